@@ -1,0 +1,30 @@
+//! Position encoder.
+//!
+//! # For firmware
+//! Positions are raw encoder increments; the counts per revolution come from [`Encoder::resolution`].
+//!
+//! # For boards
+//! `position` returns the value latched at the last PWM-synchronous sample, never a value torn
+//! between two reads.
+
+/// Why a position could not be read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EncoderFault {
+    /// No signal (cable, power).
+    SignalLoss,
+    /// Serial frame failed its CRC.
+    Crc,
+    /// The position jumped further than physically possible since the last sample.
+    ImplausibleJump,
+}
+
+/// A rotary position encoder.
+pub trait Encoder {
+    /// Increments per mechanical revolution.
+    fn resolution(&self) -> u32;
+    /// Multi-turn position in increments.
+    fn position(&mut self) -> Result<i64, EncoderFault>;
+    /// Whether the index pulse was seen since the last call (incremental encoders).
+    fn take_index(&mut self) -> bool;
+}
