@@ -7,3 +7,4 @@
 
 pub mod od;
 pub mod profiles;
+pub mod slave;

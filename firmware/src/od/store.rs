@@ -1,0 +1,103 @@
+//! Run-time access to a profile's object dictionary: the static description plus the OD RAM.
+
+use super::model::{Entry, Object, Profile, Value};
+
+/// Why a value could not be read or written at the storage level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StoreError {
+    /// The entry is a constant.
+    ReadOnly,
+    /// The data length does not fit the entry.
+    Length,
+    /// The OD RAM is smaller than the profile requires (a build error, reported not panicked).
+    Layout,
+}
+
+/// A profile's dictionary together with its OD RAM.
+///
+/// A cheap view: the owner keeps the RAM (`[u8; N]` in the slave) and builds a `Dictionary`
+/// when it needs one.
+pub struct Dictionary<'r> {
+    profile: &'static Profile,
+    ram: &'r mut [u8],
+}
+
+impl<'r> Dictionary<'r> {
+    /// A view of `profile` over `ram`. `ram` must be at least [`Profile::ram_size`] bytes; accesses
+    /// outside it fail with [`StoreError::Layout`].
+    pub fn new(profile: &'static Profile, ram: &'r mut [u8]) -> Self {
+        Self { profile, ram }
+    }
+
+    /// Resets every variable to its default.
+    pub fn load_defaults(&mut self) {
+        let n = self.profile.defaults.len().min(self.ram.len());
+        if let (Some(dst), Some(src)) = (self.ram.get_mut(..n), self.profile.defaults.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+    }
+
+    /// The profile.
+    pub fn profile(&self) -> &'static Profile {
+        self.profile
+    }
+
+    /// The object with this index.
+    pub fn object(&self, index: u16) -> Option<&'static Object> {
+        self.profile.object(index)
+    }
+
+    /// The entry `index:subindex`.
+    pub fn entry(&self, index: u16, subindex: u8) -> Option<&'static Entry> {
+        self.object(index).and_then(|o| o.entry(subindex))
+    }
+
+    /// The current bytes of an entry's value (its full byte length).
+    pub fn value(&self, entry: &Entry) -> Result<&[u8], StoreError> {
+        match entry.value {
+            Value::Const(bytes) => Ok(bytes),
+            Value::Ram(offset) => {
+                let start = offset as usize;
+                self.ram.get(start..start + entry.byte_len()).ok_or(StoreError::Layout)
+            }
+        }
+    }
+
+    /// Overwrites the start of an entry's value with `data` (`data` may be shorter than the entry,
+    /// e.g. a shorter string; the rest is zero-filled).
+    pub fn set_value(&mut self, entry: &Entry, data: &[u8]) -> Result<(), StoreError> {
+        let Value::Ram(offset) = entry.value else {
+            return Err(StoreError::ReadOnly);
+        };
+        let start = offset as usize;
+        let dst = self.ram.get_mut(start..start + entry.byte_len()).ok_or(StoreError::Layout)?;
+        if data.len() > dst.len() {
+            return Err(StoreError::Length);
+        }
+        let (head, tail) = dst.split_at_mut(data.len());
+        head.copy_from_slice(data);
+        tail.fill(0);
+        Ok(())
+    }
+
+    /// Reads an unsigned value of up to 4 bytes of `index:subindex` (0 if the entry is missing).
+    pub fn read_u32(&self, index: u16, subindex: u8) -> Option<u32> {
+        let entry = self.entry(index, subindex)?;
+        let bytes = self.value(entry).ok()?;
+        let mut b = [0u8; 4];
+        let n = bytes.len().min(4);
+        b.get_mut(..n)?.copy_from_slice(bytes.get(..n)?);
+        Some(u32::from_le_bytes(b))
+    }
+
+    /// The whole OD RAM (for process-data copy plans, which address it by offset).
+    pub fn ram(&self) -> &[u8] {
+        self.ram
+    }
+
+    /// The whole OD RAM, mutable.
+    pub fn ram_mut(&mut self) -> &mut [u8] {
+        self.ram
+    }
+}
