@@ -1,1 +1,122 @@
-//! od-gen
+//! od-gen: one drive profile file → the firmware's object dictionary, the SII EEPROM image and
+//! the ESI XML.
+//!
+//! A mismatch between the dictionary compiled into the slave, the SII that the master reads at
+//! start-up and the ESI that the configuration tool imports is the most common reason a slave
+//! does not reach SAFE-OP. od-gen derives all three from one TOML file, and derives the
+//! communication objects (1008h, 1009h, 100Ah, 1018h, 16xxh/1Axxh, 1C00h, 1C12h, 1C13h, 1C32h,
+//! 1C33h) from the device, PDO, SM and sync sections, so they cannot disagree.
+//!
+//! # Modules
+//!
+//! | module | does |
+//! |---|---|
+//! | [`file`] | the TOML format (serde types; every key is documented there and in `README.md`) |
+//! | [`resolve`] | file → checked [`Profile`] with the derived objects |
+//! | `validate` | profile-wide checks (SM layout, mailbox, sync, roles, EEPROM size) |
+//! | [`model`] | the resolved profile |
+//! | [`rust`] | the generated Rust (`OUT_DIR/profiles.rs` of the firmware) |
+//! | [`sii`] | the SII EEPROM image |
+//! | [`esi`] | the ESI XML |
+//! | [`cli`] | the `od-gen` command line |
+//!
+//! # Example
+//!
+//! ```
+//! let p = od_gen::builtin("standard").unwrap();
+//! assert_eq!(p.sii_image().len(), p.eeprom.byte_size);
+//! assert!(p.esi_xml().contains("<Fmmu>Outputs</Fmmu>"));
+//! let code = od_gen::rust::generate(&[p]);
+//! assert!(code.contains("pub mod standard"));
+//! ```
+
+pub mod cli;
+pub mod error;
+pub mod esi;
+pub mod file;
+pub mod model;
+pub mod resolve;
+pub mod rust;
+pub mod sii;
+mod validate;
+
+use std::path::Path;
+
+pub use error::{Error, Invalid};
+pub use model::Profile;
+
+include!(concat!(env!("OUT_DIR"), "/builtin.rs"));
+
+/// The names of the built-in profiles (`od-gen/profiles/*.toml`), sorted.
+pub fn builtin_names() -> Vec<&'static str> {
+    BUILTIN.iter().map(|(n, _)| *n).collect()
+}
+
+/// Loads a built-in profile by name.
+pub fn builtin(name: &str) -> Result<Profile, Error> {
+    let (_, text) = BUILTIN
+        .iter()
+        .find(|(n, _)| *n == name)
+        .ok_or_else(|| Error::UnknownProfile { name: name.to_string(), available: builtin_names() })?;
+    let p = resolve::parse(text, &format!("builtin:{name}"))?;
+    check_stem(&p, name, &format!("builtin:{name}"))?;
+    Ok(p)
+}
+
+/// Loads every built-in profile.
+pub fn builtin_profiles() -> Result<Vec<Profile>, Error> {
+    builtin_names().into_iter().map(builtin).collect()
+}
+
+/// Parses profile text; `source` names it in error messages.
+pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
+    resolve::parse(text, source)
+}
+
+/// Loads a profile file.
+pub fn load(path: &Path) -> Result<Profile, Error> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let p = resolve::parse(&text, &path.display().to_string())?;
+    if let Some(stem) = path.file_stem().and_then(|s| s.to_str()) {
+        check_stem(&p, stem, &path.display().to_string())?;
+    }
+    Ok(p)
+}
+
+/// Loads every `*.toml` in a directory, sorted by file name.
+pub fn load_dir(dir: &Path) -> Result<Vec<Profile>, Error> {
+    let io = |source| Error::Io { path: dir.to_path_buf(), source };
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(io)?
+        .into_iter()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    files.iter().map(|f| load(f)).collect()
+}
+
+/// A built-in name or a path to a `.toml` file.
+pub fn load_any(name_or_path: &str) -> Result<Profile, Error> {
+    let path = Path::new(name_or_path);
+    if name_or_path.ends_with(".toml") || path.components().count() > 1 {
+        load(path)
+    } else {
+        builtin(name_or_path)
+    }
+}
+
+/// The profile `name` must equal the file stem, so that file, module and name agree.
+fn check_stem(p: &Profile, stem: &str, source: &str) -> Result<(), Error> {
+    if p.name == stem {
+        Ok(())
+    } else {
+        Err(Error::Invalid {
+            file: source.to_string(),
+            key: "name".into(),
+            error: Invalid::Value(format!("`{}` differs from the file name `{stem}`", p.name)),
+        })
+    }
+}

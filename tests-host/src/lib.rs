@@ -1,1 +1,57 @@
-//! tests-host
+//! Shared helpers of the end-to-end tests: a single-threaded runtime for the in-process
+//! ethercrab master, the expected identity from the profile, and the SOEM (pysoem) harness.
+
+pub mod soem;
+
+use std::future::Future;
+
+/// Runs `f` on a current-thread tokio runtime with a `LocalSet` (the in-process transport is
+/// spawned locally).
+pub fn block_on<F: Future>(f: F) -> F::Output {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .build()
+        .expect("tokio runtime"); // test harness only
+    tokio::task::LocalSet::new().block_on(&rt, f)
+}
+
+/// Identity words of a built-in profile as its SII carries them: (vendor, product, revision, serial)
+/// and the device name.
+pub fn expected_identity(profile: &str) -> ((u32, u32, u32, u32), String) {
+    let sii = od_gen::builtin(profile).expect("built-in profile").sii_image();
+    let word = |w: usize| u32::from_le_bytes(sii[w * 2..w * 2 + 4].try_into().expect("4 bytes"));
+    let identity = (word(0x08), word(0x0A), word(0x0C), word(0x0E));
+    (identity, device_name(&sii))
+}
+
+/// Device name from the SII: the string the General category's order index points at, found
+/// by walking the categories (independently of od-gen's writer).
+fn device_name(sii: &[u8]) -> String {
+    const FIRST_CATEGORY_WORD: usize = 0x40;
+    const STRINGS: u16 = 10;
+    const GENERAL: u16 = 30;
+    const END: u16 = 0xFFFF;
+    let mut strings: Vec<String> = Vec::new();
+    let mut order_idx = 0usize;
+    let mut at = FIRST_CATEGORY_WORD * 2;
+    while at + 4 <= sii.len() {
+        let kind = u16::from_le_bytes([sii[at], sii[at + 1]]);
+        let words = u16::from_le_bytes([sii[at + 2], sii[at + 3]]) as usize;
+        let data = &sii[at + 4..(at + 4 + words * 2).min(sii.len())];
+        match kind {
+            END => break,
+            STRINGS => {
+                let mut p = 1;
+                for _ in 0..data.first().copied().unwrap_or(0) {
+                    let len = data[p] as usize;
+                    strings.push(String::from_utf8_lossy(&data[p + 1..p + 1 + len]).into_owned());
+                    p += 1 + len;
+                }
+            }
+            GENERAL => order_idx = data.get(2).copied().unwrap_or(0) as usize,
+            _ => {}
+        }
+        at += 4 + words * 2;
+    }
+    strings.get(order_idx.wrapping_sub(1)).cloned().unwrap_or_default()
+}

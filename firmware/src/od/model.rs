@@ -250,6 +250,23 @@ pub struct SyncSupport {
     pub max_cycle_ns: u32,
 }
 
+/// CoE services the device supports (SII General CoE details, ESI `Mailbox/CoE` attributes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CoeDetails {
+    /// SDO upload/download.
+    pub sdo: bool,
+    /// SDO information service.
+    pub sdo_info: bool,
+    /// PDO assignment (1C12h/1C13h) writable.
+    pub pdo_assign: bool,
+    /// PDO mapping (16xxh/1Axxh) writable.
+    pub pdo_config: bool,
+    /// Upload of the PDO configuration at start-up.
+    pub upload_at_startup: bool,
+    /// SDO complete access.
+    pub complete_access: bool,
+}
+
 /// Identity and communication layout of a device: the facts the ESM checks the master's
 /// configuration against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -280,6 +297,11 @@ pub struct DeviceInfo {
     pub sync: SyncSupport,
     /// Maximum number of entries in one PDO.
     pub max_pdo_entries: u8,
+    /// Mailbox protocols (SII word 0x1C bits: 0x01 AoE, 0x02 EoE, 0x04 CoE, 0x08 FoE, 0x10 SoE,
+    /// 0x20 VoE).
+    pub mailbox_protocols: u16,
+    /// CoE services.
+    pub coe: CoeDetails,
 }
 
 /// OD RAM offsets of the variables the generic application reads and writes, by role. A role the

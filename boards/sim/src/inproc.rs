@@ -1,0 +1,162 @@
+//! In-process transport for the ethercrab master: frames go straight from ethercrab's PDU loop
+//! through the simulated segment and back, without a network or privileges.
+//!
+//! Simulated time is exposed to ethercrab through [`SimClock`], so DC offsets computed by the
+//! master refer to the simulated clock.
+
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::task::{Context, Poll};
+
+use ethercrab::error::Error;
+use ethercrab::{MainDevice, MainDeviceConfig, PduRx, PduStorage, PduTx, Timeouts};
+
+use crate::segment::Segment;
+
+/// Frames in flight in the master's PDU loop.
+const MAX_FRAMES: usize = 16;
+/// Largest PDU payload per frame.
+const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
+
+/// The simulated time as ethercrab reads it (`init_single_group(clock.now_fn())`).
+#[derive(Clone, Copy)]
+pub struct SimClock(&'static AtomicU64);
+
+impl SimClock {
+    fn new() -> Self {
+        Self(Box::leak(Box::new(AtomicU64::new(0))))
+    }
+    /// Current simulated time in ns.
+    pub fn now(self) -> u64 {
+        self.0.load(Ordering::Acquire)
+    }
+    fn set(self, t: u64) {
+        self.0.store(t, Ordering::Release);
+    }
+    /// A `Copy` function returning the simulated time, as ethercrab's `init` wants it.
+    pub fn now_fn(self) -> impl Fn() -> u64 + Copy {
+        move || self.now()
+    }
+}
+
+/// Fault injection between master and segment.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Faults {
+    /// Drop the reply to the next `n` frames (the frame still passed the ring).
+    pub drop_replies: u32,
+}
+
+/// Shared between the transport and the test: the segment, the clock and fault switches.
+pub struct Shared {
+    segment: Mutex<Segment>,
+    clock: SimClock,
+    faults: Mutex<Faults>,
+    frames: AtomicU64,
+}
+
+impl Shared {
+    /// Locks the segment (to advance time or inspect drives). A poisoned lock (a panicking test
+    /// thread) is recovered: the segment has no invariant a panic elsewhere could break.
+    pub fn segment(&self) -> MutexGuard<'_, Segment> {
+        self.segment.lock().unwrap_or_else(|p| p.into_inner())
+    }
+    /// Advances simulated time by `dt_ns` (SYNC0s and timers fire on the way).
+    pub fn advance(&self, dt_ns: u64) {
+        let mut s = self.segment();
+        s.advance(dt_ns);
+        self.clock.set(s.now_ns());
+    }
+    /// The clock.
+    pub fn clock(&self) -> SimClock {
+        self.clock
+    }
+    /// Frames processed so far.
+    pub fn frames(&self) -> u64 {
+        self.frames.load(Ordering::Relaxed)
+    }
+    /// Sets the fault switches.
+    pub fn set_faults(&self, f: Faults) {
+        *self.faults.lock().unwrap_or_else(|p| p.into_inner()) = f;
+    }
+
+    fn exchange(&self, frame: &[u8]) -> Option<Vec<u8>> {
+        let reply = {
+            let mut s = self.segment();
+            let r = s.process_frame(frame);
+            self.clock.set(s.now_ns());
+            r
+        };
+        self.frames.fetch_add(1, Ordering::Relaxed);
+        let mut f = self.faults.lock().unwrap_or_else(|p| p.into_inner());
+        if f.drop_replies > 0 {
+            f.drop_replies -= 1;
+            return None;
+        }
+        reply
+    }
+}
+
+/// The transport future: spawn it on the runtime that runs the master.
+pub struct InMemoryTxRx {
+    tx: PduTx<'static>,
+    rx: PduRx<'static>,
+    shared: Arc<Shared>,
+}
+
+impl Future for InMemoryTxRx {
+    type Output = Result<(), Error>;
+
+    fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
+        let this = self.get_mut();
+        // Re-register every poll, or frames queued later are never seen.
+        this.tx.replace_waker(cx.waker());
+        if this.tx.should_exit() {
+            return Poll::Ready(Ok(()));
+        }
+        while let Some(frame) = this.tx.next_sendable_frame() {
+            let mut reply = None;
+            frame.send_blocking(|bytes| {
+                reply = this.shared.exchange(bytes);
+                Ok(bytes.len())
+            })?;
+            // Only after send_blocking returned is the frame marked sent and able to take a reply.
+            if let Some(r) = reply {
+                this.rx.receive_frame(&r)?;
+            }
+        }
+        Poll::Pending
+    }
+}
+
+/// An ethercrab master connected to `segment` in process.
+pub struct InProcess {
+    /// The master.
+    pub maindevice: Arc<MainDevice<'static>>,
+    /// Segment, clock and fault switches.
+    pub shared: Arc<Shared>,
+}
+
+impl InProcess {
+    /// Connects a new master (with its own PDU storage) to `segment`; spawn the returned
+    /// transport before using the master.
+    pub fn connect(segment: Segment, timeouts: Timeouts, config: MainDeviceConfig) -> (Self, InMemoryTxRx) {
+        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> = Box::leak(Box::new(PduStorage::new()));
+        // A freshly leaked storage has never been split.
+        let (tx, rx, pdu_loop) = match storage.try_split() {
+            Ok(parts) => parts,
+            Err(()) => unreachable!("a new PduStorage splits once"),
+        };
+        let clock = SimClock::new();
+        clock.set(segment.now_ns());
+        let shared = Arc::new(Shared {
+            segment: Mutex::new(segment),
+            clock,
+            faults: Mutex::new(Faults::default()),
+            frames: AtomicU64::new(0),
+        });
+        let maindevice = Arc::new(MainDevice::new(pdu_loop, timeouts, config));
+        (Self { maindevice, shared: shared.clone() }, InMemoryTxRx { tx, rx, shared })
+    }
+}

@@ -1,0 +1,8 @@
+//! Mailbox: the data-link layer over SM0/SM1 ([`dll`]), the mailbox header ([`header`]) and the
+//! protocols on top of it ([`coe`]).
+
+pub mod coe;
+pub mod dll;
+pub mod header;
+
+pub use dll::Mailbox;

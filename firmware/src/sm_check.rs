@@ -1,0 +1,105 @@
+//! SyncManager configuration checks: what the master wrote into SM0..SM3 against the device's
+//! declared layout (the same facts the SII and ESI carry, from the profile).
+
+use hal::esc::{AlStatusCode, SmConfig, SmDirection, SmMode};
+
+use crate::od::{DeviceInfo, SmLayout};
+
+/// Largest mailbox the stack buffers (bytes). A profile with a larger mailbox is refused at
+/// INIT → PREOP with 0x0016 rather than overflowing a buffer.
+pub const MAX_MAILBOX: usize = 512;
+
+/// Checks one mailbox SM against its layout: enabled, same start and length, mailbox mode,
+/// the right direction.
+fn mailbox_sm_ok(sm: SmConfig, layout: &SmLayout, direction: SmDirection) -> bool {
+    sm.active()
+        && sm.start == layout.start
+        && sm.length == layout.length
+        && (sm.length as usize) <= MAX_MAILBOX
+        && sm.control.mode() == SmMode::Mailbox
+        && sm.control.direction() == direction
+}
+
+/// INIT → PREOP: SM0 (master → slave) and SM1 (slave → master) must match the mailbox layout
+/// (ETG.1000.6 §6.4.2), else AL status code 0x0016.
+pub fn check_mailbox(sm0: SmConfig, sm1: SmConfig, device: &DeviceInfo) -> Result<(), AlStatusCode> {
+    if mailbox_sm_ok(sm0, &device.mailbox_out, SmDirection::EcatWrite)
+        && mailbox_sm_ok(sm1, &device.mailbox_in, SmDirection::EcatRead)
+    {
+        Ok(())
+    } else {
+        Err(AlStatusCode::InvalidMailboxConfig)
+    }
+}
+
+/// PREOP → SAFEOP: a process-data SM must be a buffered SM at the declared start address, in
+/// the given direction, whose length equals the mapped size `bytes`. With nothing mapped the SM
+/// must be disabled or of length 0. A mismatch gives `code` (0x001D for SM2, 0x001E for SM3).
+pub fn check_process_data(
+    sm: SmConfig,
+    layout: &SmLayout,
+    direction: SmDirection,
+    bytes: u16,
+    code: AlStatusCode,
+) -> Result<(), AlStatusCode> {
+    let ok = if bytes == 0 {
+        !sm.active()
+    } else {
+        sm.active()
+            && sm.start == layout.start
+            && sm.length == bytes
+            && sm.control.mode() == SmMode::Buffered
+            && sm.control.direction() == direction
+    };
+    if ok { Ok(()) } else { Err(code) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use hal::esc::{SmActivate, SmControl};
+
+    const OUT: SmLayout = SmLayout { start: 0x1200, length: 0, control: 0x64 };
+
+    fn sm(start: u16, length: u16, control: u8, enable: bool) -> SmConfig {
+        SmConfig {
+            start,
+            length,
+            control: SmControl(control),
+            activate: SmActivate(enable as u8),
+            ..SmConfig::default()
+        }
+    }
+
+    #[test]
+    fn outputs_sm_with_mapped_length_passes() {
+        assert_eq!(
+            check_process_data(sm(0x1200, 7, 0x64, true), &OUT, SmDirection::EcatWrite, 7, AlStatusCode::InvalidOutputConfig),
+            Ok(())
+        );
+    }
+
+    #[test]
+    fn outputs_sm_with_wrong_length_is_0x1d() {
+        assert_eq!(
+            check_process_data(sm(0x1200, 8, 0x64, true), &OUT, SmDirection::EcatWrite, 7, AlStatusCode::InvalidOutputConfig),
+            Err(AlStatusCode::InvalidOutputConfig)
+        );
+    }
+
+    #[test]
+    fn outputs_sm_at_wrong_address_or_mode_is_refused() {
+        let code = AlStatusCode::InvalidOutputConfig;
+        assert!(check_process_data(sm(0x1300, 7, 0x64, true), &OUT, SmDirection::EcatWrite, 7, code).is_err());
+        assert!(check_process_data(sm(0x1200, 7, 0x66, true), &OUT, SmDirection::EcatWrite, 7, code).is_err());
+        assert!(check_process_data(sm(0x1200, 7, 0x60, true), &OUT, SmDirection::EcatWrite, 7, code).is_err());
+        assert!(check_process_data(sm(0x1200, 7, 0x64, false), &OUT, SmDirection::EcatWrite, 7, code).is_err());
+    }
+
+    #[test]
+    fn nothing_mapped_requires_disabled_sm() {
+        let code = AlStatusCode::InvalidInputConfig;
+        assert_eq!(check_process_data(sm(0, 0, 0, false), &OUT, SmDirection::EcatRead, 0, code), Ok(()));
+        assert_eq!(check_process_data(sm(0x1200, 4, 0x20, true), &OUT, SmDirection::EcatRead, 0, code), Err(code));
+    }
+}

@@ -1,0 +1,106 @@
+//! Synchronisation configuration: which cycle trigger the master configured (DC registers and
+//! 1C32h:01) and whether the profile accepts it.
+
+use hal::esc::{regs, AlStatusCode, DcActivation};
+use hal::pdi::EscPdi;
+
+use crate::od::SyncSupport;
+
+/// How the process-data cycle is triggered; the values are those of 1C32h:01 (ETG.1020 §5.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u16)]
+pub enum SyncMode {
+    /// Not synchronised: the board runs the cycle from a local timer.
+    FreeRun = 0,
+    /// Synchronous with the SM2 event.
+    SmSynchronous = 1,
+    /// DC SYNC0.
+    DcSync0 = 2,
+    /// DC SYNC1.
+    DcSync1 = 3,
+}
+
+/// The synchronisation the master configured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SyncConfig {
+    /// Trigger.
+    pub mode: SyncMode,
+    /// SYNC0 cycle in ns (DC modes), 0 otherwise.
+    pub cycle_ns: u32,
+}
+
+impl SyncConfig {
+    /// Reads the DC activation and SYNC0 cycle; `sm_sync_requested` is 1C32h:01 == 1.
+    pub fn read<P: EscPdi>(pdi: &mut P, sm_sync_requested: bool) -> Result<Self, P::Error> {
+        let activation = DcActivation(pdi.read_u8(regs::DC_ACTIVATION.addr)?);
+        let mode = if activation.sync1_active() && activation.sync0_active() {
+            SyncMode::DcSync1
+        } else if activation.sync0_active() {
+            SyncMode::DcSync0
+        } else if sm_sync_requested {
+            SyncMode::SmSynchronous
+        } else {
+            SyncMode::FreeRun
+        };
+        let cycle_ns = match mode {
+            SyncMode::DcSync0 | SyncMode::DcSync1 => pdi.read_u32(regs::DC_SYNC0_CYCLE.addr)?,
+            _ => 0,
+        };
+        Ok(Self { mode, cycle_ns })
+    }
+
+    /// Whether the profile accepts this configuration; the AL status code if not
+    /// (ETG.1000.6 Table 11: 0x0027, 0x0028, 0x0030, 0x0035).
+    pub fn check(&self, support: &SyncSupport) -> Result<(), AlStatusCode> {
+        match self.mode {
+            SyncMode::FreeRun if !support.free_run => Err(AlStatusCode::FreeRunNotSupported),
+            SyncMode::SmSynchronous if !support.sm_synchronous => Err(AlStatusCode::SyncNotSupported),
+            SyncMode::DcSync0 if !support.dc_sync0 => Err(AlStatusCode::InvalidDcSyncConfig),
+            SyncMode::DcSync1 if !support.dc_sync1 => Err(AlStatusCode::InvalidDcSyncConfig),
+            SyncMode::DcSync0 | SyncMode::DcSync1
+                if self.cycle_ns < support.min_cycle_ns || self.cycle_ns > support.max_cycle_ns =>
+            {
+                Err(AlStatusCode::DcInvalidSyncCycleTime)
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SUPPORT: SyncSupport = SyncSupport {
+        free_run: true,
+        sm_synchronous: true,
+        dc_sync0: true,
+        dc_sync1: false,
+        min_cycle_ns: 125_000,
+        max_cycle_ns: 10_000_000,
+    };
+
+    #[test]
+    fn dc_cycle_inside_limits_is_accepted() {
+        let c = SyncConfig { mode: SyncMode::DcSync0, cycle_ns: 1_000_000 };
+        assert_eq!(c.check(&SUPPORT), Ok(()));
+    }
+
+    #[test]
+    fn dc_cycle_below_minimum_is_0x35() {
+        let c = SyncConfig { mode: SyncMode::DcSync0, cycle_ns: 62_500 };
+        assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0035));
+        let c = SyncConfig { mode: SyncMode::DcSync0, cycle_ns: 0 };
+        assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0035));
+    }
+
+    #[test]
+    fn unsupported_modes_are_refused() {
+        let c = SyncConfig { mode: SyncMode::DcSync1, cycle_ns: 1_000_000 };
+        assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0030));
+        let no_free_run = SyncSupport { free_run: false, ..SUPPORT };
+        let c = SyncConfig { mode: SyncMode::FreeRun, cycle_ns: 0 };
+        assert_eq!(c.check(&no_free_run).map_err(|c| c.code()), Err(0x0027));
+    }
+}

@@ -1,0 +1,424 @@
+//! The profile file format as TOML (serde types). See the crate docs and `README.md` for the
+//! meaning of every key; [`crate::resolve`] turns a [`ProfileFile`] into a checked
+//! [`crate::Profile`].
+
+use serde::Deserialize;
+
+/// A whole profile file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileFile {
+    /// Profile name: the Rust module name in the generated code (`[a-z][a-z0-9_]*`).
+    pub name: String,
+    /// Free text describing the profile (ESI device comment is not emitted; for humans).
+    #[serde(default)]
+    pub description: String,
+    /// The vendor.
+    pub vendor: VendorFile,
+    /// Device identity.
+    pub device: DeviceFile,
+    /// SII EEPROM configuration area and size.
+    pub eeprom: EepromFile,
+    /// SyncManager layout.
+    pub sm: SmFile,
+    /// Mailbox protocols and CoE details.
+    pub mailbox: MailboxFile,
+    /// Synchronisation.
+    pub sync: SyncFile,
+    /// DC op modes (ESI `Dc/OpMode`, SII DC category).
+    #[serde(default, rename = "dc_op_mode")]
+    pub dc_op_modes: Vec<DcOpModeFile>,
+    /// PDO limits.
+    pub pdo: PdoLimitsFile,
+    /// RxPDOs (master → slave, SM2).
+    #[serde(default, rename = "rxpdo")]
+    pub rx_pdos: Vec<PdoFile>,
+    /// TxPDOs (slave → master, SM3).
+    #[serde(default, rename = "txpdo")]
+    pub tx_pdos: Vec<PdoFile>,
+    /// The declared objects.
+    #[serde(default, rename = "object")]
+    pub objects: Vec<ObjectFile>,
+}
+
+/// `[vendor]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VendorFile {
+    /// ETG vendor ID (1018h:01, SII word 0x08).
+    pub id: u32,
+    /// Vendor name (ESI `Vendor/Name`).
+    pub name: String,
+}
+
+/// `[device]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceFile {
+    /// Device name: 1008h, ESI `Device/Name`, SII string 1.
+    pub name: String,
+    /// Order number / type text: ESI `Device/Type`.
+    pub order_number: String,
+    /// Product code (1018h:02).
+    pub product_code: u32,
+    /// Revision number (1018h:03).
+    pub revision: u32,
+    /// Serial number default (1018h:04, SII word 0x0E).
+    #[serde(default)]
+    pub serial: u32,
+    /// Hardware version (1009h).
+    pub hardware_version: String,
+    /// Software version (100Ah).
+    pub software_version: String,
+    /// ESI group type (`Groups/Group/Type`, `Device/GroupType`).
+    pub group_type: String,
+    /// ESI group name.
+    pub group_name: String,
+    /// Physical ports (ESI `Device@Physics`, SII General PhysicalPort), e.g. "YY".
+    #[serde(default = "default_physics")]
+    pub physics: String,
+    /// Device profile number (ESI `Profile/ProfileNo`), 402 for CiA402.
+    #[serde(default)]
+    pub profile_no: u16,
+    /// Number of CiA402 axes (SII General DS402 channels).
+    #[serde(default)]
+    pub ds402_channels: u8,
+}
+
+fn default_physics() -> String {
+    "YY".into()
+}
+
+/// `[eeprom]`: SII words 0..6 and the image size.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EepromFile {
+    /// EEPROM size in bytes (ESI `Eeprom/ByteSize`, SII word 0x3E); a power of two ≥ 128.
+    pub byte_size: usize,
+    /// Word 0 low byte: PDI control (ESC register 0x0140).
+    pub pdi_control: u8,
+    /// Word 0 high byte: ESC configuration (0x0141).
+    pub esc_config: u8,
+    /// Word 1: PDI configuration (0x0150:0x0151).
+    pub pdi_config: u16,
+    /// Word 2: SYNC impulse length in 10 ns (0x0982).
+    pub sync_impulse_len: u16,
+    /// Word 3: extended PDI configuration (0x0152:0x0153).
+    #[serde(default)]
+    pub pdi_config2: u16,
+    /// Word 4: configured station alias (0x0012).
+    #[serde(default)]
+    pub station_alias: u16,
+    /// Words 5 and 6: reserved, ESC-specific.
+    #[serde(default)]
+    pub reserved: [u16; 2],
+}
+
+/// One SyncManager: `{ start, size, control }`.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct SmFileEntry {
+    /// Physical start address.
+    pub start: u16,
+    /// Size in bytes (mailboxes only; process-data sizes come from the PDOs).
+    #[serde(default)]
+    pub size: Option<u16>,
+    /// Control byte.
+    pub control: u8,
+}
+
+/// `[sm]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SmFile {
+    /// SM0: mailbox master → slave.
+    pub mailbox_out: SmFileEntry,
+    /// SM1: mailbox slave → master.
+    pub mailbox_in: SmFileEntry,
+    /// Bootstrap mailbox out (optional).
+    #[serde(default)]
+    pub boot_out: Option<SmFileEntry>,
+    /// Bootstrap mailbox in (optional).
+    #[serde(default)]
+    pub boot_in: Option<SmFileEntry>,
+    /// SM2: process-data outputs.
+    pub outputs: SmFileEntry,
+    /// SM3: process-data inputs.
+    pub inputs: SmFileEntry,
+}
+
+/// `[mailbox]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MailboxFile {
+    /// Supported protocols: any of "AoE", "EoE", "CoE", "FoE", "SoE", "VoE".
+    pub protocols: Vec<String>,
+    /// Mailbox data link layer (ESI `Mailbox@DataLinkLayer`, SII General flag b2).
+    #[serde(default)]
+    pub data_link_layer: bool,
+    /// CoE details (required when CoE is listed).
+    #[serde(default)]
+    pub coe: Option<CoeFile>,
+}
+
+/// `[mailbox.coe]`: what the CoE implementation supports (SII General CoE details, ESI
+/// `Mailbox/CoE` attributes).
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct CoeFile {
+    /// SDO services.
+    pub sdo: bool,
+    /// SDO information service.
+    pub sdo_info: bool,
+    /// PDO assignment (1C12h/1C13h) writable.
+    pub pdo_assign: bool,
+    /// PDO mapping (16xxh/1Axxh) writable.
+    pub pdo_config: bool,
+    /// Upload of the PDO configuration at startup.
+    pub upload_at_startup: bool,
+    /// SDO complete access.
+    pub complete_access: bool,
+}
+
+/// `[sync]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SyncFile {
+    /// Free run supported.
+    pub free_run: bool,
+    /// Synchronous with the SM2 event supported.
+    pub sm_synchronous: bool,
+    /// DC SYNC0 supported.
+    pub dc_sync0: bool,
+    /// DC SYNC1 supported.
+    #[serde(default)]
+    pub dc_sync1: bool,
+    /// Shortest cycle in ns (1C32h:05).
+    pub min_cycle_ns: u32,
+    /// Longest cycle in ns.
+    pub max_cycle_ns: u32,
+    /// Default cycle time in ns (1C32h:02 / 1C33h:02 default).
+    pub default_cycle_ns: u32,
+    /// Calc-and-copy time in ns (1C32h:06 / 1C33h:06 default).
+    #[serde(default)]
+    pub calc_and_copy_ns: u32,
+    /// Delay time in ns (1C32h:09 / 1C33h:09 default).
+    #[serde(default)]
+    pub delay_ns: u32,
+}
+
+/// `[[dc_op_mode]]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DcOpModeFile {
+    /// Name (ESI `OpMode/Name`).
+    pub name: String,
+    /// Description (ESI `OpMode/Desc`).
+    #[serde(default)]
+    pub description: String,
+    /// Value for ESC registers 0x0980:0x0981.
+    pub assign_activate: u16,
+    /// SYNC0 cycle time in ns (0 = the master's cycle).
+    #[serde(default)]
+    pub sync0_cycle_ns: u32,
+    /// SYNC0 cycle factor (ESI `CycleTimeSync0@Factor`).
+    #[serde(default)]
+    pub sync0_factor: i16,
+    /// SYNC0 shift time in ns.
+    #[serde(default)]
+    pub sync0_shift_ns: u32,
+    /// SYNC1 cycle time in ns (ESI only; the SII has no field for it).
+    #[serde(default)]
+    pub sync1_cycle_ns: u32,
+    /// SYNC1 cycle factor.
+    #[serde(default)]
+    pub sync1_factor: i16,
+    /// SYNC1 shift time in ns.
+    #[serde(default)]
+    pub sync1_shift_ns: u32,
+}
+
+/// `[pdo]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PdoLimitsFile {
+    /// Maximum number of entries in one PDO (capacity of each 16xxh/1Axxh object).
+    pub max_entries: u8,
+}
+
+/// `[[rxpdo]]` / `[[txpdo]]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PdoFile {
+    /// PDO (mapping object) index.
+    pub index: u16,
+    /// Name.
+    pub name: String,
+    /// SyncManager: 2 for RxPDOs, 3 for TxPDOs.
+    pub sm: u8,
+    /// The mapping cannot be changed.
+    #[serde(default)]
+    pub fixed: bool,
+    /// The PDO must be assigned (ESI `@Mandatory`).
+    #[serde(default)]
+    pub mandatory: bool,
+    /// Part of the default assignment (1C12h/1C13h default, ESI `@Sm`, SII PDO SM byte).
+    #[serde(default = "yes")]
+    pub assigned: bool,
+    /// Default mapping.
+    pub entries: Vec<PdoEntryFile>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// One default mapping entry: `{ index, sub, bits }` or padding `{ pad = n }`.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct PdoEntryFile {
+    /// Object index.
+    #[serde(default)]
+    pub index: Option<u16>,
+    /// Subindex.
+    #[serde(default)]
+    pub sub: Option<u8>,
+    /// Bit length (must equal the object entry's).
+    #[serde(default)]
+    pub bits: Option<u16>,
+    /// A gap of this many bits.
+    #[serde(default)]
+    pub pad: Option<u16>,
+}
+
+/// `[[object]]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectFile {
+    /// Index.
+    pub index: u16,
+    /// Name.
+    pub name: String,
+    /// "var" (default), "record" or "array".
+    #[serde(default)]
+    pub code: Option<String>,
+    /// RECORD/ARRAY only: entries with subindex ≥ 1 (subindex 0 is generated).
+    #[serde(default, rename = "entry")]
+    pub entries: Vec<EntryFile>,
+    /// Data type (ESI base type name: BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT,
+    /// INT24, UINT24, REAL, LREAL, STRING, OCTET_STRING, UNICODE_STRING, BIT1..BIT8).
+    #[serde(default, rename = "type")]
+    pub data_type: Option<String>,
+    /// Bit length; required for strings without a default, otherwise implied by the type.
+    #[serde(default)]
+    pub bits: Option<u16>,
+    /// "ro", "rw", "wo", "rw_preop", "rw_preop_safeop", "rw_preop_op", "rw_safeop",
+    /// "rw_safeop_op", "rw_op".
+    #[serde(default)]
+    pub access: Option<String>,
+    /// PDO mappability: "no" (default), "rx", "tx", "rxtx".
+    #[serde(default)]
+    pub pdo: Option<String>,
+    /// Default value: integer, float, bool or string (strings: the text; integers may be given
+    /// as "0x…" strings for 64-bit values).
+    #[serde(default)]
+    pub default: Option<toml::Value>,
+    /// Minimum.
+    #[serde(default)]
+    pub min: Option<toml::Value>,
+    /// Maximum.
+    #[serde(default)]
+    pub max: Option<toml::Value>,
+    /// "ram" or "const"; default: RAM when writable, PDO-mappable or given a role.
+    #[serde(default)]
+    pub storage: Option<String>,
+    /// Application role (an `AppVars` field name).
+    #[serde(default)]
+    pub role: Option<String>,
+}
+
+/// `[[object.entry]]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EntryFile {
+    /// Subindex (≥ 1).
+    pub sub: u8,
+    /// Name.
+    pub name: String,
+    /// Data type (ESI base type name: BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT,
+    /// INT24, UINT24, REAL, LREAL, STRING, OCTET_STRING, UNICODE_STRING, BIT1..BIT8).
+    #[serde(default, rename = "type")]
+    pub data_type: Option<String>,
+    /// Bit length; required for strings without a default, otherwise implied by the type.
+    #[serde(default)]
+    pub bits: Option<u16>,
+    /// "ro", "rw", "wo", "rw_preop", "rw_preop_safeop", "rw_preop_op", "rw_safeop",
+    /// "rw_safeop_op", "rw_op".
+    #[serde(default)]
+    pub access: Option<String>,
+    /// PDO mappability: "no" (default), "rx", "tx", "rxtx".
+    #[serde(default)]
+    pub pdo: Option<String>,
+    /// Default value: integer, float, bool or string (strings: the text; integers may be given
+    /// as "0x…" strings for 64-bit values).
+    #[serde(default)]
+    pub default: Option<toml::Value>,
+    /// Minimum.
+    #[serde(default)]
+    pub min: Option<toml::Value>,
+    /// Maximum.
+    #[serde(default)]
+    pub max: Option<toml::Value>,
+    /// "ram" or "const"; default: RAM when writable, PDO-mappable or given a role.
+    #[serde(default)]
+    pub storage: Option<String>,
+    /// Application role (an `AppVars` field name).
+    #[serde(default)]
+    pub role: Option<String>,
+}
+
+/// The attributes of one value (a VAR object or a RECORD/ARRAY entry), as written.
+#[derive(Debug, Default, Clone)]
+pub struct EntryAttrs {
+    /// See [`ObjectFile::data_type`].
+    pub data_type: Option<String>,
+    /// Bit length.
+    pub bits: Option<u16>,
+    /// Access.
+    pub access: Option<String>,
+    /// PDO mappability.
+    pub pdo: Option<String>,
+    /// Default.
+    pub default: Option<toml::Value>,
+    /// Minimum.
+    pub min: Option<toml::Value>,
+    /// Maximum.
+    pub max: Option<toml::Value>,
+    /// Storage.
+    pub storage: Option<String>,
+    /// Role.
+    pub role: Option<String>,
+}
+
+macro_rules! attrs_of {
+    ($t:ty) => {
+        impl $t {
+            /// The value attributes given on this item.
+            pub fn attrs(&self) -> EntryAttrs {
+                EntryAttrs {
+                    data_type: self.data_type.clone(),
+                    bits: self.bits,
+                    access: self.access.clone(),
+                    pdo: self.pdo.clone(),
+                    default: self.default.clone(),
+                    min: self.min.clone(),
+                    max: self.max.clone(),
+                    storage: self.storage.clone(),
+                    role: self.role.clone(),
+                }
+            }
+        }
+    };
+}
+attrs_of!(ObjectFile);
+attrs_of!(EntryFile);

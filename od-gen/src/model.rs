@@ -1,0 +1,758 @@
+//! The resolved, checked profile: what the three generators read.
+//!
+//! A [`Profile`] is built from a profile file by [`crate::resolve`]; it already contains the
+//! objects od-gen derives (1008h, 1009h, 100Ah, 1018h, 16xxh/1Axxh, 1C00h, 1C12h, 1C13h, 1C32h,
+//! 1C33h), so the Rust dictionary, the SII and the ESI all read the same data.
+
+/// CoE data types (ETG.1000.6 Table 64), with the ESI base type names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DataType {
+    /// BOOL.
+    Bool,
+    /// SINT.
+    Sint,
+    /// INT.
+    Int,
+    /// INT24.
+    Int24,
+    /// DINT.
+    Dint,
+    /// LINT.
+    Lint,
+    /// USINT.
+    Usint,
+    /// UINT.
+    Uint,
+    /// UINT24.
+    Uint24,
+    /// UDINT.
+    Udint,
+    /// ULINT.
+    Ulint,
+    /// REAL.
+    Real,
+    /// LREAL.
+    Lreal,
+    /// VISIBLE_STRING (ESI `STRING(n)`).
+    VisibleString,
+    /// OCTET_STRING.
+    OctetString,
+    /// UNICODE_STRING.
+    UnicodeString,
+    /// BIT1..BIT8 (the number of bits).
+    Bit(u8),
+}
+
+impl DataType {
+    /// Parses an ESI base type name (also accepts `VISIBLE_STRING`).
+    pub fn parse(name: &str) -> Option<Self> {
+        Some(match name {
+            "BOOL" => Self::Bool,
+            "SINT" => Self::Sint,
+            "INT" => Self::Int,
+            "INT24" => Self::Int24,
+            "DINT" => Self::Dint,
+            "LINT" => Self::Lint,
+            "USINT" => Self::Usint,
+            "UINT" => Self::Uint,
+            "UINT24" => Self::Uint24,
+            "UDINT" => Self::Udint,
+            "ULINT" => Self::Ulint,
+            "REAL" => Self::Real,
+            "LREAL" => Self::Lreal,
+            "STRING" | "VISIBLE_STRING" => Self::VisibleString,
+            "OCTET_STRING" => Self::OctetString,
+            "UNICODE_STRING" => Self::UnicodeString,
+            _ => {
+                let n: u8 = name.strip_prefix("BIT")?.parse().ok()?;
+                if (1..=8).contains(&n) {
+                    Self::Bit(n)
+                } else {
+                    return None;
+                }
+            }
+        })
+    }
+
+    /// The CoE data type code (ETG.1000.6 Table 64; SII PDO entry data type byte).
+    pub fn code(self) -> u16 {
+        match self {
+            Self::Bool => 0x01,
+            Self::Sint => 0x02,
+            Self::Int => 0x03,
+            Self::Dint => 0x04,
+            Self::Usint => 0x05,
+            Self::Uint => 0x06,
+            Self::Udint => 0x07,
+            Self::Real => 0x08,
+            Self::VisibleString => 0x09,
+            Self::OctetString => 0x0A,
+            Self::UnicodeString => 0x0B,
+            Self::Int24 => 0x10,
+            Self::Lreal => 0x11,
+            Self::Lint => 0x15,
+            Self::Uint24 => 0x16,
+            Self::Ulint => 0x1B,
+            Self::Bit(n) => 0x30 + u16::from(n) - 1,
+        }
+    }
+
+    /// The variant name of `firmware::od::DataType`.
+    pub fn rust_variant(self) -> String {
+        match self {
+            Self::Bool => "Boolean".into(),
+            Self::Sint => "Integer8".into(),
+            Self::Int => "Integer16".into(),
+            Self::Int24 => "Integer24".into(),
+            Self::Dint => "Integer32".into(),
+            Self::Lint => "Integer64".into(),
+            Self::Usint => "Unsigned8".into(),
+            Self::Uint => "Unsigned16".into(),
+            Self::Uint24 => "Unsigned24".into(),
+            Self::Udint => "Unsigned32".into(),
+            Self::Ulint => "Unsigned64".into(),
+            Self::Real => "Real32".into(),
+            Self::Lreal => "Real64".into(),
+            Self::VisibleString => "VisibleString".into(),
+            Self::OctetString => "OctetString".into(),
+            Self::UnicodeString => "UnicodeString".into(),
+            Self::Bit(n) => format!("Bit{n}"),
+        }
+    }
+
+    /// The ESI type name for an entry of `bits` bits (`STRING(n)` for strings).
+    pub fn esi_name(self, bits: u16) -> String {
+        match self {
+            Self::Bool => "BOOL".into(),
+            Self::Sint => "SINT".into(),
+            Self::Int => "INT".into(),
+            Self::Int24 => "INT24".into(),
+            Self::Dint => "DINT".into(),
+            Self::Lint => "LINT".into(),
+            Self::Usint => "USINT".into(),
+            Self::Uint => "UINT".into(),
+            Self::Uint24 => "UINT24".into(),
+            Self::Udint => "UDINT".into(),
+            Self::Ulint => "ULINT".into(),
+            Self::Real => "REAL".into(),
+            Self::Lreal => "LREAL".into(),
+            Self::VisibleString => format!("STRING({})", bits / 8),
+            Self::OctetString => format!("OCTET_STRING({})", bits / 8),
+            Self::UnicodeString => format!("UNICODE_STRING({})", bits / 16),
+            Self::Bit(n) => format!("BIT{n}"),
+        }
+    }
+
+    /// The bit size fixed by the type (`None` for strings, whose size the entry gives).
+    pub fn fixed_bits(self) -> Option<u16> {
+        Some(match self {
+            Self::Bool => 1,
+            Self::Sint | Self::Usint => 8,
+            Self::Int | Self::Uint => 16,
+            Self::Int24 | Self::Uint24 => 24,
+            Self::Dint | Self::Udint | Self::Real => 32,
+            Self::Lint | Self::Ulint | Self::Lreal => 64,
+            Self::Bit(n) => u16::from(n),
+            Self::VisibleString | Self::OctetString | Self::UnicodeString => return None,
+        })
+    }
+
+    /// Whether values are text or bytes whose length the entry gives.
+    pub fn is_string(self) -> bool {
+        self.fixed_bits().is_none()
+    }
+
+    /// The integer range of the type (`None` for floats and strings).
+    pub fn int_range(self) -> Option<(i128, i128)> {
+        Some(match self {
+            Self::Bool => (0, 1),
+            Self::Bit(n) => (0, (1i128 << n) - 1),
+            Self::Sint => (i8::MIN.into(), i8::MAX.into()),
+            Self::Int => (i16::MIN.into(), i16::MAX.into()),
+            Self::Int24 => (-(1 << 23), (1 << 23) - 1),
+            Self::Dint => (i32::MIN.into(), i32::MAX.into()),
+            Self::Lint => (i64::MIN.into(), i64::MAX.into()),
+            Self::Usint => (0, u8::MAX.into()),
+            Self::Uint => (0, u16::MAX.into()),
+            Self::Uint24 => (0, (1 << 24) - 1),
+            Self::Udint => (0, u32::MAX.into()),
+            Self::Ulint => (0, u64::MAX.into()),
+            Self::Real | Self::Lreal | Self::VisibleString | Self::OctetString | Self::UnicodeString => {
+                return None
+            }
+        })
+    }
+
+    /// Whether the type is a signed integer.
+    pub fn is_signed(self) -> bool {
+        matches!(self, Self::Sint | Self::Int | Self::Int24 | Self::Dint | Self::Lint)
+    }
+}
+
+/// Object code (ETG.1000.6 Table 63).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ObjectCode {
+    /// VAR.
+    Var,
+    /// ARRAY.
+    Array,
+    /// RECORD.
+    Record,
+}
+
+impl ObjectCode {
+    /// The variant name of `firmware::od::ObjectCode`.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::Var => "Var",
+            Self::Array => "Array",
+            Self::Record => "Record",
+        }
+    }
+}
+
+/// Access rights per state, same bits as `firmware::od::Access` (ETG.1000.6 Table 48 ObjAccess).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Access(pub u8);
+
+impl Access {
+    /// Read in PREOP, SAFEOP, OP.
+    pub const READ_ALL: u8 = 0b0000_0111;
+    /// Write in PREOP.
+    pub const WRITE_PREOP: u8 = 1 << 3;
+    /// Write in SAFEOP.
+    pub const WRITE_SAFEOP: u8 = 1 << 4;
+    /// Write in OP.
+    pub const WRITE_OP: u8 = 1 << 5;
+    /// Write in every state.
+    pub const WRITE_ALL: u8 = Self::WRITE_PREOP | Self::WRITE_SAFEOP | Self::WRITE_OP;
+    /// Read-only.
+    pub const RO: Self = Self(Self::READ_ALL);
+    /// Read/write in every state.
+    pub const RW: Self = Self(Self::READ_ALL | Self::WRITE_ALL);
+    /// Writable in PREOP only.
+    pub const RW_PREOP: Self = Self(Self::READ_ALL | Self::WRITE_PREOP);
+
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        let w = match s {
+            "ro" => return Some(Self::RO),
+            "wo" => return Some(Self(Self::WRITE_ALL)),
+            "rw" => Self::WRITE_ALL,
+            "rw_preop" => Self::WRITE_PREOP,
+            "rw_preop_safeop" => Self::WRITE_PREOP | Self::WRITE_SAFEOP,
+            "rw_preop_op" => Self::WRITE_PREOP | Self::WRITE_OP,
+            "rw_safeop" => Self::WRITE_SAFEOP,
+            "rw_safeop_op" => Self::WRITE_SAFEOP | Self::WRITE_OP,
+            "rw_op" => Self::WRITE_OP,
+            _ => return None,
+        };
+        Some(Self(Self::READ_ALL | w))
+    }
+
+    /// Readable in some state.
+    pub fn readable(self) -> bool {
+        self.0 & Self::READ_ALL != 0
+    }
+
+    /// Writable in some state.
+    pub fn writable(self) -> bool {
+        self.0 & Self::WRITE_ALL != 0
+    }
+
+    /// ESI `Flags/Access` text and `@WriteRestrictions` (if any).
+    pub fn esi(self) -> (&'static str, Option<&'static str>) {
+        let w = self.0 & Self::WRITE_ALL;
+        let text = match (self.readable(), w != 0) {
+            (true, false) | (false, false) => "ro",
+            (false, true) => "wo",
+            (true, true) => "rw",
+        };
+        let restriction = match w {
+            x if x == Self::WRITE_PREOP => Some("PreOP"),
+            x if x == Self::WRITE_PREOP | Self::WRITE_SAFEOP => Some("PreOP_SafeOP"),
+            x if x == Self::WRITE_PREOP | Self::WRITE_OP => Some("PreOP_OP"),
+            x if x == Self::WRITE_SAFEOP => Some("SafeOP"),
+            x if x == Self::WRITE_SAFEOP | Self::WRITE_OP => Some("SafeOP_OP"),
+            x if x == Self::WRITE_OP => Some("OP"),
+            _ => None,
+        };
+        (text, restriction)
+    }
+}
+
+/// PDO mappability.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PdoMapping {
+    /// Not mappable.
+    No,
+    /// RxPDO.
+    Rx,
+    /// TxPDO.
+    Tx,
+    /// Both.
+    RxTx,
+}
+
+impl PdoMapping {
+    /// Mappable into an RxPDO.
+    pub fn rx(self) -> bool {
+        matches!(self, Self::Rx | Self::RxTx)
+    }
+    /// Mappable into a TxPDO.
+    pub fn tx(self) -> bool {
+        matches!(self, Self::Tx | Self::RxTx)
+    }
+    /// The variant name of `firmware::od::PdoMappable`.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::No => "No",
+            Self::Rx => "Rx",
+            Self::Tx => "Tx",
+            Self::RxTx => "RxTx",
+        }
+    }
+    /// ESI `Flags/PdoMapping` text (`None` when not mappable).
+    pub fn esi(self) -> Option<&'static str> {
+        match self {
+            Self::No => None,
+            Self::Rx => Some("R"),
+            Self::Tx => Some("T"),
+            Self::RxTx => Some("TR"),
+        }
+    }
+}
+
+/// Where a value is stored in the firmware.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Storage {
+    /// In the OD RAM (changeable at run time).
+    Ram,
+    /// A constant in flash.
+    Const,
+}
+
+/// The application variables a profile can bind to entries (`firmware::od::AppVars` fields).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Role {
+    /// 6040h controlword (UINT).
+    Controlword,
+    /// 6041h statusword (UINT).
+    Statusword,
+    /// 6060h modes of operation (SINT).
+    ModesOfOperation,
+    /// 6061h modes of operation display (SINT).
+    ModesOfOperationDisplay,
+    /// 607Ah target position (DINT).
+    TargetPosition,
+    /// 6064h position actual value (DINT).
+    PositionActualValue,
+}
+
+impl Role {
+    /// All roles.
+    pub const ALL: [Role; 6] = [
+        Self::Controlword,
+        Self::Statusword,
+        Self::ModesOfOperation,
+        Self::ModesOfOperationDisplay,
+        Self::TargetPosition,
+        Self::PositionActualValue,
+    ];
+    /// The `AppVars` field name (also the profile-file spelling).
+    pub fn field(self) -> &'static str {
+        match self {
+            Self::Controlword => "controlword",
+            Self::Statusword => "statusword",
+            Self::ModesOfOperation => "modes_of_operation",
+            Self::ModesOfOperationDisplay => "modes_of_operation_display",
+            Self::TargetPosition => "target_position",
+            Self::PositionActualValue => "position_actual_value",
+        }
+    }
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|r| r.field() == s)
+    }
+    /// The data type the role needs.
+    pub fn data_type(self) -> DataType {
+        match self {
+            Self::Controlword | Self::Statusword => DataType::Uint,
+            Self::ModesOfOperation | Self::ModesOfOperationDisplay => DataType::Sint,
+            Self::TargetPosition | Self::PositionActualValue => DataType::Dint,
+        }
+    }
+}
+
+/// One subindex.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// Subindex.
+    pub subindex: u8,
+    /// Name.
+    pub name: String,
+    /// Data type.
+    pub data_type: DataType,
+    /// Size in bits.
+    pub bit_len: u16,
+    /// Access.
+    pub access: Access,
+    /// PDO mappability.
+    pub pdo: PdoMapping,
+    /// Storage.
+    pub storage: Storage,
+    /// Default value, little-endian, type width (strings: the text bytes); empty = none.
+    pub default: Vec<u8>,
+    /// Minimum, little-endian; empty = none.
+    pub min: Vec<u8>,
+    /// Maximum, little-endian; empty = none.
+    pub max: Vec<u8>,
+    /// Application role.
+    pub role: Option<Role>,
+}
+
+impl Entry {
+    /// Size in whole bytes.
+    pub fn byte_len(&self) -> usize {
+        usize::from(self.bit_len).div_ceil(8)
+    }
+    /// The initial value as stored: the default padded with zeros to [`Entry::byte_len`].
+    pub fn initial_bytes(&self) -> Vec<u8> {
+        let mut v = self.default.clone();
+        v.resize(self.byte_len(), 0);
+        v
+    }
+}
+
+/// One object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// Index.
+    pub index: u16,
+    /// Object code.
+    pub code: ObjectCode,
+    /// Name.
+    pub name: String,
+    /// Entries sorted by subindex (subindex 0 first for ARRAY/RECORD).
+    pub entries: Vec<Entry>,
+    /// Generated by od-gen from other sections of the profile.
+    pub derived: bool,
+}
+
+impl Object {
+    /// The entry with this subindex.
+    pub fn entry(&self, subindex: u8) -> Option<&Entry> {
+        self.entries.iter().find(|e| e.subindex == subindex)
+    }
+}
+
+/// One SyncManager.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sm {
+    /// Start address.
+    pub start: u16,
+    /// Length in bytes (mailbox size, or the default process-data size).
+    pub length: u16,
+    /// Control byte.
+    pub control: u8,
+}
+
+/// The SyncManager layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SmLayout {
+    /// SM0.
+    pub mailbox_out: Sm,
+    /// SM1.
+    pub mailbox_in: Sm,
+    /// Bootstrap mailbox out.
+    pub boot_out: Option<Sm>,
+    /// Bootstrap mailbox in.
+    pub boot_in: Option<Sm>,
+    /// SM2 (length = default RxPDO assignment size).
+    pub outputs: Sm,
+    /// SM3 (length = default TxPDO assignment size).
+    pub inputs: Sm,
+}
+
+/// CoE details (SII General byte 5 bits; ESI `Mailbox/CoE` attributes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct CoeDetails {
+    /// b0 SDO.
+    pub sdo: bool,
+    /// b1 SDO information.
+    pub sdo_info: bool,
+    /// b2 PDO assign.
+    pub pdo_assign: bool,
+    /// b3 PDO configuration.
+    pub pdo_config: bool,
+    /// b4 upload at startup.
+    pub upload_at_startup: bool,
+    /// b5 SDO complete access.
+    pub complete_access: bool,
+}
+
+impl CoeDetails {
+    /// The SII General CoE details byte.
+    pub fn bits(&self) -> u8 {
+        u8::from(self.sdo)
+            | u8::from(self.sdo_info) << 1
+            | u8::from(self.pdo_assign) << 2
+            | u8::from(self.pdo_config) << 3
+            | u8::from(self.upload_at_startup) << 4
+            | u8::from(self.complete_access) << 5
+    }
+}
+
+/// Mailbox protocol bits of SII word 0x1C.
+pub mod protocol {
+    /// ADS over EtherCAT.
+    pub const AOE: u16 = 0x01;
+    /// Ethernet over EtherCAT.
+    pub const EOE: u16 = 0x02;
+    /// CAN application protocol over EtherCAT.
+    pub const COE: u16 = 0x04;
+    /// File access over EtherCAT.
+    pub const FOE: u16 = 0x08;
+    /// Servo drive profile over EtherCAT.
+    pub const SOE: u16 = 0x10;
+    /// Vendor specific.
+    pub const VOE: u16 = 0x20;
+    /// Names as written in profile files, with their bits.
+    pub const NAMES: [(&str, u16); 6] =
+        [("AoE", AOE), ("EoE", EOE), ("CoE", COE), ("FoE", FOE), ("SoE", SOE), ("VoE", VOE)];
+}
+
+/// Mailbox settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Mailbox {
+    /// Protocol bits ([`protocol`]).
+    pub protocols: u16,
+    /// Mailbox data link layer.
+    pub data_link_layer: bool,
+    /// CoE details (all false without CoE).
+    pub coe: CoeDetails,
+}
+
+/// Synchronisation support.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sync {
+    /// Free run.
+    pub free_run: bool,
+    /// SM2-synchronous.
+    pub sm_synchronous: bool,
+    /// DC SYNC0.
+    pub dc_sync0: bool,
+    /// DC SYNC1.
+    pub dc_sync1: bool,
+    /// Minimum cycle, ns.
+    pub min_cycle_ns: u32,
+    /// Maximum cycle, ns.
+    pub max_cycle_ns: u32,
+    /// Default cycle, ns.
+    pub default_cycle_ns: u32,
+    /// Calc and copy time, ns.
+    pub calc_and_copy_ns: u32,
+    /// Delay time, ns.
+    pub delay_ns: u32,
+}
+
+impl Sync {
+    /// 1C32h:04 / 1C33h:04 "sync modes supported" (ETG.1020 §21.1.2 as reproduced in Beckhoff
+    /// terminal documentation: b0 free run, b1 SM-synchronous, b2..3 = 01 DC SYNC0, = 10 DC SYNC1).
+    pub fn modes_supported(&self) -> u16 {
+        u16::from(self.free_run)
+            | u16::from(self.sm_synchronous) << 1
+            | u16::from(self.dc_sync0 && !self.dc_sync1) << 2
+            | u16::from(self.dc_sync1) << 3
+    }
+}
+
+/// One DC op mode.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DcOpMode {
+    /// Name.
+    pub name: String,
+    /// Description.
+    pub description: String,
+    /// Registers 0x0980:0x0981.
+    pub assign_activate: u16,
+    /// SYNC0 cycle, ns.
+    pub sync0_cycle_ns: u32,
+    /// SYNC0 factor.
+    pub sync0_factor: i16,
+    /// SYNC0 shift, ns.
+    pub sync0_shift_ns: u32,
+    /// SYNC1 cycle, ns (ESI only).
+    pub sync1_cycle_ns: u32,
+    /// SYNC1 factor.
+    pub sync1_factor: i16,
+    /// SYNC1 shift, ns.
+    pub sync1_shift_ns: u32,
+}
+
+/// One default mapping entry of a PDO.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PdoEntry {
+    /// Object index (0 = padding).
+    pub index: u16,
+    /// Subindex.
+    pub subindex: u8,
+    /// Bit length.
+    pub bits: u16,
+    /// Name (the object entry's; empty for padding).
+    pub name: String,
+    /// Data type (`None` for padding).
+    pub data_type: Option<DataType>,
+}
+
+impl PdoEntry {
+    /// The 32-bit mapping value (index << 16 | subindex << 8 | bits).
+    pub fn mapping_value(&self) -> u32 {
+        u32::from(self.index) << 16 | u32::from(self.subindex) << 8 | u32::from(self.bits & 0xFF)
+    }
+}
+
+/// A PDO.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Pdo {
+    /// Index.
+    pub index: u16,
+    /// Name.
+    pub name: String,
+    /// SyncManager.
+    pub sm: u8,
+    /// Fixed mapping.
+    pub fixed: bool,
+    /// Mandatory.
+    pub mandatory: bool,
+    /// In the default assignment.
+    pub assigned: bool,
+    /// Default mapping.
+    pub entries: Vec<PdoEntry>,
+}
+
+impl Pdo {
+    /// Sum of the entry bit lengths.
+    pub fn bits(&self) -> u32 {
+        self.entries.iter().map(|e| u32::from(e.bits)).sum()
+    }
+}
+
+/// Vendor.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Vendor {
+    /// Vendor ID.
+    pub id: u32,
+    /// Name.
+    pub name: String,
+}
+
+/// Device identity.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Device {
+    /// Device name.
+    pub name: String,
+    /// Order number (ESI Type text).
+    pub order_number: String,
+    /// Product code.
+    pub product_code: u32,
+    /// Revision.
+    pub revision: u32,
+    /// Serial number.
+    pub serial: u32,
+    /// Hardware version.
+    pub hardware_version: String,
+    /// Software version.
+    pub software_version: String,
+    /// ESI group type.
+    pub group_type: String,
+    /// ESI group name.
+    pub group_name: String,
+    /// Physics (e.g. "YY").
+    pub physics: String,
+    /// Profile number (402).
+    pub profile_no: u16,
+    /// DS402 channels.
+    pub ds402_channels: u8,
+}
+
+/// SII configuration area (words 0..6) and EEPROM size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Eeprom {
+    /// EEPROM size in bytes.
+    pub byte_size: usize,
+    /// Word 0 low byte.
+    pub pdi_control: u8,
+    /// Word 0 high byte.
+    pub esc_config: u8,
+    /// Word 1.
+    pub pdi_config: u16,
+    /// Word 2.
+    pub sync_impulse_len: u16,
+    /// Word 3.
+    pub pdi_config2: u16,
+    /// Word 4.
+    pub station_alias: u16,
+    /// Words 5 and 6.
+    pub reserved: [u16; 2],
+}
+
+/// A checked profile with all derived objects.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Profile {
+    /// Name (Rust module name).
+    pub name: String,
+    /// Where it came from (path or `builtin:<name>`), for messages.
+    pub source: String,
+    /// Free text.
+    pub description: String,
+    /// Vendor.
+    pub vendor: Vendor,
+    /// Identity.
+    pub device: Device,
+    /// SII configuration.
+    pub eeprom: Eeprom,
+    /// SyncManagers.
+    pub sm: SmLayout,
+    /// Mailbox.
+    pub mailbox: Mailbox,
+    /// Synchronisation.
+    pub sync: Sync,
+    /// DC op modes.
+    pub dc_op_modes: Vec<DcOpMode>,
+    /// Maximum entries per PDO.
+    pub max_pdo_entries: u8,
+    /// RxPDOs, sorted by index.
+    pub rx_pdos: Vec<Pdo>,
+    /// TxPDOs, sorted by index.
+    pub tx_pdos: Vec<Pdo>,
+    /// All objects (declared and derived), sorted by index.
+    pub objects: Vec<Object>,
+}
+
+impl Profile {
+    /// The object with this index.
+    pub fn object(&self, index: u16) -> Option<&Object> {
+        self.objects.iter().find(|o| o.index == index)
+    }
+    /// The entry `index:subindex`.
+    pub fn entry(&self, index: u16, subindex: u8) -> Option<&Entry> {
+        self.object(index).and_then(|o| o.entry(subindex))
+    }
+    /// Bits of the default-assigned RxPDOs (SM2 default size × 8).
+    pub fn outputs_bits(&self) -> u32 {
+        self.rx_pdos.iter().filter(|p| p.assigned).map(Pdo::bits).sum()
+    }
+    /// Bits of the default-assigned TxPDOs (SM3 default size × 8).
+    pub fn inputs_bits(&self) -> u32 {
+        self.tx_pdos.iter().filter(|p| p.assigned).map(Pdo::bits).sum()
+    }
+    /// The SII EEPROM image ([`crate::sii`]).
+    pub fn sii_image(&self) -> Vec<u8> {
+        crate::sii::image(self)
+    }
+    /// The ESI XML ([`crate::esi`]).
+    pub fn esi_xml(&self) -> String {
+        crate::esi::xml(self)
+    }
+}

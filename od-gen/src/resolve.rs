@@ -1,0 +1,808 @@
+//! From a [`ProfileFile`] to a checked [`Profile`]: converts values, derives the communication
+//! objects from the PDO, SM and sync sections, then runs [`crate::validate`].
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use crate::error::{Error, Invalid};
+use crate::file::{EntryAttrs, ObjectFile, PdoFile, ProfileFile, SmFileEntry};
+use crate::model::*;
+
+/// A key and what is wrong with it (the file name is added by [`resolve`]).
+pub(crate) type Fault = (String, Invalid);
+
+/// Parses TOML text into a checked profile. `source` names the file in error messages.
+pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
+    let file: ProfileFile = toml::from_str(text).map_err(|e| Error::Parse {
+        file: source.to_string(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    resolve(&file, source)
+}
+
+/// Checks a parsed profile file and derives the full dictionary.
+pub fn resolve(file: &ProfileFile, source: &str) -> Result<Profile, Error> {
+    build(file, source).map_err(|(key, error)| Error::Invalid { file: source.to_string(), key, error })
+}
+
+fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
+    let mut protocols = 0u16;
+    for p in &f.mailbox.protocols {
+        let bit = protocol::NAMES
+            .iter()
+            .find(|(n, _)| n == p)
+            .map(|(_, b)| *b)
+            .ok_or_else(|| {
+                fault("mailbox.protocols", Invalid::Mailbox(format!("unknown protocol `{p}`")))
+            })?;
+        protocols |= bit;
+    }
+    let coe = match (&f.mailbox.coe, protocols & protocol::COE != 0) {
+        (Some(c), true) => CoeDetails {
+            sdo: c.sdo,
+            sdo_info: c.sdo_info,
+            pdo_assign: c.pdo_assign,
+            pdo_config: c.pdo_config,
+            upload_at_startup: c.upload_at_startup,
+            complete_access: c.complete_access,
+        },
+        (None, true) => return Err(fault("mailbox.coe", Invalid::Missing("mailbox.coe"))),
+        (Some(_), false) => {
+            return Err(fault(
+                "mailbox.coe",
+                Invalid::Mailbox("CoE details given but CoE is not in mailbox.protocols".into()),
+            ))
+        }
+        (None, false) => CoeDetails::default(),
+    };
+    let mailbox = Mailbox { protocols, data_link_layer: f.mailbox.data_link_layer, coe };
+
+    let sync = Sync {
+        free_run: f.sync.free_run,
+        sm_synchronous: f.sync.sm_synchronous,
+        dc_sync0: f.sync.dc_sync0,
+        dc_sync1: f.sync.dc_sync1,
+        min_cycle_ns: f.sync.min_cycle_ns,
+        max_cycle_ns: f.sync.max_cycle_ns,
+        default_cycle_ns: f.sync.default_cycle_ns,
+        calc_and_copy_ns: f.sync.calc_and_copy_ns,
+        delay_ns: f.sync.delay_ns,
+    };
+
+    let dc_op_modes = f
+        .dc_op_modes
+        .iter()
+        .map(|m| DcOpMode {
+            name: m.name.clone(),
+            description: m.description.clone(),
+            assign_activate: m.assign_activate,
+            sync0_cycle_ns: m.sync0_cycle_ns,
+            sync0_factor: m.sync0_factor,
+            sync0_shift_ns: m.sync0_shift_ns,
+            sync1_cycle_ns: m.sync1_cycle_ns,
+            sync1_factor: m.sync1_factor,
+            sync1_shift_ns: m.sync1_shift_ns,
+        })
+        .collect();
+
+    let device = Device {
+        name: f.device.name.clone(),
+        order_number: f.device.order_number.clone(),
+        product_code: f.device.product_code,
+        revision: f.device.revision,
+        serial: f.device.serial,
+        hardware_version: f.device.hardware_version.clone(),
+        software_version: f.device.software_version.clone(),
+        group_type: f.device.group_type.clone(),
+        group_name: f.device.group_name.clone(),
+        physics: f.device.physics.clone(),
+        profile_no: f.device.profile_no,
+        ds402_channels: f.device.ds402_channels,
+    };
+    let e = &f.eeprom;
+    let eeprom = Eeprom {
+        byte_size: e.byte_size,
+        pdi_control: e.pdi_control,
+        esc_config: e.esc_config,
+        pdi_config: e.pdi_config,
+        sync_impulse_len: e.sync_impulse_len,
+        pdi_config2: e.pdi_config2,
+        station_alias: e.station_alias,
+        reserved: e.reserved,
+    };
+
+    // Declared objects.
+    let mut declared: BTreeMap<u16, Object> = BTreeMap::new();
+    for o in &f.objects {
+        let key = format!("object[{:#06x}]", o.index);
+        if let Some(from) = derived_from(o.index, f) {
+            return Err(fault(&key, Invalid::DerivedObject { index: o.index, from }));
+        }
+        let obj = object(o, &key)?;
+        if declared.insert(o.index, obj).is_some() {
+            return Err(fault(&key, Invalid::DuplicateIndex(o.index)));
+        }
+    }
+
+    // PDOs, checked against the declared objects.
+    let max_entries = f.pdo.max_entries;
+    if max_entries == 0 || max_entries > 254 {
+        return Err(fault("pdo.max_entries", Invalid::Value("must be 1..=254".into())));
+    }
+    let rx_pdos = pdos(&f.rx_pdos, true, &declared, max_entries)?;
+    let tx_pdos = pdos(&f.tx_pdos, false, &declared, max_entries)?;
+
+    let bits = |pdos: &[Pdo], sm: u8, key: &str| -> Result<u16, Fault> {
+        let bits: u32 = pdos.iter().filter(|p| p.assigned).map(Pdo::bits).sum();
+        if bits % 8 != 0 {
+            return Err(fault(key, Invalid::PdoBitsNotBytes { sm, bits }));
+        }
+        u16::try_from(bits / 8).map_err(|_| fault(key, Invalid::Value("process data too large".into())))
+    };
+    let out_len = bits(&rx_pdos, 2, "rxpdo")?;
+    let in_len = bits(&tx_pdos, 3, "txpdo")?;
+    let mbx = |s: &SmFileEntry, key: &str| -> Result<Sm, Fault> {
+        let length = s.size.ok_or_else(|| fault(key, Invalid::Missing("size")))?;
+        Ok(Sm { start: s.start, length, control: s.control })
+    };
+    let pd = |s: &SmFileEntry, key: &str, length: u16| -> Result<Sm, Fault> {
+        if s.size.is_some() {
+            return Err(fault(
+                key,
+                Invalid::Value("process-data SM size comes from the default PDO assignment; remove `size`".into()),
+            ));
+        }
+        Ok(Sm { start: s.start, length, control: s.control })
+    };
+    let sm = SmLayout {
+        mailbox_out: mbx(&f.sm.mailbox_out, "sm.mailbox_out")?,
+        mailbox_in: mbx(&f.sm.mailbox_in, "sm.mailbox_in")?,
+        boot_out: f.sm.boot_out.as_ref().map(|s| mbx(s, "sm.boot_out")).transpose()?,
+        boot_in: f.sm.boot_in.as_ref().map(|s| mbx(s, "sm.boot_in")).transpose()?,
+        outputs: pd(&f.sm.outputs, "sm.outputs", out_len)?,
+        inputs: pd(&f.sm.inputs, "sm.inputs", in_len)?,
+    };
+
+    let mut profile = Profile {
+        name: f.name.clone(),
+        source: source.to_string(),
+        description: f.description.clone(),
+        vendor: Vendor { id: f.vendor.id, name: f.vendor.name.clone() },
+        device,
+        eeprom,
+        sm,
+        mailbox,
+        sync,
+        dc_op_modes,
+        max_pdo_entries: max_entries,
+        rx_pdos,
+        tx_pdos,
+        objects: Vec::new(),
+    };
+    for o in derived_objects(&profile)? {
+        declared.insert(o.index, o);
+    }
+    profile.objects = declared.into_values().collect();
+    crate::validate::check(&profile)?;
+    Ok(profile)
+}
+
+pub(crate) fn fault(key: &str, error: Invalid) -> Fault {
+    (key.to_string(), error)
+}
+
+/// The section an object index is derived from, if od-gen generates it.
+fn derived_from(index: u16, f: &ProfileFile) -> Option<&'static str> {
+    match index {
+        0x1008 | 0x1009 | 0x100A | 0x1018 => Some("device"),
+        0x1600..=0x17FF => Some("rxpdo"),
+        0x1A00..=0x1BFF => Some("txpdo"),
+        0x1C00 | 0x1C10..=0x1C2F => Some("sm"),
+        0x1C32 | 0x1C33 => Some("sync"),
+        _ => {
+            let _ = f;
+            None
+        }
+    }
+}
+
+fn object(o: &ObjectFile, key: &str) -> Result<Object, Fault> {
+    let code = match o.code.as_deref() {
+        None | Some("var") => ObjectCode::Var,
+        Some("record") => ObjectCode::Record,
+        Some("array") => ObjectCode::Array,
+        Some(other) => {
+            return Err(fault(
+                &format!("{key}.code"),
+                Invalid::Value(format!("`{other}` is not var, record or array")),
+            ))
+        }
+    };
+    let attrs = o.attrs();
+    let entries = if code == ObjectCode::Var {
+        if !o.entries.is_empty() {
+            return Err(fault(key, Invalid::NotAllowed("entry (on a VAR object)")));
+        }
+        vec![entry(0, &o.name, &attrs, key)?]
+    } else {
+        if let Some(k) = first_value_key(&attrs) {
+            return Err(fault(key, Invalid::NotAllowed(k)));
+        }
+        if o.entries.is_empty() {
+            return Err(fault(key, Invalid::Missing("entry")));
+        }
+        let mut subs: BTreeMap<u8, Entry> = BTreeMap::new();
+        for e in &o.entries {
+            let ekey = format!("{key}.entry[{:#04x}]", e.sub);
+            if e.sub == 0 {
+                return Err(fault(
+                    &ekey,
+                    Invalid::Value("subindex 0 is generated (highest subindex / count)".into()),
+                ));
+            }
+            let en = entry(e.sub, &e.name, &e.attrs(), &ekey)?;
+            if subs.insert(e.sub, en).is_some() {
+                return Err(fault(&ekey, Invalid::DuplicateSubindex(e.sub)));
+            }
+        }
+        if code == ObjectCode::Array {
+            let first = subs.values().next().map(|e| (e.data_type, e.bit_len));
+            let contiguous = subs.keys().copied().eq(1..=u8::try_from(subs.len()).unwrap_or(u8::MAX));
+            if !contiguous || subs.values().any(|e| Some((e.data_type, e.bit_len)) != first) {
+                return Err(fault(
+                    key,
+                    Invalid::Value("ARRAY entries must be subindex 1..n of one type".into()),
+                ));
+            }
+        }
+        let highest = subs.keys().next_back().copied().unwrap_or(0);
+        let mut v = vec![sub0(highest, Access::RO, Storage::Const)];
+        v.extend(subs.into_values());
+        v
+    };
+    Ok(Object { index: o.index, code, name: o.name.clone(), entries, derived: false })
+}
+
+fn first_value_key(a: &EntryAttrs) -> Option<&'static str> {
+    [
+        (a.data_type.is_some(), "type"),
+        (a.bits.is_some(), "bits"),
+        (a.access.is_some(), "access"),
+        (a.pdo.is_some(), "pdo"),
+        (a.default.is_some(), "default"),
+        (a.min.is_some(), "min"),
+        (a.max.is_some(), "max"),
+        (a.storage.is_some(), "storage"),
+        (a.role.is_some(), "role"),
+    ]
+    .into_iter()
+    .find(|(set, _)| *set)
+    .map(|(_, k)| k)
+}
+
+/// Subindex 0 of a RECORD/ARRAY.
+fn sub0(value: u8, access: Access, storage: Storage) -> Entry {
+    Entry {
+        subindex: 0,
+        name: "SubIndex 000".into(),
+        data_type: DataType::Usint,
+        bit_len: 8,
+        access,
+        pdo: PdoMapping::No,
+        storage,
+        default: vec![value],
+        min: Vec::new(),
+        max: Vec::new(),
+        role: None,
+    }
+}
+
+fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, Fault> {
+    let k = |s: &str| format!("{key}.{s}");
+    let tname = a.data_type.as_deref().ok_or_else(|| fault(key, Invalid::Missing("type")))?;
+    let data_type =
+        DataType::parse(tname).ok_or_else(|| fault(&k("type"), Invalid::UnknownType(tname.into())))?;
+    let access = match a.access.as_deref() {
+        None => return Err(fault(key, Invalid::Missing("access"))),
+        Some(s) => Access::parse(s)
+            .ok_or_else(|| fault(&k("access"), Invalid::Value(format!("unknown access `{s}`"))))?,
+    };
+    let pdo = match a.pdo.as_deref() {
+        None | Some("no") => PdoMapping::No,
+        Some("rx") => PdoMapping::Rx,
+        Some("tx") => PdoMapping::Tx,
+        Some("rxtx") => PdoMapping::RxTx,
+        Some(s) => {
+            return Err(fault(&k("pdo"), Invalid::Value(format!("`{s}` is not no, rx, tx or rxtx"))))
+        }
+    };
+    if pdo.rx() && !access.writable() {
+        return Err(fault(&k("pdo"), Invalid::Value("an RxPDO-mappable entry must be writable".into())));
+    }
+    if pdo.tx() && !access.readable() {
+        return Err(fault(&k("pdo"), Invalid::Value("a TxPDO-mappable entry must be readable".into())));
+    }
+    let role = match a.role.as_deref() {
+        None => None,
+        Some(s) => Some(
+            Role::parse(s)
+                .ok_or_else(|| fault(&k("role"), Invalid::Value(format!("unknown role `{s}`"))))?,
+        ),
+    };
+    let default = match &a.default {
+        None => Vec::new(),
+        Some(v) => encode(data_type, v).map_err(|e| fault(&k("default"), e))?,
+    };
+    let bit_len = match (data_type.fixed_bits(), a.bits) {
+        (Some(b), None) => b,
+        (Some(b), Some(given)) if given == b => b,
+        (Some(b), Some(given)) => {
+            return Err(fault(
+                &k("bits"),
+                Invalid::Value(format!("{tname} has {b} bits, `bits` says {given}")),
+            ))
+        }
+        (None, Some(given)) => {
+            if given == 0 || given % 8 != 0 || usize::from(given / 8) < default.len() {
+                return Err(fault(
+                    &k("bits"),
+                    Invalid::Value("must be a non-zero multiple of 8 holding the default".into()),
+                ));
+            }
+            given
+        }
+        (None, None) if !default.is_empty() => u16::try_from(default.len() * 8)
+            .map_err(|_| fault(&k("default"), Invalid::Value("too long".into())))?,
+        (None, None) => return Err(fault(key, Invalid::Missing("bits"))),
+    };
+    let min = match &a.min {
+        None => Vec::new(),
+        Some(v) => encode(data_type, v).map_err(|e| fault(&k("min"), e))?,
+    };
+    let max = match &a.max {
+        None => Vec::new(),
+        Some(v) => encode(data_type, v).map_err(|e| fault(&k("max"), e))?,
+    };
+    if data_type.is_string() && (!min.is_empty() || !max.is_empty()) {
+        return Err(fault(key, Invalid::NotAllowed("min/max (on a string)")));
+    }
+    check_range(data_type, &default, &min, &max).map_err(|e| fault(&k("default"), e))?;
+    let storage = match a.storage.as_deref() {
+        None if access.writable() || pdo != PdoMapping::No || role.is_some() => Storage::Ram,
+        None => Storage::Const,
+        Some("ram") => Storage::Ram,
+        Some("const") if access.writable() || pdo != PdoMapping::No || role.is_some() => {
+            return Err(fault(
+                &k("storage"),
+                Invalid::Value("a writable, PDO-mappable or role entry must be stored in RAM".into()),
+            ))
+        }
+        Some("const") => Storage::Const,
+        Some(s) => return Err(fault(&k("storage"), Invalid::Value(format!("`{s}` is not ram or const")))),
+    };
+    if let Some(r) = role {
+        if r.data_type() != data_type {
+            let expected = match r.data_type() {
+                DataType::Uint => "UINT",
+                DataType::Sint => "SINT",
+                _ => "DINT",
+            };
+            return Err(fault(&k("role"), Invalid::RoleType { role: r.field().into(), expected }));
+        }
+    }
+    Ok(Entry {
+        subindex,
+        name: name.to_string(),
+        data_type,
+        bit_len,
+        access,
+        pdo,
+        storage,
+        default,
+        min,
+        max,
+        role,
+    })
+}
+
+/// A number read from a profile value.
+#[derive(Clone, Copy, PartialEq, PartialOrd)]
+enum Num {
+    Int(i128),
+    Float(f64),
+}
+
+fn int_of(v: &toml::Value) -> Option<i128> {
+    match v {
+        toml::Value::Integer(i) => Some(i128::from(*i)),
+        toml::Value::Boolean(b) => Some(i128::from(*b)),
+        toml::Value::String(s) => {
+            let t = s.replace('_', "");
+            let (neg, t) = match t.strip_prefix('-') {
+                Some(r) => (true, r.to_string()),
+                None => (false, t),
+            };
+            let n = if let Some(h) = t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+                i128::from_str_radix(h, 16).ok()?
+            } else {
+                t.parse::<i128>().ok()?
+            };
+            Some(if neg { -n } else { n })
+        }
+        toml::Value::Float(_) | toml::Value::Datetime(_) | toml::Value::Array(_) | toml::Value::Table(_) => {
+            None
+        }
+    }
+}
+
+/// Encodes a profile value as little-endian bytes of the type.
+fn encode(dt: DataType, v: &toml::Value) -> Result<Vec<u8>, Invalid> {
+    match dt {
+        DataType::VisibleString => match v {
+            toml::Value::String(s) if s.is_ascii() => Ok(s.as_bytes().to_vec()),
+            _ => Err(Invalid::Value("a VISIBLE_STRING value must be an ASCII string".into())),
+        },
+        DataType::UnicodeString => match v {
+            toml::Value::String(s) => Ok(s.encode_utf16().flat_map(u16::to_le_bytes).collect()),
+            _ => Err(Invalid::Value("a UNICODE_STRING value must be a string".into())),
+        },
+        DataType::OctetString => match v {
+            toml::Value::String(s) => {
+                let hex: String = s.chars().filter(|c| !c.is_whitespace()).collect();
+                if hex.len() % 2 != 0 {
+                    return Err(Invalid::Value("an OCTET_STRING value is an even number of hex digits".into()));
+                }
+                (0..hex.len())
+                    .step_by(2)
+                    .map(|i| {
+                        hex.get(i..i + 2)
+                            .and_then(|b| u8::from_str_radix(b, 16).ok())
+                            .ok_or_else(|| Invalid::Value("an OCTET_STRING value is hex digits".into()))
+                    })
+                    .collect()
+            }
+            _ => Err(Invalid::Value("an OCTET_STRING value must be a hex string".into())),
+        },
+        DataType::Real | DataType::Lreal => {
+            let x = match v {
+                toml::Value::Float(x) => *x,
+                toml::Value::Integer(i) => *i as f64,
+                _ => return Err(Invalid::Value("a REAL value must be a number".into())),
+            };
+            if dt == DataType::Real {
+                let y = x as f32;
+                if x.is_finite() && !y.is_finite() {
+                    return Err(Invalid::OutOfTypeRange(format!("{x} does not fit REAL")));
+                }
+                Ok(y.to_le_bytes().to_vec())
+            } else {
+                Ok(x.to_le_bytes().to_vec())
+            }
+        }
+        _ => {
+            let n = int_of(v).ok_or_else(|| Invalid::Value("an integer value is expected".into()))?;
+            let (lo, hi) = dt.int_range().unwrap_or((0, 0));
+            if n < lo || n > hi {
+                return Err(Invalid::OutOfTypeRange(format!("{n} is not in {lo}..={hi}")));
+            }
+            let bytes = usize::from(dt.fixed_bits().unwrap_or(8)).div_ceil(8);
+            Ok(n.to_le_bytes().get(..bytes).map(<[u8]>::to_vec).unwrap_or_default())
+        }
+    }
+}
+
+/// Decodes little-endian bytes of a numeric type.
+fn decode(dt: DataType, b: &[u8]) -> Option<Num> {
+    match dt {
+        DataType::Real => Some(Num::Float(f64::from(f32::from_le_bytes(b.try_into().ok()?)))),
+        DataType::Lreal => Some(Num::Float(f64::from_le_bytes(b.try_into().ok()?))),
+        _ if dt.is_string() || b.is_empty() => None,
+        _ => {
+            let mut buf = [0u8; 16];
+            buf.get_mut(..b.len())?.copy_from_slice(b);
+            let mut n = i128::from_le_bytes(buf);
+            let bits = 8 * b.len() as u32;
+            if dt.is_signed() && n >> (bits - 1) & 1 == 1 {
+                n -= 1i128 << bits;
+            }
+            Some(Num::Int(n))
+        }
+    }
+}
+
+fn check_range(dt: DataType, default: &[u8], min: &[u8], max: &[u8]) -> Result<(), Invalid> {
+    let (d, lo, hi) = (decode(dt, default), decode(dt, min), decode(dt, max));
+    if let (Some(lo), Some(hi)) = (lo, hi) {
+        if lo > hi {
+            return Err(Invalid::DefaultOutOfRange);
+        }
+    }
+    if let Some(d) = d {
+        if lo.is_some_and(|lo| d < lo) || hi.is_some_and(|hi| d > hi) {
+            return Err(Invalid::DefaultOutOfRange);
+        }
+    }
+    Ok(())
+}
+
+fn pdos(
+    list: &[PdoFile],
+    rx: bool,
+    objects: &BTreeMap<u16, Object>,
+    max_entries: u8,
+) -> Result<Vec<Pdo>, Fault> {
+    let kind = if rx { "rxpdo" } else { "txpdo" };
+    let (range, sm) = if rx { (0x1600..=0x17FF, 2) } else { (0x1A00..=0x1BFF, 3) };
+    let mut seen = BTreeSet::new();
+    let mut out = Vec::new();
+    for p in list {
+        let key = format!("{kind}[{:#06x}]", p.index);
+        if !range.contains(&p.index) {
+            return Err(fault(&key, Invalid::PdoIndexRange(p.index)));
+        }
+        if !seen.insert(p.index) {
+            return Err(fault(&key, Invalid::DuplicatePdo(p.index)));
+        }
+        if p.sm != sm {
+            return Err(fault(&format!("{key}.sm"), Invalid::PdoSm { sm: p.sm, expected: sm }));
+        }
+        if p.entries.is_empty() {
+            // ethercat-esi 0.2.0 and many tools reject PDOs without entries (esi-sii.md §3).
+            return Err(fault(&format!("{key}.entries"), Invalid::Missing("entries")));
+        }
+        if p.entries.len() > usize::from(max_entries) {
+            return Err(fault(
+                &format!("{key}.entries"),
+                Invalid::TooManyPdoEntries { count: p.entries.len(), max: max_entries },
+            ));
+        }
+        let mut entries = Vec::new();
+        for (i, e) in p.entries.iter().enumerate() {
+            let ekey = format!("{key}.entries[{i}]");
+            entries.push(pdo_entry(e, rx, objects, &ekey)?);
+        }
+        out.push(Pdo {
+            index: p.index,
+            name: p.name.clone(),
+            sm,
+            fixed: p.fixed,
+            mandatory: p.mandatory,
+            assigned: p.assigned,
+            entries,
+        });
+    }
+    out.sort_by_key(|p| p.index);
+    Ok(out)
+}
+
+fn pdo_entry(
+    e: &crate::file::PdoEntryFile,
+    rx: bool,
+    objects: &BTreeMap<u16, Object>,
+    key: &str,
+) -> Result<PdoEntry, Fault> {
+    match (e.pad, e.index, e.sub, e.bits) {
+        (Some(bits), None, None, None) => {
+            if bits == 0 || bits > 255 {
+                return Err(fault(key, Invalid::Value("padding must be 1..=255 bits".into())));
+            }
+            Ok(PdoEntry { index: 0, subindex: 0, bits, name: String::new(), data_type: None })
+        }
+        (None, Some(index), sub, Some(bits)) => {
+            let subindex = sub.unwrap_or(0);
+            let missing = || fault(key, Invalid::PdoEntryMissing { index, subindex });
+            let obj = objects.get(&index).ok_or_else(missing)?;
+            let en = obj.entry(subindex).ok_or_else(missing)?;
+            let ok = if rx { en.pdo.rx() } else { en.pdo.tx() };
+            if !ok {
+                return Err(fault(key, Invalid::PdoEntryNotMappable { index, subindex }));
+            }
+            if en.bit_len != bits {
+                return Err(fault(
+                    key,
+                    Invalid::PdoEntryBitLen { index, subindex, pdo: bits, object: en.bit_len },
+                ));
+            }
+            if en.storage != Storage::Ram {
+                return Err(fault(key, Invalid::Value("a mapped entry must be stored in RAM".into())));
+            }
+            let name = if obj.code == ObjectCode::Var { obj.name.clone() } else { en.name.clone() };
+            Ok(PdoEntry { index, subindex, bits, name, data_type: Some(en.data_type) })
+        }
+        (None, Some(_), _, None) => Err(fault(key, Invalid::Missing("bits"))),
+        _ => Err(fault(
+            key,
+            Invalid::Value("a PDO entry is `{ index, sub, bits }` or `{ pad = bits }`".into()),
+        )),
+    }
+}
+
+fn var(index: u16, name: &str, e: Entry) -> Object {
+    Object { index, code: ObjectCode::Var, name: name.into(), entries: vec![e], derived: true }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn val(
+    sub: u8,
+    name: &str,
+    dt: DataType,
+    access: Access,
+    storage: Storage,
+    default: Vec<u8>,
+    min: Vec<u8>,
+    max: Vec<u8>,
+) -> Entry {
+    let bit_len = dt.fixed_bits().unwrap_or_else(|| u16::try_from(default.len() * 8).unwrap_or(0));
+    Entry {
+        subindex: sub,
+        name: name.into(),
+        data_type: dt,
+        bit_len,
+        access,
+        pdo: PdoMapping::No,
+        storage,
+        default,
+        min,
+        max,
+        role: None,
+    }
+}
+
+fn konst(sub: u8, name: &str, dt: DataType, default: Vec<u8>) -> Entry {
+    val(sub, name, dt, Access::RO, Storage::Const, default, Vec::new(), Vec::new())
+}
+
+fn ram_ro(sub: u8, name: &str, dt: DataType, default: Vec<u8>) -> Entry {
+    val(sub, name, dt, Access::RO, Storage::Ram, default, Vec::new(), Vec::new())
+}
+
+/// The objects od-gen derives from the device, PDO, SM and sync sections.
+fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
+    use DataType::*;
+    let mut v = Vec::new();
+    let s = |t: &str| t.as_bytes().to_vec();
+    for (index, name, text, key) in [
+        (0x1008, "Manufacturer device name", &p.device.name, "device.name"),
+        (0x1009, "Manufacturer hardware version", &p.device.hardware_version, "device.hardware_version"),
+        (0x100A, "Manufacturer software version", &p.device.software_version, "device.software_version"),
+    ] {
+        if text.is_empty() || !text.is_ascii() {
+            return Err(fault(key, Invalid::Value("must be non-empty ASCII (VISIBLE_STRING)".into())));
+        }
+        v.push(var(index, name, konst(0, name, VisibleString, s(text))));
+    }
+    v.push(Object {
+        index: 0x1018,
+        code: ObjectCode::Record,
+        name: "Identity".into(),
+        entries: vec![
+            sub0(4, Access::RO, Storage::Const),
+            konst(1, "Vendor ID", Udint, p.vendor.id.to_le_bytes().to_vec()),
+            konst(2, "Product code", Udint, p.device.product_code.to_le_bytes().to_vec()),
+            konst(3, "Revision", Udint, p.device.revision.to_le_bytes().to_vec()),
+            // RAM: the board writes the unit's serial number at start-up.
+            ram_ro(4, "Serial number", Udint, p.device.serial.to_le_bytes().to_vec()),
+        ],
+        derived: true,
+    });
+
+    let coe = p.mailbox.coe;
+    for pdo in p.rx_pdos.iter().chain(&p.tx_pdos) {
+        let configurable = coe.pdo_config && !pdo.fixed;
+        let cap = if configurable { p.max_pdo_entries } else { u8::try_from(pdo.entries.len()).unwrap_or(0) };
+        let (access, storage) =
+            if configurable { (Access::RW_PREOP, Storage::Ram) } else { (Access::RO, Storage::Const) };
+        let n = u8::try_from(pdo.entries.len()).unwrap_or(0);
+        let mut entries = vec![val(
+            0,
+            "SubIndex 000",
+            Usint,
+            access,
+            storage,
+            vec![n],
+            vec![0],
+            vec![cap],
+        )];
+        for i in 1..=cap {
+            let m = pdo.entries.get(usize::from(i) - 1).map_or(0, PdoEntry::mapping_value);
+            entries.push(val(
+                i,
+                &format!("SubIndex {i:03}"),
+                Udint,
+                access,
+                storage,
+                m.to_le_bytes().to_vec(),
+                Vec::new(),
+                Vec::new(),
+            ));
+        }
+        v.push(Object { index: pdo.index, code: ObjectCode::Record, name: pdo.name.clone(), entries, derived: true });
+    }
+
+    // 1C00h: SM communication types (ETG.1000.6 §5.6.7.4.9): 1 mailbox out, 2 mailbox in,
+    // 3 process-data out, 4 process-data in. SOEM reads :00 and needs n > 2.
+    let mut sm_types = vec![sub0(4, Access::RO, Storage::Const)];
+    for (i, name) in [(1u8, "SubIndex 001"), (2, "SubIndex 002"), (3, "SubIndex 003"), (4, "SubIndex 004")] {
+        sm_types.push(konst(i, name, Usint, vec![i]));
+    }
+    v.push(Object {
+        index: 0x1C00,
+        code: ObjectCode::Array,
+        name: "Sync manager type".into(),
+        entries: sm_types,
+        derived: true,
+    });
+
+    for (index, name, pdos) in [
+        (0x1C12u16, "RxPDO assign", &p.rx_pdos),
+        (0x1C13, "TxPDO assign", &p.tx_pdos),
+    ] {
+        let cap = u8::try_from(pdos.len()).unwrap_or(u8::MAX);
+        let (access, storage) =
+            if coe.pdo_assign { (Access::RW_PREOP, Storage::Ram) } else { (Access::RO, Storage::Const) };
+        let assigned: Vec<u16> = pdos.iter().filter(|p| p.assigned).map(|p| p.index).collect();
+        let n = u8::try_from(assigned.len()).unwrap_or(0);
+        let mut entries = vec![val(0, "SubIndex 000", Usint, access, storage, vec![n], vec![0], vec![cap])];
+        for i in 1..=cap {
+            let d = assigned.get(usize::from(i) - 1).copied().unwrap_or(0);
+            entries.push(val(
+                i,
+                &format!("SubIndex {i:03}"),
+                Uint,
+                access,
+                storage,
+                d.to_le_bytes().to_vec(),
+                Vec::new(),
+                Vec::new(),
+            ));
+        }
+        v.push(Object { index, code: ObjectCode::Array, name: name.into(), entries, derived: true });
+    }
+
+    // 1C32h/1C33h: SM output/input parameter (ETG.1020 §21; subindex list as in Beckhoff
+    // terminal documentation). All RAM so the stack can write measured values; only :01 and :02
+    // are master-writable (PREOP).
+    let y = &p.sync;
+    for (index, name, sm_sync_mode) in [(0x1C32u16, "SM output parameter", 1u16), (0x1C33, "SM input parameter", 0x22)] {
+        let mode = if y.free_run {
+            0
+        } else if y.sm_synchronous {
+            sm_sync_mode
+        } else if y.dc_sync0 {
+            2
+        } else {
+            3
+        };
+        let u32b = |x: u32| x.to_le_bytes().to_vec();
+        let u16b = |x: u16| x.to_le_bytes().to_vec();
+        v.push(Object {
+            index,
+            code: ObjectCode::Record,
+            name: name.into(),
+            entries: vec![
+                sub0(0x20, Access::RO, Storage::Const),
+                val(1, "Sync mode", Uint, Access::RW_PREOP, Storage::Ram, u16b(mode), Vec::new(), Vec::new()),
+                val(
+                    2,
+                    "Cycle time",
+                    Udint,
+                    Access::RW_PREOP,
+                    Storage::Ram,
+                    u32b(y.default_cycle_ns),
+                    u32b(y.min_cycle_ns),
+                    u32b(y.max_cycle_ns),
+                ),
+                ram_ro(3, "Shift time", Udint, u32b(0)),
+                ram_ro(4, "Sync modes supported", Uint, u16b(y.modes_supported())),
+                ram_ro(5, "Minimum cycle time", Udint, u32b(y.min_cycle_ns)),
+                ram_ro(6, "Calc and copy time", Udint, u32b(y.calc_and_copy_ns)),
+                ram_ro(8, "Get cycle time", Uint, u16b(0)),
+                ram_ro(9, "Delay time", Udint, u32b(y.delay_ns)),
+                ram_ro(0x0B, "SM event missed counter", Uint, u16b(0)),
+                ram_ro(0x0C, "Cycle time too small counter", Uint, u16b(0)),
+                ram_ro(0x20, "Sync error", Bool, vec![0]),
+            ],
+            derived: true,
+        });
+    }
+    Ok(v)
+}

@@ -1,0 +1,311 @@
+//! The Rust object dictionary compiled into the firmware (`OUT_DIR/profiles.rs`).
+//!
+//! For every profile, `generate` emits a module
+//!
+//! ```text
+//! pub mod <name> {
+//!     pub const RAM_SIZE: usize;         // OD RAM bytes
+//!     pub const OUTPUTS_SIZE: usize;     // SM2 default size (default RxPDO assignment)
+//!     pub const INPUTS_SIZE: usize;      // SM3 default size (default TxPDO assignment)
+//!     pub const DEFAULTS: &[u8];         // initial OD RAM image
+//!     pub const OBJECTS: &[Object];      // sorted by index, entries by subindex
+//!     pub static PROFILE: Profile;
+//! }
+//! ```
+//!
+//! plus `MAX_RAM_SIZE`, `ALL` and `by_name` at the top level, and `const` assertions that the
+//! objects and entries are sorted, every RAM variable lies inside `RAM_SIZE`, and the default
+//! PDO assignment read back from the generated 1C12h/1C13h and 16xxh/1Axxh adds up to the SM2/SM3
+//! sizes that the SII and the ESI carry. The code uses only `core` and the types of
+//! `firmware::od::model`.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use crate::model::{Access, Entry, Profile, Role, Sm, Storage};
+
+/// Where each RAM variable of a profile lives.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RamLayout {
+    /// Byte offset of each RAM entry, by (index, subindex).
+    pub offsets: BTreeMap<(u16, u8), u16>,
+    /// The initial OD RAM image.
+    pub image: Vec<u8>,
+}
+
+/// Packs the RAM entries in dictionary order, each aligned to its size (at most 4 bytes;
+/// strings byte-aligned).
+pub fn ram_layout(p: &Profile) -> RamLayout {
+    let mut offsets = BTreeMap::new();
+    let mut image: Vec<u8> = Vec::new();
+    for o in &p.objects {
+        for e in o.entries.iter().filter(|e| e.storage == Storage::Ram) {
+            let align = if e.data_type.is_string() { 1 } else { e.byte_len().next_power_of_two().min(4) };
+            let at = image.len().div_ceil(align) * align;
+            image.resize(at, 0);
+            image.extend_from_slice(&e.initial_bytes());
+            offsets.insert((o.index, e.subindex), u16::try_from(at).unwrap_or(u16::MAX));
+        }
+    }
+    // Keep the size a multiple of 4 so that `[u8; RAM_SIZE]` arrays pack well.
+    image.resize(image.len().div_ceil(4) * 4, 0);
+    RamLayout { offsets, image }
+}
+
+fn bytes(b: &[u8]) -> String {
+    let items: Vec<String> = b.iter().map(|x| format!("{x:#04x}")).collect();
+    format!("&[{}]", items.join(", "))
+}
+
+fn access(a: Access) -> String {
+    match a.0 {
+        0x07 => "Access::RO".into(),
+        0x3F => "Access::RW".into(),
+        0x0F => "Access::RW_PREOP".into(),
+        0x1F => "Access::RW_PREOP_SAFEOP".into(),
+        0x38 => "Access::WO".into(),
+        x => format!("Access({x:#04x})"),
+    }
+}
+
+fn sm(s: Sm, length: u16) -> String {
+    format!("SmLayout {{ start: {:#06x}, length: {length}, control: {:#04x} }}", s.start, s.control)
+}
+
+fn entry(out: &mut String, index: u16, e: &Entry, layout: &RamLayout) {
+    let value = match e.storage {
+        Storage::Ram => format!("Value::Ram({})", layout.offsets.get(&(index, e.subindex)).copied().unwrap_or(0)),
+        Storage::Const => format!("Value::Const({})", bytes(&e.initial_bytes())),
+    };
+    let _ = writeln!(
+        out,
+        "            Entry {{ subindex: {:#04x}, name: {:?}, data_type: DataType::{}, bit_len: {}, access: {}, pdo: PdoMappable::{}, value: {value}, default: {}, min: {}, max: {} }},",
+        e.subindex,
+        e.name,
+        e.data_type.rust_variant(),
+        e.bit_len,
+        access(e.access),
+        e.pdo.rust_variant(),
+        bytes(&e.default),
+        bytes(&e.min),
+        bytes(&e.max),
+    );
+}
+
+fn module(out: &mut String, p: &Profile) {
+    let layout = ram_layout(p);
+    let out_size = p.outputs_bits() / 8;
+    let in_size = p.inputs_bits() / 8;
+    let _ = writeln!(out, "/// Profile `{}`: {} (generated from `{}`).", p.name, p.device.name, p.source);
+    let _ = writeln!(out, "pub mod {} {{", p.name);
+    let _ = writeln!(
+        out,
+        "    use crate::od::{{Access, AppVars, CoeDetails, DataType, DeviceInfo, Entry, Object, ObjectCode, PdoMappable, Profile, SmLayout, SyncSupport, Value}};\n"
+    );
+    let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
+    let _ = writeln!(out, "    pub const RAM_SIZE: usize = {};", layout.image.len());
+    let _ = writeln!(out, "    /// SM2 default size in bytes: the default RxPDO assignment (SII SYNCM, ESI `Sm@DefaultSize`).");
+    let _ = writeln!(out, "    pub const OUTPUTS_SIZE: usize = {out_size};");
+    let _ = writeln!(out, "    /// SM3 default size in bytes: the default TxPDO assignment.");
+    let _ = writeln!(out, "    pub const INPUTS_SIZE: usize = {in_size};");
+    let _ = writeln!(out, "    /// Initial OD RAM content.");
+    let _ = writeln!(out, "    pub const DEFAULTS: &[u8] = {};", bytes(&layout.image));
+    let _ = writeln!(out, "    /// All objects, sorted by index.");
+    let _ = writeln!(out, "    pub const OBJECTS: &[Object] = &[");
+    for o in &p.objects {
+        let _ = writeln!(
+            out,
+            "        Object {{ index: {:#06x}, code: ObjectCode::{}, name: {:?}, entries: &[",
+            o.index,
+            o.code.rust_variant(),
+            o.name
+        );
+        for e in &o.entries {
+            entry(out, o.index, e, &layout);
+        }
+        let _ = writeln!(out, "        ] }},");
+    }
+    let _ = writeln!(out, "    ];");
+
+    let var = |r: Role| -> String {
+        p.objects
+            .iter()
+            .flat_map(|o| o.entries.iter().map(move |e| (o.index, e)))
+            .find(|(_, e)| e.role == Some(r))
+            .and_then(|(i, e)| layout.offsets.get(&(i, e.subindex)))
+            .map_or("None".into(), |off| format!("Some({off})"))
+    };
+    let boot = |s: Option<Sm>| s.map_or("None".into(), |s| format!("Some({})", sm(s, s.length)));
+    let c = p.mailbox.coe;
+    let y = &p.sync;
+    let _ = writeln!(out, "    /// The profile.");
+    let _ = writeln!(out, "    pub static PROFILE: Profile = Profile {{");
+    let _ = writeln!(out, "        device: DeviceInfo {{");
+    let _ = writeln!(out, "            profile: {:?},", p.name);
+    let _ = writeln!(out, "            name: {:?},", p.device.name);
+    let _ = writeln!(out, "            vendor_id: {:#010x},", p.vendor.id);
+    let _ = writeln!(out, "            product_code: {:#010x},", p.device.product_code);
+    let _ = writeln!(out, "            revision: {:#010x},", p.device.revision);
+    let _ = writeln!(out, "            mailbox_out: {},", sm(p.sm.mailbox_out, p.sm.mailbox_out.length));
+    let _ = writeln!(out, "            mailbox_in: {},", sm(p.sm.mailbox_in, p.sm.mailbox_in.length));
+    let _ = writeln!(out, "            boot_mailbox_out: {},", boot(p.sm.boot_out));
+    let _ = writeln!(out, "            boot_mailbox_in: {},", boot(p.sm.boot_in));
+    let _ = writeln!(out, "            outputs: {},", sm(p.sm.outputs, 0));
+    let _ = writeln!(out, "            inputs: {},", sm(p.sm.inputs, 0));
+    let _ = writeln!(
+        out,
+        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {} }},",
+        y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns
+    );
+    let _ = writeln!(out, "            max_pdo_entries: {},", p.max_pdo_entries);
+    let _ = writeln!(out, "            mailbox_protocols: {:#06x},", p.mailbox.protocols);
+    let _ = writeln!(
+        out,
+        "            coe: CoeDetails {{ sdo: {}, sdo_info: {}, pdo_assign: {}, pdo_config: {}, upload_at_startup: {}, complete_access: {} }},",
+        c.sdo, c.sdo_info, c.pdo_assign, c.pdo_config, c.upload_at_startup, c.complete_access
+    );
+    let _ = writeln!(out, "        }},");
+    let _ = writeln!(out, "        objects: OBJECTS,");
+    let _ = writeln!(out, "        defaults: DEFAULTS,");
+    let _ = writeln!(out, "        vars: AppVars {{");
+    for r in Role::ALL {
+        let _ = writeln!(out, "            {}: {},", r.field(), var(r));
+    }
+    let _ = writeln!(out, "        }},");
+    let _ = writeln!(out, "    }};\n");
+    let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");
+    let _ = writeln!(out, "    const _: () = assert!(super::check::objects_sorted(OBJECTS), \"objects not sorted by index\");");
+    let _ = writeln!(out, "    const _: () = assert!(super::check::entries_sorted(OBJECTS), \"entries not sorted by subindex\");");
+    let _ = writeln!(out, "    const _: () = assert!(super::check::ram_in_bounds(OBJECTS, RAM_SIZE), \"a RAM variable lies outside RAM_SIZE\");");
+    let _ = writeln!(
+        out,
+        "    const _: () = assert!(super::check::assigned_bits(OBJECTS, DEFAULTS, 0x1c12) == OUTPUTS_SIZE * 8, \"default RxPDO mapping differs from the SM2 size in SII/ESI\");"
+    );
+    let _ = writeln!(
+        out,
+        "    const _: () = assert!(super::check::assigned_bits(OBJECTS, DEFAULTS, 0x1c13) == INPUTS_SIZE * 8, \"default TxPDO mapping differs from the SM3 size in SII/ESI\");"
+    );
+    let _ = writeln!(out, "}}\n");
+}
+
+const CHECK: &str = r#"/// `const` cross-checks of the generated tables (evaluated at compile time only).
+mod check {
+    use crate::od::{Object, Value};
+
+    pub(super) const fn objects_sorted(o: &[Object]) -> bool {
+        let mut i = 1;
+        while i < o.len() {
+            if o[i - 1].index >= o[i].index {
+                return false;
+            }
+            i += 1;
+        }
+        true
+    }
+
+    pub(super) const fn entries_sorted(o: &[Object]) -> bool {
+        let mut i = 0;
+        while i < o.len() {
+            let e = o[i].entries;
+            let mut j = 1;
+            while j < e.len() {
+                if e[j - 1].subindex >= e[j].subindex {
+                    return false;
+                }
+                j += 1;
+            }
+            i += 1;
+        }
+        true
+    }
+
+    pub(super) const fn ram_in_bounds(o: &[Object], ram: usize) -> bool {
+        let mut i = 0;
+        while i < o.len() {
+            let e = o[i].entries;
+            let mut j = 0;
+            while j < e.len() {
+                if let Value::Ram(off) = e[j].value {
+                    if off as usize + e[j].byte_len() > ram {
+                        return false;
+                    }
+                }
+                j += 1;
+            }
+            i += 1;
+        }
+        true
+    }
+
+    /// The value of `index:sub` (up to 4 bytes, little-endian; 0 if missing).
+    const fn value(o: &[Object], defaults: &[u8], index: u16, sub: u8) -> u32 {
+        let mut i = 0;
+        while i < o.len() {
+            if o[i].index == index {
+                let e = o[i].entries;
+                let mut j = 0;
+                while j < e.len() {
+                    if e[j].subindex == sub {
+                        let n = if e[j].byte_len() < 4 { e[j].byte_len() } else { 4 };
+                        let mut v = 0u32;
+                        let mut k = 0;
+                        while k < n {
+                            let b = match e[j].value {
+                                Value::Const(bytes) => bytes[k],
+                                Value::Ram(off) => defaults[off as usize + k],
+                            };
+                            v |= (b as u32) << (8 * k);
+                            k += 1;
+                        }
+                        return v;
+                    }
+                    j += 1;
+                }
+            }
+            i += 1;
+        }
+        0
+    }
+
+    /// Sum of the mapped bit lengths of the PDOs assigned by default in `assign` (1C12h/1C13h).
+    pub(super) const fn assigned_bits(o: &[Object], defaults: &[u8], assign: u16) -> usize {
+        let n = value(o, defaults, assign, 0);
+        let mut bits = 0usize;
+        let mut i = 1;
+        while i <= n {
+            let pdo = value(o, defaults, assign, i as u8) as u16;
+            let m = value(o, defaults, pdo, 0);
+            let mut j = 1;
+            while j <= m {
+                bits += (value(o, defaults, pdo, j as u8) & 0xff) as usize;
+                j += 1;
+            }
+            i += 1;
+        }
+        bits
+    }
+}
+"#;
+
+/// The Rust source of `OUT_DIR/profiles.rs` for these profiles (sorted by name in `ALL`).
+pub fn generate(profiles: &[Profile]) -> String {
+    let mut sorted: Vec<&Profile> = profiles.iter().collect();
+    sorted.sort_by(|a, b| a.name.cmp(&b.name));
+    let mut out = String::new();
+    out.push_str("// @generated by od-gen from the profile files. Do not edit: change the profile.\n\n");
+    let max = sorted.iter().map(|p| ram_layout(p).image.len()).max().unwrap_or(0);
+    let _ = writeln!(out, "/// The largest OD RAM of all profiles (bytes): size a shared RAM buffer with it.");
+    let _ = writeln!(out, "pub const MAX_RAM_SIZE: usize = {max};\n");
+    let _ = writeln!(out, "/// All compiled-in profiles, sorted by name.");
+    let refs: Vec<String> = sorted.iter().map(|p| format!("&{}::PROFILE", p.name)).collect();
+    let _ = writeln!(out, "pub static ALL: [&crate::od::Profile; {}] = [{}];\n", sorted.len(), refs.join(", "));
+    let _ = writeln!(out, "/// The compiled-in profile with this name (the profile file's `name`).");
+    let _ = writeln!(out, "pub fn by_name(name: &str) -> Option<&'static crate::od::Profile> {{");
+    let _ = writeln!(out, "    ALL.iter().copied().find(|p| p.device.profile == name)");
+    let _ = writeln!(out, "}}\n");
+    for p in &sorted {
+        module(&mut out, p);
+    }
+    out.push_str(CHECK);
+    out
+}

@@ -1,0 +1,272 @@
+//! Profile-wide consistency checks that need the whole resolved profile: name, SM layout and
+//! control bytes, mailbox and CoE flags, sync and DC op modes, roles, EEPROM size.
+
+use std::collections::BTreeSet;
+
+use crate::error::Invalid;
+use crate::model::*;
+use crate::resolve::{fault, Fault};
+
+/// Runs every check; the first failure is returned with its key.
+pub(crate) fn check(p: &Profile) -> Result<(), Fault> {
+    name(&p.name)?;
+    sms(p)?;
+    mailbox(p)?;
+    sync(p)?;
+    roles(p)?;
+    strings(p)?;
+    eeprom(p)?;
+    Ok(())
+}
+
+const KEYWORDS: [&str; 51] = [
+    "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for", "if",
+    "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub", "ref", "return", "self", "Self",
+    "static", "struct", "super", "trait", "true", "type", "unsafe", "use", "where", "while", "async",
+    "await", "dyn", "abstract", "become", "box", "do", "final", "macro", "override", "priv", "typeof",
+    "unsized", "virtual", "yield", "try",
+];
+
+fn name(n: &str) -> Result<(), Fault> {
+    let mut chars = n.chars();
+    let ok = chars.next().is_some_and(|c| c.is_ascii_lowercase())
+        && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+        && !KEYWORDS.contains(&n)
+        && n != "check";
+    if ok {
+        Ok(())
+    } else {
+        Err(fault(
+            "name",
+            Invalid::Value(format!("`{n}` is not a lower-case Rust identifier `[a-z][a-z0-9_]*`")),
+        ))
+    }
+}
+
+/// SM control byte (ESC register 0x0804, ET1100 datasheet Sec. II): bits 0..1 operation mode
+/// (00 buffered/3-buffer, 10 mailbox), bits 2..3 direction (00 ECAT reads, 01 ECAT writes).
+fn control(sm: &'static str, c: u8, mailbox: bool, ecat_writes: bool) -> Result<(), Fault> {
+    let mode = c & 0x03;
+    let dir = (c >> 2) & 0x03;
+    let why = if mailbox && mode != 0b10 {
+        Some("bits 0..1 must be 10 (mailbox mode)")
+    } else if !mailbox && mode != 0b00 {
+        Some("bits 0..1 must be 00 (buffered mode)")
+    } else if ecat_writes && dir != 0b01 {
+        Some("bits 2..3 must be 01 (master writes)")
+    } else if !ecat_writes && dir != 0b00 {
+        Some("bits 2..3 must be 00 (master reads)")
+    } else if c & 0x80 != 0 {
+        Some("bit 7 is reserved")
+    } else {
+        None
+    };
+    match why {
+        Some(why) => Err(fault(&format!("sm.{sm}.control"), Invalid::SmControl { sm, control: c, why })),
+        None => Ok(()),
+    }
+}
+
+fn sms(p: &Profile) -> Result<(), Fault> {
+    let s = &p.sm;
+    control("mailbox_out", s.mailbox_out.control, true, true)?;
+    control("mailbox_in", s.mailbox_in.control, true, false)?;
+    if let Some(b) = s.boot_out {
+        control("boot_out", b.control, true, true)?;
+    }
+    if let Some(b) = s.boot_in {
+        control("boot_in", b.control, true, false)?;
+    }
+    control("outputs", s.outputs.control, false, true)?;
+    control("inputs", s.inputs.control, false, false)?;
+    if s.boot_out.is_some() != s.boot_in.is_some() {
+        return Err(fault("sm.boot_out", Invalid::Value("boot_out and boot_in come as a pair".into())));
+    }
+    for (name, sm) in [("mailbox_out", s.mailbox_out), ("mailbox_in", s.mailbox_in)]
+        .into_iter()
+        .chain(s.boot_out.map(|b| ("boot_out", b)))
+        .chain(s.boot_in.map(|b| ("boot_in", b)))
+    {
+        // A CoE SDO request needs 6 (mailbox header) + 10 (CoE + SDO header) bytes.
+        if sm.length < 16 {
+            return Err(fault(&format!("sm.{name}.size"), Invalid::Value("a mailbox needs at least 16 bytes".into())));
+        }
+    }
+    // Memory used by each SM: mailboxes one buffer, process data three buffers (3-buffer mode),
+    // sized for the larger of the default assignment and all PDOs of that direction.
+    let all_bits = |pdos: &[Pdo]| -> u32 { pdos.iter().map(Pdo::bits).sum() };
+    let pd_len = |sm: Sm, pdos: &[Pdo]| -> u32 { u32::from(sm.length).max(all_bits(pdos).div_ceil(8)) };
+    let mut areas: Vec<(&'static str, u32, u32)> = vec![
+        ("mailbox_out", u32::from(s.mailbox_out.start), u32::from(s.mailbox_out.length)),
+        ("mailbox_in", u32::from(s.mailbox_in.start), u32::from(s.mailbox_in.length)),
+        ("outputs", u32::from(s.outputs.start), 3 * pd_len(s.outputs, &p.rx_pdos)),
+        ("inputs", u32::from(s.inputs.start), 3 * pd_len(s.inputs, &p.tx_pdos)),
+    ];
+    // The bootstrap mailboxes replace the standard ones in BOOT, so they may share memory with
+    // them; they must not collide with process data.
+    let boot: Vec<(&'static str, u32, u32)> = [("boot_out", s.boot_out), ("boot_in", s.boot_in)]
+        .into_iter()
+        .filter_map(|(n, b)| b.map(|b| (n, u32::from(b.start), u32::from(b.length))))
+        .collect();
+    for &(name, start, len) in areas.iter().chain(&boot) {
+        // The ESC process RAM starts at 0x1000 (ET1100 datasheet Sec. I, address space).
+        if start < 0x1000 || start + len > 0x1_0000 {
+            return Err(fault(&format!("sm.{name}.start"), Invalid::Value("outside the ESC process RAM (0x1000..)".into())));
+        }
+    }
+    let overlaps = |a: (u32, u32), b: (u32, u32)| a.1 > 0 && b.1 > 0 && a.0 < b.0 + b.1 && b.0 < a.0 + a.1;
+    for i in 0..areas.len() {
+        for j in i + 1..areas.len() {
+            let (a, b) = (areas[i], areas[j]);
+            if overlaps((a.1, a.2), (b.1, b.2)) {
+                return Err(fault(&format!("sm.{}", b.0), Invalid::SmOverlap { a: a.0, b: b.0 }));
+            }
+        }
+    }
+    areas.truncate(4);
+    for &(bn, bs, bl) in &boot {
+        for &(an, as_, al) in areas.iter().skip(2) {
+            if overlaps((bs, bl), (as_, al)) {
+                return Err(fault(&format!("sm.{bn}"), Invalid::SmOverlap { a: an, b: bn }));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn mailbox(p: &Profile) -> Result<(), Fault> {
+    let c = p.mailbox.coe;
+    if p.mailbox.protocols & protocol::COE != 0 && !c.sdo {
+        return Err(fault("mailbox.coe.sdo", Invalid::Mailbox("CoE without SDO support is not useful".into())));
+    }
+    let needs_sdo = c.sdo_info || c.pdo_assign || c.pdo_config || c.upload_at_startup || c.complete_access;
+    if needs_sdo && !c.sdo {
+        return Err(fault("mailbox.coe", Invalid::Mailbox("CoE services need `sdo = true`".into())));
+    }
+    if c.pdo_config && !c.pdo_assign {
+        return Err(fault(
+            "mailbox.coe.pdo_config",
+            Invalid::Mailbox("PDO configuration without PDO assignment is not supported".into()),
+        ));
+    }
+    if p.mailbox.protocols == 0 {
+        return Err(fault("mailbox.protocols", Invalid::Mailbox("at least one protocol is needed".into())));
+    }
+    Ok(())
+}
+
+fn sync(p: &Profile) -> Result<(), Fault> {
+    let y = &p.sync;
+    if !(y.free_run || y.sm_synchronous || y.dc_sync0 || y.dc_sync1) {
+        return Err(fault("sync", Invalid::Sync("no synchronisation mode is supported".into())));
+    }
+    if y.dc_sync1 && !y.dc_sync0 {
+        return Err(fault("sync.dc_sync1", Invalid::Sync("SYNC1 needs SYNC0".into())));
+    }
+    if y.min_cycle_ns == 0 || y.min_cycle_ns > y.max_cycle_ns {
+        return Err(fault("sync.min_cycle_ns", Invalid::Sync("need 0 < min_cycle_ns <= max_cycle_ns".into())));
+    }
+    if !(y.min_cycle_ns..=y.max_cycle_ns).contains(&y.default_cycle_ns) {
+        return Err(fault(
+            "sync.default_cycle_ns",
+            Invalid::Sync("default_cycle_ns outside min_cycle_ns..=max_cycle_ns".into()),
+        ));
+    }
+    let mut names = BTreeSet::new();
+    for (i, m) in p.dc_op_modes.iter().enumerate() {
+        let key = format!("dc_op_mode[{i}]");
+        if m.name.is_empty() || !names.insert(m.name.as_str()) {
+            return Err(fault(&format!("{key}.name"), Invalid::Sync("op mode names must be unique and non-empty".into())));
+        }
+        // AssignActivate is written to 0x0980:0x0981; 0x0981 bit 0 = activate cyclic operation,
+        // bit 1 = SYNC0, bit 2 = SYNC1 (ET1100 datasheet Sec. II, register 0x0981).
+        let act = m.assign_activate >> 8;
+        if act & 0x02 != 0 && !y.dc_sync0 {
+            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("activates SYNC0 but sync.dc_sync0 is false".into())));
+        }
+        if act & 0x04 != 0 && !y.dc_sync1 {
+            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("activates SYNC1 but sync.dc_sync1 is false".into())));
+        }
+        if act & 0x06 != 0 && act & 0x01 == 0 {
+            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("SYNC signals need bit 8 (cyclic operation)".into())));
+        }
+        if m.assign_activate & 0xF800 != 0 {
+            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("reserved bits set".into())));
+        }
+    }
+    let has = |bits: u16| p.dc_op_modes.iter().any(|m| (m.assign_activate >> 8) & bits == bits);
+    if y.dc_sync0 && !has(0x03) {
+        return Err(fault("dc_op_mode", Invalid::Sync("sync.dc_sync0 needs an op mode with SYNC0 (AssignActivate 0x0300)".into())));
+    }
+    if y.dc_sync1 && !has(0x07) {
+        return Err(fault("dc_op_mode", Invalid::Sync("sync.dc_sync1 needs an op mode with SYNC1 (AssignActivate 0x0700)".into())));
+    }
+    Ok(())
+}
+
+fn roles(p: &Profile) -> Result<(), Fault> {
+    let mut seen = BTreeSet::new();
+    for o in &p.objects {
+        for e in &o.entries {
+            if let Some(r) = e.role {
+                if e.storage != Storage::Ram {
+                    return Err(fault(
+                        &format!("object[{:#06x}].role", o.index),
+                        Invalid::RoleType { role: r.field().into(), expected: "RAM" },
+                    ));
+                }
+                if !seen.insert(r) {
+                    return Err(fault(&format!("object[{:#06x}].role", o.index), Invalid::DuplicateRole(r.field().into())));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn strings(p: &Profile) -> Result<(), Fault> {
+    let mut all: Vec<(&str, String)> = vec![
+        ("device.name", p.device.name.clone()),
+        ("device.order_number", p.device.order_number.clone()),
+        ("device.group_type", p.device.group_type.clone()),
+        ("device.group_name", p.device.group_name.clone()),
+        ("vendor.name", p.vendor.name.clone()),
+    ];
+    for m in &p.dc_op_modes {
+        all.push(("dc_op_mode.name", m.name.clone()));
+        all.push(("dc_op_mode.description", m.description.clone()));
+    }
+    for pdo in p.rx_pdos.iter().chain(&p.tx_pdos) {
+        all.push(("rxpdo/txpdo.name", pdo.name.clone()));
+    }
+    for (key, s) in &all {
+        if s.len() > 255 {
+            return Err(fault(key, Invalid::Value("longer than 255 bytes (SII string limit)".into())));
+        }
+    }
+    for (key, s) in &all[..4] {
+        if s.is_empty() {
+            return Err(fault(key, Invalid::Value("must not be empty".into())));
+        }
+    }
+    let physics_ok = p.device.physics.len() <= 4 && p.device.physics.chars().all(|c| matches!(c, 'Y' | 'K' | 'H' | ' '));
+    if !physics_ok {
+        return Err(fault("device.physics", Invalid::Value("up to 4 of Y, K, H or space".into())));
+    }
+    Ok(())
+}
+
+fn eeprom(p: &Profile) -> Result<(), Fault> {
+    let n = p.eeprom.byte_size;
+    if n < 128 || !n.is_power_of_two() || n / 128 > 0x1_0000 {
+        return Err(fault(
+            "eeprom.byte_size",
+            Invalid::Value("must be 128 × a power of two (128, 256, ... bytes)".into()),
+        ));
+    }
+    let needed = crate::sii::content(p).len();
+    if needed > n {
+        return Err(fault("eeprom.byte_size", Invalid::EepromTooSmall { needed, declared: n }));
+    }
+    Ok(())
+}
