@@ -96,7 +96,8 @@ fn module(out: &mut String, p: &Profile) {
     let layout = ram_layout(p);
     let out_size = p.outputs_bits() / 8;
     let in_size = p.inputs_bits() / 8;
-    let _ = writeln!(out, "/// Profile `{}`: {} (generated from `{}`).", p.name, p.device.name, p.source);
+    let file = std::path::Path::new(&p.source).file_name().map_or(p.source.clone(), |f| f.to_string_lossy().into_owned());
+    let _ = writeln!(out, "/// Profile `{}`: {} (generated from `{file}`).", p.name, p.device.name);
     let _ = writeln!(out, "pub mod {} {{", p.name);
     let _ = writeln!(
         out,

@@ -109,8 +109,8 @@ pub fn serve(mut segment: Segment, interface: &str, duration: Option<Duration>) 
     let sock = RawSocket::open(interface)?;
     // SAFETY: installing a handler that only stores to an atomic is async-signal-safe.
     unsafe {
-        libc::signal(libc::SIGINT, on_signal as libc::sighandler_t);
-        libc::signal(libc::SIGTERM, on_signal as libc::sighandler_t);
+        libc::signal(libc::SIGINT, on_signal as *const () as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
     }
     let start = Instant::now();
     let mut buf = vec![0u8; MAX_FRAME];

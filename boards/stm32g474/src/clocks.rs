@@ -66,8 +66,8 @@ pub fn config() -> embassy_stm32::Config {
     rcc.apb2_pre = APBPrescaler::DIV1;
     rcc.boost = true;
     rcc.hsi48 = None;
-    // DMA channel interrupts default to P0, the level reserved for the FOC interrupt
+    // DMA channel interrupts (the G4's DMA is embassy's `bdma` kind) default to P0, the level reserved for the FOC interrupt
     // (see `irq::prio`). No DMA is used yet; keep them out of P0 regardless.
-    config.dma_interrupt_priority = crate::irq::prio::DMA;
+    config.bdma_interrupt_priority = crate::irq::prio::DMA;
     config
 }

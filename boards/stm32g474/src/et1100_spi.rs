@@ -76,6 +76,10 @@ pub mod cmd {
     /// No operation: address phase only (returns the AL event).
     pub const NOP: u8 = 0b000;
     /// Read without wait-state byte (needs a pause before the data phase; not used here).
+    #[expect(
+        dead_code,
+        reason = "documents the command set; reads use READ_WAIT_STATE"
+    )]
     pub const READ: u8 = 0b010;
     /// Read with a following wait-state byte.
     pub const READ_WAIT_STATE: u8 = 0b011;
@@ -282,11 +286,6 @@ impl<'d> Et1100Spi<'d> {
         self.spi.get_current_config().frequency.0
     }
 
-    /// Reads the AL event request register with an address-phase-only (NOP) frame.
-    pub fn al_event(&mut self) -> Result<AlEvent, Error> {
-        self.frame(0, cmd::NOP, Data::None)
-    }
-
     /// One complete frame: select, address phase, data phase, deselect.
     fn frame(&mut self, addr: u16, command: u8, data: Data<'_>) -> Result<AlEvent, Error> {
         let len = data.len();
@@ -310,7 +309,12 @@ impl<'d> Et1100Spi<'d> {
 
     /// Clocks header and data through SPI3, keeping up to [`MAX_IN_FLIGHT`] bytes queued so
     /// that the bytes follow each other without gaps.
-    fn clock_frame(&mut self, addr: u16, header: &Header, mut data: Data<'_>) -> Result<AlEvent, Error> {
+    fn clock_frame(
+        &mut self,
+        addr: u16,
+        header: &Header,
+        mut data: Data<'_>,
+    ) -> Result<AlEvent, Error> {
         let r = self.regs;
         let total = header.len + data.len();
         let data_len = data.len();

@@ -3,9 +3,9 @@
 //! | priority | vector | context | work |
 //! |---|---|---|---|
 //! | P0 | (TIM1_UP_TIM16 / ADC1_2, later) | FOC | **reserved** for the PWM/ADC control interrupt; nothing else uses P0 and the Slave/PDI lock does not mask it |
-//! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`Slave::on_cycle`](firmware::slave::Slave::on_cycle), raw handler [`CycleHandler`]; also pended by software for SM-synchronous and free-run cycles |
+//! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`Slave::on_cycle`](firmware::slave::Slave::on_cycle) in DC modes, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
 //! | P2 | EXTI2 (SPI_IRQ, PD2) | ESC event | raw handler [`EscIrqHandler`]: clears the line and signals the ESC-event task |
-//! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`Slave::on_esc_event`](firmware::slave::Slave::on_esc_event), and `tasks::free_run` |
+//! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`Slave::on_esc_event`](firmware::slave::Slave::on_esc_event) (which also runs SM-synchronous cycles on the SM2 event), and `tasks::free_run` |
 //! | P3 | TIM4 | embassy-time | alarm of the time driver (`time-driver-tim4`) |
 //! | P4 | DMA1/2 channels | — | not used yet, kept out of P0 (`clocks::config`) |
 //! | thread | — | background | embassy thread executor: fallback event poll, LEDs, statistics |
@@ -46,7 +46,7 @@ use cortex_m::peripheral::DWT;
 use embassy_executor::{InterruptExecutor, SendSpawner};
 use embassy_stm32::exti::{self, ExtiInput};
 use embassy_stm32::gpio::{ExtiPin, Pin as GpioPin, Pull};
-use embassy_stm32::interrupt::typelevel::{self, Handler};
+use embassy_stm32::interrupt::typelevel::{self, Binding, Handler};
 use embassy_stm32::interrupt::{self as vector, InterruptExt};
 use embassy_stm32::mode::Blocking;
 use embassy_stm32::{bind_interrupts, pac, Peri};
@@ -54,7 +54,7 @@ use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
 use firmware::slave::{Slave, SyncMode};
-use hal::esc::AlEvent;
+use static_cell::StaticCell;
 
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
 use crate::lock::BasepriRawMutex;
@@ -99,12 +99,18 @@ pub struct Drive {
     pub pdi: Et1100Spi<'static>,
 }
 
+/// Storage of the [`Drive`] (in .bss: `StaticCell` is uninitialised memory, where a
+/// `RefCell<Option<Drive>>` initialised to `None` would be copied from flash into .data).
+static DRIVE_STORAGE: StaticCell<Drive> = StaticCell::new();
+
 /// The shared [`Drive`], locked with the SYNC0 priority as ceiling. `None` until [`install`].
-static DRIVE: Mutex<BasepriRawMutex<{ prio::CYCLE as u8 }>, RefCell<Option<Drive>>> =
+static DRIVE: Mutex<BasepriRawMutex<{ prio::CYCLE as u8 }>, RefCell<Option<&'static mut Drive>>> =
     Mutex::new(RefCell::new(None));
 
-/// Moves the drive into the shared cell; the contexts start using it from now on.
-pub fn install(drive: Drive) {
+/// Moves the drive into its static storage and the shared cell; the contexts start using it
+/// from now on. Builds the drive in place (`make` runs once; a second call panics).
+pub fn install(make: impl FnOnce() -> Drive) {
+    let drive = DRIVE_STORAGE.init_with(make);
     DRIVE.lock(|cell| {
         if let Ok(mut slot) = cell.try_borrow_mut() {
             *slot = Some(drive);
@@ -117,7 +123,7 @@ pub fn install(drive: Drive) {
 pub fn with_drive<R>(f: impl FnOnce(&mut Drive) -> R) -> Option<R> {
     DRIVE.lock(|cell| {
         let mut slot = cell.try_borrow_mut().ok()?;
-        slot.as_mut().map(f)
+        slot.as_deref_mut().map(f)
     })
 }
 
@@ -170,8 +176,6 @@ pub static EVENT_STATS: ContextStats = ContextStats::new();
 static CYCLE_REQUESTS: AtomicU8 = AtomicU8::new(0);
 /// A free-run tick (`tasks::free_run`).
 pub const REQUEST_FREE_RUN: u8 = 1 << 0;
-/// An SM2 event seen by the ESC-event context (SM-synchronous mode).
-pub const REQUEST_SM2: u8 = 1 << 1;
 
 /// Asks the cycle context to run one cycle; it decides from the sync mode whether the
 /// request applies.
@@ -185,8 +189,7 @@ pub struct CycleHandler;
 
 impl Handler<typelevel::EXTI4> for CycleHandler {
     /// ISR: ESC SYNC0, EXTI4 at P1.
-    /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free-run 1 kHz; SM-sync at
-    ///   the master's frame rate.
+    /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free-run 1 kHz.
     /// - Budget: `on_cycle` ≤ 2,000 instructions (DESIGN.md §6) ≈ 12 µs at 170 MHz, plus the
     ///   PDI bus time: (3 + n_out) + (2 + n_in) bytes × 376 ns, e.g. 2 × 32 B of PDO ≈ 26 µs.
     ///   Everything (lock wait included) must end before the next SYNC0, less the FOC load.
@@ -204,8 +207,9 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
         let result = with_drive(|d| {
             let run = match d.slave.sync_mode() {
                 SyncMode::DcSync0 | SyncMode::DcSync1 => edge,
-                SyncMode::SmSynchronous => requests & REQUEST_SM2 != 0,
                 SyncMode::FreeRun => requests & REQUEST_FREE_RUN != 0,
+                // `on_esc_event` runs the cycle itself when it sees the SM2 event.
+                SyncMode::SmSynchronous => false,
             };
             if run {
                 Some(d.slave.on_cycle(&mut d.pdi, now_ns()))
@@ -234,7 +238,9 @@ impl Handler<typelevel::EXTI2> for EscIrqHandler {
     /// - Budget: ≤ 100 cycles (clear the line, signal the task: a ~20-cycle critical section).
     /// - Measured: not yet on hardware; to be measured with DWT stamps like the cycle context.
     unsafe fn on_interrupt() {
-        pac::EXTI.pr(0).write(|w| w.set_line(ESC_IRQ_EXTI_LINE, true));
+        pac::EXTI
+            .pr(0)
+            .write(|w| w.set_line(ESC_IRQ_EXTI_LINE, true));
         ESC_IRQ.signal(());
     }
 }
@@ -270,8 +276,11 @@ pub fn set_priorities() {
     vector::TIM4.set_priority(prio::TIME_DRIVER);
 }
 
-/// Starts the ESC-event executor (priority set by [`set_priorities`]).
-pub fn start_esc_event_executor() -> SendSpawner {
+/// Starts the ESC-event executor (priority set by [`set_priorities`]). `_irqs` proves that
+/// UART4 polls this executor.
+pub fn start_esc_event_executor(
+    _irqs: impl Binding<typelevel::UART4, EscEventExecutor>,
+) -> SendSpawner {
     ESC_EVENT_EXECUTOR.start(vector::UART4)
 }
 
@@ -280,6 +289,7 @@ pub fn start_esc_event_executor() -> SendSpawner {
 pub fn sync0_input<T>(
     pin: Peri<'static, T>,
     channel: Peri<'static, T::ExtiChannel>,
+    _irqs: impl Binding<typelevel::EXTI4, CycleHandler>,
 ) -> ExtiInput<'static, Blocking>
 where
     T: GpioPin + ExtiPin,
@@ -293,6 +303,7 @@ where
 pub fn esc_irq_input<T>(
     pin: Peri<'static, T>,
     channel: Peri<'static, T::ExtiChannel>,
+    _irqs: impl Binding<typelevel::EXTI2, EscIrqHandler>,
 ) -> ExtiInput<'static, Blocking>
 where
     T: GpioPin + ExtiPin,
@@ -301,20 +312,11 @@ where
     ExtiInput::new_blocking(pin, channel, Pull::Up, exti::TriggerEdge::Falling)
 }
 
-/// Serves pending AL events once: in SM-synchronous mode, first looks at the SM2 event (read
-/// for free in the address phase of a NOP frame) and requests a cycle; then runs
-/// [`Slave::on_esc_event`]. Called from the ESC-event context and the thread-mode fallback.
+/// Serves pending AL events once ([`Slave::on_esc_event`], which polls the AL event register
+/// itself and also runs the SM-synchronous cycle on an SM2 event). Called from the ESC-event
+/// context and from the thread-mode fallback poll.
 pub fn service_esc_events() {
     let started = DWT::cycle_count();
-    let result = with_drive(|d| {
-        if d.slave.sync_mode() == SyncMode::SmSynchronous {
-            let event = d.pdi.al_event()?;
-            if event.any(AlEvent::sm(2)) {
-                // Runs as soon as this lock is released (P1 is masked until then).
-                request_cycle(REQUEST_SM2);
-            }
-        }
-        d.slave.on_esc_event(&mut d.pdi, now_ns())
-    });
+    let result = with_drive(|d| d.slave.on_esc_event(&mut d.pdi, now_ns()));
     EVENT_STATS.record(started, result);
 }

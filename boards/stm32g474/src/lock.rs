@@ -71,7 +71,10 @@ impl<const CEILING: u8> BasepriRawMutex<CEILING> {
 unsafe impl<const CEILING: u8> RawMutex for BasepriRawMutex<CEILING> {
     const INIT: Self = {
         assert!(CEILING != 0, "BASEPRI 0 disables masking");
-        assert!(CEILING & 0x0F == 0, "the STM32G4 implements 4 priority bits (the high nibble)");
+        assert!(
+            CEILING & 0x0F == 0,
+            "the STM32G4 implements 4 priority bits (the high nibble)"
+        );
         Self {
             _not_constructible_elsewhere: PhantomData,
         }

@@ -1,1 +1,129 @@
+//! Real board: STM32G474RE (Cortex-M4F, 170 MHz) with a Beckhoff ET1100 EtherCAT slave
+//! controller on SPI. Built with embassy for `thumbv7em-none-eabihf`, flashed with probe-rs.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`pins`] | the pin map (the only place that names pins) |
+//! | [`clocks`] | HSE 24 MHz → PLL → 170 MHz |
+//! | [`et1100_spi`] | the ET1100 SPI PDI driver (`hal::pdi::EscPdi`) |
+//! | [`irq`] | priorities, vectors, the cycle and ESC-event contexts, the shared Slave/PDI |
+//! | [`lock`] | the BASEPRI priority-ceiling lock |
+//! | [`tasks`] | async tasks (ESC-event context and thread mode) |
+//! | [`time`] | DWT cycle counter (`hal::time::CycleCounter`), 64-bit ns clock |
+//! | [`leds`] | RUN/ERR LEDs (`hal::io::StatusLeds`) |
+//! | [`profile`] | which vendor profile this image carries |
 #![no_std]
+#![no_main]
+#![deny(missing_docs)]
+#![deny(clippy::missing_safety_doc)]
+
+mod clocks;
+mod et1100_spi;
+mod irq;
+mod leds;
+mod lock;
+mod pins;
+mod profile;
+mod tasks;
+mod time;
+
+use defmt::{error, info, unwrap};
+use embassy_executor::Spawner;
+use embassy_time::{Duration, Timer};
+use firmware::slave::Slave;
+use hal::esc::regs;
+use hal::pdi::EscPdi;
+use {defmt_rtt as _, panic_probe as _};
+
+use crate::et1100_spi::Et1100Spi;
+
+/// Start-up probe: attempts and spacing. The ET1100 loads its SII EEPROM after reset (tens of
+/// ms for a few KiB at 100/400 kHz I²C) and only then enables the SPI PDI; 100 × 10 ms = 1 s.
+const PROBE_ATTEMPTS: u32 = 100;
+const PROBE_RETRY: Duration = Duration::from_millis(10);
+
+/// Waits (bounded) until the ESC answers on the PDI (see [`tasks::esc_ready`]). Returns
+/// whether it did.
+async fn probe_esc(pdi: &mut Et1100Spi<'_>) -> bool {
+    for attempt in 0..PROBE_ATTEMPTS {
+        match tasks::esc_ready(pdi) {
+            Ok(true) => {
+                let revision = pdi.read_u8(regs::REVISION.addr).unwrap_or(0);
+                let build = pdi.read_u16(regs::BUILD.addr).unwrap_or(0);
+                info!(
+                    "ET1100 ready after {} attempt(s): revision {}, build {}",
+                    attempt + 1,
+                    revision,
+                    build
+                );
+                return true;
+            }
+            Ok(false) => {}
+            Err(e) => error!("ESC probe: PDI error {}", e),
+        }
+        Timer::after(PROBE_RETRY).await;
+    }
+    error!(
+        "ESC not ready after {} ms (type register != 0x11 or EEPROM not loaded); \
+         the fallback poll keeps probing",
+        PROBE_ATTEMPTS * PROBE_RETRY.as_millis() as u32
+    );
+    false
+}
+
+/// Creates the slave, starts it if the ESC is ready, and installs slave and PDI as the shared
+/// drive. Returns whether the slave was started. A plain function, so that the multi-KiB
+/// `Slave` never becomes part of the main task's future.
+fn install_drive(mut pdi: Et1100Spi<'static>, ready: bool) -> bool {
+    let mut started = false;
+    irq::install(|| {
+        // A profile whose OD RAM does not fit RAM_SIZE is a build error of od-gen: stop here.
+        let mut slave: Slave<{ profile::RAM_SIZE }> = unwrap!(Slave::new(&profile::PROFILE));
+        // AL status INIT and the AL event mask (drives SPI_IRQ). If the ESC is not ready yet,
+        // the fallback poll task keeps probing and calls `start` once it is.
+        started = ready && slave.start(&mut pdi).is_ok();
+        if ready && !started {
+            error!("Slave::start failed; the fallback poll retries");
+        }
+        irq::Drive { slave, pdi }
+    });
+    started
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let p = embassy_stm32::init(clocks::config());
+    // Before any EXTI line is unmasked: embassy's init enabled every EXTI vector at P0.
+    irq::set_priorities();
+    let core = unwrap!(cortex_m::Peripherals::take());
+    let _cycle_counter = time::CycleCount::enable(core.DCB, core.DWT);
+    info!(
+        "board-stm32g474: SYSCLK {} Hz, profile {}",
+        clocks::SYSCLK_HZ,
+        profile::PROFILE.device.profile
+    );
+
+    let board = pins::split(p);
+    let esc = board.esc;
+    let mut pdi = Et1100Spi::new(esc.spi, esc.sck, esc.miso, esc.mosi, esc.cs);
+    info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
+    let ready = probe_esc(&mut pdi).await;
+
+    let started = install_drive(pdi, ready);
+
+    // Unmask the ESC lines only now that the drive is installed.
+    let sync0 = irq::sync0_input(esc.sync0, esc.sync0_exti, irq::Irqs);
+    let esc_irq = irq::esc_irq_input(esc.irq, esc.irq_exti, irq::Irqs);
+
+    let event_spawner = irq::start_esc_event_executor(irq::Irqs);
+    // The task pools have one slot each and each task is spawned once: a spawn error is a bug.
+    event_spawner.spawn(unwrap!(tasks::esc_event(esc_irq)));
+    event_spawner.spawn(unwrap!(tasks::free_run()));
+    spawner.spawn(unwrap!(tasks::esc_poll(started)));
+    spawner.spawn(unwrap!(tasks::leds(leds::Leds::new(board.leds))));
+    spawner.spawn(unwrap!(tasks::report()));
+
+    // SYNC0's EXTI configuration belongs to `sync0`: keep it alive for ever.
+    let _sync0 = sync0;
+    core::future::pending::<()>().await;
+}

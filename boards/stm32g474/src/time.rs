@@ -36,8 +36,7 @@ impl CycleCounter for CycleCount {
 }
 
 /// (high word, last low word) of the 64-bit cycle count.
-static EXTENSION: Mutex<CriticalSectionRawMutex, Cell<(u32, u32)>> =
-    Mutex::new(Cell::new((0, 0)));
+static EXTENSION: Mutex<CriticalSectionRawMutex, Cell<(u32, u32)>> = Mutex::new(Cell::new((0, 0)));
 
 /// Cycles since the counter was enabled, extended to 64 bits.
 ///

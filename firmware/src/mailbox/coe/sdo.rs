@@ -256,7 +256,8 @@ impl SdoServer {
     }
 
     /// Initiate download: expedited and normal transfers commit at once, a normal transfer whose
-    /// data does not fit the frame starts a segmented download.
+    /// data does not fit the frame starts a segmented download. Bytes of a normal init frame
+    /// beyond the announced complete size are ignored.
     fn download_init(
         &mut self,
         od: &mut Dictionary<'_>,
@@ -388,9 +389,8 @@ impl SdoServer {
             };
         }
         let flags = if toggle { command::TOGGLE } else { 0 };
-        let mut frame = [0; SDO_FRAME_LEN];
-        frame[0] = Command::new(scs::DOWNLOAD_SEGMENT, flags).0;
-        Ok(write_frame(resp, frame))
+        let cmd = Command::new(scs::DOWNLOAD_SEGMENT, flags);
+        Ok(write_frame(resp, [cmd.0, 0, 0, 0, 0, 0, 0, 0]))
     }
 
     /// Commits the first `size` buffered bytes.
@@ -443,7 +443,7 @@ impl SdoServer {
             return Err(abort(AbortCode::UnsupportedAccess));
         }
         let entry = find_entry(od, index, subindex).map_err(abort)?;
-        check_access(entry.access, state, Direction::Read).map_err(abort)?;
+        check_access(entry.access, state, AccessKind::Read).map_err(abort)?;
         let data = upload_value(od, entry).map_err(abort)?;
         if (1..=EXPEDITED_DATA_LEN).contains(&data.len()) {
             return Ok(write_expedited_upload(resp, index, subindex, data));
@@ -541,9 +541,9 @@ impl SdoServer {
     }
 }
 
-/// Access direction.
+/// Kind of access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Direction {
+enum AccessKind {
     Read,
     Write,
 }
@@ -566,35 +566,35 @@ fn find_writable(
         return Err(AbortCode::UnsupportedAccess);
     }
     let entry = find_entry(od, index, subindex)?;
-    check_access(entry.access, state, Direction::Write)?;
+    check_access(entry.access, state, AccessKind::Write)?;
     Ok(entry)
 }
 
 /// Checks the entry's access rights: never readable/writable gives 0x06010001/0x06010002, not in
 /// the current state 0x08000022.
-fn check_access(access: Access, state: AlState, dir: Direction) -> Result<(), AbortCode> {
-    let (any, none_code) = match dir {
-        Direction::Read => (access.readable(), AbortCode::WriteOnlyRead),
-        Direction::Write => (access.writable(), AbortCode::ReadOnlyWrite),
+fn check_access(access: Access, state: AlState, kind: AccessKind) -> Result<(), AbortCode> {
+    let (any, none_code) = match kind {
+        AccessKind::Read => (access.readable(), AbortCode::WriteOnlyRead),
+        AccessKind::Write => (access.writable(), AbortCode::ReadOnlyWrite),
     };
     if !any {
         return Err(none_code);
     }
-    if access.0 & state_bit(state, dir) == 0 {
+    if access.0 & state_bit(state, kind) == 0 {
         return Err(AbortCode::DataNotStoredDeviceState);
     }
     Ok(())
 }
 
-/// The [`Access`] bit for `dir` in `state` (none in INIT and BOOT, where no SDO is served).
-fn state_bit(state: AlState, dir: Direction) -> u8 {
-    match (state, dir) {
-        (AlState::PreOp, Direction::Read) => Access::READ_PREOP,
-        (AlState::SafeOp, Direction::Read) => Access::READ_SAFEOP,
-        (AlState::Op, Direction::Read) => Access::READ_OP,
-        (AlState::PreOp, Direction::Write) => Access::WRITE_PREOP,
-        (AlState::SafeOp, Direction::Write) => Access::WRITE_SAFEOP,
-        (AlState::Op, Direction::Write) => Access::WRITE_OP,
+/// The [`Access`] bit for `kind` in `state` (none in INIT and BOOT, where no SDO is served).
+fn state_bit(state: AlState, kind: AccessKind) -> u8 {
+    match (state, kind) {
+        (AlState::PreOp, AccessKind::Read) => Access::READ_PREOP,
+        (AlState::SafeOp, AccessKind::Read) => Access::READ_SAFEOP,
+        (AlState::Op, AccessKind::Read) => Access::READ_OP,
+        (AlState::PreOp, AccessKind::Write) => Access::WRITE_PREOP,
+        (AlState::SafeOp, AccessKind::Write) => Access::WRITE_SAFEOP,
+        (AlState::Op, AccessKind::Write) => Access::WRITE_OP,
         (AlState::Init | AlState::Boot, _) => 0,
     }
 }
@@ -609,7 +609,7 @@ fn write_entry(
     data: &[u8],
 ) -> Result<(), AbortCode> {
     let entry = find_entry(od, index, subindex)?;
-    check_access(entry.access, state, Direction::Write)?;
+    check_access(entry.access, state, AccessKind::Write)?;
     check_length(entry, data.len())?;
     check_subindex0(od, index, subindex, data)?;
     pdo_rules::check_write(od, index, subindex, data)?;

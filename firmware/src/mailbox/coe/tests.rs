@@ -10,8 +10,8 @@ use hal::esc::AlState;
 
 use super::{CoeError, CoeServer};
 use crate::od::{
-    Access, AppVars, DataType, DeviceInfo, Dictionary, Entry, Object, ObjectCode, PdoMappable,
-    Profile, SmLayout, SyncSupport, Value,
+    Access, AppVars, CoeDetails, DataType, DeviceInfo, Dictionary, Entry, Object, ObjectCode,
+    PdoMappable, Profile, SmLayout, SyncSupport, Value,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -223,6 +223,9 @@ static DEFAULTS: [u8; RAM_SIZE] = {
     put(d, OFF_1C13 + 1, &0x1A00u16.to_le_bytes())
 };
 
+/// SII mailbox protocol bit of CoE.
+const COE_PROTOCOL: u16 = 0x04;
+
 const SM: SmLayout = SmLayout {
     start: 0x1000,
     length: 128,
@@ -263,6 +266,15 @@ static PROFILE: Profile = Profile {
             max_cycle_ns: 10_000_000,
         },
         max_pdo_entries: 4,
+        mailbox_protocols: COE_PROTOCOL,
+        coe: CoeDetails {
+            sdo: true,
+            sdo_info: false,
+            pdo_assign: true,
+            pdo_config: true,
+            upload_at_startup: false,
+            complete_access: false,
+        },
     },
     objects: &OBJECTS,
     defaults: &DEFAULTS,

@@ -1,0 +1,138 @@
+//! Async tasks: the ESC-event context (on the P2 `InterruptExecutor`) and the thread-mode
+//! background work.
+
+use core::sync::atomic::Ordering;
+
+use embassy_stm32::exti::ExtiInput;
+use embassy_stm32::mode::Blocking;
+use embassy_time::{Duration, Ticker, Timer};
+use hal::esc::{regs, AlState, DlStatus};
+use hal::io::StatusLeds;
+use hal::pdi::EscPdi;
+
+use crate::clocks::SYSCLK_HZ;
+use crate::et1100_spi::{Error as PdiError, Et1100Spi};
+use crate::irq::{self, ContextStats, CYCLE_STATS, ESC_IRQ, EVENT_STATS};
+use crate::leds::Leds;
+
+/// Wait before serving again while SPI_IRQ stays asserted after a service (an event the stack
+/// did not acknowledge yet): keeps a stuck event from monopolising the P2 context.
+const IRQ_RETRY: Duration = Duration::from_micros(250);
+/// Free-run cycle period. [placeholder] the firmware should hand the board the cycle time of
+/// 1C32h:02 once it supports free run; 1 ms is the usual default.
+const FREE_RUN_PERIOD: Duration = Duration::from_millis(1);
+/// Fallback poll of the AL events, in case an IRQ edge was lost (also keeps the 64-bit cycle
+/// count extension alive: it needs a call every < 25 s).
+const ESC_POLL_PERIOD: Duration = Duration::from_millis(10);
+/// LED update period (ETG.1300 blink patterns are ≥ 200 ms per phase; 50 ms is fine enough).
+const LED_PERIOD: Duration = Duration::from_millis(50);
+/// Statistics log period.
+const REPORT_PERIOD: Duration = Duration::from_secs(1);
+
+/// ESC-event context (P2): serves AL events on every SPI_IRQ falling edge, and again every
+/// [`IRQ_RETRY`] while the line stays low (the IRQ is a level: low while any unmasked event is
+/// pending; EXTI only sees edges).
+#[embassy_executor::task]
+pub async fn esc_event(irq: ExtiInput<'static, Blocking>) {
+    loop {
+        if irq.is_high() {
+            // An edge between the check and the wait is kept by the signal.
+            ESC_IRQ.wait().await;
+        }
+        irq::service_esc_events();
+        if irq.is_low() {
+            Timer::after(IRQ_RETRY).await;
+        }
+    }
+}
+
+/// Free-run ticks (P2): requests a cycle every [`FREE_RUN_PERIOD`]; the cycle context ignores
+/// it unless the slave is in free-run mode.
+#[embassy_executor::task]
+pub async fn free_run() {
+    let mut ticker = Ticker::every(FREE_RUN_PERIOD);
+    loop {
+        ticker.next().await;
+        irq::request_cycle(irq::REQUEST_FREE_RUN);
+    }
+}
+
+/// Value of the ESC type register 0x0000 on an ET1100.
+pub const ET1100_TYPE: u8 = 0x11;
+
+/// Whether the ESC answers on the PDI: type register = ET1100 and DL status "PDI operational"
+/// (EEPROM loaded, 0x0110 bit 0). Before the EEPROM is loaded the SPI PDI is off and reads
+/// return 0x00 (MISO pull-down), so this cannot be fooled by a floating bus.
+pub fn esc_ready(pdi: &mut Et1100Spi<'_>) -> Result<bool, PdiError> {
+    let esc_type = pdi.read_u8(regs::TYPE.addr)?;
+    let dl_status = pdi.read_u16(regs::DL_STATUS.addr)?;
+    Ok(esc_type == ET1100_TYPE && dl_status & DlStatus::PDI_OPERATIONAL != 0)
+}
+
+/// Thread mode: fallback poll of the AL events. Until the slave is started (`started` false
+/// when the ESC was not ready at boot) it probes the ESC instead and starts the slave once the
+/// ESC answers.
+#[embassy_executor::task]
+pub async fn esc_poll(mut started: bool) {
+    let mut ticker = Ticker::every(ESC_POLL_PERIOD);
+    loop {
+        ticker.next().await;
+        if started {
+            irq::service_esc_events();
+            continue;
+        }
+        let result = irq::with_drive(|d| match esc_ready(&mut d.pdi) {
+            Ok(true) => d.slave.start(&mut d.pdi).map(|()| true),
+            Ok(false) => Ok(false),
+            Err(e) => Err(e),
+        });
+        // Keep the 64-bit clock extension alive while not started.
+        let _ = crate::time::now_cycles();
+        if let Some(Ok(true)) = result {
+            defmt::info!("ET1100 ready: slave started");
+            started = true;
+        }
+    }
+}
+
+/// Thread mode: RUN/ERR LEDs. [placeholder] until the firmware computes the ETG.1300 patterns:
+/// RUN on in OP, ERR on while PDI errors keep occurring.
+#[embassy_executor::task]
+pub async fn leds(mut leds: Leds) {
+    let mut ticker = Ticker::every(LED_PERIOD);
+    let mut seen_errors = 0u32;
+    loop {
+        ticker.next().await;
+        let state = irq::with_drive(|d| d.slave.al_state());
+        leds.set_run(state == Some(AlState::Op));
+        let errors =
+            CYCLE_STATS.errors.load(Ordering::Relaxed) + EVENT_STATS.errors.load(Ordering::Relaxed);
+        leds.set_err(errors != seen_errors);
+        seen_errors = errors;
+    }
+}
+
+/// Thread mode: logs the context statistics once per second.
+#[embassy_executor::task]
+pub async fn report() {
+    let mut ticker = Ticker::every(REPORT_PERIOD);
+    loop {
+        ticker.next().await;
+        log_stats("cycle", &CYCLE_STATS);
+        log_stats("esc-event", &EVENT_STATS);
+    }
+}
+
+fn log_stats(name: &str, stats: &ContextStats) {
+    let max_cycles = stats.max_cycles.swap(0, Ordering::Relaxed);
+    let max_ns = u64::from(max_cycles) * 1_000_000_000 / u64::from(SYSCLK_HZ);
+    defmt::info!(
+        "{}: runs {}, errors {} (last kind {}), max {} cycles = {} ns",
+        name,
+        stats.runs.load(Ordering::Relaxed),
+        stats.errors.load(Ordering::Relaxed),
+        stats.last_error.load(Ordering::Relaxed),
+        max_cycles,
+        max_ns
+    );
+}
