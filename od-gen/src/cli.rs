@@ -51,10 +51,20 @@ impl From<Error> for CliError {
 
 fn write_out(path: Option<&PathBuf>, data: &[u8]) -> Result<(), CliError> {
     match path {
-        Some(p) => std::fs::write(p, data).map_err(|source| Error::Io { path: p.clone(), source }.into()),
-        None => std::io::stdout()
-            .write_all(data)
-            .map_err(|source| Error::Io { path: "<stdout>".into(), source }.into()),
+        Some(p) => std::fs::write(p, data).map_err(|source| {
+            Error::Io {
+                path: p.clone(),
+                source,
+            }
+            .into()
+        }),
+        None => std::io::stdout().write_all(data).map_err(|source| {
+            Error::Io {
+                path: "<stdout>".into(),
+                source,
+            }
+            .into()
+        }),
     }
 }
 
@@ -71,24 +81,32 @@ pub fn hex_dump(data: &[u8]) -> String {
 
 /// Runs the command line (without the program name).
 pub fn run(args: &[String]) -> Result<(), CliError> {
-    let (cmd, rest) = args.split_first().ok_or_else(|| CliError::Usage("missing command".into()))?;
+    let (cmd, rest) = args
+        .split_first()
+        .ok_or_else(|| CliError::Usage("missing command".into()))?;
     let mut inputs = Vec::new();
     let mut out: Option<PathBuf> = None;
     let mut it = rest.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "-o" | "--output" => {
-                let p = it.next().ok_or_else(|| CliError::Usage("-o needs a file name".into()))?;
+                let p = it
+                    .next()
+                    .ok_or_else(|| CliError::Usage("-o needs a file name".into()))?;
                 out = Some(PathBuf::from(p));
             }
-            s if s.starts_with('-') => return Err(CliError::Usage(format!("unknown option `{s}`"))),
+            s if s.starts_with('-') => {
+                return Err(CliError::Usage(format!("unknown option `{s}`")))
+            }
             s => inputs.push(s.to_string()),
         }
     }
     let one = |inputs: &[String]| -> Result<crate::Profile, CliError> {
         match inputs {
             [one] => Ok(crate::load_any(one)?),
-            [] => Err(CliError::Usage(format!("`{cmd}` needs a profile name or path"))),
+            [] => Err(CliError::Usage(format!(
+                "`{cmd}` needs a profile name or path"
+            ))),
             _ => Err(CliError::Usage(format!("`{cmd}` takes one profile"))),
         }
     };
@@ -111,9 +129,14 @@ pub fn run(args: &[String]) -> Result<(), CliError> {
         }
         "rust" | "check" => {
             if inputs.is_empty() {
-                return Err(CliError::Usage(format!("`{cmd}` needs at least one profile")));
+                return Err(CliError::Usage(format!(
+                    "`{cmd}` needs at least one profile"
+                )));
             }
-            let profiles = inputs.iter().map(|i| crate::load_any(i)).collect::<Result<Vec<_>, _>>()?;
+            let profiles = inputs
+                .iter()
+                .map(|i| crate::load_any(i))
+                .collect::<Result<Vec<_>, _>>()?;
             if cmd == "rust" {
                 write_out(out.as_ref(), crate::rust::generate(&profiles).as_bytes())
             } else {

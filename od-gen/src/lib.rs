@@ -54,10 +54,14 @@ pub fn builtin_names() -> Vec<&'static str> {
 
 /// Loads a built-in profile by name.
 pub fn builtin(name: &str) -> Result<Profile, Error> {
-    let (_, text) = BUILTIN
-        .iter()
-        .find(|(n, _)| *n == name)
-        .ok_or_else(|| Error::UnknownProfile { name: name.to_string(), available: builtin_names() })?;
+    let (_, text) =
+        BUILTIN
+            .iter()
+            .find(|(n, _)| *n == name)
+            .ok_or_else(|| Error::UnknownProfile {
+                name: name.to_string(),
+                available: builtin_names(),
+            })?;
     let p = resolve::parse(text, &format!("builtin:{name}"))?;
     check_stem(&p, name, &format!("builtin:{name}"))?;
     Ok(p)
@@ -75,7 +79,10 @@ pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
 
 /// Loads a profile file.
 pub fn load(path: &Path) -> Result<Profile, Error> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let p = resolve::parse(&text, &path.display().to_string())?;
     if let Some(stem) = path.file_stem().and_then(|s| s.to_str()) {
         check_stem(&p, stem, &path.display().to_string())?;
@@ -85,7 +92,10 @@ pub fn load(path: &Path) -> Result<Profile, Error> {
 
 /// Loads every `*.toml` in a directory, sorted by file name.
 pub fn load_dir(dir: &Path) -> Result<Vec<Profile>, Error> {
-    let io = |source| Error::Io { path: dir.to_path_buf(), source };
+    let io = |source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
     let mut files: Vec<_> = std::fs::read_dir(dir)
         .map_err(io)?
         .collect::<Result<Vec<_>, _>>()

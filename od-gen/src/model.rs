@@ -177,15 +177,20 @@ impl DataType {
             Self::Uint24 => (0, (1 << 24) - 1),
             Self::Udint => (0, u32::MAX.into()),
             Self::Ulint => (0, u64::MAX.into()),
-            Self::Real | Self::Lreal | Self::VisibleString | Self::OctetString | Self::UnicodeString => {
-                return None
-            }
+            Self::Real
+            | Self::Lreal
+            | Self::VisibleString
+            | Self::OctetString
+            | Self::UnicodeString => return None,
         })
     }
 
     /// Whether the type is a signed integer.
     pub fn is_signed(self) -> bool {
-        matches!(self, Self::Sint | Self::Int | Self::Int24 | Self::Dint | Self::Lint)
+        matches!(
+            self,
+            Self::Sint | Self::Int | Self::Int24 | Self::Dint | Self::Lint
+        )
     }
 }
 
@@ -518,8 +523,14 @@ pub mod protocol {
     /// Vendor specific.
     pub const VOE: u16 = 0x20;
     /// Names as written in profile files, with their bits.
-    pub const NAMES: [(&str, u16); 6] =
-        [("AoE", AOE), ("EoE", EOE), ("CoE", COE), ("FoE", FOE), ("SoE", SOE), ("VoE", VOE)];
+    pub const NAMES: [(&str, u16); 6] = [
+        ("AoE", AOE),
+        ("EoE", EOE),
+        ("CoE", COE),
+        ("FoE", FOE),
+        ("SoE", SOE),
+        ("VoE", VOE),
+    ];
 }
 
 /// Mailbox settings.
@@ -741,11 +752,19 @@ impl Profile {
     }
     /// Bits of the default-assigned RxPDOs (SM2 default size × 8).
     pub fn outputs_bits(&self) -> u32 {
-        self.rx_pdos.iter().filter(|p| p.assigned).map(Pdo::bits).sum()
+        self.rx_pdos
+            .iter()
+            .filter(|p| p.assigned)
+            .map(Pdo::bits)
+            .sum()
     }
     /// Bits of the default-assigned TxPDOs (SM3 default size × 8).
     pub fn inputs_bits(&self) -> u32 {
-        self.tx_pdos.iter().filter(|p| p.assigned).map(Pdo::bits).sum()
+        self.tx_pdos
+            .iter()
+            .filter(|p| p.assigned)
+            .map(Pdo::bits)
+            .sum()
     }
     /// The SII EEPROM image ([`crate::sii`]).
     pub fn sii_image(&self) -> Vec<u8> {

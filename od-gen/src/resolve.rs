@@ -21,7 +21,11 @@ pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
 
 /// Checks a parsed profile file and derives the full dictionary.
 pub fn resolve(file: &ProfileFile, source: &str) -> Result<Profile, Error> {
-    build(file, source).map_err(|(key, error)| Error::Invalid { file: source.to_string(), key, error })
+    build(file, source).map_err(|(key, error)| Error::Invalid {
+        file: source.to_string(),
+        key,
+        error,
+    })
 }
 
 fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
@@ -32,7 +36,10 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .find(|(n, _)| n == p)
             .map(|(_, b)| *b)
             .ok_or_else(|| {
-                fault("mailbox.protocols", Invalid::Mailbox(format!("unknown protocol `{p}`")))
+                fault(
+                    "mailbox.protocols",
+                    Invalid::Mailbox(format!("unknown protocol `{p}`")),
+                )
             })?;
         protocols |= bit;
     }
@@ -54,7 +61,11 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         }
         (None, false) => CoeDetails::default(),
     };
-    let mailbox = Mailbox { protocols, data_link_layer: f.mailbox.data_link_layer, coe };
+    let mailbox = Mailbox {
+        protocols,
+        data_link_layer: f.mailbox.data_link_layer,
+        coe,
+    };
 
     let sync = Sync {
         free_run: f.sync.free_run,
@@ -115,7 +126,13 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     for o in &f.objects {
         let key = format!("object[{:#06x}]", o.index);
         if let Some(from) = derived_from(o.index, f) {
-            return Err(fault(&key, Invalid::DerivedObject { index: o.index, from }));
+            return Err(fault(
+                &key,
+                Invalid::DerivedObject {
+                    index: o.index,
+                    from,
+                },
+            ));
         }
         let obj = object(o, &key)?;
         if declared.insert(o.index, obj).is_some() {
@@ -126,7 +143,10 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     // PDOs, checked against the declared objects.
     let max_entries = f.pdo.max_entries;
     if max_entries == 0 || max_entries > 254 {
-        return Err(fault("pdo.max_entries", Invalid::Value("must be 1..=254".into())));
+        return Err(fault(
+            "pdo.max_entries",
+            Invalid::Value("must be 1..=254".into()),
+        ));
     }
     let rx_pdos = pdos(&f.rx_pdos, true, &declared, max_entries)?;
     let tx_pdos = pdos(&f.tx_pdos, false, &declared, max_entries)?;
@@ -136,28 +156,50 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         if bits % 8 != 0 {
             return Err(fault(key, Invalid::PdoBitsNotBytes { sm, bits }));
         }
-        u16::try_from(bits / 8).map_err(|_| fault(key, Invalid::Value("process data too large".into())))
+        u16::try_from(bits / 8)
+            .map_err(|_| fault(key, Invalid::Value("process data too large".into())))
     };
     let out_len = bits(&rx_pdos, 2, "rxpdo")?;
     let in_len = bits(&tx_pdos, 3, "txpdo")?;
     let mbx = |s: &SmFileEntry, key: &str| -> Result<Sm, Fault> {
         let length = s.size.ok_or_else(|| fault(key, Invalid::Missing("size")))?;
-        Ok(Sm { start: s.start, length, control: s.control })
+        Ok(Sm {
+            start: s.start,
+            length,
+            control: s.control,
+        })
     };
     let pd = |s: &SmFileEntry, key: &str, length: u16| -> Result<Sm, Fault> {
         if s.size.is_some() {
             return Err(fault(
                 key,
-                Invalid::Value("process-data SM size comes from the default PDO assignment; remove `size`".into()),
+                Invalid::Value(
+                    "process-data SM size comes from the default PDO assignment; remove `size`"
+                        .into(),
+                ),
             ));
         }
-        Ok(Sm { start: s.start, length, control: s.control })
+        Ok(Sm {
+            start: s.start,
+            length,
+            control: s.control,
+        })
     };
     let sm = SmLayout {
         mailbox_out: mbx(&f.sm.mailbox_out, "sm.mailbox_out")?,
         mailbox_in: mbx(&f.sm.mailbox_in, "sm.mailbox_in")?,
-        boot_out: f.sm.boot_out.as_ref().map(|s| mbx(s, "sm.boot_out")).transpose()?,
-        boot_in: f.sm.boot_in.as_ref().map(|s| mbx(s, "sm.boot_in")).transpose()?,
+        boot_out: f
+            .sm
+            .boot_out
+            .as_ref()
+            .map(|s| mbx(s, "sm.boot_out"))
+            .transpose()?,
+        boot_in: f
+            .sm
+            .boot_in
+            .as_ref()
+            .map(|s| mbx(s, "sm.boot_in"))
+            .transpose()?,
         outputs: pd(&f.sm.outputs, "sm.outputs", out_len)?,
         inputs: pd(&f.sm.inputs, "sm.inputs", in_len)?,
     };
@@ -166,7 +208,10 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         name: f.name.clone(),
         source: source.to_string(),
         description: f.description.clone(),
-        vendor: Vendor { id: f.vendor.id, name: f.vendor.name.clone() },
+        vendor: Vendor {
+            id: f.vendor.id,
+            name: f.vendor.name.clone(),
+        },
         device,
         eeprom,
         sm,
@@ -246,8 +291,15 @@ fn object(o: &ObjectFile, key: &str) -> Result<Object, Fault> {
         }
         if code == ObjectCode::Array {
             let first = subs.values().next().map(|e| (e.data_type, e.bit_len));
-            let contiguous = subs.keys().copied().eq(1..=u8::try_from(subs.len()).unwrap_or(u8::MAX));
-            if !contiguous || subs.values().any(|e| Some((e.data_type, e.bit_len)) != first) {
+            let contiguous = subs
+                .keys()
+                .copied()
+                .eq(1..=u8::try_from(subs.len()).unwrap_or(u8::MAX));
+            if !contiguous
+                || subs
+                    .values()
+                    .any(|e| Some((e.data_type, e.bit_len)) != first)
+            {
                 return Err(fault(
                     key,
                     Invalid::Value("ARRAY entries must be subindex 1..n of one type".into()),
@@ -259,7 +311,13 @@ fn object(o: &ObjectFile, key: &str) -> Result<Object, Fault> {
         v.extend(subs.into_values());
         v
     };
-    Ok(Object { index: o.index, code, name: o.name.clone(), entries, derived: false })
+    Ok(Object {
+        index: o.index,
+        code,
+        name: o.name.clone(),
+        entries,
+        derived: false,
+    })
 }
 
 fn first_value_key(a: &EntryAttrs) -> Option<&'static str> {
@@ -298,13 +356,20 @@ fn sub0(value: u8, access: Access, storage: Storage) -> Entry {
 
 fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, Fault> {
     let k = |s: &str| format!("{key}.{s}");
-    let tname = a.data_type.as_deref().ok_or_else(|| fault(key, Invalid::Missing("type")))?;
-    let data_type =
-        DataType::parse(tname).ok_or_else(|| fault(&k("type"), Invalid::UnknownType(tname.into())))?;
+    let tname = a
+        .data_type
+        .as_deref()
+        .ok_or_else(|| fault(key, Invalid::Missing("type")))?;
+    let data_type = DataType::parse(tname)
+        .ok_or_else(|| fault(&k("type"), Invalid::UnknownType(tname.into())))?;
     let access = match a.access.as_deref() {
         None => return Err(fault(key, Invalid::Missing("access"))),
-        Some(s) => Access::parse(s)
-            .ok_or_else(|| fault(&k("access"), Invalid::Value(format!("unknown access `{s}`"))))?,
+        Some(s) => Access::parse(s).ok_or_else(|| {
+            fault(
+                &k("access"),
+                Invalid::Value(format!("unknown access `{s}`")),
+            )
+        })?,
     };
     let pdo = match a.pdo.as_deref() {
         None | Some("no") => PdoMapping::No,
@@ -312,14 +377,23 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         Some("tx") => PdoMapping::Tx,
         Some("rxtx") => PdoMapping::RxTx,
         Some(s) => {
-            return Err(fault(&k("pdo"), Invalid::Value(format!("`{s}` is not no, rx, tx or rxtx"))))
+            return Err(fault(
+                &k("pdo"),
+                Invalid::Value(format!("`{s}` is not no, rx, tx or rxtx")),
+            ))
         }
     };
     if pdo.rx() && !access.writable() {
-        return Err(fault(&k("pdo"), Invalid::Value("an RxPDO-mappable entry must be writable".into())));
+        return Err(fault(
+            &k("pdo"),
+            Invalid::Value("an RxPDO-mappable entry must be writable".into()),
+        ));
     }
     if pdo.tx() && !access.readable() {
-        return Err(fault(&k("pdo"), Invalid::Value("a TxPDO-mappable entry must be readable".into())));
+        return Err(fault(
+            &k("pdo"),
+            Invalid::Value("a TxPDO-mappable entry must be readable".into()),
+        ));
     }
     let role = match a.role.as_deref() {
         None => None,
@@ -373,11 +447,18 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         Some("const") if access.writable() || pdo != PdoMapping::No || role.is_some() => {
             return Err(fault(
                 &k("storage"),
-                Invalid::Value("a writable, PDO-mappable or role entry must be stored in RAM".into()),
+                Invalid::Value(
+                    "a writable, PDO-mappable or role entry must be stored in RAM".into(),
+                ),
             ))
         }
         Some("const") => Storage::Const,
-        Some(s) => return Err(fault(&k("storage"), Invalid::Value(format!("`{s}` is not ram or const")))),
+        Some(s) => {
+            return Err(fault(
+                &k("storage"),
+                Invalid::Value(format!("`{s}` is not ram or const")),
+            ))
+        }
     };
     if let Some(r) = role {
         if r.data_type() != data_type {
@@ -386,7 +467,13 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
                 DataType::Sint => "SINT",
                 _ => "DINT",
             };
-            return Err(fault(&k("role"), Invalid::RoleType { role: r.field().into(), expected }));
+            return Err(fault(
+                &k("role"),
+                Invalid::RoleType {
+                    role: r.field().into(),
+                    expected,
+                },
+            ));
         }
     }
     Ok(Entry {
@@ -428,9 +515,10 @@ fn int_of(v: &toml::Value) -> Option<i128> {
             };
             Some(if neg { -n } else { n })
         }
-        toml::Value::Float(_) | toml::Value::Datetime(_) | toml::Value::Array(_) | toml::Value::Table(_) => {
-            None
-        }
+        toml::Value::Float(_)
+        | toml::Value::Datetime(_)
+        | toml::Value::Array(_)
+        | toml::Value::Table(_) => None,
     }
 }
 
@@ -439,28 +527,38 @@ fn encode(dt: DataType, v: &toml::Value) -> Result<Vec<u8>, Invalid> {
     match dt {
         DataType::VisibleString => match v {
             toml::Value::String(s) if s.is_ascii() => Ok(s.as_bytes().to_vec()),
-            _ => Err(Invalid::Value("a VISIBLE_STRING value must be an ASCII string".into())),
+            _ => Err(Invalid::Value(
+                "a VISIBLE_STRING value must be an ASCII string".into(),
+            )),
         },
         DataType::UnicodeString => match v {
             toml::Value::String(s) => Ok(s.encode_utf16().flat_map(u16::to_le_bytes).collect()),
-            _ => Err(Invalid::Value("a UNICODE_STRING value must be a string".into())),
+            _ => Err(Invalid::Value(
+                "a UNICODE_STRING value must be a string".into(),
+            )),
         },
         DataType::OctetString => match v {
             toml::Value::String(s) => {
                 let hex: String = s.chars().filter(|c| !c.is_whitespace()).collect();
                 if hex.len() % 2 != 0 {
-                    return Err(Invalid::Value("an OCTET_STRING value is an even number of hex digits".into()));
+                    return Err(Invalid::Value(
+                        "an OCTET_STRING value is an even number of hex digits".into(),
+                    ));
                 }
                 (0..hex.len())
                     .step_by(2)
                     .map(|i| {
                         hex.get(i..i + 2)
                             .and_then(|b| u8::from_str_radix(b, 16).ok())
-                            .ok_or_else(|| Invalid::Value("an OCTET_STRING value is hex digits".into()))
+                            .ok_or_else(|| {
+                                Invalid::Value("an OCTET_STRING value is hex digits".into())
+                            })
                     })
                     .collect()
             }
-            _ => Err(Invalid::Value("an OCTET_STRING value must be a hex string".into())),
+            _ => Err(Invalid::Value(
+                "an OCTET_STRING value must be a hex string".into(),
+            )),
         },
         DataType::Real | DataType::Lreal => {
             let x = match v {
@@ -479,13 +577,19 @@ fn encode(dt: DataType, v: &toml::Value) -> Result<Vec<u8>, Invalid> {
             }
         }
         _ => {
-            let n = int_of(v).ok_or_else(|| Invalid::Value("an integer value is expected".into()))?;
+            let n =
+                int_of(v).ok_or_else(|| Invalid::Value("an integer value is expected".into()))?;
             let (lo, hi) = dt.int_range().unwrap_or((0, 0));
             if n < lo || n > hi {
-                return Err(Invalid::OutOfTypeRange(format!("{n} is not in {lo}..={hi}")));
+                return Err(Invalid::OutOfTypeRange(format!(
+                    "{n} is not in {lo}..={hi}"
+                )));
             }
             let bytes = usize::from(dt.fixed_bits().unwrap_or(8)).div_ceil(8);
-            Ok(n.to_le_bytes().get(..bytes).map(<[u8]>::to_vec).unwrap_or_default())
+            Ok(n.to_le_bytes()
+                .get(..bytes)
+                .map(<[u8]>::to_vec)
+                .unwrap_or_default())
         }
     }
 }
@@ -493,7 +597,9 @@ fn encode(dt: DataType, v: &toml::Value) -> Result<Vec<u8>, Invalid> {
 /// Decodes little-endian bytes of a numeric type.
 fn decode(dt: DataType, b: &[u8]) -> Option<Num> {
     match dt {
-        DataType::Real => Some(Num::Float(f64::from(f32::from_le_bytes(b.try_into().ok()?)))),
+        DataType::Real => Some(Num::Float(f64::from(f32::from_le_bytes(
+            b.try_into().ok()?,
+        )))),
         DataType::Lreal => Some(Num::Float(f64::from_le_bytes(b.try_into().ok()?))),
         _ if dt.is_string() || b.is_empty() => None,
         _ => {
@@ -531,7 +637,11 @@ fn pdos(
     max_entries: u8,
 ) -> Result<Vec<Pdo>, Fault> {
     let kind = if rx { "rxpdo" } else { "txpdo" };
-    let (range, sm) = if rx { (0x1600..=0x17FF, 2) } else { (0x1A00..=0x1BFF, 3) };
+    let (range, sm) = if rx {
+        (0x1600..=0x17FF, 2)
+    } else {
+        (0x1A00..=0x1BFF, 3)
+    };
     let mut seen = BTreeSet::new();
     let mut out = Vec::new();
     for p in list {
@@ -543,16 +653,28 @@ fn pdos(
             return Err(fault(&key, Invalid::DuplicatePdo(p.index)));
         }
         if p.sm != sm {
-            return Err(fault(&format!("{key}.sm"), Invalid::PdoSm { sm: p.sm, expected: sm }));
+            return Err(fault(
+                &format!("{key}.sm"),
+                Invalid::PdoSm {
+                    sm: p.sm,
+                    expected: sm,
+                },
+            ));
         }
         if p.entries.is_empty() {
             // ethercat-esi 0.2.0 and many tools reject PDOs without entries (esi-sii.md §3).
-            return Err(fault(&format!("{key}.entries"), Invalid::Missing("entries")));
+            return Err(fault(
+                &format!("{key}.entries"),
+                Invalid::Missing("entries"),
+            ));
         }
         if p.entries.len() > usize::from(max_entries) {
             return Err(fault(
                 &format!("{key}.entries"),
-                Invalid::TooManyPdoEntries { count: p.entries.len(), max: max_entries },
+                Invalid::TooManyPdoEntries {
+                    count: p.entries.len(),
+                    max: max_entries,
+                },
             ));
         }
         let mut entries = Vec::new();
@@ -583,9 +705,18 @@ fn pdo_entry(
     match (e.pad, e.index, e.sub, e.bits) {
         (Some(bits), None, None, None) => {
             if bits == 0 || bits > 255 {
-                return Err(fault(key, Invalid::Value("padding must be 1..=255 bits".into())));
+                return Err(fault(
+                    key,
+                    Invalid::Value("padding must be 1..=255 bits".into()),
+                ));
             }
-            Ok(PdoEntry { index: 0, subindex: 0, bits, name: String::new(), data_type: None })
+            Ok(PdoEntry {
+                index: 0,
+                subindex: 0,
+                bits,
+                name: String::new(),
+                data_type: None,
+            })
         }
         (None, Some(index), sub, Some(bits)) => {
             let subindex = sub.unwrap_or(0);
@@ -599,14 +730,32 @@ fn pdo_entry(
             if en.bit_len != bits {
                 return Err(fault(
                     key,
-                    Invalid::PdoEntryBitLen { index, subindex, pdo: bits, object: en.bit_len },
+                    Invalid::PdoEntryBitLen {
+                        index,
+                        subindex,
+                        pdo: bits,
+                        object: en.bit_len,
+                    },
                 ));
             }
             if en.storage != Storage::Ram {
-                return Err(fault(key, Invalid::Value("a mapped entry must be stored in RAM".into())));
+                return Err(fault(
+                    key,
+                    Invalid::Value("a mapped entry must be stored in RAM".into()),
+                ));
             }
-            let name = if obj.code == ObjectCode::Var { obj.name.clone() } else { en.name.clone() };
-            Ok(PdoEntry { index, subindex, bits, name, data_type: Some(en.data_type) })
+            let name = if obj.code == ObjectCode::Var {
+                obj.name.clone()
+            } else {
+                en.name.clone()
+            };
+            Ok(PdoEntry {
+                index,
+                subindex,
+                bits,
+                name,
+                data_type: Some(en.data_type),
+            })
         }
         (None, Some(_), _, None) => Err(fault(key, Invalid::Missing("bits"))),
         _ => Err(fault(
@@ -617,7 +766,13 @@ fn pdo_entry(
 }
 
 fn var(index: u16, name: &str, e: Entry) -> Object {
-    Object { index, code: ObjectCode::Var, name: name.into(), entries: vec![e], derived: true }
+    Object {
+        index,
+        code: ObjectCode::Var,
+        name: name.into(),
+        entries: vec![e],
+        derived: true,
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -631,7 +786,9 @@ fn val(
     min: Vec<u8>,
     max: Vec<u8>,
 ) -> Entry {
-    let bit_len = dt.fixed_bits().unwrap_or_else(|| u16::try_from(default.len() * 8).unwrap_or(0));
+    let bit_len = dt
+        .fixed_bits()
+        .unwrap_or_else(|| u16::try_from(default.len() * 8).unwrap_or(0));
     Entry {
         subindex: sub,
         name: name.into(),
@@ -648,11 +805,29 @@ fn val(
 }
 
 fn konst(sub: u8, name: &str, dt: DataType, default: Vec<u8>) -> Entry {
-    val(sub, name, dt, Access::RO, Storage::Const, default, Vec::new(), Vec::new())
+    val(
+        sub,
+        name,
+        dt,
+        Access::RO,
+        Storage::Const,
+        default,
+        Vec::new(),
+        Vec::new(),
+    )
 }
 
 fn ram_ro(sub: u8, name: &str, dt: DataType, default: Vec<u8>) -> Entry {
-    val(sub, name, dt, Access::RO, Storage::Ram, default, Vec::new(), Vec::new())
+    val(
+        sub,
+        name,
+        dt,
+        Access::RO,
+        Storage::Ram,
+        default,
+        Vec::new(),
+        Vec::new(),
+    )
 }
 
 /// The objects od-gen derives from the device, PDO, SM and sync sections.
@@ -661,12 +836,30 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
     let mut v = Vec::new();
     let s = |t: &str| t.as_bytes().to_vec();
     for (index, name, text, key) in [
-        (0x1008, "Manufacturer device name", &p.device.name, "device.name"),
-        (0x1009, "Manufacturer hardware version", &p.device.hardware_version, "device.hardware_version"),
-        (0x100A, "Manufacturer software version", &p.device.software_version, "device.software_version"),
+        (
+            0x1008,
+            "Manufacturer device name",
+            &p.device.name,
+            "device.name",
+        ),
+        (
+            0x1009,
+            "Manufacturer hardware version",
+            &p.device.hardware_version,
+            "device.hardware_version",
+        ),
+        (
+            0x100A,
+            "Manufacturer software version",
+            &p.device.software_version,
+            "device.software_version",
+        ),
     ] {
         if text.is_empty() || !text.is_ascii() {
-            return Err(fault(key, Invalid::Value("must be non-empty ASCII (VISIBLE_STRING)".into())));
+            return Err(fault(
+                key,
+                Invalid::Value("must be non-empty ASCII (VISIBLE_STRING)".into()),
+            ));
         }
         v.push(var(index, name, konst(0, name, VisibleString, s(text))));
     }
@@ -677,10 +870,25 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         entries: vec![
             sub0(4, Access::RO, Storage::Const),
             konst(1, "Vendor ID", Udint, p.vendor.id.to_le_bytes().to_vec()),
-            konst(2, "Product code", Udint, p.device.product_code.to_le_bytes().to_vec()),
-            konst(3, "Revision", Udint, p.device.revision.to_le_bytes().to_vec()),
+            konst(
+                2,
+                "Product code",
+                Udint,
+                p.device.product_code.to_le_bytes().to_vec(),
+            ),
+            konst(
+                3,
+                "Revision",
+                Udint,
+                p.device.revision.to_le_bytes().to_vec(),
+            ),
             // RAM: the board writes the unit's serial number at start-up.
-            ram_ro(4, "Serial number", Udint, p.device.serial.to_le_bytes().to_vec()),
+            ram_ro(
+                4,
+                "Serial number",
+                Udint,
+                p.device.serial.to_le_bytes().to_vec(),
+            ),
         ],
         derived: true,
     });
@@ -688,9 +896,16 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
     let coe = p.mailbox.coe;
     for pdo in p.rx_pdos.iter().chain(&p.tx_pdos) {
         let configurable = coe.pdo_config && !pdo.fixed;
-        let cap = if configurable { p.max_pdo_entries } else { u8::try_from(pdo.entries.len()).unwrap_or(0) };
-        let (access, storage) =
-            if configurable { (Access::RW_PREOP, Storage::Ram) } else { (Access::RO, Storage::Const) };
+        let cap = if configurable {
+            p.max_pdo_entries
+        } else {
+            u8::try_from(pdo.entries.len()).unwrap_or(0)
+        };
+        let (access, storage) = if configurable {
+            (Access::RW_PREOP, Storage::Ram)
+        } else {
+            (Access::RO, Storage::Const)
+        };
         let n = u8::try_from(pdo.entries.len()).unwrap_or(0);
         let mut entries = vec![val(
             0,
@@ -703,7 +918,10 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
             vec![cap],
         )];
         for i in 1..=cap {
-            let m = pdo.entries.get(usize::from(i) - 1).map_or(0, PdoEntry::mapping_value);
+            let m = pdo
+                .entries
+                .get(usize::from(i) - 1)
+                .map_or(0, PdoEntry::mapping_value);
             entries.push(val(
                 i,
                 &format!("SubIndex {i:03}"),
@@ -715,13 +933,24 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
                 Vec::new(),
             ));
         }
-        v.push(Object { index: pdo.index, code: ObjectCode::Record, name: pdo.name.clone(), entries, derived: true });
+        v.push(Object {
+            index: pdo.index,
+            code: ObjectCode::Record,
+            name: pdo.name.clone(),
+            entries,
+            derived: true,
+        });
     }
 
     // 1C00h: SM communication types (ETG.1000.6 §5.6.7.4.9): 1 mailbox out, 2 mailbox in,
     // 3 process-data out, 4 process-data in. SOEM reads :00 and needs n > 2.
     let mut sm_types = vec![sub0(4, Access::RO, Storage::Const)];
-    for (i, name) in [(1u8, "SubIndex 001"), (2, "SubIndex 002"), (3, "SubIndex 003"), (4, "SubIndex 004")] {
+    for (i, name) in [
+        (1u8, "SubIndex 001"),
+        (2, "SubIndex 002"),
+        (3, "SubIndex 003"),
+        (4, "SubIndex 004"),
+    ] {
         sm_types.push(konst(i, name, Usint, vec![i]));
     }
     v.push(Object {
@@ -737,11 +966,27 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         (0x1C13, "TxPDO assign", &p.tx_pdos),
     ] {
         let cap = u8::try_from(pdos.len()).unwrap_or(u8::MAX);
-        let (access, storage) =
-            if coe.pdo_assign { (Access::RW_PREOP, Storage::Ram) } else { (Access::RO, Storage::Const) };
-        let assigned: Vec<u16> = pdos.iter().filter(|p| p.assigned).map(|p| p.index).collect();
+        let (access, storage) = if coe.pdo_assign {
+            (Access::RW_PREOP, Storage::Ram)
+        } else {
+            (Access::RO, Storage::Const)
+        };
+        let assigned: Vec<u16> = pdos
+            .iter()
+            .filter(|p| p.assigned)
+            .map(|p| p.index)
+            .collect();
         let n = u8::try_from(assigned.len()).unwrap_or(0);
-        let mut entries = vec![val(0, "SubIndex 000", Usint, access, storage, vec![n], vec![0], vec![cap])];
+        let mut entries = vec![val(
+            0,
+            "SubIndex 000",
+            Usint,
+            access,
+            storage,
+            vec![n],
+            vec![0],
+            vec![cap],
+        )];
         for i in 1..=cap {
             let d = assigned.get(usize::from(i) - 1).copied().unwrap_or(0);
             entries.push(val(
@@ -755,14 +1000,23 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
                 Vec::new(),
             ));
         }
-        v.push(Object { index, code: ObjectCode::Array, name: name.into(), entries, derived: true });
+        v.push(Object {
+            index,
+            code: ObjectCode::Array,
+            name: name.into(),
+            entries,
+            derived: true,
+        });
     }
 
     // 1C32h/1C33h: SM output/input parameter (ETG.1020 §21; subindex list as in Beckhoff
     // terminal documentation). All RAM so the stack can write measured values; only :01 and :02
     // are master-writable (PREOP).
     let y = &p.sync;
-    for (index, name, sm_sync_mode) in [(0x1C32u16, "SM output parameter", 1u16), (0x1C33, "SM input parameter", 0x22)] {
+    for (index, name, sm_sync_mode) in [
+        (0x1C32u16, "SM output parameter", 1u16),
+        (0x1C33, "SM input parameter", 0x22),
+    ] {
         let mode = if y.free_run {
             0
         } else if y.sm_synchronous {
@@ -780,7 +1034,16 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
             name: name.into(),
             entries: vec![
                 sub0(0x20, Access::RO, Storage::Const),
-                val(1, "Sync mode", Uint, Access::RW_PREOP, Storage::Ram, u16b(mode), Vec::new(), Vec::new()),
+                val(
+                    1,
+                    "Sync mode",
+                    Uint,
+                    Access::RW_PREOP,
+                    Storage::Ram,
+                    u16b(mode),
+                    Vec::new(),
+                    Vec::new(),
+                ),
                 val(
                     2,
                     "Cycle time",

@@ -40,7 +40,11 @@ pub fn ram_layout(p: &Profile) -> RamLayout {
     let mut image: Vec<u8> = Vec::new();
     for o in &p.objects {
         for e in o.entries.iter().filter(|e| e.storage == Storage::Ram) {
-            let align = if e.data_type.is_string() { 1 } else { e.byte_len().next_power_of_two().min(4) };
+            let align = if e.data_type.is_string() {
+                1
+            } else {
+                e.byte_len().next_power_of_two().min(4)
+            };
             let at = image.len().div_ceil(align) * align;
             image.resize(at, 0);
             image.extend_from_slice(&e.initial_bytes());
@@ -69,12 +73,22 @@ fn access(a: Access) -> String {
 }
 
 fn sm(s: Sm, length: u16) -> String {
-    format!("SmLayout {{ start: {:#06x}, length: {length}, control: {:#04x} }}", s.start, s.control)
+    format!(
+        "SmLayout {{ start: {:#06x}, length: {length}, control: {:#04x} }}",
+        s.start, s.control
+    )
 }
 
 fn entry(out: &mut String, index: u16, e: &Entry, layout: &RamLayout) {
     let value = match e.storage {
-        Storage::Ram => format!("Value::Ram({})", layout.offsets.get(&(index, e.subindex)).copied().unwrap_or(0)),
+        Storage::Ram => format!(
+            "Value::Ram({})",
+            layout
+                .offsets
+                .get(&(index, e.subindex))
+                .copied()
+                .unwrap_or(0)
+        ),
         Storage::Const => format!("Value::Const({})", bytes(&e.initial_bytes())),
     };
     let _ = writeln!(
@@ -96,21 +110,38 @@ fn module(out: &mut String, p: &Profile) {
     let layout = ram_layout(p);
     let out_size = p.outputs_bits() / 8;
     let in_size = p.inputs_bits() / 8;
-    let file = std::path::Path::new(&p.source).file_name().map_or(p.source.clone(), |f| f.to_string_lossy().into_owned());
-    let _ = writeln!(out, "/// Profile `{}`: {} (generated from `{file}`).", p.name, p.device.name);
+    let file = std::path::Path::new(&p.source)
+        .file_name()
+        .map_or(p.source.clone(), |f| f.to_string_lossy().into_owned());
+    let _ = writeln!(
+        out,
+        "/// Profile `{}`: {} (generated from `{file}`).",
+        p.name, p.device.name
+    );
     let _ = writeln!(out, "pub mod {} {{", p.name);
     let _ = writeln!(
         out,
         "    use crate::od::{{Access, AppVars, CoeDetails, DataType, DeviceInfo, Entry, Object, ObjectCode, PdoMappable, Profile, SmLayout, SyncSupport, Value}};\n"
     );
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
-    let _ = writeln!(out, "    pub const RAM_SIZE: usize = {};", layout.image.len());
+    let _ = writeln!(
+        out,
+        "    pub const RAM_SIZE: usize = {};",
+        layout.image.len()
+    );
     let _ = writeln!(out, "    /// SM2 default size in bytes: the default RxPDO assignment (SII SYNCM, ESI `Sm@DefaultSize`).");
     let _ = writeln!(out, "    pub const OUTPUTS_SIZE: usize = {out_size};");
-    let _ = writeln!(out, "    /// SM3 default size in bytes: the default TxPDO assignment.");
+    let _ = writeln!(
+        out,
+        "    /// SM3 default size in bytes: the default TxPDO assignment."
+    );
     let _ = writeln!(out, "    pub const INPUTS_SIZE: usize = {in_size};");
     let _ = writeln!(out, "    /// Initial OD RAM content.");
-    let _ = writeln!(out, "    pub const DEFAULTS: &[u8] = {};", bytes(&layout.image));
+    let _ = writeln!(
+        out,
+        "    pub const DEFAULTS: &[u8] = {};",
+        bytes(&layout.image)
+    );
     let _ = writeln!(out, "    /// All objects, sorted by index.");
     let _ = writeln!(out, "    pub const OBJECTS: &[Object] = &[");
     for o in &p.objects {
@@ -145,11 +176,27 @@ fn module(out: &mut String, p: &Profile) {
     let _ = writeln!(out, "            profile: {:?},", p.name);
     let _ = writeln!(out, "            name: {:?},", p.device.name);
     let _ = writeln!(out, "            vendor_id: {:#010x},", p.vendor.id);
-    let _ = writeln!(out, "            product_code: {:#010x},", p.device.product_code);
+    let _ = writeln!(
+        out,
+        "            product_code: {:#010x},",
+        p.device.product_code
+    );
     let _ = writeln!(out, "            revision: {:#010x},", p.device.revision);
-    let _ = writeln!(out, "            mailbox_out: {},", sm(p.sm.mailbox_out, p.sm.mailbox_out.length));
-    let _ = writeln!(out, "            mailbox_in: {},", sm(p.sm.mailbox_in, p.sm.mailbox_in.length));
-    let _ = writeln!(out, "            boot_mailbox_out: {},", boot(p.sm.boot_out));
+    let _ = writeln!(
+        out,
+        "            mailbox_out: {},",
+        sm(p.sm.mailbox_out, p.sm.mailbox_out.length)
+    );
+    let _ = writeln!(
+        out,
+        "            mailbox_in: {},",
+        sm(p.sm.mailbox_in, p.sm.mailbox_in.length)
+    );
+    let _ = writeln!(
+        out,
+        "            boot_mailbox_out: {},",
+        boot(p.sm.boot_out)
+    );
     let _ = writeln!(out, "            boot_mailbox_in: {},", boot(p.sm.boot_in));
     let _ = writeln!(out, "            outputs: {},", sm(p.sm.outputs, 0));
     let _ = writeln!(out, "            inputs: {},", sm(p.sm.inputs, 0));
@@ -159,7 +206,11 @@ fn module(out: &mut String, p: &Profile) {
         y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns
     );
     let _ = writeln!(out, "            max_pdo_entries: {},", p.max_pdo_entries);
-    let _ = writeln!(out, "            mailbox_protocols: {:#06x},", p.mailbox.protocols);
+    let _ = writeln!(
+        out,
+        "            mailbox_protocols: {:#06x},",
+        p.mailbox.protocols
+    );
     let _ = writeln!(
         out,
         "            coe: CoeDetails {{ sdo: {}, sdo_info: {}, pdo_assign: {}, pdo_config: {}, upload_at_startup: {}, complete_access: {} }},",
@@ -293,16 +344,42 @@ pub fn generate(profiles: &[Profile]) -> String {
     let mut sorted: Vec<&Profile> = profiles.iter().collect();
     sorted.sort_by(|a, b| a.name.cmp(&b.name));
     let mut out = String::new();
-    out.push_str("// @generated by od-gen from the profile files. Do not edit: change the profile.\n\n");
-    let max = sorted.iter().map(|p| ram_layout(p).image.len()).max().unwrap_or(0);
-    let _ = writeln!(out, "/// The largest OD RAM of all profiles (bytes): size a shared RAM buffer with it.");
+    out.push_str(
+        "// @generated by od-gen from the profile files. Do not edit: change the profile.\n\n",
+    );
+    let max = sorted
+        .iter()
+        .map(|p| ram_layout(p).image.len())
+        .max()
+        .unwrap_or(0);
+    let _ = writeln!(
+        out,
+        "/// The largest OD RAM of all profiles (bytes): size a shared RAM buffer with it."
+    );
     let _ = writeln!(out, "pub const MAX_RAM_SIZE: usize = {max};\n");
     let _ = writeln!(out, "/// All compiled-in profiles, sorted by name.");
-    let refs: Vec<String> = sorted.iter().map(|p| format!("&{}::PROFILE", p.name)).collect();
-    let _ = writeln!(out, "pub static ALL: [&crate::od::Profile; {}] = [{}];\n", sorted.len(), refs.join(", "));
-    let _ = writeln!(out, "/// The compiled-in profile with this name (the profile file's `name`).");
-    let _ = writeln!(out, "pub fn by_name(name: &str) -> Option<&'static crate::od::Profile> {{");
-    let _ = writeln!(out, "    ALL.iter().copied().find(|p| p.device.profile == name)");
+    let refs: Vec<String> = sorted
+        .iter()
+        .map(|p| format!("&{}::PROFILE", p.name))
+        .collect();
+    let _ = writeln!(
+        out,
+        "pub static ALL: [&crate::od::Profile; {}] = [{}];\n",
+        sorted.len(),
+        refs.join(", ")
+    );
+    let _ = writeln!(
+        out,
+        "/// The compiled-in profile with this name (the profile file's `name`)."
+    );
+    let _ = writeln!(
+        out,
+        "pub fn by_name(name: &str) -> Option<&'static crate::od::Profile> {{"
+    );
+    let _ = writeln!(
+        out,
+        "    ALL.iter().copied().find(|p| p.device.profile == name)"
+    );
     let _ = writeln!(out, "}}\n");
     for p in &sorted {
         module(&mut out, p);

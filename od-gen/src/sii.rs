@@ -38,7 +38,11 @@ pub fn crc8(bytes: &[u8]) -> u8 {
     for &b in bytes {
         crc ^= b;
         for _ in 0..8 {
-            crc = if crc & 0x80 != 0 { (crc << 1) ^ 0x07 } else { crc << 1 };
+            crc = if crc & 0x80 != 0 {
+                (crc << 1) ^ 0x07
+            } else {
+                crc << 1
+            };
         }
     }
     crc
@@ -68,7 +72,10 @@ pub fn config_data(p: &Profile) -> [u8; 14] {
 pub fn bootstrap(p: &Profile) -> Option<[u8; 8]> {
     let (o, i) = (p.sm.boot_out?, p.sm.boot_in?);
     let mut out = [0u8; 8];
-    for (chunk, w) in out.chunks_exact_mut(2).zip([o.start, o.length, i.start, i.length]) {
+    for (chunk, w) in out
+        .chunks_exact_mut(2)
+        .zip([o.start, o.length, i.start, i.length])
+    {
         chunk.copy_from_slice(&w.to_le_bytes());
     }
     Some(out)
@@ -216,7 +223,10 @@ fn pdos(pdos: &[Pdo], s: &mut Strings) -> Vec<u8> {
             push_u16(&mut v, e.index);
             v.push(e.subindex);
             v.push(s.add(&e.name));
-            v.push(e.data_type.map_or(0, |d| u8::try_from(d.code()).unwrap_or(0)));
+            v.push(
+                e.data_type
+                    .map_or(0, |d| u8::try_from(d.code()).unwrap_or(0)),
+            );
             v.push(u8::try_from(e.bits).unwrap_or(u8::MAX));
             push_u16(&mut v, 0);
         }
@@ -251,7 +261,10 @@ pub fn content(p: &Profile) -> Vec<u8> {
         (0x1A, p.sm.mailbox_in.start),
         (0x1B, p.sm.mailbox_in.length),
         (0x1C, p.mailbox.protocols),
-        (0x3E, u16::try_from((p.eeprom.byte_size / 128).saturating_sub(1)).unwrap_or(u16::MAX)),
+        (
+            0x3E,
+            u16::try_from((p.eeprom.byte_size / 128).saturating_sub(1)).unwrap_or(u16::MAX),
+        ),
         (0x3F, 1),
     ];
     for (word, x) in words {
@@ -267,7 +280,12 @@ pub fn content(p: &Profile) -> Vec<u8> {
         set_u16(&mut v, word + 1, (x >> 16) as u16);
     }
     if let (Some(o), Some(i)) = (p.sm.boot_out, p.sm.boot_in) {
-        for (word, x) in [(0x14, o.start), (0x15, o.length), (0x16, i.start), (0x17, i.length)] {
+        for (word, x) in [
+            (0x14, o.start),
+            (0x15, o.length),
+            (0x16, i.start),
+            (0x17, i.length),
+        ] {
             set_u16(&mut v, word, x);
         }
     }

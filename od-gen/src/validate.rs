@@ -20,11 +20,11 @@ pub(crate) fn check(p: &Profile) -> Result<(), Fault> {
 }
 
 const KEYWORDS: [&str; 51] = [
-    "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for", "if",
-    "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub", "ref", "return", "self", "Self",
-    "static", "struct", "super", "trait", "true", "type", "unsafe", "use", "where", "while", "async",
-    "await", "dyn", "abstract", "become", "box", "do", "final", "macro", "override", "priv", "typeof",
-    "unsized", "virtual", "yield", "try",
+    "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for",
+    "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub", "ref", "return",
+    "self", "Self", "static", "struct", "super", "trait", "true", "type", "unsafe", "use", "where",
+    "while", "async", "await", "dyn", "abstract", "become", "box", "do", "final", "macro",
+    "override", "priv", "typeof", "unsized", "virtual", "yield", "try",
 ];
 
 fn name(n: &str) -> Result<(), Fault> {
@@ -38,7 +38,9 @@ fn name(n: &str) -> Result<(), Fault> {
     } else {
         Err(fault(
             "name",
-            Invalid::Value(format!("`{n}` is not a lower-case Rust identifier `[a-z][a-z0-9_]*`")),
+            Invalid::Value(format!(
+                "`{n}` is not a lower-case Rust identifier `[a-z][a-z0-9_]*`"
+            )),
         ))
     }
 }
@@ -62,7 +64,14 @@ fn control(sm: &'static str, c: u8, mailbox: bool, ecat_writes: bool) -> Result<
         None
     };
     match why {
-        Some(why) => Err(fault(&format!("sm.{sm}.control"), Invalid::SmControl { sm, control: c, why })),
+        Some(why) => Err(fault(
+            &format!("sm.{sm}.control"),
+            Invalid::SmControl {
+                sm,
+                control: c,
+                why,
+            },
+        )),
         None => Ok(()),
     }
 }
@@ -80,7 +89,10 @@ fn sms(p: &Profile) -> Result<(), Fault> {
     control("outputs", s.outputs.control, false, true)?;
     control("inputs", s.inputs.control, false, false)?;
     if s.boot_out.is_some() != s.boot_in.is_some() {
-        return Err(fault("sm.boot_out", Invalid::Value("boot_out and boot_in come as a pair".into())));
+        return Err(fault(
+            "sm.boot_out",
+            Invalid::Value("boot_out and boot_in come as a pair".into()),
+        ));
     }
     for (name, sm) in [("mailbox_out", s.mailbox_out), ("mailbox_in", s.mailbox_in)]
         .into_iter()
@@ -89,18 +101,38 @@ fn sms(p: &Profile) -> Result<(), Fault> {
     {
         // A CoE SDO request needs 6 (mailbox header) + 10 (CoE + SDO header) bytes.
         if sm.length < 16 {
-            return Err(fault(&format!("sm.{name}.size"), Invalid::Value("a mailbox needs at least 16 bytes".into())));
+            return Err(fault(
+                &format!("sm.{name}.size"),
+                Invalid::Value("a mailbox needs at least 16 bytes".into()),
+            ));
         }
     }
     // Memory used by each SM: mailboxes one buffer, process data three buffers (3-buffer mode),
     // sized for the larger of the default assignment and all PDOs of that direction.
     let all_bits = |pdos: &[Pdo]| -> u32 { pdos.iter().map(Pdo::bits).sum() };
-    let pd_len = |sm: Sm, pdos: &[Pdo]| -> u32 { u32::from(sm.length).max(all_bits(pdos).div_ceil(8)) };
+    let pd_len =
+        |sm: Sm, pdos: &[Pdo]| -> u32 { u32::from(sm.length).max(all_bits(pdos).div_ceil(8)) };
     let mut areas: Vec<(&'static str, u32, u32)> = vec![
-        ("mailbox_out", u32::from(s.mailbox_out.start), u32::from(s.mailbox_out.length)),
-        ("mailbox_in", u32::from(s.mailbox_in.start), u32::from(s.mailbox_in.length)),
-        ("outputs", u32::from(s.outputs.start), 3 * pd_len(s.outputs, &p.rx_pdos)),
-        ("inputs", u32::from(s.inputs.start), 3 * pd_len(s.inputs, &p.tx_pdos)),
+        (
+            "mailbox_out",
+            u32::from(s.mailbox_out.start),
+            u32::from(s.mailbox_out.length),
+        ),
+        (
+            "mailbox_in",
+            u32::from(s.mailbox_in.start),
+            u32::from(s.mailbox_in.length),
+        ),
+        (
+            "outputs",
+            u32::from(s.outputs.start),
+            3 * pd_len(s.outputs, &p.rx_pdos),
+        ),
+        (
+            "inputs",
+            u32::from(s.inputs.start),
+            3 * pd_len(s.inputs, &p.tx_pdos),
+        ),
     ];
     // The bootstrap mailboxes replace the standard ones in BOOT, so they may share memory with
     // them; they must not collide with process data.
@@ -111,15 +143,22 @@ fn sms(p: &Profile) -> Result<(), Fault> {
     for &(name, start, len) in areas.iter().chain(&boot) {
         // The ESC process RAM starts at 0x1000 (ET1100 datasheet Sec. I, address space).
         if start < 0x1000 || start + len > 0x1_0000 {
-            return Err(fault(&format!("sm.{name}.start"), Invalid::Value("outside the ESC process RAM (0x1000..)".into())));
+            return Err(fault(
+                &format!("sm.{name}.start"),
+                Invalid::Value("outside the ESC process RAM (0x1000..)".into()),
+            ));
         }
     }
-    let overlaps = |a: (u32, u32), b: (u32, u32)| a.1 > 0 && b.1 > 0 && a.0 < b.0 + b.1 && b.0 < a.0 + a.1;
+    let overlaps =
+        |a: (u32, u32), b: (u32, u32)| a.1 > 0 && b.1 > 0 && a.0 < b.0 + b.1 && b.0 < a.0 + a.1;
     for i in 0..areas.len() {
         for j in i + 1..areas.len() {
             let (a, b) = (areas[i], areas[j]);
             if overlaps((a.1, a.2), (b.1, b.2)) {
-                return Err(fault(&format!("sm.{}", b.0), Invalid::SmOverlap { a: a.0, b: b.0 }));
+                return Err(fault(
+                    &format!("sm.{}", b.0),
+                    Invalid::SmOverlap { a: a.0, b: b.0 },
+                ));
             }
         }
     }
@@ -127,7 +166,10 @@ fn sms(p: &Profile) -> Result<(), Fault> {
     for &(bn, bs, bl) in &boot {
         for &(an, as_, al) in areas.iter().skip(2) {
             if overlaps((bs, bl), (as_, al)) {
-                return Err(fault(&format!("sm.{bn}"), Invalid::SmOverlap { a: an, b: bn }));
+                return Err(fault(
+                    &format!("sm.{bn}"),
+                    Invalid::SmOverlap { a: an, b: bn },
+                ));
             }
         }
     }
@@ -137,11 +179,18 @@ fn sms(p: &Profile) -> Result<(), Fault> {
 fn mailbox(p: &Profile) -> Result<(), Fault> {
     let c = p.mailbox.coe;
     if p.mailbox.protocols & protocol::COE != 0 && !c.sdo {
-        return Err(fault("mailbox.coe.sdo", Invalid::Mailbox("CoE without SDO support is not useful".into())));
+        return Err(fault(
+            "mailbox.coe.sdo",
+            Invalid::Mailbox("CoE without SDO support is not useful".into()),
+        ));
     }
-    let needs_sdo = c.sdo_info || c.pdo_assign || c.pdo_config || c.upload_at_startup || c.complete_access;
+    let needs_sdo =
+        c.sdo_info || c.pdo_assign || c.pdo_config || c.upload_at_startup || c.complete_access;
     if needs_sdo && !c.sdo {
-        return Err(fault("mailbox.coe", Invalid::Mailbox("CoE services need `sdo = true`".into())));
+        return Err(fault(
+            "mailbox.coe",
+            Invalid::Mailbox("CoE services need `sdo = true`".into()),
+        ));
     }
     if c.pdo_config && !c.pdo_assign {
         return Err(fault(
@@ -150,7 +199,10 @@ fn mailbox(p: &Profile) -> Result<(), Fault> {
         ));
     }
     if p.mailbox.protocols == 0 {
-        return Err(fault("mailbox.protocols", Invalid::Mailbox("at least one protocol is needed".into())));
+        return Err(fault(
+            "mailbox.protocols",
+            Invalid::Mailbox("at least one protocol is needed".into()),
+        ));
     }
     Ok(())
 }
@@ -158,13 +210,22 @@ fn mailbox(p: &Profile) -> Result<(), Fault> {
 fn sync(p: &Profile) -> Result<(), Fault> {
     let y = &p.sync;
     if !(y.free_run || y.sm_synchronous || y.dc_sync0 || y.dc_sync1) {
-        return Err(fault("sync", Invalid::Sync("no synchronisation mode is supported".into())));
+        return Err(fault(
+            "sync",
+            Invalid::Sync("no synchronisation mode is supported".into()),
+        ));
     }
     if y.dc_sync1 && !y.dc_sync0 {
-        return Err(fault("sync.dc_sync1", Invalid::Sync("SYNC1 needs SYNC0".into())));
+        return Err(fault(
+            "sync.dc_sync1",
+            Invalid::Sync("SYNC1 needs SYNC0".into()),
+        ));
     }
     if y.min_cycle_ns == 0 || y.min_cycle_ns > y.max_cycle_ns {
-        return Err(fault("sync.min_cycle_ns", Invalid::Sync("need 0 < min_cycle_ns <= max_cycle_ns".into())));
+        return Err(fault(
+            "sync.min_cycle_ns",
+            Invalid::Sync("need 0 < min_cycle_ns <= max_cycle_ns".into()),
+        ));
     }
     if !(y.min_cycle_ns..=y.max_cycle_ns).contains(&y.default_cycle_ns) {
         return Err(fault(
@@ -176,30 +237,59 @@ fn sync(p: &Profile) -> Result<(), Fault> {
     for (i, m) in p.dc_op_modes.iter().enumerate() {
         let key = format!("dc_op_mode[{i}]");
         if m.name.is_empty() || !names.insert(m.name.as_str()) {
-            return Err(fault(&format!("{key}.name"), Invalid::Sync("op mode names must be unique and non-empty".into())));
+            return Err(fault(
+                &format!("{key}.name"),
+                Invalid::Sync("op mode names must be unique and non-empty".into()),
+            ));
         }
         // AssignActivate is written to 0x0980:0x0981; 0x0981 bit 0 = activate cyclic operation,
         // bit 1 = SYNC0, bit 2 = SYNC1 (ET1100 datasheet Sec. II, register 0x0981).
         let act = m.assign_activate >> 8;
         if act & 0x02 != 0 && !y.dc_sync0 {
-            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("activates SYNC0 but sync.dc_sync0 is false".into())));
+            return Err(fault(
+                &format!("{key}.assign_activate"),
+                Invalid::Sync("activates SYNC0 but sync.dc_sync0 is false".into()),
+            ));
         }
         if act & 0x04 != 0 && !y.dc_sync1 {
-            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("activates SYNC1 but sync.dc_sync1 is false".into())));
+            return Err(fault(
+                &format!("{key}.assign_activate"),
+                Invalid::Sync("activates SYNC1 but sync.dc_sync1 is false".into()),
+            ));
         }
         if act & 0x06 != 0 && act & 0x01 == 0 {
-            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("SYNC signals need bit 8 (cyclic operation)".into())));
+            return Err(fault(
+                &format!("{key}.assign_activate"),
+                Invalid::Sync("SYNC signals need bit 8 (cyclic operation)".into()),
+            ));
         }
         if m.assign_activate & 0xF800 != 0 {
-            return Err(fault(&format!("{key}.assign_activate"), Invalid::Sync("reserved bits set".into())));
+            return Err(fault(
+                &format!("{key}.assign_activate"),
+                Invalid::Sync("reserved bits set".into()),
+            ));
         }
     }
-    let has = |bits: u16| p.dc_op_modes.iter().any(|m| (m.assign_activate >> 8) & bits == bits);
+    let has = |bits: u16| {
+        p.dc_op_modes
+            .iter()
+            .any(|m| (m.assign_activate >> 8) & bits == bits)
+    };
     if y.dc_sync0 && !has(0x03) {
-        return Err(fault("dc_op_mode", Invalid::Sync("sync.dc_sync0 needs an op mode with SYNC0 (AssignActivate 0x0300)".into())));
+        return Err(fault(
+            "dc_op_mode",
+            Invalid::Sync(
+                "sync.dc_sync0 needs an op mode with SYNC0 (AssignActivate 0x0300)".into(),
+            ),
+        ));
     }
     if y.dc_sync1 && !has(0x07) {
-        return Err(fault("dc_op_mode", Invalid::Sync("sync.dc_sync1 needs an op mode with SYNC1 (AssignActivate 0x0700)".into())));
+        return Err(fault(
+            "dc_op_mode",
+            Invalid::Sync(
+                "sync.dc_sync1 needs an op mode with SYNC1 (AssignActivate 0x0700)".into(),
+            ),
+        ));
     }
     Ok(())
 }
@@ -212,11 +302,17 @@ fn roles(p: &Profile) -> Result<(), Fault> {
                 if e.storage != Storage::Ram {
                     return Err(fault(
                         &format!("object[{:#06x}].role", o.index),
-                        Invalid::RoleType { role: r.field().into(), expected: "RAM" },
+                        Invalid::RoleType {
+                            role: r.field().into(),
+                            expected: "RAM",
+                        },
                     ));
                 }
                 if !seen.insert(r) {
-                    return Err(fault(&format!("object[{:#06x}].role", o.index), Invalid::DuplicateRole(r.field().into())));
+                    return Err(fault(
+                        &format!("object[{:#06x}].role", o.index),
+                        Invalid::DuplicateRole(r.field().into()),
+                    ));
                 }
             }
         }
@@ -241,7 +337,10 @@ fn strings(p: &Profile) -> Result<(), Fault> {
     }
     for (key, s) in &all {
         if s.len() > 255 {
-            return Err(fault(key, Invalid::Value("longer than 255 bytes (SII string limit)".into())));
+            return Err(fault(
+                key,
+                Invalid::Value("longer than 255 bytes (SII string limit)".into()),
+            ));
         }
     }
     for (key, s) in &all[..4] {
@@ -249,9 +348,16 @@ fn strings(p: &Profile) -> Result<(), Fault> {
             return Err(fault(key, Invalid::Value("must not be empty".into())));
         }
     }
-    let physics_ok = p.device.physics.len() <= 4 && p.device.physics.chars().all(|c| matches!(c, 'Y' | 'K' | 'H' | ' '));
+    let physics_ok = p.device.physics.len() <= 4
+        && p.device
+            .physics
+            .chars()
+            .all(|c| matches!(c, 'Y' | 'K' | 'H' | ' '));
     if !physics_ok {
-        return Err(fault("device.physics", Invalid::Value("up to 4 of Y, K, H or space".into())));
+        return Err(fault(
+            "device.physics",
+            Invalid::Value("up to 4 of Y, K, H or space".into()),
+        ));
     }
     Ok(())
 }
@@ -266,7 +372,13 @@ fn eeprom(p: &Profile) -> Result<(), Fault> {
     }
     let needed = crate::sii::content(p).len();
     if needed > n {
-        return Err(fault("eeprom.byte_size", Invalid::EepromTooSmall { needed, declared: n }));
+        return Err(fault(
+            "eeprom.byte_size",
+            Invalid::EepromTooSmall {
+                needed,
+                declared: n,
+            },
+        ));
     }
     Ok(())
 }

@@ -41,8 +41,14 @@ fn objects_sorted_in_the_text() {
         .map(|rest| u16::from_str_radix(&rest[..4], 16).unwrap())
         .collect();
     assert!(indices.windows(2).all(|w| w[0] < w[1]), "{indices:x?}");
-    assert_eq!(indices, p.objects.iter().map(|o| o.index).collect::<Vec<_>>());
-    for idx in [0x1000, 0x1001, 0x1008, 0x1009, 0x100A, 0x1018, 0x1600, 0x1A00, 0x1C00, 0x1C12, 0x1C13, 0x1C32, 0x1C33, 0x6040, 0x6041, 0x6060, 0x6061, 0x6064, 0x607A, 0x6502] {
+    assert_eq!(
+        indices,
+        p.objects.iter().map(|o| o.index).collect::<Vec<_>>()
+    );
+    for idx in [
+        0x1000, 0x1001, 0x1008, 0x1009, 0x100A, 0x1018, 0x1600, 0x1A00, 0x1C00, 0x1C12, 0x1C13,
+        0x1C32, 0x1C33, 0x6040, 0x6041, 0x6060, 0x6061, 0x6064, 0x607A, 0x6502,
+    ] {
         assert!(indices.contains(&idx), "{idx:#x} missing");
     }
 }
@@ -51,12 +57,21 @@ fn objects_sorted_in_the_text() {
 fn ram_image_holds_the_defaults() {
     let (p, code) = generated();
     let layout = od_gen::rust::ram_layout(&p);
-    assert!(code.contains(&format!("pub const RAM_SIZE: usize = {};", layout.image.len())));
+    assert!(code.contains(&format!(
+        "pub const RAM_SIZE: usize = {};",
+        layout.image.len()
+    )));
     for o in &p.objects {
         for e in &o.entries {
             if e.storage == Storage::Ram {
                 let off = usize::from(layout.offsets[&(o.index, e.subindex)]);
-                assert_eq!(&layout.image[off..off + e.byte_len()], e.initial_bytes().as_slice(), "{:#x}:{}", o.index, e.subindex);
+                assert_eq!(
+                    &layout.image[off..off + e.byte_len()],
+                    e.initial_bytes().as_slice(),
+                    "{:#x}:{}",
+                    o.index,
+                    e.subindex
+                );
                 if e.byte_len() >= 2 {
                     assert_eq!(off % e.byte_len().min(4), 0, "aligned");
                 }
@@ -65,11 +80,23 @@ fn ram_image_holds_the_defaults() {
     }
     // 1600h:01 = 6040h:00, 16 bit; 1C12h:01 = 1600h; 1000h const 0x00020192.
     let at = |i, s| usize::from(layout.offsets[&(i, s)]);
-    assert_eq!(&layout.image[at(0x1600, 1)..at(0x1600, 1) + 4], &0x6040_0010u32.to_le_bytes());
-    assert_eq!(&layout.image[at(0x1A00, 2)..at(0x1A00, 2) + 4], &0x6064_0020u32.to_le_bytes());
-    assert_eq!(&layout.image[at(0x1C12, 1)..at(0x1C12, 1) + 2], &0x1600u16.to_le_bytes());
+    assert_eq!(
+        &layout.image[at(0x1600, 1)..at(0x1600, 1) + 4],
+        &0x6040_0010u32.to_le_bytes()
+    );
+    assert_eq!(
+        &layout.image[at(0x1A00, 2)..at(0x1A00, 2) + 4],
+        &0x6064_0020u32.to_le_bytes()
+    );
+    assert_eq!(
+        &layout.image[at(0x1C12, 1)..at(0x1C12, 1) + 2],
+        &0x1600u16.to_le_bytes()
+    );
     assert_eq!(layout.image[at(0x1C13, 0)], 1);
-    assert!(code.contains("value: Value::Const(&[0x92, 0x01, 0x02, 0x00])"), "1000h device type");
+    assert!(
+        code.contains("value: Value::Const(&[0x92, 0x01, 0x02, 0x00])"),
+        "1000h device type"
+    );
     // Roles point at the RAM variables.
     assert!(code.contains(&format!("controlword: Some({}),", at(0x6040, 0))));
     assert!(code.contains(&format!("position_actual_value: Some({}),", at(0x6064, 0))));
@@ -86,12 +113,21 @@ fn sync_manager_parameters_and_access() {
         let writable = matches!(e.subindex, 1 | 2);
         assert_eq!(e.access.writable(), writable, "1C32h:{:02x}", e.subindex);
     }
-    assert_eq!(p.entry(0x1C32, 4).unwrap().default, 0x0007u16.to_le_bytes(), "free run + SM + DC SYNC0");
+    assert_eq!(
+        p.entry(0x1C32, 4).unwrap().default,
+        0x0007u16.to_le_bytes(),
+        "free run + SM + DC SYNC0"
+    );
     assert_eq!(p.entry(0x1C32, 5).unwrap().default, 31_250u32.to_le_bytes());
     assert_eq!(p.entry(0x1C00, 0).unwrap().default, [4]);
     for idx in [0x1600u16, 0x1A00, 0x1C12, 0x1C13] {
         for e in &p.object(idx).unwrap().entries {
-            assert_eq!(e.access, od_gen::model::Access::RW_PREOP, "{idx:#x}:{}", e.subindex);
+            assert_eq!(
+                e.access,
+                od_gen::model::Access::RW_PREOP,
+                "{idx:#x}:{}",
+                e.subindex
+            );
         }
     }
 }

@@ -9,7 +9,11 @@ fn crc8_table() -> [u8; 256] {
     for (i, slot) in t.iter_mut().enumerate() {
         let mut c = i as u8;
         for _ in 0..8 {
-            c = if c & 0x80 != 0 { (c << 1) ^ 0x07 } else { c << 1 };
+            c = if c & 0x80 != 0 {
+                (c << 1) ^ 0x07
+            } else {
+                c << 1
+            };
         }
         *slot = c;
     }
@@ -69,8 +73,14 @@ fn categories(img: &[u8]) -> Vec<Category> {
             break;
         }
         let len = usize::from(u16::from_le_bytes([img[at + 2], img[at + 3]])) * 2;
-        assert!(at + 4 + len <= img.len(), "category {kind} runs past the image");
-        out.push(Category { kind, data: img[at + 4..at + 4 + len].to_vec() });
+        assert!(
+            at + 4 + len <= img.len(),
+            "category {kind} runs past the image"
+        );
+        out.push(Category {
+            kind,
+            data: img[at + 4..at + 4 + len].to_vec(),
+        });
         at += 4 + len;
     }
     out
@@ -120,7 +130,8 @@ fn decode_pdos(c: &Category, s: &[String]) -> Vec<DecodedPdo> {
         for _ in 0..n {
             let e = &d[at..at + 8];
             assert_eq!(&e[6..8], &[0, 0], "entry flags are reserved");
-            p.entries.push((u16::from_le_bytes([e[0], e[1]]), e[2], e[4], e[5]));
+            p.entries
+                .push((u16::from_le_bytes([e[0], e[1]]), e[2], e[4], e[5]));
             at += 8;
         }
         v.push(p);
@@ -146,7 +157,10 @@ fn crc_known_vectors() {
     b[..2].copy_from_slice(&[0x80, 0x02]);
     let c = [0x05, 0x06, 0x00, 0x44, 0x64, 0, 0, 0, 0, 0, 0x1A, 0, 0, 0];
     assert_eq!([crc8(&a), crc8(&b), crc8(&c)], [0x2F, 0xC6, 0xA9]);
-    assert_eq!([crc8_igh(&a), crc8_igh(&b), crc8_igh(&c)], [0x2F, 0xC6, 0xA9]);
+    assert_eq!(
+        [crc8_igh(&a), crc8_igh(&b), crc8_igh(&c)],
+        [0x2F, 0xC6, 0xA9]
+    );
     assert_eq!(od_gen::sii::crc8(&c), 0xA9);
 }
 
@@ -170,8 +184,14 @@ fn header_words() {
     assert_eq!(dw(&img, 0x08), 0x7E57_0402);
     assert_eq!(dw(&img, 0x0A), 0x0000_0402);
     // No bootstrap mailbox; standard mailbox SM0 0x1000/256, SM1 0x1100/256; CoE only.
-    assert_eq!([w(&img, 0x14), w(&img, 0x15), w(&img, 0x16), w(&img, 0x17)], [0; 4]);
-    assert_eq!([w(&img, 0x18), w(&img, 0x19), w(&img, 0x1A), w(&img, 0x1B)], [0x1000, 256, 0x1100, 256]);
+    assert_eq!(
+        [w(&img, 0x14), w(&img, 0x15), w(&img, 0x16), w(&img, 0x17)],
+        [0; 4]
+    );
+    assert_eq!(
+        [w(&img, 0x18), w(&img, 0x19), w(&img, 0x1A), w(&img, 0x1B)],
+        [0x1000, 256, 0x1100, 256]
+    );
     assert_eq!(w(&img, 0x1C), 0x0004);
     // Reserved words are zero.
     for word in (0x10..0x14).chain(0x1D..0x3E) {
@@ -199,28 +219,54 @@ fn category_order_and_bodies() {
     let img = p.sii_image();
     let cats = categories(&img);
     let kinds: Vec<u16> = cats.iter().map(|c| c.kind).collect();
-    assert_eq!(kinds, [10, 30, 40, 41, 50, 51, 60], "STRINGS, GENERAL, FMMU, SYNCM, TXPDO, RXPDO, DC");
-    assert_eq!(kinds.iter().filter(|&&k| k == 50).count(), 1, "exactly one TXPDO category");
-    assert_eq!(kinds.iter().filter(|&&k| k == 51).count(), 1, "exactly one RXPDO category");
+    assert_eq!(
+        kinds,
+        [10, 30, 40, 41, 50, 51, 60],
+        "STRINGS, GENERAL, FMMU, SYNCM, TXPDO, RXPDO, DC"
+    );
+    assert_eq!(
+        kinds.iter().filter(|&&k| k == 50).count(),
+        1,
+        "exactly one TXPDO category"
+    );
+    assert_eq!(
+        kinds.iter().filter(|&&k| k == 51).count(),
+        1,
+        "exactly one RXPDO category"
+    );
     let s = strings(&cats[0]);
-    assert_eq!(s[0], "Open CiA402 Servo", "string 1 is the device name (SOEM)");
+    assert_eq!(
+        s[0], "Open CiA402 Servo",
+        "string 1 is the device name (SOEM)"
+    );
 
     // GENERAL: exactly 32 bytes (IgH), name indexes resolve to the device name.
     let g = &cats[1].data;
     assert_eq!(g.len(), 32);
     assert_eq!(string(&s, g[0]), p.device.group_type);
     assert_eq!(g[1], 0, "no image");
-    assert_eq!(string(&s, g[2]), p.device.name, "OrderIdx: ethercrab's name");
+    assert_eq!(
+        string(&s, g[2]),
+        p.device.name,
+        "OrderIdx: ethercrab's name"
+    );
     assert_eq!(string(&s, g[3]), p.device.name, "NameIdx");
     assert_eq!(g[4], 0);
-    assert_eq!(g[5], 0b0000_1101, "CoE details: SDO, PDO assign, PDO config; no SDO info, no CA");
+    assert_eq!(
+        g[5], 0b0000_1101,
+        "CoE details: SDO, PDO assign, PDO config; no SDO info, no CA"
+    );
     assert_eq!(g[5] & 0xC0, 0, "reserved CoE bits");
     assert_eq!([g[6], g[7], g[8]], [0, 0, 0], "no FoE, EoE, SoE");
     assert_eq!(g[9], 1, "one DS402 channel");
     assert_eq!(g[0x0B], 0x04, "flags: mailbox data link layer only");
     assert_eq!(g[0x0B] & 0xE0, 0, "reserved flag bits");
     assert_eq!(string(&s, g[0x0E]), p.device.group_name);
-    assert_eq!(u16::from_le_bytes([g[0x10], g[0x11]]), 0x0011, "two MII ports");
+    assert_eq!(
+        u16::from_le_bytes([g[0x10], g[0x11]]),
+        0x0011,
+        "two MII ports"
+    );
     assert!(g[0x12..].iter().all(|&b| b == 0));
 
     // FMMU: Outputs, Inputs, MBoxState, then only unused codes.
@@ -233,7 +279,14 @@ fn category_order_and_bodies() {
     assert_eq!(sm.len(), 32);
     let sm_at = |i: usize| {
         let e = &sm[8 * i..8 * i + 8];
-        (u16::from_le_bytes([e[0], e[1]]), u16::from_le_bytes([e[2], e[3]]), e[4], e[5], e[6], e[7])
+        (
+            u16::from_le_bytes([e[0], e[1]]),
+            u16::from_le_bytes([e[2], e[3]]),
+            e[4],
+            e[5],
+            e[6],
+            e[7],
+        )
     };
     assert_eq!(sm_at(0), (0x1000, 256, 0x26, 0, 1, 1));
     assert_eq!(sm_at(1), (0x1100, 256, 0x22, 0, 1, 2));
@@ -256,7 +309,11 @@ fn category_order_and_bodies() {
             sm: 2,
             flags: 0,
             name: "RxPDO 1 mapping".into(),
-            entries: vec![(0x6040, 0, 0x06, 16), (0x607A, 0, 0x04, 32), (0x6060, 0, 0x02, 8)],
+            entries: vec![
+                (0x6040, 0, 0x06, 16),
+                (0x607A, 0, 0x04, 32),
+                (0x6060, 0, 0x02, 8)
+            ],
         }]
     );
     assert_eq!(
@@ -266,11 +323,19 @@ fn category_order_and_bodies() {
             sm: 3,
             flags: 0,
             name: "TxPDO 1 mapping".into(),
-            entries: vec![(0x6041, 0, 0x06, 16), (0x6064, 0, 0x04, 32), (0x6061, 0, 0x02, 8)],
+            entries: vec![
+                (0x6041, 0, 0x06, 16),
+                (0x6064, 0, 0x04, 32),
+                (0x6061, 0, 0x02, 8)
+            ],
         }]
     );
     for (pdos, sm_len) in [(&rx, out_len), (&tx, in_len)] {
-        let bits: u32 = pdos.iter().flat_map(|p| &p.entries).map(|e| u32::from(e.3)).sum();
+        let bits: u32 = pdos
+            .iter()
+            .flat_map(|p| &p.entries)
+            .map(|e| u32::from(e.3))
+            .sum();
         assert_eq!(bits, u32::from(sm_len) * 8, "PDO bits equal the SM length");
     }
 
@@ -281,10 +346,20 @@ fn category_order_and_bodies() {
         .chunks(24)
         .map(|m| {
             assert_eq!(&m[20..24], &[0; 4], "reserved");
-            (string(&s, m[18]).to_string(), u16::from_le_bytes([m[14], m[15]]), i16::from_le_bytes([m[16], m[17]]))
+            (
+                string(&s, m[18]).to_string(),
+                u16::from_le_bytes([m[14], m[15]]),
+                i16::from_le_bytes([m[16], m[17]]),
+            )
         })
         .collect();
-    assert_eq!(modes, vec![("FreeRun".to_string(), 0x0000, 0), ("DC".to_string(), 0x0300, 1)]);
+    assert_eq!(
+        modes,
+        vec![
+            ("FreeRun".to_string(), 0x0000, 0),
+            ("DC".to_string(), 0x0300, 1)
+        ]
+    );
 }
 
 #[test]

@@ -5,7 +5,10 @@ use od_gen::{Error, Invalid};
 const STANDARD: &str = include_str!("../profiles/standard.toml");
 
 fn with(from: &str, to: &str) -> String {
-    assert!(STANDARD.contains(from), "test setup: `{from}` not in standard.toml");
+    assert!(
+        STANDARD.contains(from),
+        "test setup: `{from}` not in standard.toml"
+    );
     STANDARD.replacen(from, to, 1)
 }
 
@@ -29,12 +32,17 @@ fn standard_profile_is_valid() {
     let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
     assert_eq!(p.name, "standard");
     assert_eq!(od_gen::builtin_names(), ["standard"]);
-    assert_eq!(od_gen::builtin("standard").unwrap(), od_gen::parse(STANDARD, "builtin:standard").unwrap());
+    assert_eq!(
+        od_gen::builtin("standard").unwrap(),
+        od_gen::parse(STANDARD, "builtin:standard").unwrap()
+    );
 }
 
 #[test]
 fn duplicate_index() {
-    let (key, e) = invalid(&appended("[[object]]\nindex = 0x6040\nname = \"Again\"\ntype = \"UINT\"\naccess = \"ro\""));
+    let (key, e) = invalid(&appended(
+        "[[object]]\nindex = 0x6040\nname = \"Again\"\ntype = \"UINT\"\naccess = \"ro\"",
+    ));
     assert_eq!(e, Invalid::DuplicateIndex(0x6040));
     assert_eq!(key, "object[0x6040]");
 }
@@ -51,40 +59,106 @@ fn duplicate_subindex() {
 
 #[test]
 fn derived_object_declared() {
-    let (_, e) = invalid(&appended("[[object]]\nindex = 0x1C12\nname = \"x\"\ntype = \"UINT\"\naccess = \"ro\""));
-    assert_eq!(e, Invalid::DerivedObject { index: 0x1C12, from: "sm" });
-    let (_, e) = invalid(&appended("[[object]]\nindex = 0x1018\nname = \"x\"\ntype = \"UINT\"\naccess = \"ro\""));
-    assert_eq!(e, Invalid::DerivedObject { index: 0x1018, from: "device" });
+    let (_, e) = invalid(&appended(
+        "[[object]]\nindex = 0x1C12\nname = \"x\"\ntype = \"UINT\"\naccess = \"ro\"",
+    ));
+    assert_eq!(
+        e,
+        Invalid::DerivedObject {
+            index: 0x1C12,
+            from: "sm"
+        }
+    );
+    let (_, e) = invalid(&appended(
+        "[[object]]\nindex = 0x1018\nname = \"x\"\ntype = \"UINT\"\naccess = \"ro\"",
+    ));
+    assert_eq!(
+        e,
+        Invalid::DerivedObject {
+            index: 0x1018,
+            from: "device"
+        }
+    );
 }
 
 #[test]
 fn pdo_entry_missing() {
-    let (key, e) = invalid(&with("{ index = 0x6060, sub = 0, bits = 8 }", "{ index = 0x6071, sub = 0, bits = 16 }"));
-    assert_eq!(e, Invalid::PdoEntryMissing { index: 0x6071, subindex: 0 });
+    let (key, e) = invalid(&with(
+        "{ index = 0x6060, sub = 0, bits = 8 }",
+        "{ index = 0x6071, sub = 0, bits = 16 }",
+    ));
+    assert_eq!(
+        e,
+        Invalid::PdoEntryMissing {
+            index: 0x6071,
+            subindex: 0
+        }
+    );
     assert_eq!(key, "rxpdo[0x1600].entries[2]");
-    let (_, e) = invalid(&with("{ index = 0x6060, sub = 0, bits = 8 }", "{ index = 0x6060, sub = 1, bits = 8 }"));
-    assert_eq!(e, Invalid::PdoEntryMissing { index: 0x6060, subindex: 1 });
+    let (_, e) = invalid(&with(
+        "{ index = 0x6060, sub = 0, bits = 8 }",
+        "{ index = 0x6060, sub = 1, bits = 8 }",
+    ));
+    assert_eq!(
+        e,
+        Invalid::PdoEntryMissing {
+            index: 0x6060,
+            subindex: 1
+        }
+    );
 }
 
 #[test]
 fn pdo_entry_not_mappable() {
     // 6502h is not mappable at all.
-    let (_, e) = invalid(&with("{ index = 0x6061, sub = 0, bits = 8 }", "{ index = 0x6502, sub = 0, bits = 32 }"));
-    assert_eq!(e, Invalid::PdoEntryNotMappable { index: 0x6502, subindex: 0 });
+    let (_, e) = invalid(&with(
+        "{ index = 0x6061, sub = 0, bits = 8 }",
+        "{ index = 0x6502, sub = 0, bits = 32 }",
+    ));
+    assert_eq!(
+        e,
+        Invalid::PdoEntryNotMappable {
+            index: 0x6502,
+            subindex: 0
+        }
+    );
     // 6041h is TxPDO-mappable only.
-    let (_, e) = invalid(&with("{ index = 0x6060, sub = 0, bits = 8 }", "{ index = 0x6041, sub = 0, bits = 16 }"));
-    assert_eq!(e, Invalid::PdoEntryNotMappable { index: 0x6041, subindex: 0 });
+    let (_, e) = invalid(&with(
+        "{ index = 0x6060, sub = 0, bits = 8 }",
+        "{ index = 0x6041, sub = 0, bits = 16 }",
+    ));
+    assert_eq!(
+        e,
+        Invalid::PdoEntryNotMappable {
+            index: 0x6041,
+            subindex: 0
+        }
+    );
 }
 
 #[test]
 fn pdo_entry_wrong_bit_length() {
-    let (_, e) = invalid(&with("{ index = 0x6040, sub = 0, bits = 16 }", "{ index = 0x6040, sub = 0, bits = 32 }"));
-    assert_eq!(e, Invalid::PdoEntryBitLen { index: 0x6040, subindex: 0, pdo: 32, object: 16 });
+    let (_, e) = invalid(&with(
+        "{ index = 0x6040, sub = 0, bits = 16 }",
+        "{ index = 0x6040, sub = 0, bits = 32 }",
+    ));
+    assert_eq!(
+        e,
+        Invalid::PdoEntryBitLen {
+            index: 0x6040,
+            subindex: 0,
+            pdo: 32,
+            object: 16
+        }
+    );
 }
 
 #[test]
 fn pdo_sm_and_index_range() {
-    let (_, e) = invalid(&with("index = 0x1600\nname = \"RxPDO 1 mapping\"\nsm = 2", "index = 0x1600\nname = \"RxPDO 1 mapping\"\nsm = 3"));
+    let (_, e) = invalid(&with(
+        "index = 0x1600\nname = \"RxPDO 1 mapping\"\nsm = 2",
+        "index = 0x1600\nname = \"RxPDO 1 mapping\"\nsm = 3",
+    ));
     assert_eq!(e, Invalid::PdoSm { sm: 3, expected: 2 });
     let (_, e) = invalid(&with("index = 0x1600", "index = 0x1A05"));
     assert_eq!(e, Invalid::PdoIndexRange(0x1A05));
@@ -102,7 +176,13 @@ fn role_on_wrong_type() {
         "name = \"Controlword\"\ntype = \"UINT\"",
         "name = \"Controlword\"\ntype = \"UDINT\"",
     ));
-    assert_eq!(e, Invalid::RoleType { role: "controlword".into(), expected: "UINT" });
+    assert_eq!(
+        e,
+        Invalid::RoleType {
+            role: "controlword".into(),
+            expected: "UINT"
+        }
+    );
     assert_eq!(key, "object[0x6040].role");
 }
 
@@ -141,31 +221,71 @@ fn default_out_of_type_range() {
 
 #[test]
 fn unknown_type() {
-    let (_, e) = invalid(&appended("[[object]]\nindex = 0x2004\nname = \"x\"\ntype = \"UINT16\"\naccess = \"rw\""));
+    let (_, e) = invalid(&appended(
+        "[[object]]\nindex = 0x2004\nname = \"x\"\ntype = \"UINT16\"\naccess = \"rw\"",
+    ));
     assert_eq!(e, Invalid::UnknownType("UINT16".into()));
 }
 
 #[test]
 fn sm_overlap() {
-    let (key, e) = invalid(&with("outputs = { start = 0x1200", "outputs = { start = 0x1100"));
-    assert_eq!(e, Invalid::SmOverlap { a: "mailbox_in", b: "outputs" });
+    let (key, e) = invalid(&with(
+        "outputs = { start = 0x1200",
+        "outputs = { start = 0x1100",
+    ));
+    assert_eq!(
+        e,
+        Invalid::SmOverlap {
+            a: "mailbox_in",
+            b: "outputs"
+        }
+    );
     assert_eq!(key, "sm.outputs");
     // SM3 right behind one SM2 buffer: fine for 1 buffer, but SM2 uses 3 buffers (3 × 7 bytes).
-    let (_, e) = invalid(&with("inputs = { start = 0x1600", "inputs = { start = 0x1208"));
-    assert_eq!(e, Invalid::SmOverlap { a: "outputs", b: "inputs" });
-    assert!(od_gen::parse(&with("inputs = { start = 0x1600", "inputs = { start = 0x1216"), "ok").is_ok());
+    let (_, e) = invalid(&with(
+        "inputs = { start = 0x1600",
+        "inputs = { start = 0x1208",
+    ));
+    assert_eq!(
+        e,
+        Invalid::SmOverlap {
+            a: "outputs",
+            b: "inputs"
+        }
+    );
+    assert!(od_gen::parse(
+        &with("inputs = { start = 0x1600", "inputs = { start = 0x1216"),
+        "ok"
+    )
+    .is_ok());
 }
 
 #[test]
 fn sm_control_byte() {
-    let (key, e) = invalid(&with("size = 256, control = 0x26", "size = 256, control = 0x22"));
-    assert!(matches!(e, Invalid::SmControl { sm: "mailbox_out", control: 0x22, .. }), "{e:?}");
+    let (key, e) = invalid(&with(
+        "size = 256, control = 0x26",
+        "size = 256, control = 0x22",
+    ));
+    assert!(
+        matches!(
+            e,
+            Invalid::SmControl {
+                sm: "mailbox_out",
+                control: 0x22,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
     assert_eq!(key, "sm.mailbox_out.control");
 }
 
 #[test]
 fn dc_mode_needed_for_sync0() {
-    let (_, e) = invalid(&with("assign_activate = 0x0300", "assign_activate = 0x0100"));
+    let (_, e) = invalid(&with(
+        "assign_activate = 0x0300",
+        "assign_activate = 0x0100",
+    ));
     assert!(matches!(e, Invalid::Sync(_)), "{e:?}");
 }
 
@@ -178,14 +298,20 @@ fn coe_flags_need_sdo() {
 #[test]
 fn eeprom_size() {
     let (_, e) = invalid(&with("byte_size = 2048", "byte_size = 256"));
-    assert!(matches!(e, Invalid::EepromTooSmall { declared: 256, .. }), "{e:?}");
+    assert!(
+        matches!(e, Invalid::EepromTooSmall { declared: 256, .. }),
+        "{e:?}"
+    );
     let (_, e) = invalid(&with("byte_size = 2048", "byte_size = 3000"));
     assert!(matches!(e, Invalid::Value(_)), "{e:?}");
 }
 
 #[test]
 fn unknown_key_is_a_parse_error_naming_the_key() {
-    match od_gen::parse(&with("pdi_control = 0x05", "pdi_controll = 0x05"), "bad.toml") {
+    match od_gen::parse(
+        &with("pdi_control = 0x05", "pdi_controll = 0x05"),
+        "bad.toml",
+    ) {
         Err(Error::Parse { file, message }) => {
             assert_eq!(file, "bad.toml");
             assert!(message.contains("pdi_controll"), "{message}");
@@ -196,11 +322,23 @@ fn unknown_key_is_a_parse_error_naming_the_key() {
 
 #[test]
 fn errors_name_file_and_key() {
-    let err = od_gen::parse(&with("{ index = 0x6040, sub = 0, bits = 16 }", "{ index = 0x6040, sub = 0, bits = 8 }"), "x.toml")
+    let err = od_gen::parse(
+        &with(
+            "{ index = 0x6040, sub = 0, bits = 16 }",
+            "{ index = 0x6040, sub = 0, bits = 8 }",
+        ),
+        "x.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.starts_with("x.toml: `rxpdo[0x1600].entries[0]`:"),
+        "{err}"
+    );
+    assert!(od_gen::builtin("nope")
         .unwrap_err()
-        .to_string();
-    assert!(err.starts_with("x.toml: `rxpdo[0x1600].entries[0]`:"), "{err}");
-    assert!(od_gen::builtin("nope").unwrap_err().to_string().contains("standard"));
+        .to_string()
+        .contains("standard"));
 }
 
 #[test]
@@ -210,7 +348,10 @@ fn file_name_must_match_profile_name() {
     let f = dir.join("other.toml");
     std::fs::write(&f, STANDARD).unwrap();
     let e = od_gen::load(&f).unwrap_err();
-    assert!(matches!(e, Error::Invalid { ref key, .. } if key == "name"), "{e}");
+    assert!(
+        matches!(e, Error::Invalid { ref key, .. } if key == "name"),
+        "{e}"
+    );
     let missing = od_gen::load(&dir.join("missing.toml")).unwrap_err();
     assert!(matches!(missing, Error::Io { .. }));
     std::fs::remove_dir_all(&dir).unwrap();

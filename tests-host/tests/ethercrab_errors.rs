@@ -4,8 +4,8 @@ use std::time::Duration;
 
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
-use ethercrab::error::{Error, MailboxError};
-use ethercrab::{Command, CoeAbortCode, MainDeviceConfig, Timeouts};
+use ethercrab::error::{CoeAbortCode, Error, MailboxError};
+use ethercrab::{Command, MainDeviceConfig, Timeouts};
 use tests_host::block_on;
 
 const FIRST_STATION: u16 = 0x1000;

@@ -52,12 +52,23 @@ pub(crate) struct Effects {
 impl Effects {
     /// Effects of an access at global time `time` outside a frame (PDI).
     pub fn at(time: u64) -> Self {
-        Self { time, frame: FrameTiming { port0: time, port1: None }, ..Self::default() }
+        Self {
+            time,
+            frame: FrameTiming {
+                port0: time,
+                port1: None,
+            },
+            ..Self::default()
+        }
     }
 
     /// Effects of an ECAT access inside a frame.
     pub fn in_frame(frame: FrameTiming) -> Self {
-        Self { time: frame.port0, frame, ..Self::default() }
+        Self {
+            time: frame.port0,
+            frame,
+            ..Self::default()
+        }
     }
 }
 
@@ -84,10 +95,16 @@ impl Et1100 {
         }
         let mut next_start = space_end;
         for n in 0..super::sm::SM_COUNT {
-            let Some((start, len)) = self.sm_window(n) else { continue };
+            let Some((start, len)) = self.sm_window(n) else {
+                continue;
+            };
             let end = start + len;
             if pos >= start && pos < end {
-                return Region::Sm { n, start, end: end.min(space_end) };
+                return Region::Sm {
+                    n,
+                    start,
+                    end: end.min(space_end),
+                };
             }
             if start > pos {
                 next_start = next_start.min(start);
@@ -99,7 +116,13 @@ impl Et1100 {
     /// Reads `buf.len()` bytes at `addr` with the semantics of `side`. Bytes that are not
     /// executed (refused SM access, beyond the address space) are left untouched. Returns
     /// whether at least one byte was accessed (working counter rule).
-    pub(crate) fn read_range(&mut self, side: Side, addr: u32, buf: &mut [u8], fx: &mut Effects) -> bool {
+    pub(crate) fn read_range(
+        &mut self,
+        side: Side,
+        addr: u32,
+        buf: &mut [u8],
+        fx: &mut Effects,
+    ) -> bool {
         let mut any = false;
         let end = addr.saturating_add(buf.len() as u32);
         let mut pos = addr;
@@ -116,7 +139,11 @@ impl Et1100 {
                     }
                     (chunk_end, true)
                 }
-                Region::Sm { n, start, end: s_end } => {
+                Region::Sm {
+                    n,
+                    start,
+                    end: s_end,
+                } => {
                     let chunk_end = end.min(s_end);
                     let len = (chunk_end - pos) as usize;
                     let ok = match buf.get_mut(idx..idx + len) {
@@ -172,7 +199,11 @@ impl Et1100 {
                     }
                     (chunk_end, true)
                 }
-                Region::Sm { n, start, end: s_end } => {
+                Region::Sm {
+                    n,
+                    start,
+                    end: s_end,
+                } => {
                     let chunk_end = end.min(s_end);
                     let range = idx..idx + (chunk_end - pos) as usize;
                     let ok = match data.get(range.clone()) {

@@ -79,7 +79,10 @@ const LEN: usize = 6;
 const IRQ: usize = 8;
 
 fn le16(d: &[u8], at: usize) -> u16 {
-    u16::from_le_bytes([d.get(at).copied().unwrap_or(0), d.get(at + 1).copied().unwrap_or(0)])
+    u16::from_le_bytes([
+        d.get(at).copied().unwrap_or(0),
+        d.get(at + 1).copied().unwrap_or(0),
+    ])
 }
 
 fn put16(d: &mut [u8], at: usize, v: u16) {
@@ -100,7 +103,9 @@ impl Et1100 {
     /// Processes one datagram `dg` (header, data, working counter; its length was checked by the
     /// frame parser). Unknown commands pass unchanged.
     pub(crate) fn process_datagram(&mut self, dg: &mut [u8], timing: FrameTiming) {
-        let Some(cmd) = dg.get(CMD).copied().and_then(Command::from_code) else { return };
+        let Some(cmd) = dg.get(CMD).copied().and_then(Command::from_code) else {
+            return;
+        };
         let len = usize::from(le16(dg, LEN) & DG_LEN_MASK);
         let adp = le16(dg, ADP);
         let ado = le16(dg, ADO);
@@ -109,7 +114,9 @@ impl Et1100 {
         put16(dg, IRQ, irq);
         let wkc_at = DG_HEADER_LEN + len;
         let wkc = le16(dg, wkc_at);
-        let Some(data) = dg.get_mut(DG_HEADER_LEN..wkc_at) else { return };
+        let Some(data) = dg.get_mut(DG_HEADER_LEN..wkc_at) else {
+            return;
+        };
         let mut fx = Effects::in_frame(timing);
 
         let (action, next_adp) = match cmd {
@@ -148,7 +155,11 @@ impl Et1100 {
                 return;
             }
         };
-        let rw_weight = if matches!(cmd, Command::Aprw | Command::Fprw | Command::Brw) { 2 } else { 1 };
+        let rw_weight = if matches!(cmd, Command::Aprw | Command::Fprw | Command::Brw) {
+            2
+        } else {
+            1
+        };
         let inc = match action {
             Some(a) => self.physical(a, u32::from(ado), data, rw_weight, &mut fx),
             None => 0,
@@ -160,7 +171,14 @@ impl Et1100 {
     }
 
     /// Executes a physically addressed action; returns the working counter increment.
-    fn physical(&mut self, action: Action, ado: u32, data: &mut [u8], write_weight: u16, fx: &mut Effects) -> u16 {
+    fn physical(
+        &mut self,
+        action: Action,
+        ado: u32,
+        data: &mut [u8],
+        write_weight: u16,
+        fx: &mut Effects,
+    ) -> u16 {
         match action {
             Action::Read => u16::from(self.read_range(Side::Ecat, ado, data, fx)),
             Action::Write => {

@@ -110,13 +110,19 @@ impl DcUnit {
     }
 
     pub(crate) fn set_clock(&mut self, now: u64, local: u64, drift_ppm: f64) {
-        self.clock = LocalClock { anchor_global: now, anchor_local: local, drift_ppb: drift_ppm * PPB_PER_PPM, correction_ppb: 0.0 };
+        self.clock = LocalClock {
+            anchor_global: now,
+            anchor_local: local,
+            drift_ppb: drift_ppm * PPB_PER_PPM,
+            correction_ppb: 0.0,
+        };
         self.time_loop = TimeLoop::default();
     }
 
-    /// A write to the speed counter start resets the loop filters.
-    pub(crate) fn reset_loop(&mut self) {
+    /// A write to the speed counter start resets the loop filters and the rate correction.
+    pub(crate) fn reset_loop(&mut self, now: u64) {
         self.time_loop = TimeLoop::default();
+        self.clock.set_correction(now, 0.0);
     }
 }
 
@@ -153,7 +159,12 @@ impl Et1100 {
         let t = fx.time;
         let offset = self.u64_at(regs::DC_SYSTEM_TIME_OFFSET.addr);
         let delay = u64::from(self.u32_at(regs::DC_SYSTEM_TIME_DELAY.addr));
-        let mine = self.dc.clock.local_at(t).wrapping_add(offset).wrapping_sub(delay);
+        let mine = self
+            .dc
+            .clock
+            .local_at(t)
+            .wrapping_add(offset)
+            .wrapping_sub(delay);
         let diff = if fx.systime_mask == ALL {
             mine.wrapping_sub(received) as i64
         } else {
@@ -162,17 +173,22 @@ impl Et1100 {
         self.set_u32(regs::DC_SYSTEM_TIME_DIFF.addr, encode_diff(diff));
 
         let depth = u32::from(self.u8_at(regs::DC_TIME_FILTER_DEPTH.addr) & FILTER_DEPTH_MASK);
-        let speed_start = self.u16_at(regs::DC_SPEED_COUNTER_START.addr).max(SPEED_COUNTER_START_MIN);
+        let speed_start = self
+            .u16_at(regs::DC_SPEED_COUNTER_START.addr)
+            .max(SPEED_COUNTER_START_MIN);
         let max_slew_ppb = NS_PER_S / (f64::from(speed_start) * DC_CLOCK_NS);
         let tl = &mut self.dc.time_loop;
         tl.filtered_ns += (diff as f64 - tl.filtered_ns) / f64::from(1u32 << depth);
-        let dt_ns = tl.last_write.map_or(0.0, |last| t.saturating_sub(last) as f64);
+        let dt_ns = tl
+            .last_write
+            .map_or(0.0, |last| t.saturating_sub(last) as f64);
         tl.last_write = Some(t);
         let tau_s = TIME_LOOP_TAU_MIN_NS.max(2.0 * dt_ns) / NS_PER_S;
         let kp = 1.0 / tau_s;
         let ki = kp * kp / 4.0;
         let e = tl.filtered_ns;
-        tl.integral_ppb = (tl.integral_ppb - ki * e * dt_ns / NS_PER_S).clamp(-max_slew_ppb, max_slew_ppb);
+        tl.integral_ppb =
+            (tl.integral_ppb - ki * e * dt_ns / NS_PER_S).clamp(-max_slew_ppb, max_slew_ppb);
         let correction = (tl.integral_ppb - kp * e).clamp(-max_slew_ppb, max_slew_ppb);
         self.dc.clock.set_correction(t, correction);
     }
@@ -233,11 +249,27 @@ impl Et1100 {
 
     fn sync_pulse(&mut self, sync1: bool) {
         let act = DcActivation(self.u8_at(regs::DC_ACTIVATION.addr));
-        let enabled = if sync1 { act.0 & DcActivation::SYNC1 } else { act.0 & DcActivation::SYNC0 } != 0;
-        let (status_reg, event, output, to_event, pending) = if sync1 {
-            (regs::DC_SYNC1_STATUS, AlEvent::SYNC1, SYNC1_OUTPUT, SYNC1_TO_AL_EVENT, ACT_STATUS_SYNC1_PENDING)
+        let enabled = if sync1 {
+            act.0 & DcActivation::SYNC1
         } else {
-            (regs::DC_SYNC0_STATUS, AlEvent::SYNC0, SYNC0_OUTPUT, SYNC0_TO_AL_EVENT, ACT_STATUS_SYNC0_PENDING)
+            act.0 & DcActivation::SYNC0
+        } != 0;
+        let (status_reg, event, output, to_event, pending) = if sync1 {
+            (
+                regs::DC_SYNC1_STATUS,
+                AlEvent::SYNC1,
+                SYNC1_OUTPUT,
+                SYNC1_TO_AL_EVENT,
+                ACT_STATUS_SYNC1_PENDING,
+            )
+        } else {
+            (
+                regs::DC_SYNC0_STATUS,
+                AlEvent::SYNC0,
+                SYNC0_OUTPUT,
+                SYNC0_TO_AL_EVENT,
+                ACT_STATUS_SYNC0_PENDING,
+            )
         };
         if !enabled {
             return;
@@ -298,7 +330,12 @@ impl Et1100 {
         [self.dc.sync.next_sync0, self.dc.sync.next_sync1]
             .into_iter()
             .flatten()
-            .map(|s| self.dc.clock.global_at(s.wrapping_sub(offset)).max(self.now))
+            .map(|s| {
+                self.dc
+                    .clock
+                    .global_at(s.wrapping_sub(offset))
+                    .max(self.now)
+            })
             .min()
     }
 }

@@ -24,7 +24,11 @@ pub fn sii_crc8(data: &[u8]) -> u8 {
     for &b in data {
         crc ^= b;
         for _ in 0..8 {
-            crc = if crc & 0x80 != 0 { (crc << 1) ^ SII_CRC_POLY } else { crc << 1 };
+            crc = if crc & 0x80 != 0 {
+                (crc << 1) ^ SII_CRC_POLY
+            } else {
+                crc << 1
+            };
         }
     }
     crc
@@ -73,8 +77,14 @@ impl Et1100 {
         if good {
             self.set_u16(regs::PDI_CONTROL.addr, self.sii_word(SII_WORD_PDI_CONTROL));
             self.set_u16(regs::PDI_CONFIG.addr, self.sii_word(SII_WORD_PDI_CONFIG));
-            self.set_u16(regs::DC_PULSE_LENGTH.addr, self.sii_word(SII_WORD_SYNC_PULSE));
-            self.set_u16(regs::PDI_CONFIG_EXT.addr, self.sii_word(SII_WORD_PDI_CONFIG_EXT));
+            self.set_u16(
+                regs::DC_PULSE_LENGTH.addr,
+                self.sii_word(SII_WORD_SYNC_PULSE),
+            );
+            self.set_u16(
+                regs::PDI_CONFIG_EXT.addr,
+                self.sii_word(SII_WORD_PDI_CONFIG_EXT),
+            );
             if power_on {
                 self.set_u16(regs::STATION_ALIAS.addr, self.sii_word(SII_WORD_ALIAS));
             }
@@ -116,8 +126,18 @@ impl Et1100 {
     }
 
     /// Write of one byte of 0x0502..0x050F by `side`.
-    pub(crate) fn eeprom_register_write(&mut self, side: Side, addr: u16, v: u8, fx: &mut super::access::Effects) {
-        let owner = if self.pdi_owns_eeprom() { Side::Pdi } else { Side::Ecat };
+    pub(crate) fn eeprom_register_write(
+        &mut self,
+        side: Side,
+        addr: u16,
+        v: u8,
+        fx: &mut super::access::Effects,
+    ) {
+        let owner = if self.pdi_owns_eeprom() {
+            Side::Pdi
+        } else {
+            Side::Ecat
+        };
         if side != owner || self.eeprom.busy.is_some() {
             return;
         }
@@ -157,7 +177,11 @@ impl Et1100 {
             EepromCommand::Read | EepromCommand::Write | EepromCommand::Reload => {
                 ctl.0 &= !(EepromControl::ACK_ERROR | EepromControl::WRITE_ENABLE_ERROR);
                 ctl.0 |= EepromControl::BUSY;
-                self.eeprom.busy = Some(Busy { command, started_ns: self.now, frames_seen: 0 });
+                self.eeprom.busy = Some(Busy {
+                    command,
+                    started_ns: self.now,
+                    frames_seen: 0,
+                });
             }
         }
         self.set_u16(regs::EEPROM_CONTROL.addr, ctl.0);
@@ -165,14 +189,20 @@ impl Et1100 {
 
     /// Finishes the command in progress.
     fn eeprom_complete(&mut self) {
-        let Some(busy) = self.eeprom.busy.take() else { return };
+        let Some(busy) = self.eeprom.busy.take() else {
+            return;
+        };
         let word = self.u32_at(regs::EEPROM_ADDRESS.addr) as usize;
         let mut ctl = self.u16_at(regs::EEPROM_CONTROL.addr);
         match busy.command {
             EepromCommand::Read => {
                 let mut data = [EEPROM_ERASED; EEPROM_READ_BYTES];
                 for (i, b) in data.iter_mut().enumerate() {
-                    if let Some(v) = word.checked_mul(2).and_then(|a| a.checked_add(i)).and_then(|a| self.sii.get(a)) {
+                    if let Some(v) = word
+                        .checked_mul(2)
+                        .and_then(|a| a.checked_add(i))
+                        .and_then(|a| self.sii.get(a))
+                    {
                         *b = *v;
                     }
                 }
@@ -206,7 +236,11 @@ impl Et1100 {
 
     /// At the start of a frame: complete a command that has seen enough frames.
     pub(crate) fn eeprom_poll_frame_start(&mut self) {
-        if self.eeprom.busy.is_some_and(|b| b.frames_seen >= EEPROM_BUSY_FRAMES) {
+        if self
+            .eeprom
+            .busy
+            .is_some_and(|b| b.frames_seen >= EEPROM_BUSY_FRAMES)
+        {
             self.eeprom_complete();
         }
     }
@@ -220,13 +254,19 @@ impl Et1100 {
 
     /// When time advances: complete a command whose busy time is over.
     pub(crate) fn eeprom_poll_time(&mut self) {
-        if self.eeprom.busy.is_some_and(|b| self.now >= b.started_ns.saturating_add(EEPROM_BUSY_NS)) {
+        if self
+            .eeprom
+            .busy
+            .is_some_and(|b| self.now >= b.started_ns.saturating_add(EEPROM_BUSY_NS))
+        {
             self.eeprom_complete();
         }
     }
 
     /// Global time at which the command in progress completes.
     pub(crate) fn eeprom_next_event(&self) -> Option<u64> {
-        self.eeprom.busy.map(|b| b.started_ns.saturating_add(EEPROM_BUSY_NS))
+        self.eeprom
+            .busy
+            .map(|b| b.started_ns.saturating_add(EEPROM_BUSY_NS))
     }
 }

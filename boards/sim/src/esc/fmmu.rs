@@ -31,7 +31,8 @@ impl Overlap {
             return None;
         }
         let lb0 = u64::from(f.logical_start) * BITS + u64::from(f.logical_start_bit);
-        let lb1 = (u64::from(f.logical_start) + u64::from(f.length) - 1) * BITS + u64::from(f.logical_end_bit);
+        let lb1 = (u64::from(f.logical_start) + u64::from(f.length) - 1) * BITS
+            + u64::from(f.logical_end_bit);
         let db0 = u64::from(laddr) * BITS;
         let db1 = (u64::from(laddr) + len as u64) * BITS - 1;
         let first = lb0.max(db0);
@@ -40,7 +41,11 @@ impl Overlap {
             return None;
         }
         let pb0 = u64::from(f.physical_start) * BITS + u64::from(f.physical_start_bit);
-        Some(Self { first, last, shift: pb0 as i64 - lb0 as i64 })
+        Some(Self {
+            first,
+            last,
+            shift: pb0 as i64 - lb0 as i64,
+        })
     }
 
     fn phys(&self, l: u64) -> u64 {
@@ -61,7 +66,14 @@ impl Et1100 {
     }
 
     /// Executes a logical datagram on this slave; returns its working counter increment.
-    pub(crate) fn logical(&mut self, read: bool, write: bool, laddr: u32, data: &mut [u8], fx: &mut Effects) -> u16 {
+    pub(crate) fn logical(
+        &mut self,
+        read: bool,
+        write: bool,
+        laddr: u32,
+        data: &mut [u8],
+        fx: &mut Effects,
+    ) -> u16 {
         let mut wrote = false;
         let mut was_read = false;
         // Writes first: they carry the data as it arrived; reads then replace frame bits.
@@ -97,7 +109,9 @@ impl Et1100 {
 
     fn fmmu_write(&mut self, o: &Overlap, laddr: u32, data: &[u8], fx: &mut Effects) -> bool {
         let (p0, count) = o.phys_bytes();
-        let Ok(p0) = u32::try_from(p0) else { return false };
+        let Ok(p0) = u32::try_from(p0) else {
+            return false;
+        };
         let mut buf = core::mem::take(&mut self.scratch);
         let mut mask = core::mem::take(&mut self.scratch_mask);
         buf.clear();
@@ -107,7 +121,9 @@ impl Et1100 {
         let base = u64::from(laddr) * BITS;
         for l in o.first..=o.last {
             let li = l - base;
-            let bit = data.get((li / BITS) as usize).is_some_and(|b| b & (1 << (li % BITS)) != 0);
+            let bit = data
+                .get((li / BITS) as usize)
+                .is_some_and(|b| b & (1 << (li % BITS)) != 0);
             let p = o.phys(l) - u64::from(p0) * BITS;
             let (pi, pb) = ((p / BITS) as usize, p % BITS);
             if let (Some(d), Some(m)) = (buf.get_mut(pi), mask.get_mut(pi)) {
@@ -126,7 +142,9 @@ impl Et1100 {
 
     fn fmmu_read(&mut self, o: &Overlap, laddr: u32, data: &mut [u8], fx: &mut Effects) -> bool {
         let (p0, count) = o.phys_bytes();
-        let Ok(p0) = u32::try_from(p0) else { return false };
+        let Ok(p0) = u32::try_from(p0) else {
+            return false;
+        };
         let mut buf = core::mem::take(&mut self.scratch);
         buf.clear();
         buf.resize(count, 0);
@@ -135,7 +153,9 @@ impl Et1100 {
             let base = u64::from(laddr) * BITS;
             for l in o.first..=o.last {
                 let p = o.phys(l) - u64::from(p0) * BITS;
-                let bit = buf.get((p / BITS) as usize).is_some_and(|b| b & (1 << (p % BITS)) != 0);
+                let bit = buf
+                    .get((p / BITS) as usize)
+                    .is_some_and(|b| b & (1 << (p % BITS)) != 0);
                 let li = l - base;
                 if let Some(d) = data.get_mut((li / BITS) as usize) {
                     let m = 1u8 << (li % BITS);

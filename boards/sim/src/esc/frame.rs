@@ -48,10 +48,20 @@ impl core::fmt::Display for FrameError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             Self::TooShort => write!(f, "frame too short"),
-            Self::NotEtherCat { ethertype } => write!(f, "not EtherCAT (EtherType {ethertype:#06x})"),
-            Self::UnsupportedType { ecat_type } => write!(f, "unsupported EtherCAT type {ecat_type}"),
-            Self::LengthMismatch { declared, available } => {
-                write!(f, "EtherCAT length {declared} exceeds the {available} bytes present")
+            Self::NotEtherCat { ethertype } => {
+                write!(f, "not EtherCAT (EtherType {ethertype:#06x})")
+            }
+            Self::UnsupportedType { ecat_type } => {
+                write!(f, "unsupported EtherCAT type {ecat_type}")
+            }
+            Self::LengthMismatch {
+                declared,
+                available,
+            } => {
+                write!(
+                    f,
+                    "EtherCAT length {declared} exceeds the {available} bytes present"
+                )
             }
             Self::DatagramOverrun { index } => write!(f, "datagram {index} overruns the frame"),
         }
@@ -66,8 +76,18 @@ fn validate(frame: &[u8]) -> Result<core::ops::Range<usize>, FrameError> {
     if frame.len() < header_end {
         return Err(FrameError::TooShort);
     }
-    let be = |at: usize| u16::from_be_bytes([frame.get(at).copied().unwrap_or(0), frame.get(at + 1).copied().unwrap_or(0)]);
-    let le = |at: usize| u16::from_le_bytes([frame.get(at).copied().unwrap_or(0), frame.get(at + 1).copied().unwrap_or(0)]);
+    let be = |at: usize| {
+        u16::from_be_bytes([
+            frame.get(at).copied().unwrap_or(0),
+            frame.get(at + 1).copied().unwrap_or(0),
+        ])
+    };
+    let le = |at: usize| {
+        u16::from_le_bytes([
+            frame.get(at).copied().unwrap_or(0),
+            frame.get(at + 1).copied().unwrap_or(0),
+        ])
+    };
     let ethertype = be(ETHERTYPE_OFFSET);
     if ethertype != ETHERTYPE_ETHERCAT {
         return Err(FrameError::NotEtherCat { ethertype });
@@ -75,12 +95,17 @@ fn validate(frame: &[u8]) -> Result<core::ops::Range<usize>, FrameError> {
     let h = le(ETH_HEADER_LEN);
     let ecat_type = h >> ECAT_TYPE_SHIFT;
     if ecat_type != ECAT_TYPE_DLPDU {
-        return Err(FrameError::UnsupportedType { ecat_type: ecat_type as u8 });
+        return Err(FrameError::UnsupportedType {
+            ecat_type: ecat_type as u8,
+        });
     }
     let declared = usize::from(h & ECAT_LEN_MASK);
     let available = frame.len() - header_end;
     if declared > available {
-        return Err(FrameError::LengthMismatch { declared, available });
+        return Err(FrameError::LengthMismatch {
+            declared,
+            available,
+        });
     }
     let end = header_end + declared;
     let mut at = header_end;
@@ -112,7 +137,9 @@ fn for_each_datagram(payload: &mut [u8], mut f: impl FnMut(&mut [u8])) {
     while let Some(&[lo, hi]) = payload.get(at + LEN_FIELD..at + LEN_FIELD + 2) {
         let lf = u16::from_le_bytes([lo, hi]);
         let total = DG_HEADER_LEN + usize::from(lf & DG_LEN_MASK) + DG_WKC_LEN;
-        let Some(dg) = payload.get_mut(at..at + total) else { return };
+        let Some(dg) = payload.get_mut(at..at + total) else {
+            return;
+        };
         f(dg);
         at += total;
         if lf & DG_MORE_FOLLOWS == 0 {
@@ -132,7 +159,19 @@ pub fn process_frame<'a>(
     frame: &mut [u8],
     chain: impl IntoIterator<Item = &'a mut Et1100>,
 ) -> Result<(), FrameError> {
-    let range = validate(frame)?;
+    let range = match validate(frame) {
+        Ok(r) => r,
+        Err(e) => {
+            // A broken EtherCAT structure counts in the processing unit error counter of the first
+            // ESC (Section II 0x030C); foreign frames are not errors.
+            if matches!(e, FrameError::LengthMismatch { .. } | FrameError::DatagramOverrun { .. }) {
+                if let Some(first) = chain.into_iter().next() {
+                    first.count_pu_error();
+                }
+            }
+            return Err(e);
+        }
+    };
     let mut escs: Vec<&'a mut Et1100> = chain.into_iter().collect();
     let n = escs.len() as u64;
     let hop = PORT_FORWARD_DELAY_NS + CABLE_DELAY_NS;
@@ -156,6 +195,13 @@ pub fn process_frame<'a>(
 }
 
 impl Et1100 {
+    /// Counts a frame with a broken EtherCAT structure (0x030C, saturating).
+    fn count_pu_error(&mut self) {
+        let addr = hal::esc::regs::ECAT_PU_ERROR_COUNTER.addr;
+        let c = self.u8_at(addr).saturating_add(1);
+        self.set_u8(addr, c);
+    }
+
     /// All datagrams of a validated frame through this ESC, then the end-of-frame commit.
     fn process_ecat_payload(&mut self, payload: &mut [u8], timing: FrameTiming) {
         self.eeprom_poll_frame_start();

@@ -40,7 +40,9 @@ impl PdiError for SimPdiError {
 impl core::fmt::Display for SimPdiError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            Self::OutOfRange { addr, len } => write!(f, "PDI access {addr:#06x}+{len} out of range"),
+            Self::OutOfRange { addr, len } => {
+                write!(f, "PDI access {addr:#06x}+{len} out of range")
+            }
             Self::NotOperational => write!(f, "PDI not operational (SII checksum error)"),
         }
     }

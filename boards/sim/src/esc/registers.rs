@@ -22,9 +22,15 @@ fn fmmu_register(addr: u16) -> Option<(usize, u16)> {
 
 /// Error counter groups: a write to any member clears the whole group (Section II 0x0300 ff.).
 const ERROR_COUNTER_GROUPS: [regs::Reg; 4] = [
-    regs::Reg::new(regs::RX_ERROR_COUNTERS.addr, regs::RX_ERROR_COUNTERS.len + regs::FORWARDED_RX_ERROR_COUNTERS.len),
+    regs::Reg::new(
+        regs::RX_ERROR_COUNTERS.addr,
+        regs::RX_ERROR_COUNTERS.len + regs::FORWARDED_RX_ERROR_COUNTERS.len,
+    ),
     regs::ECAT_PU_ERROR_COUNTER,
-    regs::Reg::new(regs::PDI_ERROR_COUNTER.addr, regs::PDI_ERROR_COUNTER.len + regs::PDI_ERROR_CODE.len),
+    regs::Reg::new(
+        regs::PDI_ERROR_COUNTER.addr,
+        regs::PDI_ERROR_COUNTER.len + regs::PDI_ERROR_CODE.len,
+    ),
     regs::LOST_LINK_COUNTERS,
 ];
 
@@ -58,11 +64,19 @@ const ECAT_PLAIN_DC: [regs::Reg; 4] = [
 ];
 
 /// Registers the PDI side may write as plain storage.
-const PDI_PLAIN: [regs::Reg; 4] =
-    [regs::STATION_ALIAS, regs::AL_STATUS_CODE, regs::AL_EVENT_MASK, regs::RESET_PDI];
+const PDI_PLAIN: [regs::Reg; 4] = [
+    regs::STATION_ALIAS,
+    regs::AL_STATUS_CODE,
+    regs::AL_EVENT_MASK,
+    regs::RESET_PDI,
+];
 
 /// Registers of the SYNC unit written by whichever side 0x0980 bit 0 assigns it to.
-const SYNC_UNIT_PLAIN: [regs::Reg; 3] = [regs::DC_START_TIME, regs::DC_SYNC0_CYCLE, regs::DC_SYNC1_CYCLE];
+const SYNC_UNIT_PLAIN: [regs::Reg; 3] = [
+    regs::DC_START_TIME,
+    regs::DC_SYNC0_CYCLE,
+    regs::DC_SYNC1_CYCLE,
+];
 
 fn in_any(set: &[regs::Reg], addr: u16) -> bool {
     set.iter().any(|r| r.contains(addr))
@@ -130,7 +144,10 @@ impl Et1100 {
     }
 
     fn ecat_write_register(&mut self, addr: u16, v: u8, fx: &mut Effects) {
-        if in_any(&ECAT_PLAIN, addr) || in_any(&ECAT_PLAIN_DC, addr) || regs::USER_RAM.contains(addr) {
+        if in_any(&ECAT_PLAIN, addr)
+            || in_any(&ECAT_PLAIN_DC, addr)
+            || regs::USER_RAM.contains(addr)
+        {
             self.set_u8(addr, v);
         } else if regs::AL_CONTROL.contains(addr) {
             self.set_u8(addr, v);
@@ -139,13 +156,15 @@ impl Et1100 {
             for a in group.addr..group.end() {
                 self.set_u8(a, 0);
             }
-        } else if regs::WATCHDOG_COUNTER_PD.contains(addr) || regs::WATCHDOG_COUNTER_PDI.contains(addr) {
+        } else if regs::WATCHDOG_COUNTER_PD.contains(addr)
+            || regs::WATCHDOG_COUNTER_PDI.contains(addr)
+        {
             self.set_u8(addr, 0);
         } else if regs::EEPROM_CONFIG.contains(addr) {
             self.eeprom_config_ecat_write(v);
         } else if self.eeprom_interface_reg(addr) {
             self.eeprom_register_write(Side::Ecat, addr, v, fx);
-        } else if let Some((n, off)) = fmmu_register(addr) {
+        } else if let Some((_, off)) = fmmu_register(addr) {
             if off <= regs::fmmu_offset::ACTIVATE {
                 self.set_u8(addr, v);
             }
@@ -217,7 +236,7 @@ impl Et1100 {
             }
         }
         if fx.speed_counter_written {
-            self.dc.reset_loop();
+            self.dc.reset_loop(fx.time);
         }
         if fx.dc_latch && side == Side::Ecat {
             self.dc_latch(fx);
@@ -231,6 +250,11 @@ impl Et1100 {
         if fx.eeprom_command_written {
             self.eeprom_execute(side, fx.eeprom_write_enable);
         }
-        *fx = Effects { time: fx.time, frame: fx.frame, system_time: fx.system_time, ..Effects::default() };
+        *fx = Effects {
+            time: fx.time,
+            frame: fx.frame,
+            system_time: fx.system_time,
+            ..Effects::default()
+        };
     }
 }

@@ -11,7 +11,9 @@
 //! - status bit 0 (written completely) / bit 1 (read completely) mirror into AL event bit 8+n
 //!   (the PDI side's event) and ECAT event bit 4+n (the master's event) when enabled in control.
 
-use hal::esc::{regs, AlEvent, SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus};
+use hal::esc::{
+    regs, AlEvent, SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus,
+};
 
 use super::access::Side;
 use super::consts::ecat_event;
@@ -22,8 +24,10 @@ pub(crate) const SM_COUNT: usize = regs::ET1100_SMS as usize;
 /// Buffer state value "no buffer written yet" (status bits 4..5).
 const NO_BUFFER_WRITTEN: u8 = 3;
 /// Activate bits ECAT may write (enable, repeat request, latch events).
-const ACTIVATE_WRITABLE: u8 =
-    SmActivate::ENABLE | SmActivate::REPEAT_REQUEST | SmActivate::LATCH_ECAT | SmActivate::LATCH_PDI;
+const ACTIVATE_WRITABLE: u8 = SmActivate::ENABLE
+    | SmActivate::REPEAT_REQUEST
+    | SmActivate::LATCH_ECAT
+    | SmActivate::LATCH_PDI;
 /// PDI control bits the PDI may write.
 const PDI_CONTROL_WRITABLE: u8 = SmPdiControl::DEACTIVATE | SmPdiControl::REPEAT_ACK;
 
@@ -112,11 +116,6 @@ pub(crate) fn sm_register(addr: u16) -> Option<(usize, u16)> {
     (n < SM_COUNT).then_some((n, rel % regs::SM_LEN))
 }
 
-/// Whether `addr` lies in the SM block of SMs that do not exist (8..15), which masters blank.
-pub(crate) fn is_sm_block(addr: u16) -> bool {
-    addr >= regs::SM_BASE && addr < regs::SM_BASE + 2 * regs::SM_LEN * SM_COUNT as u16
-}
-
 impl Et1100 {
     pub(crate) fn sm_config(&self, n: usize) -> SmConfig {
         SmConfig::from_bytes(self.bytes_at(regs::sm(n as u8).addr))
@@ -138,7 +137,9 @@ impl Et1100 {
 
     /// Rewrites status byte +5 and the SM's AL/ECAT event bits from the internal state.
     pub(crate) fn sm_sync_status(&mut self, n: usize) {
-        let Some(st) = self.sm.get(n).copied() else { return };
+        let Some(st) = self.sm.get(n).copied() else {
+            return;
+        };
         let c = self.sm_config(n);
         let status = st.status_byte(c.control.mode());
         self.set_u8(regs::sm(n as u8).addr + regs::sm_offset::STATUS, status);
@@ -172,12 +173,22 @@ impl Et1100 {
     }
 
     /// Writes `data` at offset `off` inside SM `n`'s window. Returns whether it was executed.
-    pub(crate) fn sm_write(&mut self, side: Side, n: usize, off: u16, data: &[u8], mask: Option<&[u8]>) -> bool {
+    pub(crate) fn sm_write(
+        &mut self,
+        side: Side,
+        n: usize,
+        off: u16,
+        data: &[u8],
+        mask: Option<&[u8]>,
+    ) -> bool {
         let c = self.sm_config(n);
-        let Some(st) = self.sm.get(n).copied() else { return false };
+        let Some(st) = self.sm.get(n).copied() else {
+            return false;
+        };
         if c.pdi_control.0 & SmPdiControl::DEACTIVATE != 0 {
             // Deactivated by the PDI: ECAT access is locked, the PDI sees plain memory.
-            return side == Side::Pdi && self.plain_write(usize::from(c.start) + usize::from(off), data, mask);
+            return side == Side::Pdi
+                && self.plain_write(usize::from(c.start) + usize::from(off), data, mask);
         }
         if !Self::sm_is_writer(c, side) {
             return false;
@@ -218,9 +229,12 @@ impl Et1100 {
     /// executed.
     pub(crate) fn sm_read(&mut self, side: Side, n: usize, off: u16, buf: &mut [u8]) -> bool {
         let c = self.sm_config(n);
-        let Some(st) = self.sm.get(n).copied() else { return false };
+        let Some(st) = self.sm.get(n).copied() else {
+            return false;
+        };
         if c.pdi_control.0 & SmPdiControl::DEACTIVATE != 0 {
-            return side == Side::Pdi && self.plain_read(usize::from(c.start) + usize::from(off), buf);
+            return side == Side::Pdi
+                && self.plain_read(usize::from(c.start) + usize::from(off), buf);
         }
         if !Self::sm_is_reader(c, side) {
             return false;
@@ -276,7 +290,11 @@ impl Et1100 {
 
     fn plain_read(&self, phys: usize, buf: &mut [u8]) -> bool {
         for (i, b) in buf.iter_mut().enumerate() {
-            *b = phys.checked_add(i).and_then(|a| self.mem.get(a)).copied().unwrap_or(0);
+            *b = phys
+                .checked_add(i)
+                .and_then(|a| self.mem.get(a))
+                .copied()
+                .unwrap_or(0);
         }
         true
     }
@@ -315,7 +333,9 @@ impl Et1100 {
     /// End of a frame that passed this ESC without error: ECAT-side completions take effect.
     pub(crate) fn sm_end_of_frame(&mut self) {
         for n in 0..SM_COUNT {
-            let Some(st) = self.sm.get(n).copied() else { continue };
+            let Some(st) = self.sm.get(n).copied() else {
+                continue;
+            };
             if st.pending_write {
                 self.sm_complete_write(n);
             }
@@ -330,11 +350,9 @@ impl Et1100 {
         let base = regs::sm(n as u8).addr;
         let old = self.sm_config(n);
         match off {
-            regs::sm_offset::START..=regs::sm_offset::CONTROL => {
-                // PSA, length and control are writable only while the SM is disabled.
-                if !old.activate.enabled() {
-                    self.set_u8(base + off, v);
-                }
+            // PSA, length and control are writable only while the SM is disabled.
+            regs::sm_offset::START..=regs::sm_offset::CONTROL if !old.activate.enabled() => {
+                self.set_u8(base + off, v);
             }
             regs::sm_offset::ACTIVATE => {
                 let new = v & ACTIVATE_WRITABLE;

@@ -27,7 +27,8 @@ pub(crate) struct Watchdogs {
 
 impl Et1100 {
     fn watchdog_tick_ns(&self) -> u64 {
-        (u64::from(self.u16_at(regs::WATCHDOG_DIVIDER.addr)) + WATCHDOG_DIVIDER_EXTRA) * WATCHDOG_CLOCK_NS
+        (u64::from(self.u16_at(regs::WATCHDOG_DIVIDER.addr)) + WATCHDOG_DIVIDER_EXTRA)
+            * WATCHDOG_CLOCK_NS
     }
 
     fn watchdog_deadline(&self, time_reg: regs::Reg, last: u64) -> Option<u64> {
@@ -72,7 +73,9 @@ impl Et1100 {
     pub(crate) fn watchdogs_poll(&mut self) {
         if self.pdi_deadline().is_some_and(|d| self.now >= d) {
             self.wd.pdi_expired = true;
-            let c = self.u8_at(regs::WATCHDOG_COUNTER_PDI.addr).saturating_add(1);
+            let c = self
+                .u8_at(regs::WATCHDOG_COUNTER_PDI.addr)
+                .saturating_add(1);
             self.set_u8(regs::WATCHDOG_COUNTER_PDI.addr, c);
             self.update_dl_status();
         }
@@ -88,6 +91,9 @@ impl Et1100 {
 
     /// The next watchdog expiry (global ns).
     pub(crate) fn watchdog_next_event(&self) -> Option<u64> {
-        [self.pdi_deadline(), self.pd_deadline()].into_iter().flatten().min()
+        [self.pdi_deadline(), self.pd_deadline()]
+            .into_iter()
+            .flatten()
+            .min()
     }
 }

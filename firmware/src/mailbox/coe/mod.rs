@@ -132,6 +132,11 @@ impl fmt::Display for CoeError {
     }
 }
 
+/// Bit position of the command specifier in the SDO command byte.
+const SDO_CS_SHIFT: u8 = 5;
+/// Command specifier of "Abort SDO Transfer" (ETG.1000.6 §5.6.2.7).
+const SDO_CS_ABORT: u8 = 4;
+
 /// The CoE server: SDO upload/download with the segmented-transfer state between requests.
 ///
 /// Holds a [`SEGMENT_BUFFER_CAPACITY`]-byte buffer; keep one per slave (e.g. in the slave
@@ -152,7 +157,8 @@ impl CoeServer {
     ///
     /// `request` is the mailbox payload after the 6-byte mailbox header, exactly as long as the
     /// mailbox header's length field says (segment lengths are derived from it), starting at the
-    /// 2-byte CoE header. The CoE response (CoE header included, service SDO response, number 0)
+    /// 2-byte CoE header. The CoE response (CoE header included, service SDO response — SDO
+    /// request for an abort, as ETG.1000.6 §5.6.2.7 specifies —, number 0)
     /// is written to `response` (its length = mailbox size − 6) and its length returned as
     /// `Ok(n)`; `Ok(0)` means there is nothing to send (the master aborted a transfer). SDO
     /// failures are answered with an SDO abort frame, not an `Err`. `state` is the current
@@ -183,7 +189,11 @@ impl CoeServer {
         if n == 0 {
             return Ok(0);
         }
-        *resp_header = CoeService::SdoResponse.header();
+        // ETG.1000.6 §5.6.2.7: "Abort SDO Transfer" is an SDO *request* (service 2), whichever
+        // side sends it; SOEM recognises an abort only with that service.
+        let is_abort = sdo_response.first().is_some_and(|c| c >> SDO_CS_SHIFT == SDO_CS_ABORT);
+        let service = if is_abort { CoeService::SdoRequest } else { CoeService::SdoResponse };
+        *resp_header = service.header();
         Ok(COE_HEADER_LEN + n)
     }
 

@@ -1,0 +1,58 @@
+//! The `od-gen` binary: outputs, files and error exits.
+
+use std::process::Command;
+
+fn od_gen(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_od-gen"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn list_esi_and_sii() {
+    let out = od_gen(&["list"]);
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "standard\n");
+
+    let out = od_gen(&["esi", "standard"]);
+    assert!(out.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        od_gen::builtin("standard").unwrap().esi_xml()
+    );
+
+    let dir = std::env::temp_dir().join(format!("od-gen-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bin = dir.join("standard.bin");
+    let out = od_gen(&["sii", "standard", "-o", bin.to_str().unwrap()]);
+    assert!(out.status.success());
+    assert_eq!(
+        std::fs::read(&bin).unwrap(),
+        od_gen::builtin("standard").unwrap().sii_image()
+    );
+
+    // A path works too.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/profiles/standard.toml");
+    let out = od_gen(&["sii", path]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("0000: 05 06 00 44 64 00"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn errors_are_messages_with_non_zero_exit() {
+    for args in [
+        &["esi", "nope"][..],
+        &["sii", "/nonexistent/x.toml"],
+        &["frobnicate"],
+        &["esi"],
+        &["esi", "standard", "-o"],
+    ] {
+        let out = od_gen(args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.starts_with("od-gen: "), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
