@@ -11,6 +11,10 @@ import pysoem
 
 CYCLE_S = 0.001
 CYCLES = 1000
+# SOEM's dc_sync starts SYNC0 about 100 ms after the call (SyncDelay in ecx_dcsync0), so each
+# controlword command is held for longer than that before the next one.
+SHUTDOWN_UNTIL = 300
+SWITCH_ON_UNTIL = 600
 
 
 def sdo_u32(slave, index, sub):
@@ -56,7 +60,7 @@ def main():
     samples = []
     next_t = time.monotonic()
     for i in range(CYCLES):
-        cw = 0x0006 if i < 10 else (0x0007 if i < 20 else 0x000F)
+        cw = 0x0006 if i < SHUTDOWN_UNTIL else (0x0007 if i < SWITCH_ON_UNTIL else 0x000F)
         target = i * 100
         for s in m.slaves:
             s.output = struct.pack("<HiB", cw, target, 8)
@@ -69,6 +73,7 @@ def main():
         if delay > 0:
             time.sleep(delay)
     out["samples"] = samples
+    out["phases"] = [SHUTDOWN_UNTIL, SWITCH_ON_UNTIL]
 
     m.state = pysoem.INIT_STATE
     m.write_state()

@@ -34,7 +34,7 @@ fn soem_discovers_maps_syncs_and_cycles_the_drive() {
     // config_map reads 1C00h, 1C12h/1C13h and the mapping via CoE; 7 bytes out + 7 bytes in.
     assert_eq!(u(&r["iomap_size"]), 14);
     assert_eq!(u(&r["safeop"]), SAFEOP);
-    assert_eq!(r["dc"].as_bool(), Some(true), "config_dc finds the DC-capable slave");
+    assert_eq!(u(&r["dc"]), 1, "config_dc finds the DC-capable slave");
     assert_eq!(u(&r["op"]), OP, "all slaves in OP; sim log:\n{log}");
 
     let expected_wkc = u(&r["expected_wkc"]);
@@ -46,6 +46,11 @@ fn soem_discovers_maps_syncs_and_cycles_the_drive() {
     }
     let sw = |k: usize| u(&samples[k][3]) & STATE_MASK;
     let last = samples.len() - 1;
+    let (shutdown_until, switch_on_until) = (u(&r["phases"][0]) as usize, u(&r["phases"][1]) as usize);
+    // CiA402 Table 30: ready to switch on 0x21, switched on 0x23, operation enabled 0x27.
+    assert_eq!(sw(shutdown_until - 1), 0x21, "after shutdown");
+    assert_eq!(sw(switch_on_until - 1), 0x23, "after switch on");
+    assert_eq!(u(&samples[switch_on_until - 1][4]), 0, "position does not follow before operation is enabled");
     assert_eq!(sw(last), 0x27, "operation enabled after shutdown, switch on, enable operation");
     // Once enabled, the ideal axis reports a target that was sent earlier (SOEM's cycle is not
     // phase-locked to SYNC0, so the lag is one or two cycles).
