@@ -23,7 +23,10 @@ impl Default for Application {
 impl Application {
     /// Power-on state.
     pub const fn new() -> Self {
-        Self { pds: PdsState::NotReadyToSwitchOn, previous_controlword: 0 }
+        Self {
+            pds: PdsState::NotReadyToSwitchOn,
+            previous_controlword: 0,
+        }
     }
 
     /// The PDS state.

@@ -23,8 +23,12 @@ pub struct Checks {
 
 impl Checks {
     /// Every check passes (BOOT unsupported).
-    pub const ALL_OK: Self =
-        Self { mailbox: Ok(()), process_data: Ok(()), sync: Ok(()), boot_supported: false };
+    pub const ALL_OK: Self = Self {
+        mailbox: Ok(()),
+        process_data: Ok(()),
+        sync: Ok(()),
+        boot_supported: false,
+    };
 }
 
 /// What the ESM decided.
@@ -38,10 +42,24 @@ pub struct Outcome {
 
 impl Outcome {
     fn ok(state: AlState) -> Self {
-        Self { status: AlStatus { state, error: false, id_loaded: false }, code: AlStatusCode::NoError }
+        Self {
+            status: AlStatus {
+                state,
+                error: false,
+                id_loaded: false,
+            },
+            code: AlStatusCode::NoError,
+        }
     }
     fn refused(state: AlState, code: AlStatusCode) -> Self {
-        Self { status: AlStatus { state, error: true, id_loaded: false }, code }
+        Self {
+            status: AlStatus {
+                state,
+                error: true,
+                id_loaded: false,
+            },
+            code,
+        }
     }
 }
 
@@ -54,10 +72,21 @@ impl Outcome {
 /// - downward transitions always succeed; upward transitions run their check and, if it fails,
 ///   stay in the current state (INIT → PREOP failing stays in INIT, ...) with the error flag;
 /// - transitions the ESM does not have give 0x0011, state codes that name no state 0x0012.
-pub fn decide(status: AlStatus, code: AlStatusCode, control: AlControl, checks: &Checks) -> Outcome {
+pub fn decide(
+    status: AlStatus,
+    code: AlStatusCode,
+    control: AlControl,
+    checks: &Checks,
+) -> Outcome {
     let current = status.state;
     if status.error && !control.ack {
-        return Outcome { status: AlStatus { id_loaded: false, ..status }, code };
+        return Outcome {
+            status: AlStatus {
+                id_loaded: false,
+                ..status
+            },
+            code,
+        };
     }
     let Some(requested) = control.requested() else {
         return Outcome::refused(current, AlStatusCode::UnknownState);
@@ -92,7 +121,11 @@ pub fn decide(status: AlStatus, code: AlStatusCode, control: AlControl, checks: 
 /// Outcome of an asynchronous error (watchdog, sync loss, mailbox SM deactivated) detected in
 /// `current`: the state drops to `fallback` if that is lower, with the error flag and `code`.
 pub fn fault(current: AlState, fallback: AlState, code: AlStatusCode) -> Outcome {
-    let state = if state_rank(fallback) < state_rank(current) { fallback } else { current };
+    let state = if state_rank(fallback) < state_rank(current) {
+        fallback
+    } else {
+        current
+    };
     Outcome::refused(state, code)
 }
 
@@ -112,16 +145,32 @@ mod tests {
     use AlState::*;
 
     fn st(state: AlState) -> AlStatus {
-        AlStatus { state, error: false, id_loaded: false }
+        AlStatus {
+            state,
+            error: false,
+            id_loaded: false,
+        }
     }
     fn err(state: AlState) -> AlStatus {
-        AlStatus { state, error: true, id_loaded: false }
+        AlStatus {
+            state,
+            error: true,
+            id_loaded: false,
+        }
     }
     fn req(state: AlState) -> AlControl {
-        AlControl { state_bits: state.bits(), ack: false, id_request: false }
+        AlControl {
+            state_bits: state.bits(),
+            ack: false,
+            id_request: false,
+        }
     }
     fn ack(state: AlState) -> AlControl {
-        AlControl { state_bits: state.bits(), ack: true, id_request: false }
+        AlControl {
+            state_bits: state.bits(),
+            ack: true,
+            id_request: false,
+        }
     }
     const OK: AlStatusCode = AlStatusCode::NoError;
 
@@ -133,7 +182,10 @@ mod tests {
 
     #[test]
     fn esm_init_to_preop_refused_0x16_stays_init_with_error() {
-        let checks = Checks { mailbox: Err(AlStatusCode::InvalidMailboxConfig), ..Checks::ALL_OK };
+        let checks = Checks {
+            mailbox: Err(AlStatusCode::InvalidMailboxConfig),
+            ..Checks::ALL_OK
+        };
         let o = decide(st(Init), OK, ack(PreOp), &checks);
         assert_eq!(o.status, err(Init));
         assert_eq!(o.code.code(), 0x0016);
@@ -141,8 +193,10 @@ mod tests {
 
     #[test]
     fn esm_preop_to_safeop_refused_0x1d_on_bad_outputs() {
-        let checks =
-            Checks { process_data: Err(AlStatusCode::InvalidOutputConfig), ..Checks::ALL_OK };
+        let checks = Checks {
+            process_data: Err(AlStatusCode::InvalidOutputConfig),
+            ..Checks::ALL_OK
+        };
         let o = decide(st(PreOp), OK, req(SafeOp), &checks);
         assert_eq!(o.status, err(PreOp));
         assert_eq!(o.code.code(), 0x001D);
@@ -150,7 +204,10 @@ mod tests {
 
     #[test]
     fn esm_preop_to_safeop_refused_on_sync_config() {
-        let checks = Checks { sync: Err(AlStatusCode::DcInvalidSyncCycleTime), ..Checks::ALL_OK };
+        let checks = Checks {
+            sync: Err(AlStatusCode::DcInvalidSyncCycleTime),
+            ..Checks::ALL_OK
+        };
         let o = decide(st(PreOp), OK, req(SafeOp), &checks);
         assert_eq!(o.status, err(PreOp));
         assert_eq!(o.code.code(), 0x0035);
@@ -158,16 +215,39 @@ mod tests {
 
     #[test]
     fn esm_safeop_to_op_and_back_down_to_init() {
-        assert_eq!(decide(st(SafeOp), OK, req(Op), &Checks::ALL_OK), Outcome::ok(Op));
-        assert_eq!(decide(st(Op), OK, req(SafeOp), &Checks::ALL_OK), Outcome::ok(SafeOp));
-        assert_eq!(decide(st(Op), OK, req(PreOp), &Checks::ALL_OK), Outcome::ok(PreOp));
-        assert_eq!(decide(st(Op), OK, req(Init), &Checks::ALL_OK), Outcome::ok(Init));
-        assert_eq!(decide(st(SafeOp), OK, req(Init), &Checks::ALL_OK), Outcome::ok(Init));
+        assert_eq!(
+            decide(st(SafeOp), OK, req(Op), &Checks::ALL_OK),
+            Outcome::ok(Op)
+        );
+        assert_eq!(
+            decide(st(Op), OK, req(SafeOp), &Checks::ALL_OK),
+            Outcome::ok(SafeOp)
+        );
+        assert_eq!(
+            decide(st(Op), OK, req(PreOp), &Checks::ALL_OK),
+            Outcome::ok(PreOp)
+        );
+        assert_eq!(
+            decide(st(Op), OK, req(Init), &Checks::ALL_OK),
+            Outcome::ok(Init)
+        );
+        assert_eq!(
+            decide(st(SafeOp), OK, req(Init), &Checks::ALL_OK),
+            Outcome::ok(Init)
+        );
     }
 
     #[test]
     fn esm_skipping_states_upward_is_0x11() {
-        for (from, to) in [(Init, SafeOp), (Init, Op), (PreOp, Op), (PreOp, Boot), (SafeOp, Boot), (Op, Boot), (Boot, PreOp)] {
+        for (from, to) in [
+            (Init, SafeOp),
+            (Init, Op),
+            (PreOp, Op),
+            (PreOp, Boot),
+            (SafeOp, Boot),
+            (Op, Boot),
+            (Boot, PreOp),
+        ] {
             let o = decide(st(from), OK, req(to), &Checks::ALL_OK);
             assert_eq!(o.status, err(from), "{from:?} -> {to:?}");
             assert_eq!(o.code.code(), 0x0011, "{from:?} -> {to:?}");
@@ -176,7 +256,11 @@ mod tests {
 
     #[test]
     fn esm_unknown_state_code_is_0x12() {
-        let ctl = AlControl { state_bits: 0x05, ack: false, id_request: false };
+        let ctl = AlControl {
+            state_bits: 0x05,
+            ack: false,
+            id_request: false,
+        };
         let o = decide(st(PreOp), OK, ctl, &Checks::ALL_OK);
         assert_eq!(o.status, err(PreOp));
         assert_eq!(o.code.code(), 0x0012);
@@ -187,7 +271,10 @@ mod tests {
         let o = decide(st(Init), OK, req(Boot), &Checks::ALL_OK);
         assert_eq!(o.status, err(Init));
         assert_eq!(o.code.code(), 0x0013);
-        let boot = Checks { boot_supported: true, ..Checks::ALL_OK };
+        let boot = Checks {
+            boot_supported: true,
+            ..Checks::ALL_OK
+        };
         assert_eq!(decide(st(Init), OK, req(Boot), &boot), Outcome::ok(Boot));
         assert_eq!(decide(st(Boot), OK, req(Init), &boot), Outcome::ok(Init));
     }
@@ -197,14 +284,35 @@ mod tests {
         let code = AlStatusCode::InvalidOutputConfig;
         // Without ack: nothing changes, not even a downward request.
         let o = decide(err(PreOp), code, req(Init), &Checks::ALL_OK);
-        assert_eq!(o, Outcome { status: err(PreOp), code });
+        assert_eq!(
+            o,
+            Outcome {
+                status: err(PreOp),
+                code
+            }
+        );
         let o = decide(err(PreOp), code, req(SafeOp), &Checks::ALL_OK);
-        assert_eq!(o, Outcome { status: err(PreOp), code });
+        assert_eq!(
+            o,
+            Outcome {
+                status: err(PreOp),
+                code
+            }
+        );
         // With ack for the current state: error cleared.
-        assert_eq!(decide(err(PreOp), code, ack(PreOp), &Checks::ALL_OK), Outcome::ok(PreOp));
+        assert_eq!(
+            decide(err(PreOp), code, ack(PreOp), &Checks::ALL_OK),
+            Outcome::ok(PreOp)
+        );
         // With ack and a new state: cleared and performed.
-        assert_eq!(decide(err(PreOp), code, ack(SafeOp), &Checks::ALL_OK), Outcome::ok(SafeOp));
-        assert_eq!(decide(err(SafeOp), code, ack(Init), &Checks::ALL_OK), Outcome::ok(Init));
+        assert_eq!(
+            decide(err(PreOp), code, ack(SafeOp), &Checks::ALL_OK),
+            Outcome::ok(SafeOp)
+        );
+        assert_eq!(
+            decide(err(SafeOp), code, ack(Init), &Checks::ALL_OK),
+            Outcome::ok(Init)
+        );
     }
 
     #[test]

@@ -105,7 +105,12 @@ impl PdoPlan {
         Ok(plan)
     }
 
-    fn add_pdo(&mut self, od: &Dictionary<'_>, dir: Direction, pdo: u16) -> Result<(), AlStatusCode> {
+    fn add_pdo(
+        &mut self,
+        od: &Dictionary<'_>,
+        dir: Direction,
+        pdo: u16,
+    ) -> Result<(), AlStatusCode> {
         let bad = dir.invalid_mapping();
         let entries = od.read_u32(pdo, 0).ok_or(bad)?;
         for n in 1..=entries {
@@ -135,7 +140,13 @@ impl PdoPlan {
                 (Value::Const(bytes), Direction::Tx) => Slot::Const(bytes),
                 (Value::Const(_), Direction::Rx) => return Err(bad),
             };
-            self.steps.push(CopyStep { slot, image_bit: self.bits, bits }).map_err(|_| bad)?;
+            self.steps
+                .push(CopyStep {
+                    slot,
+                    image_bit: self.bits,
+                    bits,
+                })
+                .map_err(|_| bad)?;
             self.bits = self.bits.checked_add(bits).ok_or(bad)?;
         }
         if self.byte_len() > MAX_IMAGE {
@@ -153,7 +164,13 @@ impl PdoPlan {
     pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
         for step in &self.steps {
             if let Slot::Ram(offset) = step.slot {
-                copy_bits(image, step.image_bit as usize, ram, offset as usize * 8, step.bits as usize);
+                copy_bits(
+                    image,
+                    step.image_bit as usize,
+                    ram,
+                    offset as usize * 8,
+                    step.bits as usize,
+                );
             }
         }
     }
@@ -183,7 +200,9 @@ fn copy_bits(src: &[u8], src_bit: usize, dst: &mut [u8], dst_bit: usize, bits: u
     for i in 0..bits {
         let (sb, db) = (src_bit + i, dst_bit + i);
         let Some(&byte) = src.get(sb / 8) else { return };
-        let Some(out) = dst.get_mut(db / 8) else { return };
+        let Some(out) = dst.get_mut(db / 8) else {
+            return;
+        };
         let mask = 1u8 << (db % 8);
         if byte & (1 << (sb % 8)) != 0 {
             *out |= mask;
@@ -230,12 +249,42 @@ mod tests {
         var(2, 16, PdoMappable::No, Value::Ram(11)),
     ];
     static OBJECTS: [Object; 6] = [
-        Object { index: 0x1600, code: ObjectCode::Record, name: "", entries: &RXMAP },
-        Object { index: 0x1C12, code: ObjectCode::Array, name: "", entries: &RXASSIGN },
-        Object { index: 0x2000, code: ObjectCode::Var, name: "", entries: &FLAG },
-        Object { index: 0x6040, code: ObjectCode::Var, name: "", entries: &CW },
-        Object { index: 0x6041, code: ObjectCode::Var, name: "", entries: &STATUS },
-        Object { index: 0x607A, code: ObjectCode::Var, name: "", entries: &TARGET },
+        Object {
+            index: 0x1600,
+            code: ObjectCode::Record,
+            name: "",
+            entries: &RXMAP,
+        },
+        Object {
+            index: 0x1C12,
+            code: ObjectCode::Array,
+            name: "",
+            entries: &RXASSIGN,
+        },
+        Object {
+            index: 0x2000,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &FLAG,
+        },
+        Object {
+            index: 0x6040,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &CW,
+        },
+        Object {
+            index: 0x6041,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &STATUS,
+        },
+        Object {
+            index: 0x607A,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &TARGET,
+        },
     ];
     static DEFAULTS: [u8; 31] = [0; 31];
     static PROFILE: Profile = Profile {
@@ -245,13 +294,36 @@ mod tests {
             vendor_id: 0,
             product_code: 0,
             revision: 0,
-            mailbox_out: SmLayout { start: 0, length: 0, control: 0 },
-            mailbox_in: SmLayout { start: 0, length: 0, control: 0 },
+            mailbox_out: SmLayout {
+                start: 0,
+                length: 0,
+                control: 0,
+            },
+            mailbox_in: SmLayout {
+                start: 0,
+                length: 0,
+                control: 0,
+            },
             boot_mailbox_out: None,
             boot_mailbox_in: None,
-            outputs: SmLayout { start: 0, length: 0, control: 0 },
-            inputs: SmLayout { start: 0, length: 0, control: 0 },
-            sync: SyncSupport { free_run: true, sm_synchronous: false, dc_sync0: false, dc_sync1: false, min_cycle_ns: 0, max_cycle_ns: 0 },
+            outputs: SmLayout {
+                start: 0,
+                length: 0,
+                control: 0,
+            },
+            inputs: SmLayout {
+                start: 0,
+                length: 0,
+                control: 0,
+            },
+            sync: SyncSupport {
+                free_run: true,
+                sm_synchronous: false,
+                dc_sync0: false,
+                dc_sync1: false,
+                min_cycle_ns: 0,
+                max_cycle_ns: 0,
+            },
             max_pdo_entries: 8,
             mailbox_protocols: 0,
             coe: CoeDetails {
@@ -318,8 +390,16 @@ mod tests {
     fn pack_copies_constants_and_ram() {
         let plan = PdoPlan {
             steps: Vec::from_slice(&[
-                CopyStep { slot: Slot::Const(&[0x37, 0x02]), image_bit: 0, bits: 16 },
-                CopyStep { slot: Slot::Ram(2), image_bit: 16, bits: 32 },
+                CopyStep {
+                    slot: Slot::Const(&[0x37, 0x02]),
+                    image_bit: 0,
+                    bits: 16,
+                },
+                CopyStep {
+                    slot: Slot::Ram(2),
+                    image_bit: 16,
+                    bits: 32,
+                },
             ])
             .unwrap(),
             bits: 48,

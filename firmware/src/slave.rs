@@ -66,17 +66,27 @@ impl<const RAM: usize> Slave<RAM> {
     /// A slave in INIT with every object at its default.
     pub fn new(profile: &'static Profile) -> Result<Self, SlaveError> {
         if profile.ram_size() > RAM {
-            return Err(SlaveError::RamTooSmall { needed: profile.ram_size(), available: RAM });
+            return Err(SlaveError::RamTooSmall {
+                needed: profile.ram_size(),
+                available: RAM,
+            });
         }
         let mut slave = Self {
             profile,
             ram: [0; RAM],
-            status: AlStatus { state: AlState::Init, error: false, id_loaded: false },
+            status: AlStatus {
+                state: AlState::Init,
+                error: false,
+                id_loaded: false,
+            },
             code: AlStatusCode::NoError,
             mailbox: Mailbox::new(),
             rx_plan: PdoPlan::default(),
             tx_plan: PdoPlan::default(),
-            sync: SyncConfig { mode: Mode::FreeRun, cycle_ns: 0 },
+            sync: SyncConfig {
+                mode: Mode::FreeRun,
+                cycle_ns: 0,
+            },
             rx_image: [0; MAX_IMAGE],
             tx_image: [0; MAX_IMAGE],
             app: Application::new(),
@@ -149,7 +159,8 @@ impl<const RAM: usize> Slave<RAM> {
         let state = self.status.state;
         if state != AlState::Init && state != AlState::Boot {
             let mut od = Dictionary::new(self.profile, &mut self.ram);
-            self.mailbox.service(pdi, &self.profile.device, &mut od, state, events)?;
+            self.mailbox
+                .service(pdi, &self.profile.device, &mut od, state, events)?;
         }
         if state == AlState::SafeOp {
             // Masters may activate SYNC0 only after SAFEOP was reached (SOEM's dc_sync).
@@ -209,7 +220,11 @@ impl<const RAM: usize> Slave<RAM> {
             == Some(Mode::SmSynchronous as u8)
     }
 
-    fn handle_al_control<P: EscPdi>(&mut self, pdi: &mut P, control: AlControl) -> Result<(), P::Error> {
+    fn handle_al_control<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        control: AlControl,
+    ) -> Result<(), P::Error> {
         let from = self.status.state;
         let checks = self.checks_for(pdi, from, control)?;
         let mut outcome = esm::decide(self.status, self.code, control, &checks);
@@ -223,7 +238,12 @@ impl<const RAM: usize> Slave<RAM> {
     }
 
     /// Evaluates only the checks the requested transition needs.
-    fn checks_for<P: EscPdi>(&mut self, pdi: &mut P, from: AlState, control: AlControl) -> Result<Checks, P::Error> {
+    fn checks_for<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        control: AlControl,
+    ) -> Result<Checks, P::Error> {
         let device = &self.profile.device;
         let mut checks = Checks {
             boot_supported: device.boot_mailbox_out.is_some() && device.boot_mailbox_in.is_some(),
@@ -252,7 +272,10 @@ impl<const RAM: usize> Slave<RAM> {
     }
 
     /// Builds both copy plans from the OD and checks SM2/SM3 against them.
-    fn prepare_process_data<P: EscPdi>(&mut self, pdi: &mut P) -> Result<Result<(), AlStatusCode>, P::Error> {
+    fn prepare_process_data<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<Result<(), AlStatusCode>, P::Error> {
         let device = self.profile.device;
         let od = Dictionary::new(self.profile, &mut self.ram);
         let rx = PdoPlan::build(&od, Direction::Rx);
@@ -286,13 +309,22 @@ impl<const RAM: usize> Slave<RAM> {
 
     /// Writes the outcome (code first, then status, each only if changed) and runs the work of
     /// the states left and entered.
-    fn apply<P: EscPdi>(&mut self, pdi: &mut P, from: AlState, outcome: Outcome) -> Result<(), P::Error> {
+    fn apply<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        outcome: Outcome,
+    ) -> Result<(), P::Error> {
         let to = outcome.status.state;
         if to != from {
             self.leave_and_enter(pdi, from, to)?;
         }
         if outcome.code != self.code || outcome.status != self.status {
-            let code_register = if outcome.status.id_loaded { self.id_value } else { outcome.code.code() };
+            let code_register = if outcome.status.id_loaded {
+                self.id_value
+            } else {
+                outcome.code.code()
+            };
             pdi.write_u16(regs::AL_STATUS_CODE.addr, code_register)?;
             pdi.write_u16(regs::AL_STATUS.addr, outcome.status.bits())?;
         }
@@ -301,7 +333,12 @@ impl<const RAM: usize> Slave<RAM> {
         Ok(())
     }
 
-    fn leave_and_enter<P: EscPdi>(&mut self, pdi: &mut P, from: AlState, to: AlState) -> Result<(), P::Error> {
+    fn leave_and_enter<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        to: AlState,
+    ) -> Result<(), P::Error> {
         let rank_from = esm::state_rank(from);
         let rank_to = esm::state_rank(to);
         if from == AlState::Op {
@@ -311,7 +348,10 @@ impl<const RAM: usize> Slave<RAM> {
         if rank_to < 2 && rank_from >= 2 {
             self.rx_plan = PdoPlan::default();
             self.tx_plan = PdoPlan::default();
-            self.sync = SyncConfig { mode: Mode::FreeRun, cycle_ns: 0 };
+            self.sync = SyncConfig {
+                mode: Mode::FreeRun,
+                cycle_ns: 0,
+            };
         }
         if to == AlState::Init {
             self.mailbox.reset();

@@ -22,7 +22,11 @@ fn mailbox_sm_ok(sm: SmConfig, layout: &SmLayout, direction: SmDirection) -> boo
 
 /// INIT → PREOP: SM0 (master → slave) and SM1 (slave → master) must match the mailbox layout
 /// (ETG.1000.6 §6.4.2), else AL status code 0x0016.
-pub fn check_mailbox(sm0: SmConfig, sm1: SmConfig, device: &DeviceInfo) -> Result<(), AlStatusCode> {
+pub fn check_mailbox(
+    sm0: SmConfig,
+    sm1: SmConfig,
+    device: &DeviceInfo,
+) -> Result<(), AlStatusCode> {
     if mailbox_sm_ok(sm0, &device.mailbox_out, SmDirection::EcatWrite)
         && mailbox_sm_ok(sm1, &device.mailbox_in, SmDirection::EcatRead)
     {
@@ -51,7 +55,11 @@ pub fn check_process_data(
             && sm.control.mode() == SmMode::Buffered
             && sm.control.direction() == direction
     };
-    if ok { Ok(()) } else { Err(code) }
+    if ok {
+        Ok(())
+    } else {
+        Err(code)
+    }
 }
 
 #[cfg(test)]
@@ -59,7 +67,11 @@ mod tests {
     use super::*;
     use hal::esc::{SmActivate, SmControl};
 
-    const OUT: SmLayout = SmLayout { start: 0x1200, length: 0, control: 0x64 };
+    const OUT: SmLayout = SmLayout {
+        start: 0x1200,
+        length: 0,
+        control: 0x64,
+    };
 
     fn sm(start: u16, length: u16, control: u8, enable: bool) -> SmConfig {
         SmConfig {
@@ -74,7 +86,13 @@ mod tests {
     #[test]
     fn outputs_sm_with_mapped_length_passes() {
         assert_eq!(
-            check_process_data(sm(0x1200, 7, 0x64, true), &OUT, SmDirection::EcatWrite, 7, AlStatusCode::InvalidOutputConfig),
+            check_process_data(
+                sm(0x1200, 7, 0x64, true),
+                &OUT,
+                SmDirection::EcatWrite,
+                7,
+                AlStatusCode::InvalidOutputConfig
+            ),
             Ok(())
         );
     }
@@ -82,7 +100,13 @@ mod tests {
     #[test]
     fn outputs_sm_with_wrong_length_is_0x1d() {
         assert_eq!(
-            check_process_data(sm(0x1200, 8, 0x64, true), &OUT, SmDirection::EcatWrite, 7, AlStatusCode::InvalidOutputConfig),
+            check_process_data(
+                sm(0x1200, 8, 0x64, true),
+                &OUT,
+                SmDirection::EcatWrite,
+                7,
+                AlStatusCode::InvalidOutputConfig
+            ),
             Err(AlStatusCode::InvalidOutputConfig)
         );
     }
@@ -90,16 +114,56 @@ mod tests {
     #[test]
     fn outputs_sm_at_wrong_address_or_mode_is_refused() {
         let code = AlStatusCode::InvalidOutputConfig;
-        assert!(check_process_data(sm(0x1300, 7, 0x64, true), &OUT, SmDirection::EcatWrite, 7, code).is_err());
-        assert!(check_process_data(sm(0x1200, 7, 0x66, true), &OUT, SmDirection::EcatWrite, 7, code).is_err());
-        assert!(check_process_data(sm(0x1200, 7, 0x60, true), &OUT, SmDirection::EcatWrite, 7, code).is_err());
-        assert!(check_process_data(sm(0x1200, 7, 0x64, false), &OUT, SmDirection::EcatWrite, 7, code).is_err());
+        assert!(check_process_data(
+            sm(0x1300, 7, 0x64, true),
+            &OUT,
+            SmDirection::EcatWrite,
+            7,
+            code
+        )
+        .is_err());
+        assert!(check_process_data(
+            sm(0x1200, 7, 0x66, true),
+            &OUT,
+            SmDirection::EcatWrite,
+            7,
+            code
+        )
+        .is_err());
+        assert!(check_process_data(
+            sm(0x1200, 7, 0x60, true),
+            &OUT,
+            SmDirection::EcatWrite,
+            7,
+            code
+        )
+        .is_err());
+        assert!(check_process_data(
+            sm(0x1200, 7, 0x64, false),
+            &OUT,
+            SmDirection::EcatWrite,
+            7,
+            code
+        )
+        .is_err());
     }
 
     #[test]
     fn nothing_mapped_requires_disabled_sm() {
         let code = AlStatusCode::InvalidInputConfig;
-        assert_eq!(check_process_data(sm(0, 0, 0, false), &OUT, SmDirection::EcatRead, 0, code), Ok(()));
-        assert_eq!(check_process_data(sm(0x1200, 4, 0x20, true), &OUT, SmDirection::EcatRead, 0, code), Err(code));
+        assert_eq!(
+            check_process_data(sm(0, 0, 0, false), &OUT, SmDirection::EcatRead, 0, code),
+            Ok(())
+        );
+        assert_eq!(
+            check_process_data(
+                sm(0x1200, 4, 0x20, true),
+                &OUT,
+                SmDirection::EcatRead,
+                0,
+                code
+            ),
+            Err(code)
+        );
     }
 }

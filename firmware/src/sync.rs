@@ -55,7 +55,9 @@ impl SyncConfig {
     pub fn check(&self, support: &SyncSupport) -> Result<(), AlStatusCode> {
         match self.mode {
             SyncMode::FreeRun if !support.free_run => Err(AlStatusCode::FreeRunNotSupported),
-            SyncMode::SmSynchronous if !support.sm_synchronous => Err(AlStatusCode::SyncNotSupported),
+            SyncMode::SmSynchronous if !support.sm_synchronous => {
+                Err(AlStatusCode::SyncNotSupported)
+            }
             SyncMode::DcSync0 if !support.dc_sync0 => Err(AlStatusCode::InvalidDcSyncConfig),
             SyncMode::DcSync1 if !support.dc_sync1 => Err(AlStatusCode::InvalidDcSyncConfig),
             SyncMode::DcSync0 | SyncMode::DcSync1
@@ -83,24 +85,42 @@ mod tests {
 
     #[test]
     fn dc_cycle_inside_limits_is_accepted() {
-        let c = SyncConfig { mode: SyncMode::DcSync0, cycle_ns: 1_000_000 };
+        let c = SyncConfig {
+            mode: SyncMode::DcSync0,
+            cycle_ns: 1_000_000,
+        };
         assert_eq!(c.check(&SUPPORT), Ok(()));
     }
 
     #[test]
     fn dc_cycle_below_minimum_is_0x35() {
-        let c = SyncConfig { mode: SyncMode::DcSync0, cycle_ns: 62_500 };
+        let c = SyncConfig {
+            mode: SyncMode::DcSync0,
+            cycle_ns: 62_500,
+        };
         assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0035));
-        let c = SyncConfig { mode: SyncMode::DcSync0, cycle_ns: 0 };
+        let c = SyncConfig {
+            mode: SyncMode::DcSync0,
+            cycle_ns: 0,
+        };
         assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0035));
     }
 
     #[test]
     fn unsupported_modes_are_refused() {
-        let c = SyncConfig { mode: SyncMode::DcSync1, cycle_ns: 1_000_000 };
+        let c = SyncConfig {
+            mode: SyncMode::DcSync1,
+            cycle_ns: 1_000_000,
+        };
         assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0030));
-        let no_free_run = SyncSupport { free_run: false, ..SUPPORT };
-        let c = SyncConfig { mode: SyncMode::FreeRun, cycle_ns: 0 };
+        let no_free_run = SyncSupport {
+            free_run: false,
+            ..SUPPORT
+        };
+        let c = SyncConfig {
+            mode: SyncMode::FreeRun,
+            cycle_ns: 0,
+        };
         assert_eq!(c.check(&no_free_run).map_err(|c| c.code()), Err(0x0027));
     }
 }

@@ -18,7 +18,9 @@ pub fn block_on<F: Future>(f: F) -> F::Output {
 /// Identity words of a built-in profile as its SII carries them: (vendor, product, revision, serial)
 /// and the device name.
 pub fn expected_identity(profile: &str) -> ((u32, u32, u32, u32), String) {
-    let sii = od_gen::builtin(profile).expect("built-in profile").sii_image();
+    let sii = od_gen::builtin(profile)
+        .expect("built-in profile")
+        .sii_image();
     let word = |w: usize| u32::from_le_bytes(sii[w * 2..w * 2 + 4].try_into().expect("4 bytes"));
     let identity = (word(0x08), word(0x0A), word(0x0C), word(0x0E));
     (identity, device_name(&sii))
@@ -53,5 +55,8 @@ fn device_name(sii: &[u8]) -> String {
         }
         at += 4 + words * 2;
     }
-    strings.get(order_idx.wrapping_sub(1)).cloned().unwrap_or_default()
+    strings
+        .get(order_idx.wrapping_sub(1))
+        .cloned()
+        .unwrap_or_default()
 }

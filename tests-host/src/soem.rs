@@ -12,15 +12,22 @@ const PYSOEM_VERSION: &str = "1.1.13";
 
 /// The workspace root.
 pub fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().map(Path::to_path_buf).unwrap_or_default()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
 }
 
 fn target_dir() -> PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| workspace().join("target"))
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| workspace().join("target"))
 }
 
 fn run(cmd: &mut Command, what: &str) -> Result<(), String> {
-    let out = cmd.output().map_err(|e| format!("{what}: cannot start: {e}"))?;
+    let out = cmd
+        .output()
+        .map_err(|e| format!("{what}: cannot start: {e}"))?;
     if out.status.success() {
         Ok(())
     } else {
@@ -41,13 +48,23 @@ pub fn python() -> Result<PathBuf, String> {
             let venv = target_dir().join("soem-venv");
             let py = venv.join("bin/python");
             let ok = Command::new(&py)
-                .args(["-c", &format!("import pysoem; assert pysoem.__version__ == '{PYSOEM_VERSION}'")])
+                .args([
+                    "-c",
+                    &format!("import pysoem; assert pysoem.__version__ == '{PYSOEM_VERSION}'"),
+                ])
                 .output()
                 .is_ok_and(|o| o.status.success());
             if !ok {
-                run(Command::new("python3").args(["-m", "venv"]).arg(&venv), "python3 -m venv")?;
                 run(
-                    Command::new(venv.join("bin/pip")).args(["install", "-q", &format!("pysoem=={PYSOEM_VERSION}")]),
+                    Command::new("python3").args(["-m", "venv"]).arg(&venv),
+                    "python3 -m venv",
+                )?;
+                run(
+                    Command::new(venv.join("bin/pip")).args([
+                        "install",
+                        "-q",
+                        &format!("pysoem=={PYSOEM_VERSION}"),
+                    ]),
                     "pip install pysoem",
                 )?;
             }
@@ -64,7 +81,13 @@ fn build_sim_drive() -> Result<(), String> {
         .get_or_init(|| {
             let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
             run(
-                Command::new(cargo).current_dir(workspace()).args(["build", "--release", "-q", "-p", "board-sim"]),
+                Command::new(cargo).current_dir(workspace()).args([
+                    "build",
+                    "--release",
+                    "-q",
+                    "-p",
+                    "board-sim",
+                ]),
                 "cargo build --release -p board-sim",
             )
         })
@@ -101,7 +124,9 @@ pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, 
             String::from_utf8_lossy(&out.stderr)
         ));
     }
-    let text = std::fs::read_to_string(&result).map_err(|e| format!("{}: {e}", result.display()))?;
-    let json = serde_json::from_str(&text).map_err(|e| format!("scenario output is not JSON ({e}): {text}"))?;
+    let text =
+        std::fs::read_to_string(&result).map_err(|e| format!("{}: {e}", result.display()))?;
+    let json = serde_json::from_str(&text)
+        .map_err(|e| format!("scenario output is not JSON ({e}): {text}"))?;
     Ok((json, log))
 }

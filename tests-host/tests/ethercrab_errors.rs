@@ -18,8 +18,15 @@ fn master() -> (InProcess, board_sim::inproc::InMemoryTxRx) {
     let segment = Segment::new("standard", 1).expect("standard profile");
     InProcess::connect(
         segment,
-        Timeouts { pdu: Duration::from_millis(500), state_transition: Duration::from_millis(500), ..Timeouts::default() },
-        MainDeviceConfig { dc_static_sync_iterations: 10, ..MainDeviceConfig::default() },
+        Timeouts {
+            pdu: Duration::from_millis(500),
+            state_transition: Duration::from_millis(500),
+            ..Timeouts::default()
+        },
+        MainDeviceConfig {
+            dc_static_sync_iterations: 10,
+            ..MainDeviceConfig::default()
+        },
     )
 }
 
@@ -29,11 +36,21 @@ fn sdo_read_of_missing_object_aborts_0x06020000() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
-        let group = md.init_single_group::<4, 64>(m.shared.clock().now_fn()).await.expect("init");
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
         let sd = group.iter(md).next().expect("one drive");
-        let err = sd.sdo_read::<u32>(0x2FFF, 0).await.expect_err("object 2FFFh does not exist");
+        let err = sd
+            .sdo_read::<u32>(0x2FFF, 0)
+            .await
+            .expect_err("object 2FFFh does not exist");
         match err {
-            Error::Mailbox(MailboxError::Aborted { code, address, sub_index }) => {
+            Error::Mailbox(MailboxError::Aborted {
+                code,
+                address,
+                sub_index,
+            }) => {
                 assert_eq!(code, CoeAbortCode::NotFound, "ETG.1000.6 abort 0x06020000");
                 assert_eq!((address, sub_index), (0x2FFF, 0));
             }
@@ -51,29 +68,74 @@ fn safeop_with_wrong_sm2_length_is_refused_with_0x1d_and_error_flag() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
-        let group = md.init_single_group::<4, 64>(m.shared.clock().now_fn()).await.expect("init");
-        let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with SM2/SM3 configured");
-        let len: u16 = Command::fprd(FIRST_STATION, SM2_LENGTH).receive(md).await.expect("SM2 length");
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        let group = group
+            .into_pre_op_pdi(md)
+            .await
+            .expect("PRE-OP with SM2/SM3 configured");
+        let len: u16 = Command::fprd(FIRST_STATION, SM2_LENGTH)
+            .receive(md)
+            .await
+            .expect("SM2 length");
         assert!(len > 0, "the default mapping has outputs");
         // SM registers are writable only while the SM is disabled (ET1100 datasheet §8).
-        Command::fpwr(FIRST_STATION, SM2_ACTIVATE).send(md, 0u8).await.expect("disable SM2");
-        Command::fpwr(FIRST_STATION, SM2_LENGTH).send(md, len + 1).await.expect("SM2 length");
-        Command::fpwr(FIRST_STATION, SM2_ACTIVATE).send(md, 1u8).await.expect("enable SM2");
+        Command::fpwr(FIRST_STATION, SM2_ACTIVATE)
+            .send(md, 0u8)
+            .await
+            .expect("disable SM2");
+        Command::fpwr(FIRST_STATION, SM2_LENGTH)
+            .send(md, len + 1)
+            .await
+            .expect("SM2 length");
+        Command::fpwr(FIRST_STATION, SM2_ACTIVATE)
+            .send(md, 1u8)
+            .await
+            .expect("enable SM2");
 
         let r = group.into_safe_op(md).await;
         assert!(r.is_err(), "SAFE-OP must be refused");
-        let status: u16 = Command::fprd(FIRST_STATION, AL_STATUS).receive(md).await.expect("AL status");
-        let code: u16 = Command::fprd(FIRST_STATION, AL_STATUS_CODE).receive(md).await.expect("AL status code");
-        assert_eq!(status, 0x0012, "stays in PRE-OP with the error indication bit (ETG.1000.6 Table 9)");
-        assert_eq!(code, 0x001D, "invalid output configuration (ETG.1000.6 Table 11)");
+        let status: u16 = Command::fprd(FIRST_STATION, AL_STATUS)
+            .receive(md)
+            .await
+            .expect("AL status");
+        let code: u16 = Command::fprd(FIRST_STATION, AL_STATUS_CODE)
+            .receive(md)
+            .await
+            .expect("AL status code");
+        assert_eq!(
+            status, 0x0012,
+            "stays in PRE-OP with the error indication bit (ETG.1000.6 Table 9)"
+        );
+        assert_eq!(
+            code, 0x001D,
+            "invalid output configuration (ETG.1000.6 Table 11)"
+        );
 
         // The error is held until acknowledged, then INIT is reachable.
-        Command::fpwr(FIRST_STATION, 0x0120).send(md, 0x0001u16).await.expect("INIT without ack");
+        Command::fpwr(FIRST_STATION, 0x0120)
+            .send(md, 0x0001u16)
+            .await
+            .expect("INIT without ack");
         m.shared.advance(1_000_000);
-        let status: u16 = Command::fprd(FIRST_STATION, AL_STATUS).receive(md).await.expect("AL status");
-        assert_eq!(status, 0x0012, "a request without acknowledge is ignored while the error is set");
-        Command::fpwr(FIRST_STATION, 0x0120).send(md, 0x0011u16).await.expect("INIT with ack");
-        let status: u16 = Command::fprd(FIRST_STATION, AL_STATUS).receive(md).await.expect("AL status");
+        let status: u16 = Command::fprd(FIRST_STATION, AL_STATUS)
+            .receive(md)
+            .await
+            .expect("AL status");
+        assert_eq!(
+            status, 0x0012,
+            "a request without acknowledge is ignored while the error is set"
+        );
+        Command::fpwr(FIRST_STATION, 0x0120)
+            .send(md, 0x0011u16)
+            .await
+            .expect("INIT with ack");
+        let status: u16 = Command::fprd(FIRST_STATION, AL_STATUS)
+            .receive(md)
+            .await
+            .expect("AL status");
         assert_eq!(status, 0x0001, "INIT, error cleared");
     });
 }

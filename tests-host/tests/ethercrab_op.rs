@@ -14,7 +14,12 @@ const SWITCHED_ON: u16 = 0x0023;
 const OPERATION_ENABLED: u16 = 0x0027;
 
 fn run(drives: usize, cycle: Duration, cycles: u32) -> Report {
-    let scenario = Scenario { profile: "standard".into(), drives, cycle, cycles };
+    let scenario = Scenario {
+        profile: "standard".into(),
+        drives,
+        cycle,
+        cycles,
+    };
     block_on(demo::run(&scenario, &mut |_| {})).unwrap_or_else(|e| panic!("scenario failed: {e}"))
 }
 
@@ -22,17 +27,30 @@ fn check(report: &Report, drives: usize, cycles: u32) {
     let (identity, name) = expected_identity("standard");
     assert_eq!(report.drives.len(), drives, "drives discovered");
     for (i, d) in report.drives.iter().enumerate() {
-        assert_eq!(d.identity, identity, "identity of drive {i} (SII words 0x08..0x0F)");
+        assert_eq!(
+            d.identity, identity,
+            "identity of drive {i} (SII words 0x08..0x0F)"
+        );
         assert_eq!(d.name, name, "name of drive {i}");
-        assert_eq!(d.address, 0x1000 + i as u16, "ethercrab numbers stations from 0x1000");
+        assert_eq!(
+            d.address,
+            0x1000 + i as u16,
+            "ethercrab numbers stations from 0x1000"
+        );
     }
-    assert_eq!(report.states, ["PRE-OP", "SAFE-OP", "OP", "SAFE-OP", "PRE-OP", "INIT"]);
+    assert_eq!(
+        report.states,
+        ["PRE-OP", "SAFE-OP", "OP", "SAFE-OP", "PRE-OP", "INIT"]
+    );
 
     // Each drive adds 2 for the LRW write and 1 for its read (ETG.1000.4 §5.4.3).
     assert_eq!(report.expected_wkc, 3 * drives as u16);
     assert_eq!(report.samples.len(), cycles as usize);
     for (k, s) in report.samples.iter().enumerate() {
-        assert_eq!(s.working_counter, report.expected_wkc, "working counter of cycle {k}");
+        assert_eq!(
+            s.working_counter, report.expected_wkc,
+            "working counter of cycle {k}"
+        );
     }
 
     // The controlword walks the PDS state machine (CiA402 Figure 3): shutdown (cycles 0..9),
@@ -43,13 +61,23 @@ fn check(report: &Report, drives: usize, cycles: u32) {
     assert_eq!(sw(19), SWITCHED_ON);
     assert_eq!(sw(cycles as usize - 1), OPERATION_ENABLED);
     // Not enabled yet: the position must not follow.
-    assert_eq!(report.samples[15].first_drive.3, 0, "position actual while only switched on");
+    assert_eq!(
+        report.samples[15].first_drive.3, 0,
+        "position actual while only switched on"
+    );
     // Enabled: the ideal axis's actual position is the target of the previous cycle.
     for k in 30..cycles as usize {
-        assert_eq!(report.samples[k].first_drive.3, report.samples[k - 1].first_drive.1, "cycle {k}");
+        assert_eq!(
+            report.samples[k].first_drive.3,
+            report.samples[k - 1].first_drive.1,
+            "cycle {k}"
+        );
     }
     for (i, c) in report.firmware_cycles.iter().enumerate() {
-        assert!(*c >= cycles, "drive {i} ran {c} SYNC0 cycles, fewer than the {cycles} exchanged");
+        assert!(
+            *c >= cycles,
+            "drive {i} ran {c} SYNC0 cycles, fewer than the {cycles} exchanged"
+        );
     }
 }
 
@@ -58,7 +86,11 @@ fn one_drive_reaches_op_with_dc_sync0_at_1ms() {
     let report = run(1, Duration::from_millis(1), 1000);
     check(&report, 1, 1000);
     let sync = &report.sync_parameters[0];
-    assert_eq!(*sync, (2, 1_000_000), "1C32h:01 = DC SYNC0 (ETG.1020), 1C32h:02 = cycle in ns");
+    assert_eq!(
+        *sync,
+        (2, 1_000_000),
+        "1C32h:01 = DC SYNC0 (ETG.1020), 1C32h:02 = cycle in ns"
+    );
     // 1000 cycles of 1 ms each must have taken at least 1 s of simulated time.
     assert!(report.sim_time_ns >= 1_000_000_000);
 }

@@ -22,14 +22,38 @@ fn soem_discovers_maps_syncs_and_cycles_the_drive() {
 
     assert_eq!(u(&r["slave_count"]), 1, "config_init finds one slave");
     let s = &r["slaves"][0];
-    assert_eq!(s["name"].as_str(), Some(name.as_str()), "SOEM names the slave by SII string #1");
-    assert_eq!((u(&s["man"]), u(&s["id"]), u(&s["rev"])), (vendor as u64, product as u64, revision as u64));
+    assert_eq!(
+        s["name"].as_str(),
+        Some(name.as_str()),
+        "SOEM names the slave by SII string #1"
+    );
+    assert_eq!(
+        (u(&s["man"]), u(&s["id"]), u(&s["rev"])),
+        (vendor as u64, product as u64, revision as u64)
+    );
 
     // SDO upload of 1018h:01..04 and 1008h.
-    let sdo: Vec<u64> = r["sdo_identity"].as_array().expect("array").iter().map(u).collect();
-    assert_eq!(sdo, vec![vendor as u64, product as u64, revision as u64, serial as u64]);
+    let sdo: Vec<u64> = r["sdo_identity"]
+        .as_array()
+        .expect("array")
+        .iter()
+        .map(u)
+        .collect();
+    assert_eq!(
+        sdo,
+        vec![
+            vendor as u64,
+            product as u64,
+            revision as u64,
+            serial as u64
+        ]
+    );
     assert_eq!(r["sdo_device_name"].as_str(), Some(name.as_str()));
-    assert_eq!(u(&r["missing_object_abort"]), 0x0602_0000, "abort code for a missing object");
+    assert_eq!(
+        u(&r["missing_object_abort"]),
+        0x0602_0000,
+        "abort code for a missing object"
+    );
 
     // config_map reads 1C00h, 1C12h/1C13h and the mapping via CoE; 7 bytes out + 7 bytes in.
     assert_eq!(u(&r["iomap_size"]), 14);
@@ -46,17 +70,32 @@ fn soem_discovers_maps_syncs_and_cycles_the_drive() {
     }
     let sw = |k: usize| u(&samples[k][3]) & STATE_MASK;
     let last = samples.len() - 1;
-    let (shutdown_until, switch_on_until) = (u(&r["phases"][0]) as usize, u(&r["phases"][1]) as usize);
+    let (shutdown_until, switch_on_until) =
+        (u(&r["phases"][0]) as usize, u(&r["phases"][1]) as usize);
     // CiA402 Table 30: ready to switch on 0x21, switched on 0x23, operation enabled 0x27.
     assert_eq!(sw(shutdown_until - 1), 0x21, "after shutdown");
     assert_eq!(sw(switch_on_until - 1), 0x23, "after switch on");
-    assert_eq!(u(&samples[switch_on_until - 1][4]), 0, "position does not follow before operation is enabled");
-    assert_eq!(sw(last), 0x27, "operation enabled after shutdown, switch on, enable operation");
+    assert_eq!(
+        u(&samples[switch_on_until - 1][4]),
+        0,
+        "position does not follow before operation is enabled"
+    );
+    assert_eq!(
+        sw(last),
+        0x27,
+        "operation enabled after shutdown, switch on, enable operation"
+    );
     // Once enabled, the ideal axis reports a target that was sent earlier (SOEM's cycle is not
     // phase-locked to SYNC0, so the lag is one or two cycles).
     let actual = samples[last][4].as_i64().expect("actual");
-    let targets: Vec<i64> = samples[last - 3..last].iter().map(|s| s[2].as_i64().expect("target")).collect();
-    assert!(targets.contains(&actual), "position actual {actual} is one of the last targets {targets:?}");
+    let targets: Vec<i64> = samples[last - 3..last]
+        .iter()
+        .map(|s| s[2].as_i64().expect("target"))
+        .collect();
+    assert!(
+        targets.contains(&actual),
+        "position actual {actual} is one of the last targets {targets:?}"
+    );
     // Mode display mirrors the requested mode (8 = cyclic synchronous position).
     assert_eq!(u(&samples[last][5]), 8);
     assert_eq!(u(&r["init"]), INIT);

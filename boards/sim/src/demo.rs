@@ -43,7 +43,12 @@ pub struct Scenario {
 
 impl Default for Scenario {
     fn default() -> Self {
-        Self { profile: "standard".into(), drives: 1, cycle: Duration::from_millis(1), cycles: 1000 }
+        Self {
+            profile: "standard".into(),
+            drives: 1,
+            cycle: Duration::from_millis(1),
+            cycles: 1000,
+        }
     }
 }
 
@@ -100,20 +105,34 @@ fn le<const N: usize>(b: &[u8], at: usize) -> [u8; N] {
 }
 
 /// Runs the scenario, calling `log` with a line for everything worth telling a user.
-pub async fn run(s: &Scenario, log: &mut dyn FnMut(String)) -> Result<Report, Box<dyn std::error::Error>> {
+pub async fn run(
+    s: &Scenario,
+    log: &mut dyn FnMut(String),
+) -> Result<Report, Box<dyn std::error::Error>> {
     let segment = Segment::new(&s.profile, s.drives)?;
     let (master, transport) = InProcess::connect(
         segment,
-        Timeouts { pdu: Duration::from_millis(500), ..Timeouts::default() },
-        MainDeviceConfig { dc_static_sync_iterations: 1000, ..MainDeviceConfig::default() },
+        Timeouts {
+            pdu: Duration::from_millis(500),
+            ..Timeouts::default()
+        },
+        MainDeviceConfig {
+            dc_static_sync_iterations: 1000,
+            ..MainDeviceConfig::default()
+        },
     );
     let transport = tokio::task::spawn_local(transport);
     let md = &*master.maindevice;
     let shared = master.shared.clone();
     let cycle_ns = s.cycle.as_nanos() as u64;
-    let mut report = Report { expected_wkc: 3 * s.drives as u16, ..Report::default() };
+    let mut report = Report {
+        expected_wkc: 3 * s.drives as u16,
+        ..Report::default()
+    };
 
-    let mut group = md.init_single_group::<MAX_DRIVES, MAX_PDI>(shared.clock().now_fn()).await?;
+    let mut group = md
+        .init_single_group::<MAX_DRIVES, MAX_PDI>(shared.clock().now_fn())
+        .await?;
     report.states.push("PRE-OP".into());
     log(format!("found {} drive(s)", group.len()));
     for mut sd in group.iter_mut(md) {
@@ -140,7 +159,11 @@ pub async fn run(s: &Scenario, log: &mut dyn FnMut(String)) -> Result<Report, Bo
     let group = group
         .configure_dc_sync(
             md,
-            DcConfiguration { start_delay: s.cycle * 10, sync0_period: s.cycle, sync0_shift: Duration::ZERO },
+            DcConfiguration {
+                start_delay: s.cycle * 10,
+                sync0_period: s.cycle,
+                sync0_shift: Duration::ZERO,
+            },
         )
         .await?;
     let group = group.into_safe_op(md).await?;
@@ -160,7 +183,10 @@ pub async fn run(s: &Scenario, log: &mut dyn FnMut(String)) -> Result<Report, Bo
         let cycle = sd.sdo_read::<u32>(0x1C32, 2).await?;
         report.sync_parameters.push((mode, cycle));
     }
-    log(format!("OP; 1C32h sync mode / cycle time per drive: {:?}", report.sync_parameters));
+    log(format!(
+        "OP; 1C32h sync mode / cycle time per drive: {:?}",
+        report.sync_parameters
+    ));
 
     for i in 0..s.cycles {
         let controlword = match i {
@@ -185,10 +211,16 @@ pub async fn run(s: &Scenario, log: &mut dyn FnMut(String)) -> Result<Report, Bo
         }
         let first = group.iter(md).next().map(|sd| {
             let inp = sd.inputs_raw();
-            (u16::from_le_bytes(le(&inp, 0)), i32::from_le_bytes(le(&inp, 2)))
+            (
+                u16::from_le_bytes(le(&inp, 0)),
+                i32::from_le_bytes(le(&inp, 2)),
+            )
         });
         let (sw, actual) = first.unwrap_or_default();
-        report.samples.push(CycleSample { working_counter: r.working_counter, first_drive: (controlword, target, sw, actual) });
+        report.samples.push(CycleSample {
+            working_counter: r.working_counter,
+            first_drive: (controlword, target, sw, actual),
+        });
         shared.advance(cycle_ns);
     }
     if let Some(last) = report.samples.last() {

@@ -31,7 +31,11 @@ impl SimDrive {
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.
         let _ = slave.start(&mut esc);
-        Ok(Self { esc, slave, next_free_run_ns: FREE_RUN_PERIOD_NS })
+        Ok(Self {
+            esc,
+            slave,
+            next_free_run_ns: FREE_RUN_PERIOD_NS,
+        })
     }
 
     /// Earliest simulated time at which the drive has something to do.
@@ -45,7 +49,10 @@ impl SimDrive {
 
     fn free_running(&self) -> bool {
         self.slave.sync_mode() == SyncMode::FreeRun
-            && matches!(self.slave.al_state(), hal::esc::AlState::SafeOp | hal::esc::AlState::Op)
+            && matches!(
+                self.slave.al_state(),
+                hal::esc::AlState::SafeOp | hal::esc::AlState::Op
+            )
     }
 
     /// Moves the drive to simulated time `now_ns` and runs the firmware handlers that are due:

@@ -141,8 +141,13 @@ pub struct InProcess {
 impl InProcess {
     /// Connects a new master (with its own PDU storage) to `segment`; spawn the returned
     /// transport before using the master.
-    pub fn connect(segment: Segment, timeouts: Timeouts, config: MainDeviceConfig) -> (Self, InMemoryTxRx) {
-        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> = Box::leak(Box::new(PduStorage::new()));
+    pub fn connect(
+        segment: Segment,
+        timeouts: Timeouts,
+        config: MainDeviceConfig,
+    ) -> (Self, InMemoryTxRx) {
+        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+            Box::leak(Box::new(PduStorage::new()));
         // A freshly leaked storage has never been split.
         let (tx, rx, pdu_loop) = match storage.try_split() {
             Ok(parts) => parts,
@@ -157,6 +162,12 @@ impl InProcess {
             frames: AtomicU64::new(0),
         });
         let maindevice = Arc::new(MainDevice::new(pdu_loop, timeouts, config));
-        (Self { maindevice, shared: shared.clone() }, InMemoryTxRx { tx, rx, shared })
+        (
+            Self {
+                maindevice,
+                shared: shared.clone(),
+            },
+            InMemoryTxRx { tx, rx, shared },
+        )
     }
 }

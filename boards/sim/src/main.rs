@@ -16,7 +16,8 @@ use std::time::Duration;
 use board_sim::demo::{self, Scenario};
 use board_sim::{rawsock, Segment};
 
-const USAGE: &str = "usage: sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N]
+const USAGE: &str =
+    "usage: sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N]
        sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S]
        sim-drive list-profiles";
 
@@ -63,7 +64,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
 }
 
 fn number<T: std::str::FromStr>(s: &str, name: &str) -> Result<T, String> {
-    s.parse().map_err(|_| format!("{name}: {s:?} is not a valid number"))
+    s.parse()
+        .map_err(|_| format!("{name}: {s:?} is not a valid number"))
 }
 
 fn main() -> ExitCode {
@@ -74,7 +76,11 @@ fn main() -> ExitCode {
                 eprintln!("sim-drive: {msg}");
             }
             eprintln!("{USAGE}");
-            return if msg.is_empty() { ExitCode::SUCCESS } else { ExitCode::from(2) };
+            return if msg.is_empty() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(2)
+            };
         }
     };
     let result = match args.command.as_str() {
@@ -115,9 +121,13 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         "sim-drive demo: {} simulated drive(s), profile {:?}, built-in ethercrab master, DC cycle {} µs",
         scenario.drives, scenario.profile, args.cycle_us
     );
-    let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .build()?;
     let local = tokio::task::LocalSet::new();
-    let report = local.block_on(&rt, async { demo::run(&scenario, &mut |line| println!("{line}")).await })?;
+    let report = local.block_on(&rt, async {
+        demo::run(&scenario, &mut |line| println!("{line}")).await
+    })?;
     println!(
         "done: {} frames, {:.1} ms simulated, firmware cycles per drive {:?}",
         report.frames,

@@ -31,8 +31,9 @@ pub struct RawSocket {
 impl RawSocket {
     /// Opens and binds the socket (needs CAP_NET_RAW, e.g. inside `unshare --user --map-root-user --net`).
     pub fn open(interface: &str) -> io::Result<Self> {
-        let name = std::ffi::CString::new(interface)
-            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "interface name contains NUL"))?;
+        let name = std::ffi::CString::new(interface).map_err(|_| {
+            io::Error::new(io::ErrorKind::InvalidInput, "interface name contains NUL")
+        })?;
         // SAFETY: plain libc calls with valid arguments; every result is checked.
         unsafe {
             let ifindex = libc::if_nametoindex(name.as_ptr());
@@ -67,13 +68,21 @@ impl RawSocket {
             tv_sec: timeout.as_secs() as libc::time_t,
             tv_nsec: timeout.subsec_nanos() as libc::c_long,
         };
-        let mut pfd = libc::pollfd { fd: self.fd, events: libc::POLLIN, revents: 0 };
+        let mut pfd = libc::pollfd {
+            fd: self.fd,
+            events: libc::POLLIN,
+            revents: 0,
+        };
         // SAFETY: pfd and ts outlive the call; buf is a valid writable slice.
         unsafe {
             let r = libc::ppoll(&mut pfd, 1, &ts, std::ptr::null());
             if r < 0 {
                 let e = io::Error::last_os_error();
-                return if e.kind() == io::ErrorKind::Interrupted { Ok(None) } else { Err(e) };
+                return if e.kind() == io::ErrorKind::Interrupted {
+                    Ok(None)
+                } else {
+                    Err(e)
+                };
             }
             if r == 0 {
                 return Ok(None);
@@ -89,8 +98,19 @@ impl RawSocket {
     /// Sends one frame.
     pub fn send(&self, frame: &[u8]) -> io::Result<()> {
         // SAFETY: frame is a valid readable slice.
-        let n = unsafe { libc::send(self.fd, frame.as_ptr() as *const libc::c_void, frame.len(), 0) };
-        if n < 0 { Err(io::Error::last_os_error()) } else { Ok(()) }
+        let n = unsafe {
+            libc::send(
+                self.fd,
+                frame.as_ptr() as *const libc::c_void,
+                frame.len(),
+                0,
+            )
+        };
+        if n < 0 {
+            Err(io::Error::last_os_error())
+        } else {
+            Ok(())
+        }
     }
 }
 
@@ -115,13 +135,26 @@ pub fn serve(mut segment: Segment, interface: &str, duration: Option<Duration>) 
     let start = Instant::now();
     let mut buf = vec![0u8; MAX_FRAME];
     let mut frames = 0u64;
-    let mut states: Vec<_> = segment.drives().iter().map(|d| d.slave.al_status()).collect();
-    println!("sim-drive: {} drive(s) on {interface}, waiting for a master (Ctrl-C stops)", states.len());
+    let mut states: Vec<_> = segment
+        .drives()
+        .iter()
+        .map(|d| d.slave.al_status())
+        .collect();
+    println!(
+        "sim-drive: {} drive(s) on {interface}, waiting for a master (Ctrl-C stops)",
+        states.len()
+    );
     while !STOP.load(Ordering::SeqCst) && duration.is_none_or(|d| start.elapsed() < d) {
         let now = start.elapsed().as_nanos() as u64;
         segment.advance_to(now);
-        let next = segment.drives().iter().filter_map(|d| d.next_event_ns()).min();
-        let wait = next.map_or(IDLE_WAIT, |t| Duration::from_nanos(t.saturating_sub(now)).min(IDLE_WAIT));
+        let next = segment
+            .drives()
+            .iter()
+            .filter_map(|d| d.next_event_ns())
+            .min();
+        let wait = next.map_or(IDLE_WAIT, |t| {
+            Duration::from_nanos(t.saturating_sub(now)).min(IDLE_WAIT)
+        });
         if let Some(n) = sock.recv(&mut buf, wait)? {
             let frame = buf.get(..n).unwrap_or(&[]);
             // Frames we sent ourselves carry the locally-administered bit: never answer those.

@@ -29,7 +29,9 @@ pub enum SegmentError {
 impl std::fmt::Display for SegmentError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Self::UnknownProfile(n) => write!(f, "no built-in profile named {n:?} (try `list-profiles`)"),
+            Self::UnknownProfile(n) => {
+                write!(f, "no built-in profile named {n:?} (try `list-profiles`)")
+            }
             Self::Profile(e) => write!(f, "profile error: {e}"),
             Self::Slave(e) => write!(f, "firmware refused the profile: {e:?}"),
         }
@@ -49,7 +51,9 @@ impl Segment {
     pub fn new(profile: &str, count: usize) -> Result<Self, SegmentError> {
         let fw_profile = firmware::profiles::by_name(profile)
             .ok_or_else(|| SegmentError::UnknownProfile(profile.to_string()))?;
-        let sii = od_gen::builtin(profile).map_err(|e| SegmentError::Profile(e.to_string()))?.sii_image();
+        let sii = od_gen::builtin(profile)
+            .map_err(|e| SegmentError::Profile(e.to_string()))?
+            .sii_image();
         let drives = (0..count)
             .map(|_| SimDrive::new(fw_profile, &sii).map_err(SegmentError::Slave))
             .collect::<Result<Vec<_>, _>>()?;

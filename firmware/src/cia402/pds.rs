@@ -111,9 +111,10 @@ pub fn next(state: PdsState, cw: u16, previous_cw: u16) -> PdsState {
         (S::OperationEnabled, C::QuickStop) => S::QuickStopActive,
         (S::QuickStopActive, C::DisableVoltage) => S::SwitchOnDisabled,
         (S::QuickStopActive, _) => S::SwitchOnDisabled, // quick stop completes at once (no motion yet)
-        (S::ReadyToSwitchOn | S::SwitchedOn | S::OperationEnabled, C::DisableVoltage | C::QuickStop) => {
-            S::SwitchOnDisabled
-        }
+        (
+            S::ReadyToSwitchOn | S::SwitchedOn | S::OperationEnabled,
+            C::DisableVoltage | C::QuickStop,
+        ) => S::SwitchOnDisabled,
         (s, _) => s,
     }
 }
@@ -126,9 +127,13 @@ pub fn statusword_of(state: PdsState) -> u16 {
         PdsState::SwitchOnDisabled => SWITCH_ON_DISABLED,
         PdsState::ReadyToSwitchOn => READY_TO_SWITCH_ON | QUICK_STOP,
         PdsState::SwitchedOn => READY_TO_SWITCH_ON | SWITCHED_ON | QUICK_STOP,
-        PdsState::OperationEnabled => READY_TO_SWITCH_ON | SWITCHED_ON | OPERATION_ENABLED | QUICK_STOP,
+        PdsState::OperationEnabled => {
+            READY_TO_SWITCH_ON | SWITCHED_ON | OPERATION_ENABLED | QUICK_STOP
+        }
         PdsState::QuickStopActive => READY_TO_SWITCH_ON | SWITCHED_ON | OPERATION_ENABLED,
-        PdsState::FaultReactionActive => READY_TO_SWITCH_ON | SWITCHED_ON | OPERATION_ENABLED | FAULT,
+        PdsState::FaultReactionActive => {
+            READY_TO_SWITCH_ON | SWITCHED_ON | OPERATION_ENABLED | FAULT
+        }
         PdsState::Fault => FAULT,
     };
     bits | REMOTE

@@ -15,7 +15,9 @@ use hal::esc::{regs, AlEvent, AlState, SmActivate, SmPdiControl, SmStatus};
 use hal::pdi::EscPdi;
 
 use super::coe::CoeServer;
-use super::header::{next_counter, MailboxErrorCode, MailboxHeader, MailboxType, HEADER_LEN, MAILBOX_ERROR_COMMAND};
+use super::header::{
+    next_counter, MailboxErrorCode, MailboxHeader, MailboxType, HEADER_LEN, MAILBOX_ERROR_COMMAND,
+};
 use crate::od::{DeviceInfo, Dictionary, SmLayout};
 use crate::sm_check::MAX_MAILBOX;
 
@@ -86,12 +88,15 @@ impl Mailbox {
         if self.out_len > 0 && !self.out_posted && !self.post(pdi, inp)? {
             return Ok(()); // SM1 still full: keep the request waiting in SM0
         }
-        let sm0_status = SmStatus(pdi.read_u8(regs::sm(SM_MAILBOX_OUT).addr + regs::sm_offset::STATUS)?);
+        let sm0_status =
+            SmStatus(pdi.read_u8(regs::sm(SM_MAILBOX_OUT).addr + regs::sm_offset::STATUS)?);
         if !sm0_status.mailbox_full() {
             return Ok(());
         }
         let len = (out.length as usize).min(MAX_MAILBOX);
-        let Some(inbox) = self.inbox.get_mut(..len) else { return Ok(()) };
+        let Some(inbox) = self.inbox.get_mut(..len) else {
+            return Ok(());
+        };
         // Reading up to the last byte hands SM0 back to the master.
         pdi.read(out.start, inbox)?;
         if self.process(len, inp.length as usize, od, state) {
@@ -101,7 +106,13 @@ impl Mailbox {
     }
 
     /// Handles the request in `inbox[..len]`; returns whether a response was put in `outbox`.
-    fn process(&mut self, len: usize, out_capacity: usize, od: &mut Dictionary<'_>, state: AlState) -> bool {
+    fn process(
+        &mut self,
+        len: usize,
+        out_capacity: usize,
+        od: &mut Dictionary<'_>,
+        state: AlState,
+    ) -> bool {
         let capacity = out_capacity.min(MAX_MAILBOX);
         let Some(header) = MailboxHeader::parse(&self.inbox) else {
             return self.error_reply(MailboxErrorCode::Syntax, capacity);
@@ -119,9 +130,10 @@ impl Mailbox {
         if header.kind != MailboxType::Coe as u8 {
             return self.error_reply(MailboxErrorCode::UnsupportedProtocol, capacity);
         }
-        let (Some(request), Some(response)) =
-            (self.inbox.get(HEADER_LEN..payload_end), self.outbox.get_mut(HEADER_LEN..capacity))
-        else {
+        let (Some(request), Some(response)) = (
+            self.inbox.get(HEADER_LEN..payload_end),
+            self.outbox.get_mut(HEADER_LEN..capacity),
+        ) else {
             return self.error_reply(MailboxErrorCode::InvalidSize, capacity);
         };
         match self.coe.handle(od, state, request, response) {
@@ -146,7 +158,10 @@ impl Mailbox {
         }
         let c = MAILBOX_ERROR_COMMAND.to_le_bytes();
         let d = code.to_le_bytes();
-        if let Some(p) = self.outbox.get_mut(HEADER_LEN..HEADER_LEN + ERROR_PAYLOAD_LEN) {
+        if let Some(p) = self
+            .outbox
+            .get_mut(HEADER_LEN..HEADER_LEN + ERROR_PAYLOAD_LEN)
+        {
             p.copy_from_slice(&[c[0], c[1], d[0], d[1]]);
         }
         self.frame(MailboxType::Error, ERROR_PAYLOAD_LEN)
@@ -209,7 +224,10 @@ impl Mailbox {
             let status = SmStatus(pdi.read_u8(sm1_regs + regs::sm_offset::STATUS)?);
             if status.mailbox_full() {
                 // Flush the unread frame: deactivate and reactivate the SM from the PDI side.
-                pdi.write_u8(sm1_regs + regs::sm_offset::PDI_CONTROL, self.pdi_control(SmPdiControl::DEACTIVATE))?;
+                pdi.write_u8(
+                    sm1_regs + regs::sm_offset::PDI_CONTROL,
+                    self.pdi_control(SmPdiControl::DEACTIVATE),
+                )?;
                 pdi.write_u8(sm1_regs + regs::sm_offset::PDI_CONTROL, self.pdi_control(0))?;
             }
             self.write_outbox(pdi, sm1)?;
@@ -219,6 +237,11 @@ impl Mailbox {
     }
 
     fn pdi_control(&self, extra: u8) -> u8 {
-        extra | if self.repeat_ack { SmPdiControl::REPEAT_ACK } else { 0 }
+        extra
+            | if self.repeat_ack {
+                SmPdiControl::REPEAT_ACK
+            } else {
+                0
+            }
     }
 }

@@ -85,13 +85,24 @@ impl MailboxHeader {
     pub fn to_bytes(self) -> [u8; HEADER_LEN] {
         let l = self.length.to_le_bytes();
         let a = self.address.to_le_bytes();
-        [l[0], l[1], a[0], a[1], (self.channel & 0x3F) | (self.priority << 6), (self.kind & 0x0F) | ((self.counter & 0x07) << 4)]
+        [
+            l[0],
+            l[1],
+            a[0],
+            a[1],
+            (self.channel & 0x3F) | (self.priority << 6),
+            (self.kind & 0x0F) | ((self.counter & 0x07) << 4),
+        ]
     }
 }
 
 /// Next mailbox counter after `c`: 1, 2, ..., 7, 1, ... (0 is reserved for "no counter").
 pub const fn next_counter(c: u8) -> u8 {
-    if c >= 7 { 1 } else { c + 1 }
+    if c >= 7 {
+        1
+    } else {
+        c + 1
+    }
 }
 
 #[cfg(test)]

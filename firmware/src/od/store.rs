@@ -59,7 +59,9 @@ impl<'r> Dictionary<'r> {
             Value::Const(bytes) => Ok(bytes),
             Value::Ram(offset) => {
                 let start = offset as usize;
-                self.ram.get(start..start + entry.byte_len()).ok_or(StoreError::Layout)
+                self.ram
+                    .get(start..start + entry.byte_len())
+                    .ok_or(StoreError::Layout)
             }
         }
     }
@@ -71,7 +73,10 @@ impl<'r> Dictionary<'r> {
             return Err(StoreError::ReadOnly);
         };
         let start = offset as usize;
-        let dst = self.ram.get_mut(start..start + entry.byte_len()).ok_or(StoreError::Layout)?;
+        let dst = self
+            .ram
+            .get_mut(start..start + entry.byte_len())
+            .ok_or(StoreError::Layout)?;
         if data.len() > dst.len() {
             return Err(StoreError::Length);
         }

@@ -323,7 +323,11 @@ mod tests {
 
     #[test]
     fn al_status_safeop_with_error_is_0x14() {
-        let s = AlStatus { state: AlState::SafeOp, error: true, id_loaded: false };
+        let s = AlStatus {
+            state: AlState::SafeOp,
+            error: true,
+            id_loaded: false,
+        };
         assert_eq!(s.bits(), 0x0014);
         assert_eq!(AlStatus::from_bits(0x0014), Some(s));
     }

@@ -153,11 +153,22 @@ impl SmConfig {
     pub const fn to_bytes(self) -> [u8; 8] {
         let s = self.start.to_le_bytes();
         let l = self.length.to_le_bytes();
-        [s[0], s[1], l[0], l[1], self.control.0, self.status.0, self.activate.0, self.pdi_control.0]
+        [
+            s[0],
+            s[1],
+            l[0],
+            l[1],
+            self.control.0,
+            self.status.0,
+            self.activate.0,
+            self.pdi_control.0,
+        ]
     }
     /// Enabled by the master and not deactivated by the PDI, with a non-zero length.
     pub const fn active(self) -> bool {
-        self.activate.enabled() && self.pdi_control.0 & SmPdiControl::DEACTIVATE == 0 && self.length > 0
+        self.activate.enabled()
+            && self.pdi_control.0 & SmPdiControl::DEACTIVATE == 0
+            && self.length > 0
     }
 }
 

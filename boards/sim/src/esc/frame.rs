@@ -164,7 +164,10 @@ pub fn process_frame<'a>(
         Err(e) => {
             // A broken EtherCAT structure counts in the processing unit error counter of the first
             // ESC (Section II 0x030C); foreign frames are not errors.
-            if matches!(e, FrameError::LengthMismatch { .. } | FrameError::DatagramOverrun { .. }) {
+            if matches!(
+                e,
+                FrameError::LengthMismatch { .. } | FrameError::DatagramOverrun { .. }
+            ) {
                 if let Some(first) = chain.into_iter().next() {
                     first.count_pu_error();
                 }

@@ -191,8 +191,14 @@ impl CoeServer {
         }
         // ETG.1000.6 §5.6.2.7: "Abort SDO Transfer" is an SDO *request* (service 2), whichever
         // side sends it; SOEM recognises an abort only with that service.
-        let is_abort = sdo_response.first().is_some_and(|c| c >> SDO_CS_SHIFT == SDO_CS_ABORT);
-        let service = if is_abort { CoeService::SdoRequest } else { CoeService::SdoResponse };
+        let is_abort = sdo_response
+            .first()
+            .is_some_and(|c| c >> SDO_CS_SHIFT == SDO_CS_ABORT);
+        let service = if is_abort {
+            CoeService::SdoRequest
+        } else {
+            CoeService::SdoResponse
+        };
         *resp_header = service.header();
         Ok(COE_HEADER_LEN + n)
     }
