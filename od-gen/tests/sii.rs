@@ -172,9 +172,10 @@ fn header_words() {
     assert_eq!(img[14], crc8(&img[..14]));
     assert_eq!(img[14], crc8_igh(&img[..14]));
     assert_eq!(img[15], 0);
-    // Config words as declared for the ET1100 SPI PDI.
+    // Config words as declared for the ET1100 SPI PDI: PDI type 0x05 (SPI slave), SPI mode 3
+    // with SYNC0/1 push-pull active-high outputs (what boards/stm32g474 expects).
     assert_eq!(w(&img, 0), 0x0605);
-    assert_eq!(w(&img, 1), 0x4400);
+    assert_eq!(w(&img, 1), 0x6603);
     assert_eq!(w(&img, 2), 100);
     // Identity words 0x08..0x0F.
     assert_eq!(dw(&img, 0x08), p.vendor.id);

@@ -14,11 +14,16 @@ const SWITCHED_ON: u16 = 0x0023;
 const OPERATION_ENABLED: u16 = 0x0027;
 
 fn run(drives: usize, cycle: Duration, cycles: u32) -> Report {
+    run_with(drives, cycle, cycles, true)
+}
+
+fn run_with(drives: usize, cycle: Duration, cycles: u32, dc: bool) -> Report {
     let scenario = Scenario {
         profile: "standard".into(),
         drives,
         cycle,
         cycles,
+        dc,
     };
     block_on(demo::run(&scenario, &mut |_| {})).unwrap_or_else(|e| panic!("scenario failed: {e}"))
 }
@@ -108,4 +113,15 @@ fn three_drives_in_one_segment_reach_op() {
     let report = run(3, Duration::from_millis(1), 1000);
     check(&report, 3, 1000);
     assert_eq!(report.sync_parameters, vec![(2, 1_000_000); 3]);
+}
+
+#[test]
+fn one_drive_reaches_op_in_free_run() {
+    // No DC: the drive runs its cycle from its local 1 ms timer (the sim board's free-run tick).
+    let report = run_with(1, Duration::from_millis(1), 1000, false);
+    check(&report, 1, 1000);
+    assert_eq!(
+        report.sync_parameters[0].0, 0,
+        "1C32h:01 = free run (ETG.1020)"
+    );
 }

@@ -35,10 +35,12 @@ pub struct Scenario {
     pub profile: String,
     /// Drives in the ring.
     pub drives: usize,
-    /// DC SYNC0 cycle.
+    /// Master cycle (and the SYNC0 period with DC).
     pub cycle: Duration,
     /// Cyclic exchanges in OP.
     pub cycles: u32,
+    /// DC SYNC0 (true) or free run (false).
+    pub dc: bool,
 }
 
 impl Default for Scenario {
@@ -48,6 +50,7 @@ impl Default for Scenario {
             drives: 1,
             cycle: Duration::from_millis(1),
             cycles: 1000,
+            dc: true,
         }
     }
 }
@@ -104,6 +107,91 @@ fn le<const N: usize>(b: &[u8], at: usize) -> [u8; N] {
     out
 }
 
+/// The part of the scenario after OP was requested: wait for OP, read the sync parameters,
+/// exchange the cycles, go back to INIT. A macro because ethercrab's group types differ between
+/// DC (`tx_rx_dc`) and free run (`tx_rx`).
+macro_rules! operate {
+    ($group:ident, $txrx:ident, $md:ident, $shared:ident, $s:ident, $cycle_ns:ident, $report:ident, $log:ident) => {{
+        for _ in 0..1000 {
+            let r = $group.$txrx($md).await?;
+            $shared.advance($cycle_ns);
+            if r.all_op() {
+                break;
+            }
+        }
+        $report.states.push("OP".into());
+        for sd in $group.iter($md) {
+            let mode = sd.sdo_read::<u16>(SM_OUTPUT_PARAMETER, SYNC_MODE).await?;
+            let cycle = sd.sdo_read::<u32>(SM_OUTPUT_PARAMETER, CYCLE_TIME).await?;
+            $report.sync_parameters.push((mode, cycle));
+        }
+        $log(format!("OP; 1C32h sync mode / cycle time per drive: {:?}", $report.sync_parameters));
+        for i in 0..$s.cycles {
+            let (controlword, target) = set_points(i);
+            for sd in $group.iter($md) {
+                write_outputs(&mut sd.outputs_raw_mut(), controlword, target);
+            }
+            let r = $group.$txrx($md).await?;
+            if r.working_counter != $report.expected_wkc {
+                $report.wkc_errors += 1;
+            }
+            let (sw, actual) = $group.iter($md).next().map(|sd| read_inputs(&sd.inputs_raw())).unwrap_or_default();
+            $report.samples.push(CycleSample {
+                working_counter: r.working_counter,
+                first_drive: (controlword, target, sw, actual),
+            });
+            $shared.advance($cycle_ns);
+        }
+        if let Some(last) = $report.samples.last() {
+            $log(format!(
+                "{} cycles: working counter {} (expected {}), {} wrong; drive 0 statusword {:#06x}, position actual {}",
+                $s.cycles, last.working_counter, $report.expected_wkc, $report.wkc_errors, last.first_drive.2, last.first_drive.3
+            ));
+        }
+        let $group = $group.into_safe_op($md).await?;
+        $report.states.push("SAFE-OP".into());
+        let $group = $group.into_pre_op($md).await?;
+        $report.states.push("PRE-OP".into());
+        let _ = $group.into_init($md).await?;
+        $report.states.push("INIT".into());
+        $log("back in INIT".into());
+    }};
+}
+
+/// Sync manager output parameter object and its subindices (ETG.1020).
+const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
+const SYNC_MODE: u8 = 1;
+const CYCLE_TIME: u8 = 2;
+
+/// Controlword and target position of cycle `i`: shutdown, switch on, then enable operation
+/// (CiA402 Table 5), with a target ramp of 100 increments per cycle.
+fn set_points(i: u32) -> (u16, i32) {
+    let controlword = match i {
+        0..=9 => cw::SHUTDOWN,
+        10..=19 => cw::SWITCH_ON,
+        _ => cw::ENABLE_OPERATION,
+    };
+    (controlword, i as i32 * 100)
+}
+
+/// Writes controlword and target position into a drive's outputs (default RxPDO 1600h layout).
+fn write_outputs(out: &mut [u8], controlword: u16, target: i32) {
+    if let Some(b) = out.get_mut(0..2) {
+        b.copy_from_slice(&controlword.to_le_bytes());
+    }
+    if let Some(b) = out.get_mut(2..6) {
+        b.copy_from_slice(&target.to_le_bytes());
+    }
+}
+
+/// Statusword and position actual value from a drive's inputs (default TxPDO 1A00h layout).
+fn read_inputs(inp: &[u8]) -> (u16, i32) {
+    (
+        u16::from_le_bytes(le(inp, 0)),
+        i32::from_le_bytes(le(inp, 2)),
+    )
+}
+
 /// Runs the scenario, calling `log` with a line for everything worth telling a user.
 pub async fn run(
     s: &Scenario,
@@ -147,96 +235,40 @@ pub async fn run(
             info.address, info.name, id.vendor_id, id.product_id, id.revision
         ));
         report.drives.push(info);
-        sd.set_dc_sync(DcSync::Sync0);
+        if s.dc {
+            sd.set_dc_sync(DcSync::Sync0);
+        }
     }
 
     let group = group.into_pre_op_pdi(md).await?;
-    // Let the drives' clocks lock onto the reference before SYNC0 starts.
-    for _ in 0..100 {
-        group.tx_rx_sync_system_time(md).await?;
-        shared.advance(cycle_ns);
-    }
-    let group = group
-        .configure_dc_sync(
-            md,
-            DcConfiguration {
-                start_delay: s.cycle * 10,
-                sync0_period: s.cycle,
-                sync0_shift: Duration::ZERO,
-            },
-        )
-        .await?;
-    let group = group.into_safe_op(md).await?;
-    report.states.push("SAFE-OP".into());
-    log(format!("SAFE-OP, DC SYNC0 every {} µs", cycle_ns / 1000));
-    let group = group.request_into_op(md).await?;
-    for _ in 0..1000 {
-        let r = group.tx_rx_dc(md).await?;
-        shared.advance(cycle_ns);
-        if r.all_op() {
-            break;
+    if s.dc {
+        // Let the drives' clocks lock onto the reference before SYNC0 starts.
+        for _ in 0..100 {
+            group.tx_rx_sync_system_time(md).await?;
+            shared.advance(cycle_ns);
         }
-    }
-    report.states.push("OP".into());
-    for sd in group.iter(md) {
-        let mode = sd.sdo_read::<u16>(0x1C32, 1).await?;
-        let cycle = sd.sdo_read::<u32>(0x1C32, 2).await?;
-        report.sync_parameters.push((mode, cycle));
-    }
-    log(format!(
-        "OP; 1C32h sync mode / cycle time per drive: {:?}",
-        report.sync_parameters
-    ));
-
-    for i in 0..s.cycles {
-        let controlword = match i {
-            0..=9 => cw::SHUTDOWN,
-            10..=19 => cw::SWITCH_ON,
-            _ => cw::ENABLE_OPERATION,
-        };
-        let target = i as i32 * 100;
-        for sd in group.iter(md) {
-            let mut out = sd.outputs_raw_mut();
-            let o: &mut [u8] = &mut out;
-            if let Some(b) = o.get_mut(0..2) {
-                b.copy_from_slice(&controlword.to_le_bytes());
-            }
-            if let Some(b) = o.get_mut(2..6) {
-                b.copy_from_slice(&target.to_le_bytes());
-            }
-        }
-        let r = group.tx_rx_dc(md).await?;
-        if r.working_counter != report.expected_wkc {
-            report.wkc_errors += 1;
-        }
-        let first = group.iter(md).next().map(|sd| {
-            let inp = sd.inputs_raw();
-            (
-                u16::from_le_bytes(le(&inp, 0)),
-                i32::from_le_bytes(le(&inp, 2)),
+        let group = group
+            .configure_dc_sync(
+                md,
+                DcConfiguration {
+                    start_delay: s.cycle * 10,
+                    sync0_period: s.cycle,
+                    sync0_shift: Duration::ZERO,
+                },
             )
-        });
-        let (sw, actual) = first.unwrap_or_default();
-        report.samples.push(CycleSample {
-            working_counter: r.working_counter,
-            first_drive: (controlword, target, sw, actual),
-        });
-        shared.advance(cycle_ns);
+            .await?;
+        let group = group.into_safe_op(md).await?;
+        report.states.push("SAFE-OP".into());
+        log(format!("SAFE-OP, DC SYNC0 every {} µs", cycle_ns / 1000));
+        let group = group.request_into_op(md).await?;
+        operate!(group, tx_rx_dc, md, shared, s, cycle_ns, report, log);
+    } else {
+        let group = group.into_safe_op(md).await?;
+        report.states.push("SAFE-OP".into());
+        log("SAFE-OP, free run".into());
+        let group = group.request_into_op(md).await?;
+        operate!(group, tx_rx, md, shared, s, cycle_ns, report, log);
     }
-    if let Some(last) = report.samples.last() {
-        log(format!(
-            "{} cycles: working counter {} (expected {}), {} wrong; drive 0 statusword {:#06x}, position actual {}",
-            s.cycles, last.working_counter, report.expected_wkc, report.wkc_errors, last.first_drive.2, last.first_drive.3
-        ));
-    }
-
-    let group = group.into_safe_op(md).await?;
-    report.states.push("SAFE-OP".into());
-    let group = group.into_pre_op(md).await?;
-    report.states.push("PRE-OP".into());
-    let _group = group.into_init(md).await?;
-    report.states.push("INIT".into());
-    log("back in INIT".into());
 
     {
         let seg = shared.segment();

@@ -1,7 +1,7 @@
 //! `sim-drive`: the simulated EtherCAT servo drive on a PC.
 //!
 //! ```text
-//! sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N]
+//! sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N] [--free-run]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
 //!     exchange, back to INIT, and print what happened (the default)
 //! sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S]
@@ -29,6 +29,7 @@ struct Args {
     cycles: u32,
     iface: Option<String>,
     seconds: Option<u64>,
+    free_run: bool,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -40,6 +41,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         cycles: 1000,
         iface: None,
         seconds: None,
+        free_run: false,
     };
     let mut first = true;
     while let Some(arg) = it.next() {
@@ -51,6 +53,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--cycle-us" => a.cycle_us = number(&value("--cycle-us")?, "--cycle-us")?,
             "--cycles" => a.cycles = number(&value("--cycles")?, "--cycles")?,
             "--iface" => a.iface = Some(value("--iface")?),
+            "--free-run" => a.free_run = true,
             "--seconds" => a.seconds = Some(number(&value("--seconds")?, "--seconds")?),
             "-h" | "--help" => return Err(String::new()),
             other => return Err(format!("unknown argument {other:?}")),
@@ -116,10 +119,14 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         drives: args.drives,
         cycle: Duration::from_micros(args.cycle_us),
         cycles: args.cycles,
+        dc: !args.free_run,
     };
     println!(
-        "sim-drive demo: {} simulated drive(s), profile {:?}, built-in ethercrab master, DC cycle {} µs",
-        scenario.drives, scenario.profile, args.cycle_us
+        "sim-drive demo: {} simulated drive(s), profile {:?}, built-in ethercrab master, {} cycle {} µs",
+        scenario.drives,
+        scenario.profile,
+        if scenario.dc { "DC SYNC0" } else { "free-run" },
+        args.cycle_us
     );
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_time()
