@@ -112,6 +112,14 @@ pub(crate) const DC_CLOCK_NS: f64 = 10.0;
 pub(crate) const TIME_LOOP_TAU_MIN_NS: f64 = 20_000_000.0;
 /// Default clock drift of a fresh ESC against global time in ppm (sim choice).
 pub(crate) const DEFAULT_DRIFT_PPM: f64 = 3.0;
+/// Drift given to the ESC at ring position k (k mod 8) when it first sees a frame, unless the
+/// clock was set explicitly: a few ppm apart, so the masters' drift compensation has work to do
+/// (sim choice; quartz oscillators are specified to some ±25 ppm). Position 0 keeps the default.
+pub(crate) const RING_DRIFTS_PPM: [f64; 8] =
+    [DEFAULT_DRIFT_PPM, -2.0, 4.5, -3.5, 1.5, -5.0, 2.5, -1.0];
+/// Power-on skew per ring position: ESC k's local clock is `k x` this much ahead of ESC 0's, so
+/// the masters' offset compensation matters (sim choice).
+pub(crate) const RING_POWER_ON_SKEW_NS: u64 = 1_234_567;
 
 // ----- EEPROM interface -----
 /// 0x0500 bit 0: EEPROM control offered to the PDI.

@@ -184,6 +184,7 @@ pub fn process_frame<'a>(
             let k = k as u64;
             let last = k + 1 == n;
             esc.set_port_connected(1, !last);
+            esc.default_clock_for_position(k as usize);
             let timing = FrameTiming {
                 port0: t0 + k * hop,
                 port1: (!last).then(|| t0 + (2 * n - 2 - k) * hop),

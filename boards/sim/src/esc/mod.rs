@@ -75,6 +75,8 @@ pub struct Et1100 {
     now: u64,
     /// Port 1 connects to a next ESC.
     port1_connected: bool,
+    /// The local clock was set by `set_clock` or got its ring-position default.
+    clock_configured: bool,
     /// The PDI came up (SII checksum good).
     pdi_operational: bool,
     /// A SYNC0 pulse happened since the last `take_sync0`.
@@ -103,6 +105,7 @@ impl Et1100 {
             eeprom: eeprom::EepromUnit::default(),
             now: 0,
             port1_connected: false,
+            clock_configured: false,
             pdi_operational: false,
             sync0_edge: false,
             sync1_edge: false,
@@ -170,8 +173,27 @@ impl Et1100 {
     /// Sets the local clock: local time `local_ns` at the current global time and a drift of
     /// `drift_ppm` against global time (positive = the local clock runs fast). Resets the drift
     /// correction loop.
+    ///
+    /// Without this call a fresh ESC runs at +3 ppm from local time 0 at global time 0, and when
+    /// it first sees a frame at ring position k > 0 it takes a position-dependent drift (a few
+    /// ppm apart from its neighbours) and a power-on skew of k x 1.234567 ms, deterministically.
     pub fn set_clock(&mut self, local_ns: u64, drift_ppm: f64) {
         self.dc.set_clock(self.now, local_ns, drift_ppm);
+        self.clock_configured = true;
+    }
+
+    /// Gives an ESC whose clock was never set the default of ring position `k` (once).
+    fn default_clock_for_position(&mut self, k: usize) {
+        if core::mem::replace(&mut self.clock_configured, true) || k == 0 {
+            return;
+        }
+        let drift = RING_DRIFTS_PPM
+            .get(k % RING_DRIFTS_PPM.len())
+            .copied()
+            .unwrap_or(DEFAULT_DRIFT_PPM);
+        let skew = RING_POWER_ON_SKEW_NS.saturating_mul(k as u64);
+        let local = self.dc.clock.local_at(self.now).wrapping_add(skew);
+        self.dc.set_clock(self.now, local, drift);
     }
 
     /// Local time (ns) of this ESC at global time `global_ns`.

@@ -306,3 +306,39 @@ fn deactivating_cyclic_operation_stops_pulses() {
     escs[0].advance_to(10_000_000);
     assert!(!escs[0].take_sync0());
 }
+
+#[test]
+fn fresh_escs_get_distinct_clocks_by_ring_position() {
+    let escs = ring(3);
+    let rate =
+        |e: &Et1100| e.local_time_at(2_000_000_000) as i64 - e.local_time_at(1_000_000_000) as i64;
+    let rates: Vec<i64> = escs.iter().map(rate).collect();
+    assert_eq!(rates, vec![1_000_003_000, 999_998_000, 1_000_004_500]);
+    assert_eq!(
+        escs[2].local_time_at(0) - escs[0].local_time_at(0),
+        2 * 1_234_567
+    );
+}
+
+#[test]
+fn frmw_loop_converges_with_default_ring_clocks() {
+    let mut escs = ring(3);
+    dc_init(&mut escs);
+    for i in 1..=300u64 {
+        for e in escs.iter_mut() {
+            e.advance_to(i * 1_000_000);
+        }
+        send1(
+            &mut escs,
+            FRMW,
+            station(0),
+            regs::DC_SYSTEM_TIME.addr,
+            &[0; 8],
+        );
+    }
+    let t = escs[0].now();
+    for k in 1..3 {
+        let skew = escs[k].system_time_at(t) as i64 - escs[0].system_time_at(t) as i64;
+        assert!(skew.abs() < 100, "ESC {k} skew {skew} ns");
+    }
+}

@@ -122,3 +122,16 @@ fn nop_passes_unchanged() {
     let r = send(&mut escs, &[dg(NOP, 0x1234, 0x0000, &[1, 2])]).remove(0);
     assert_eq!((r.adp, r.data, r.wkc), (0x1234, vec![1, 2], 0));
 }
+
+#[test]
+fn segment_marks_topology_and_reports_the_earliest_event() {
+    use hal::esc::{regs, DlStatus};
+    let seg = Segment::new((0..3).map(|_| esc()).collect());
+    let mut b = [0u8; 2];
+    seg.escs()[1].peek(regs::DL_STATUS.addr, &mut b);
+    assert_ne!(u16::from_le_bytes(b) & DlStatus::communication(1), 0);
+    seg.escs()[2].peek(regs::DL_STATUS.addr, &mut b);
+    assert_ne!(u16::from_le_bytes(b) & DlStatus::loop_closed(1), 0);
+    // Only the PDI watchdogs (1000 ticks of 100 us after power-on) are scheduled.
+    assert_eq!(seg.next_event_ns(), Some(100_000_000));
+}
