@@ -36,7 +36,7 @@ fn list_esi_and_sii() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/profiles/standard.toml");
     let out = od_gen(&["sii", path]);
     assert!(out.status.success());
-    assert!(String::from_utf8_lossy(&out.stdout).starts_with("0000: 05 06 00 44 64 00"));
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("0000: 05 06 03 66 64 00"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
