@@ -19,6 +19,8 @@ pub struct Checks {
     pub sync: Result<(), AlStatusCode>,
     /// Whether the device supports BOOT (a bootstrap mailbox is declared).
     pub boot_supported: bool,
+    /// SM0/SM1 match the bootstrap mailbox layout (INIT → BOOT).
+    pub boot_mailbox: Result<(), AlStatusCode>,
 }
 
 impl Checks {
@@ -28,6 +30,7 @@ impl Checks {
         process_data: Ok(()),
         sync: Ok(()),
         boot_supported: false,
+        boot_mailbox: Ok(()),
     };
 }
 
@@ -104,7 +107,10 @@ pub fn decide(
             Ok(()) => Outcome::ok(PreOp),
             Err(code) => Outcome::refused(Init, code),
         },
-        (Init, Boot) if checks.boot_supported => Outcome::ok(Boot),
+        (Init, Boot) if checks.boot_supported => match checks.boot_mailbox {
+            Ok(()) => Outcome::ok(Boot),
+            Err(code) => Outcome::refused(Init, code),
+        },
         (Init, Boot) => Outcome::refused(Init, AlStatusCode::BootstrapNotSupported),
         (PreOp, SafeOp) => match checks.process_data.and(checks.sync) {
             Ok(()) => Outcome::ok(SafeOp),
@@ -277,6 +283,13 @@ mod tests {
         };
         assert_eq!(decide(st(Init), OK, req(Boot), &boot), Outcome::ok(Boot));
         assert_eq!(decide(st(Boot), OK, req(Init), &boot), Outcome::ok(Init));
+        let bad = Checks {
+            boot_mailbox: Err(AlStatusCode::InvalidBootMailboxConfig),
+            ..boot
+        };
+        let o = decide(st(Init), OK, req(Boot), &bad);
+        assert_eq!(o.status, err(Init));
+        assert_eq!(o.code.code(), 0x0015);
     }
 
     #[test]

@@ -138,7 +138,7 @@ impl PdoPlan {
             let slot = match (entry.value, dir) {
                 (Value::Ram(offset), _) => Slot::Ram(offset),
                 (Value::Const(bytes), Direction::Tx) => Slot::Const(bytes),
-                (Value::Const(_), Direction::Rx) => return Err(bad),
+                (Value::Const(_), Direction::Rx) | (Value::Domain(_), _) => return Err(bad),
             };
             self.steps
                 .push(CopyStep {
@@ -288,53 +288,7 @@ mod tests {
     ];
     static DEFAULTS: [u8; 31] = [0; 31];
     static PROFILE: Profile = Profile {
-        device: DeviceInfo {
-            profile: "test",
-            name: "",
-            vendor_id: 0,
-            product_code: 0,
-            revision: 0,
-            mailbox_out: SmLayout {
-                start: 0,
-                length: 0,
-                control: 0,
-            },
-            mailbox_in: SmLayout {
-                start: 0,
-                length: 0,
-                control: 0,
-            },
-            boot_mailbox_out: None,
-            boot_mailbox_in: None,
-            outputs: SmLayout {
-                start: 0,
-                length: 0,
-                control: 0,
-            },
-            inputs: SmLayout {
-                start: 0,
-                length: 0,
-                control: 0,
-            },
-            sync: SyncSupport {
-                free_run: true,
-                sm_synchronous: false,
-                dc_sync0: false,
-                dc_sync1: false,
-                min_cycle_ns: 0,
-                max_cycle_ns: 0,
-            },
-            max_pdo_entries: 8,
-            mailbox_protocols: 0,
-            coe: CoeDetails {
-                sdo: true,
-                sdo_info: false,
-                pdo_assign: true,
-                pdo_config: true,
-                upload_at_startup: false,
-                complete_access: false,
-            },
-        },
+        device: crate::od::test_device(),
         objects: &OBJECTS,
         defaults: &DEFAULTS,
         vars: AppVars::NONE,

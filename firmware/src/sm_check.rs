@@ -27,12 +27,35 @@ pub fn check_mailbox(
     sm1: SmConfig,
     device: &DeviceInfo,
 ) -> Result<(), AlStatusCode> {
-    if mailbox_sm_ok(sm0, &device.mailbox_out, SmDirection::EcatWrite)
-        && mailbox_sm_ok(sm1, &device.mailbox_in, SmDirection::EcatRead)
+    check_mailbox_layout(sm0, sm1, &device.mailbox_out, &device.mailbox_in)
+        .map_err(|()| AlStatusCode::InvalidMailboxConfig)
+}
+
+/// INIT → BOOT: SM0/SM1 must match the bootstrap mailbox layout (SII words 0x14..0x17), else
+/// 0x0015; a device without one refuses BOOT with 0x0013 (ETG.1000.6 Table 11).
+pub fn check_boot_mailbox(
+    sm0: SmConfig,
+    sm1: SmConfig,
+    device: &DeviceInfo,
+) -> Result<(), AlStatusCode> {
+    let (Some(out), Some(inp)) = (&device.boot_mailbox_out, &device.boot_mailbox_in) else {
+        return Err(AlStatusCode::BootstrapNotSupported);
+    };
+    check_mailbox_layout(sm0, sm1, out, inp).map_err(|()| AlStatusCode::InvalidBootMailboxConfig)
+}
+
+fn check_mailbox_layout(
+    sm0: SmConfig,
+    sm1: SmConfig,
+    out: &SmLayout,
+    inp: &SmLayout,
+) -> Result<(), ()> {
+    if mailbox_sm_ok(sm0, out, SmDirection::EcatWrite)
+        && mailbox_sm_ok(sm1, inp, SmDirection::EcatRead)
     {
         Ok(())
     } else {
-        Err(AlStatusCode::InvalidMailboxConfig)
+        Err(())
     }
 }
 
@@ -146,6 +169,32 @@ mod tests {
             code
         )
         .is_err());
+    }
+
+    #[test]
+    fn boot_mailbox_is_checked_against_the_bootstrap_layout() {
+        let mut device = crate::od::test_device();
+        let (sm0, sm1) = (sm(0x1000, 256, 0x26, true), sm(0x1100, 256, 0x22, true));
+        assert_eq!(
+            check_boot_mailbox(sm0, sm1, &device),
+            Err(AlStatusCode::BootstrapNotSupported)
+        );
+        device.boot_mailbox_out = Some(SmLayout {
+            start: 0x1000,
+            length: 256,
+            control: 0x26,
+        });
+        device.boot_mailbox_in = Some(SmLayout {
+            start: 0x1100,
+            length: 256,
+            control: 0x22,
+        });
+        assert_eq!(check_boot_mailbox(sm0, sm1, &device), Ok(()));
+        let short = sm(0x1000, 128, 0x26, true);
+        assert_eq!(
+            check_boot_mailbox(short, sm1, &device).map_err(|c| c.code()),
+            Err(0x0015)
+        );
     }
 
     #[test]

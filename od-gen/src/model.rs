@@ -39,6 +39,8 @@ pub enum DataType {
     OctetString,
     /// UNICODE_STRING.
     UnicodeString,
+    /// DOMAIN: application data of variable length outside the OD RAM (`storage = "domain"`).
+    Domain,
     /// BIT1..BIT8 (the number of bits).
     Bit(u8),
 }
@@ -63,6 +65,7 @@ impl DataType {
             "STRING" | "VISIBLE_STRING" => Self::VisibleString,
             "OCTET_STRING" => Self::OctetString,
             "UNICODE_STRING" => Self::UnicodeString,
+            "DOMAIN" => Self::Domain,
             _ => {
                 let n: u8 = name.strip_prefix("BIT")?.parse().ok()?;
                 if (1..=8).contains(&n) {
@@ -88,6 +91,7 @@ impl DataType {
             Self::VisibleString => 0x09,
             Self::OctetString => 0x0A,
             Self::UnicodeString => 0x0B,
+            Self::Domain => 0x0F,
             Self::Int24 => 0x10,
             Self::Lreal => 0x11,
             Self::Lint => 0x15,
@@ -116,6 +120,7 @@ impl DataType {
             Self::VisibleString => "VisibleString".into(),
             Self::OctetString => "OctetString".into(),
             Self::UnicodeString => "UnicodeString".into(),
+            Self::Domain => "Domain".into(),
             Self::Bit(n) => format!("Bit{n}"),
         }
     }
@@ -139,6 +144,7 @@ impl DataType {
             Self::VisibleString => format!("STRING({})", bits / 8),
             Self::OctetString => format!("OCTET_STRING({})", bits / 8),
             Self::UnicodeString => format!("UNICODE_STRING({})", bits / 16),
+            Self::Domain => "DOMAIN".into(),
             Self::Bit(n) => format!("BIT{n}"),
         }
     }
@@ -153,7 +159,9 @@ impl DataType {
             Self::Dint | Self::Udint | Self::Real => 32,
             Self::Lint | Self::Ulint | Self::Lreal => 64,
             Self::Bit(n) => u16::from(n),
-            Self::VisibleString | Self::OctetString | Self::UnicodeString => return None,
+            Self::VisibleString | Self::OctetString | Self::UnicodeString | Self::Domain => {
+                return None
+            }
         })
     }
 
@@ -181,7 +189,8 @@ impl DataType {
             | Self::Lreal
             | Self::VisibleString
             | Self::OctetString
-            | Self::UnicodeString => return None,
+            | Self::UnicodeString
+            | Self::Domain => return None,
         })
     }
 
@@ -335,6 +344,9 @@ pub enum Storage {
     Ram,
     /// A constant in flash.
     Const,
+    /// A DOMAIN outside the OD RAM, served by the firmware's `DomainStore`
+    /// (`firmware::od::Value::Domain`). Domain ids are numbered 0, 1, ... in dictionary order.
+    Domain,
 }
 
 /// The application variables a profile can bind to entries (`firmware::od::AppVars` fields).

@@ -371,6 +371,9 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
             )
         })?,
     };
+    if data_type == DataType::Domain || a.storage.as_deref() == Some("domain") {
+        return domain_entry(subindex, name, data_type, access, a, key);
+    }
     let pdo = match a.pdo.as_deref() {
         None | Some("no") => PdoMapping::No,
         Some("rx") => PdoMapping::Rx,
@@ -488,6 +491,56 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         min,
         max,
         role,
+    })
+}
+
+/// A DOMAIN entry: `type = "DOMAIN"` with `storage = "domain"`, nothing else. Its data lives in
+/// the firmware's domain store, so it has no default, range, PDO mapping, role or bit size (the
+/// entry's bit length is 0: the size is the domain's current length).
+fn domain_entry(
+    subindex: u8,
+    name: &str,
+    data_type: DataType,
+    access: Access,
+    a: &EntryAttrs,
+    key: &str,
+) -> Result<Entry, Fault> {
+    let k = |s: &str| format!("{key}.{s}");
+    if data_type != DataType::Domain {
+        return Err(fault(
+            &k("storage"),
+            Invalid::Value("`storage = \"domain\"` needs `type = \"DOMAIN\"`".into()),
+        ));
+    }
+    if a.storage.as_deref() != Some("domain") {
+        return Err(fault(
+            &k("storage"),
+            Invalid::Value("a DOMAIN entry needs `storage = \"domain\"`".into()),
+        ));
+    }
+    let forbidden = [
+        (a.pdo.is_some(), "pdo"),
+        (a.default.is_some(), "default"),
+        (a.min.is_some(), "min"),
+        (a.max.is_some(), "max"),
+        (a.role.is_some(), "role"),
+        (a.bits.is_some(), "bits"),
+    ];
+    if let Some((_, name)) = forbidden.iter().find(|(given, _)| *given) {
+        return Err(fault(&k(name), Invalid::NotAllowed(name)));
+    }
+    Ok(Entry {
+        subindex,
+        name: name.to_string(),
+        data_type,
+        bit_len: 0,
+        access,
+        pdo: PdoMapping::No,
+        storage: Storage::Domain,
+        default: Vec::new(),
+        min: Vec::new(),
+        max: Vec::new(),
+        role: None,
     })
 }
 

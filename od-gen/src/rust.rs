@@ -31,6 +31,8 @@ pub struct RamLayout {
     pub offsets: BTreeMap<(u16, u8), u16>,
     /// The initial OD RAM image.
     pub image: Vec<u8>,
+    /// Domain id of each `storage = "domain"` entry (0, 1, ... in dictionary order).
+    pub domains: BTreeMap<(u16, u8), u8>,
 }
 
 /// Packs the RAM entries in dictionary order, each aligned to its size (at most 4 bytes;
@@ -38,7 +40,12 @@ pub struct RamLayout {
 pub fn ram_layout(p: &Profile) -> RamLayout {
     let mut offsets = BTreeMap::new();
     let mut image: Vec<u8> = Vec::new();
+    let mut domains = BTreeMap::new();
     for o in &p.objects {
+        for e in o.entries.iter().filter(|e| e.storage == Storage::Domain) {
+            let id = u8::try_from(domains.len()).unwrap_or(u8::MAX);
+            domains.insert((o.index, e.subindex), id);
+        }
         for e in o.entries.iter().filter(|e| e.storage == Storage::Ram) {
             let align = if e.data_type.is_string() {
                 1
@@ -53,7 +60,11 @@ pub fn ram_layout(p: &Profile) -> RamLayout {
     }
     // Keep the size a multiple of 4 so that `[u8; RAM_SIZE]` arrays pack well.
     image.resize(image.len().div_ceil(4) * 4, 0);
-    RamLayout { offsets, image }
+    RamLayout {
+        offsets,
+        image,
+        domains,
+    }
 }
 
 fn bytes(b: &[u8]) -> String {
@@ -81,6 +92,14 @@ fn sm(s: Sm, length: u16) -> String {
 
 fn entry(out: &mut String, index: u16, e: &Entry, layout: &RamLayout) {
     let value = match e.storage {
+        Storage::Domain => format!(
+            "Value::Domain({})",
+            layout
+                .domains
+                .get(&(index, e.subindex))
+                .copied()
+                .unwrap_or(0)
+        ),
         Storage::Ram => format!(
             "Value::Ram({})",
             layout
@@ -305,6 +324,7 @@ mod check {
                             let b = match e[j].value {
                                 Value::Const(bytes) => bytes[k],
                                 Value::Ram(off) => defaults[off as usize + k],
+                                Value::Domain(_) => 0,
                             };
                             v |= (b as u32) << (8 * k);
                             k += 1;

@@ -301,8 +301,8 @@ fn structural_lints() {
         child(device, "Mailbox").attribute("DataLinkLayer"),
         Some("true")
     );
-    assert_eq!(coe.attribute("SdoInfo"), Some("false"));
-    assert_eq!(coe.attribute("CompleteAccess"), Some("false"));
+    assert_eq!(coe.attribute("SdoInfo"), Some("true"));
+    assert_eq!(coe.attribute("CompleteAccess"), Some("true"));
     assert_eq!(coe.attribute("PdoAssign"), Some("true"));
     assert_eq!(coe.attribute("PdoConfig"), Some("true"));
 

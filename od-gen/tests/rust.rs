@@ -25,7 +25,8 @@ fn module_shape() {
         "const _: () = assert!(super::check::assigned_bits(OBJECTS, DEFAULTS, 0x1c12) == OUTPUTS_SIZE * 8",
         "vendor_id: 0x7e570402,",
         "outputs: SmLayout { start: 0x1200, length: 0, control: 0x64 },",
-        "coe: CoeDetails { sdo: true, sdo_info: false, pdo_assign: true, pdo_config: true, upload_at_startup: false, complete_access: false },",
+        "coe: CoeDetails { sdo: true, sdo_info: true, pdo_assign: true, pdo_config: true, upload_at_startup: false, complete_access: true },",
+        "Entry { subindex: 0x00, name: \"Test domain\", data_type: DataType::Domain, bit_len: 0, access: Access::RW, pdo: PdoMappable::No, value: Value::Domain(0), default: &[], min: &[], max: &[] },",
     ] {
         assert!(code.contains(needle), "missing `{needle}`");
     }

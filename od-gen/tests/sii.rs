@@ -254,8 +254,8 @@ fn category_order_and_bodies() {
     assert_eq!(string(&s, g[3]), p.device.name, "NameIdx");
     assert_eq!(g[4], 0);
     assert_eq!(
-        g[5], 0b0000_1101,
-        "CoE details: SDO, PDO assign, PDO config; no SDO info, no CA"
+        g[5], 0b0010_1111,
+        "CoE details: SDO, SDO info, PDO assign, PDO config, CA"
     );
     assert_eq!(g[5] & 0xC0, 0, "reserved CoE bits");
     assert_eq!([g[6], g[7], g[8]], [0, 0, 0], "no FoE, EoE, SoE");

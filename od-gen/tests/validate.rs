@@ -356,3 +356,45 @@ fn file_name_must_match_profile_name() {
     assert!(matches!(missing, Error::Io { .. }));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn domain_objects_need_type_domain_and_domain_storage() {
+    // The standard profile's test domain 2FF0h is a domain entry of bit length 0.
+    let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
+    let domain = p.objects.iter().find(|o| o.index == 0x2FF0).unwrap();
+    let e = &domain.entries[0];
+    assert_eq!(e.storage, od_gen::model::Storage::Domain);
+    assert_eq!((e.data_type.code(), e.bit_len), (0x000F, 0));
+
+    let obj = |extra: &str| {
+        appended(&format!(
+            "[[object]]\nindex = 0x2005\nname = \"d\"\naccess = \"rw\"\n{extra}"
+        ))
+    };
+    let (key, e) = invalid(&obj("type = \"DOMAIN\""));
+    assert_eq!(key, "object[0x2005].storage");
+    assert!(matches!(e, Invalid::Value(_)), "{e:?}");
+    let (key, _) = invalid(&obj("type = \"UDINT\"\nstorage = \"domain\""));
+    assert_eq!(key, "object[0x2005].storage");
+    let (key, e) = invalid(&obj("type = \"DOMAIN\"\nstorage = \"domain\"\ndefault = 1"));
+    assert_eq!(
+        (key.as_str(), e),
+        ("object[0x2005].default", Invalid::NotAllowed("default"))
+    );
+    let (key, _) = invalid(&obj(
+        "type = \"DOMAIN\"\nstorage = \"domain\"\npdo = \"tx\"",
+    ));
+    assert_eq!(key, "object[0x2005].pdo");
+    assert!(od_gen::parse(&obj("type = \"DOMAIN\"\nstorage = \"domain\""), "ok").is_ok());
+}
+
+#[test]
+fn domain_ids_follow_dictionary_order() {
+    let text = appended(
+        "[[object]]\nindex = 0x2005\nname = \"d\"\ntype = \"DOMAIN\"\naccess = \"rw\"\nstorage = \"domain\"",
+    );
+    let p = od_gen::parse(&text, "ok").unwrap();
+    let layout = od_gen::rust::ram_layout(&p);
+    assert_eq!(layout.domains.get(&(0x2005, 0)), Some(&0));
+    assert_eq!(layout.domains.get(&(0x2FF0, 0)), Some(&1));
+}

@@ -3,7 +3,8 @@
 # attaches the simulated drive(s) to one end with the documented command, and runs the SOEM
 # (pysoem) scenario on the other end. Everything vanishes with the namespace.
 #
-# Environment: PYTHON (venv python with pysoem), WORKSPACE, PROFILE, DRIVES, SIM_LOG, RESULT.
+# Environment: PYTHON (venv python with pysoem), WORKSPACE, SCRIPT (in tests-host/soem),
+# SIM_ARGS (extra sim-drive attach arguments), PROFILE, DRIVES, SIM_LOG, RESULT.
 set -euo pipefail
 ip link set lo up
 ip link add ecm0 type veth peer name ecs0
@@ -19,12 +20,17 @@ done
 
 cd "$WORKSPACE"
 # The command the README documents for attaching a simulated drive to an interface.
-cargo run --release -q -p board-sim -- attach --iface ecs0 --profile "$PROFILE" --drives "$DRIVES" --seconds 120 >"$SIM_LOG" 2>&1 &
+# shellcheck disable=SC2086 # SIM_ARGS is a word list
+cargo run --release -q -p board-sim -- attach --iface ecs0 --profile "$PROFILE" --drives "$DRIVES" --seconds 120 ${SIM_ARGS:-} >"$SIM_LOG" 2>&1 &
 sim=$!
 trap 'kill -INT $sim 2>/dev/null || true; wait $sim 2>/dev/null || true' EXIT
-for _ in $(seq 1 200); do
-    grep -q "waiting for a master" "$SIM_LOG" 2>/dev/null && break
+# `cargo run` may have to build first; wait for the simulator to listen (bounded), never start
+# the master before it does.
+ready=0
+for _ in $(seq 1 6000); do
+    if grep -q "waiting for a master" "$SIM_LOG" 2>/dev/null; then ready=1; break; fi
     kill -0 $sim 2>/dev/null || { echo "sim-drive exited early:"; cat "$SIM_LOG"; exit 3; }
-    sleep 0.05
+    sleep 0.1
 done
-"$PYTHON" "$WORKSPACE/tests-host/soem/scenario.py" ecm0 "$DRIVES" >"$RESULT"
+[ "$ready" = 1 ] || { echo "sim-drive did not come up within 600 s:"; cat "$SIM_LOG"; exit 3; }
+"$PYTHON" "$WORKSPACE/tests-host/soem/${SCRIPT:-scenario.py}" ecm0 "$DRIVES" >"$RESULT"

@@ -97,9 +97,22 @@ fn build_sim_drive() -> Result<(), String> {
 /// Runs the SOEM scenario against `drives` simulated drives of `profile`; returns SOEM's
 /// observations (see `tests-host/soem/scenario.py`) and the simulator's log.
 pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, String), String> {
+    run_script("scenario.py", profile, drives, &[])
+}
+
+/// Runs the python script `tests-host/soem/<script>` (argument: the master's interface and the
+/// number of drives; it prints one JSON object) against `drives` simulated drives of `profile`
+/// attached with `sim-drive attach` plus `sim_args`; returns the JSON and the simulator's log.
+pub fn run_script(
+    script: &str,
+    profile: &str,
+    drives: usize,
+    sim_args: &[&str],
+) -> Result<(serde_json::Value, String), String> {
     let python = python()?;
     build_sim_drive()?;
-    let dir = target_dir().join(format!("soem-{profile}-{drives}"));
+    let stem = script.trim_end_matches(".py");
+    let dir = target_dir().join(format!("soem-{stem}-{profile}-{drives}"));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let sim_log = dir.join("sim.log");
     let result = dir.join("result.json");
@@ -109,6 +122,8 @@ pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, 
         .arg(workspace().join("tests-host/soem/run_in_netns.sh"))
         .env("PYTHON", &python)
         .env("WORKSPACE", workspace())
+        .env("SCRIPT", script)
+        .env("SIM_ARGS", sim_args.join(" "))
         .env("PROFILE", profile)
         .env("DRIVES", drives.to_string())
         .env("SIM_LOG", &sim_log)
@@ -118,7 +133,7 @@ pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, 
     let log = std::fs::read_to_string(&sim_log).unwrap_or_default();
     if !out.status.success() {
         return Err(format!(
-            "SOEM scenario failed ({}):\nstdout:\n{}\nstderr:\n{}\nsim-drive log:\n{log}",
+            "SOEM {script} failed ({}):\nstdout:\n{}\nstderr:\n{}\nsim-drive log:\n{log}",
             out.status,
             String::from_utf8_lossy(&out.stdout),
             String::from_utf8_lossy(&out.stderr)
@@ -127,6 +142,6 @@ pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, 
     let text =
         std::fs::read_to_string(&result).map_err(|e| format!("{}: {e}", result.display()))?;
     let json = serde_json::from_str(&text)
-        .map_err(|e| format!("scenario output is not JSON ({e}): {text}"))?;
+        .map_err(|e| format!("{script} output is not JSON ({e}): {text}"))?;
     Ok((json, log))
 }

@@ -5,7 +5,10 @@ use firmware::profiles;
 use firmware::slave::{Slave, SlaveError, SyncMode};
 use hal::pdi::EscSignals;
 
+use crate::domains::SimDomainStore;
 use crate::esc::Et1100;
+use crate::storage::SimStorage;
+use firmware::params::{Loaded, ParamError, ParamStore};
 
 /// OD RAM size of the simulated firmware: large enough for every built-in profile, so the
 /// profile can be chosen by name at run time.
@@ -14,37 +17,85 @@ pub const SIM_RAM: usize = profiles::MAX_RAM_SIZE;
 /// Free-run cycle of the simulated board's local timer (the target uses a hardware timer).
 pub const FREE_RUN_PERIOD_NS: u64 = 1_000_000;
 
+/// Background poll of the ESC event handler without an IRQ, as the STM32 board's thread-mode
+/// fallback does every 10 ms: re-evaluates waiting transitions and timeouts.
+pub const BACKGROUND_POLL_PERIOD_NS: u64 = 10_000_000;
+
 /// A drive: ESC + firmware.
 pub struct SimDrive {
     /// The simulated ESC.
     pub esc: Et1100,
     /// The firmware core.
     pub slave: Box<Slave<SIM_RAM>>,
+    /// DOMAIN objects outside the OD RAM (e.g. the standard profile's 64 KiB test domain).
+    pub domains: SimDomainStore,
+    /// Parameter storage (1010h/1011h); kept across [`Self::power_cycle`].
+    pub params: ParamStore<SimStorage>,
+    /// What loading the stored parameters gave at the last power-on.
+    pub loaded: Result<Option<Loaded>, ParamError>,
+    profile: &'static Profile,
     next_free_run_ns: u64,
+    next_poll_ns: u64,
 }
 
 impl SimDrive {
     /// A drive running `profile` with the SII image `sii` in its EEPROM.
     pub fn new(profile: &'static Profile, sii: &[u8]) -> Result<Self, SlaveError> {
+        Self::with_storage(profile, sii, SimStorage::new())
+    }
+
+    /// A drive whose parameter storage holds `storage`; the stored parameters are loaded at
+    /// power-on, before the firmware starts (see `firmware::params`).
+    pub fn with_storage(
+        profile: &'static Profile,
+        sii: &[u8],
+        storage: SimStorage,
+    ) -> Result<Self, SlaveError> {
         let mut esc = Et1100::new(sii);
+        let mut params = ParamStore::new(storage);
         let mut slave = Box::new(Slave::new(profile)?);
+        let loaded = slave.load_parameters(&mut params);
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.
         let _ = slave.start(&mut esc);
         Ok(Self {
             esc,
             slave,
+            domains: SimDomainStore::new(),
+            params,
+            loaded,
+            profile,
             next_free_run_ns: FREE_RUN_PERIOD_NS,
+            next_poll_ns: BACKGROUND_POLL_PERIOD_NS,
         })
+    }
+
+    /// Switches the drive off and on: a new ESC (with the SII EEPROM content as it is now) and a
+    /// new firmware core in INIT that loads the stored parameters; the parameter storage is
+    /// kept (the domain store too). Simulated time goes on; the master sees a drive that was
+    /// just powered on.
+    pub fn power_cycle(&mut self) -> Result<(), SlaveError> {
+        let now = self.esc.now();
+        let mut esc = Et1100::new(self.esc.sii());
+        esc.advance_to(now);
+        let mut slave = Box::new(Slave::new(self.profile)?);
+        self.loaded = slave.load_parameters(&mut self.params);
+        // As in `with_storage`: the simulated PDI does not fail.
+        let _ = slave.start(&mut esc);
+        self.esc = esc;
+        self.slave = slave;
+        self.next_free_run_ns = now + FREE_RUN_PERIOD_NS;
+        self.next_poll_ns = now + BACKGROUND_POLL_PERIOD_NS;
+        Ok(())
     }
 
     /// Earliest simulated time at which the drive has something to do.
     pub fn next_event_ns(&self) -> Option<u64> {
         let free_run = self.free_running().then_some(self.next_free_run_ns);
-        match (self.esc.next_event_ns(), free_run) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        [self.esc.next_event_ns(), free_run, Some(self.next_poll_ns)]
+            .into_iter()
+            .flatten()
+            .min()
     }
 
     fn free_running(&self) -> bool {
@@ -60,15 +111,29 @@ impl SimDrive {
     pub fn run_until(&mut self, now_ns: u64) {
         self.esc.advance_to(now_ns);
         if self.esc.take_sync0() {
-            let _ = self.slave.on_cycle(&mut self.esc, now_ns);
+            self.cycle(now_ns);
         }
         if self.free_running() && now_ns >= self.next_free_run_ns {
-            let _ = self.slave.on_cycle(&mut self.esc, now_ns);
+            self.cycle(now_ns);
         }
         while self.next_free_run_ns <= now_ns {
             self.next_free_run_ns += FREE_RUN_PERIOD_NS;
         }
+        if now_ns >= self.next_poll_ns {
+            self.esc_event(now_ns);
+            self.next_poll_ns = now_ns + BACKGROUND_POLL_PERIOD_NS;
+        }
         self.service_irq(now_ns);
+    }
+
+    /// One process-data cycle. Its duration, reported to the firmware (1C32h:06), is the
+    /// modelled SPI bus time of the cycle's PDI accesses: simulated time does not pass while
+    /// the firmware runs.
+    fn cycle(&mut self, now_ns: u64) {
+        let bus_before = self.esc.pdi_bus_ns();
+        let _ = self.slave.on_cycle(&mut self.esc, now_ns);
+        let bus_time = self.esc.pdi_bus_ns() - bus_before;
+        self.slave.cycle_finished(now_ns + bus_time);
     }
 
     /// Runs the ESC event handler while the IRQ line is asserted (bounded: the handler clears
@@ -79,7 +144,17 @@ impl SimDrive {
             if !self.esc.irq_asserted() {
                 break;
             }
-            let _ = self.slave.on_esc_event(&mut self.esc, now_ns);
+            self.esc_event(now_ns);
         }
+    }
+
+    /// One call of the firmware's ESC event handler.
+    fn esc_event(&mut self, now_ns: u64) {
+        let _ = self.slave.on_esc_event_full(
+            &mut self.esc,
+            &mut self.params,
+            &mut self.domains,
+            now_ns,
+        );
     }
 }

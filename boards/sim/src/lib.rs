@@ -1,13 +1,15 @@
 //! The simulated board: a software ET1100 ([`esc`]) that processes real EtherCAT frames, with the
 //! firmware core running against it ([`drive`]), in rings of any number of drives
 //! ([`segment`]), reachable by real masters in process ([`inproc`], ethercrab) or over a network
-//! interface ([`rawsock`], any master).
+//! interface ([`rawsock`], any master). [`storage`] is the board's parameter storage.
 
 pub mod demo;
+pub mod domains;
 pub mod drive;
 pub mod esc;
 pub mod inproc;
 pub mod rawsock;
 pub mod segment;
+pub mod storage;
 
 pub use segment::{Segment, SegmentError};

@@ -4,7 +4,7 @@
 //! sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N] [--free-run]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
 //!     exchange, back to INIT, and print what happened (the default)
-//! sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S]
+//! sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S] [--drop-mailbox-read K]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
@@ -18,7 +18,7 @@ use board_sim::{rawsock, Segment};
 
 const USAGE: &str =
     "usage: sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N]
-       sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S]
+       sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S] [--drop-mailbox-read K]
        sim-drive list-profiles";
 
 struct Args {
@@ -30,6 +30,7 @@ struct Args {
     iface: Option<String>,
     seconds: Option<u64>,
     free_run: bool,
+    drop_mailbox_read: Option<u32>,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -42,6 +43,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         iface: None,
         seconds: None,
         free_run: false,
+        drop_mailbox_read: None,
     };
     let mut first = true;
     while let Some(arg) = it.next() {
@@ -54,6 +56,12 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--cycles" => a.cycles = number(&value("--cycles")?, "--cycles")?,
             "--iface" => a.iface = Some(value("--iface")?),
             "--free-run" => a.free_run = true,
+            "--drop-mailbox-read" => {
+                a.drop_mailbox_read = Some(number(
+                    &value("--drop-mailbox-read")?,
+                    "--drop-mailbox-read",
+                )?)
+            }
             "--seconds" => a.seconds = Some(number(&value("--seconds")?, "--seconds")?),
             "-h" | "--help" => return Err(String::new()),
             other => return Err(format!("unknown argument {other:?}")),
@@ -108,7 +116,10 @@ fn main() -> ExitCode {
 fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let iface = args.iface.as_deref().ok_or("attach needs --iface IFNAME")?;
     let segment = Segment::new(&args.profile, args.drives)?;
-    rawsock::serve(segment, iface, args.seconds.map(Duration::from_secs))
+    let faults = rawsock::Faults {
+        drop_mailbox_read: args.drop_mailbox_read,
+    };
+    rawsock::serve_with_faults(segment, iface, args.seconds.map(Duration::from_secs), faults)
         .map_err(|e| format!("{iface}: {e} (a raw socket needs CAP_NET_RAW, e.g. run inside `unshare --user --map-root-user --net`)"))?;
     Ok(())
 }

@@ -123,9 +123,47 @@ impl Drop for RawSocket {
     }
 }
 
+/// Fault injection for tests of the master/slave recovery paths.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Faults {
+    /// Drop the reply to the frame that carries the K-th successful read (1-based) of drive
+    /// 0's slave → master mailbox: the ESC has handed the response over, the master never sees
+    /// it, and must recover with a mailbox repeat request (ETG.1000.4 §5.6).
+    pub drop_mailbox_read: Option<u32>,
+}
+
+/// FPRD command code (ETG.1000.4 Table 20).
+const CMD_FPRD: u8 = 4;
+
+/// Whether `frame` (as returned) contains an FPRD with a non-zero working counter of `len`
+/// bytes at ESC address `ado`: a completed mailbox read.
+fn reads_mailbox(frame: &[u8], ado: u16, len: u16) -> bool {
+    crate::esc::datagrams(frame).iter().any(|d| {
+        d.command == CMD_FPRD
+            && (d.address >> 16) as u16 == ado
+            && d.len == usize::from(len)
+            && d.wkc > 0
+    })
+}
+
 /// Serves `segment` on `interface` until SIGINT/SIGTERM or `duration` elapses, printing every
 /// EtherCAT state change of every drive. Returns the number of frames answered.
-pub fn serve(mut segment: Segment, interface: &str, duration: Option<Duration>) -> io::Result<u64> {
+pub fn serve(segment: Segment, interface: &str, duration: Option<Duration>) -> io::Result<u64> {
+    serve_with_faults(segment, interface, duration, Faults::default())
+}
+
+/// [`serve`] with fault injection.
+pub fn serve_with_faults(
+    mut segment: Segment,
+    interface: &str,
+    duration: Option<Duration>,
+    faults: Faults,
+) -> io::Result<u64> {
+    let mailbox_in = segment
+        .drives()
+        .first()
+        .map(|d| d.slave.profile().device.mailbox_in);
+    let mut mailbox_reads = 0u32;
     let sock = RawSocket::open(interface)?;
     // SAFETY: installing a handler that only stores to an atomic is async-signal-safe.
     unsafe {
@@ -163,6 +201,17 @@ pub fn serve(mut segment: Segment, interface: &str, duration: Option<Duration>) 
             }
             segment.advance_to(start.elapsed().as_nanos() as u64);
             if let Some(reply) = segment.process_frame(frame) {
+                if let (Some(k), Some(mbx)) = (faults.drop_mailbox_read, mailbox_in) {
+                    if reads_mailbox(&reply, mbx.start, mbx.length) {
+                        mailbox_reads += 1;
+                        if mailbox_reads == k {
+                            println!(
+                                "sim-drive: fault injection: dropped the reply to mailbox read {k}"
+                            );
+                            continue;
+                        }
+                    }
+                }
                 sock.send(&reply)?;
                 frames += 1;
             }

@@ -6,7 +6,7 @@ use core::sync::atomic::Ordering;
 use embassy_stm32::exti::ExtiInput;
 use embassy_stm32::mode::Blocking;
 use embassy_time::{Duration, Ticker, Timer};
-use hal::esc::{regs, AlState, DlStatus};
+use hal::esc::{regs, DlStatus};
 use hal::io::StatusLeds;
 use hal::pdi::EscPdi;
 
@@ -24,8 +24,8 @@ const FREE_RUN_PERIOD: Duration = Duration::from_millis(1);
 /// Fallback poll of the AL events, in case an IRQ edge was lost (also keeps the 64-bit cycle
 /// count extension alive: it needs a call every < 25 s).
 const ESC_POLL_PERIOD: Duration = Duration::from_millis(10);
-/// LED update period (ETG.1300 blink patterns are ≥ 200 ms per phase; 50 ms is fine enough).
-const LED_PERIOD: Duration = Duration::from_millis(50);
+/// LED update period: ETG.1300 flickering switches every 50 ms, so update well below that.
+const LED_PERIOD: Duration = Duration::from_millis(10);
 /// Statistics log period.
 const REPORT_PERIOD: Duration = Duration::from_secs(1);
 
@@ -95,19 +95,20 @@ pub async fn esc_poll(mut started: bool) {
     }
 }
 
-/// Thread mode: RUN/ERR LEDs. [placeholder] until the firmware computes the ETG.1300 patterns:
-/// RUN on in OP, ERR on while PDI errors keep occurring.
+/// Thread mode: RUN/ERR LEDs with the ETG.1300 patterns the firmware computes
+/// ([`firmware::slave::Slave::leds`]); ERR also lights while PDI accesses keep failing.
 #[embassy_executor::task]
 pub async fn leds(mut leds: Leds) {
     let mut ticker = Ticker::every(LED_PERIOD);
     let mut seen_errors = 0u32;
     loop {
         ticker.next().await;
-        let state = irq::with_drive(|d| d.slave.al_state());
-        leds.set_run(state == Some(AlState::Op));
+        let (run, err) =
+            irq::with_drive(|d| d.slave.leds(crate::time::now_ns())).unwrap_or((false, false));
         let errors =
             CYCLE_STATS.errors.load(Ordering::Relaxed) + EVENT_STATS.errors.load(Ordering::Relaxed);
-        leds.set_err(errors != seen_errors);
+        leds.set_run(run);
+        leds.set_err(err || errors != seen_errors);
         seen_errors = errors;
     }
 }

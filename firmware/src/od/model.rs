@@ -165,6 +165,10 @@ pub enum Value {
     Const(&'static [u8]),
     /// A variable in the OD RAM at this byte offset; its length is the entry's byte length.
     Ram(u16),
+    /// A DOMAIN whose data lives outside the OD RAM (up to 64 KiB, e.g. in flash), reached
+    /// through a `DomainStore` by this domain id; the entry's `bit_len` is 0 and the current
+    /// size comes from the store. Served by segmented SDO transfers only.
+    Domain(u8),
 }
 
 /// One subindex of an object.

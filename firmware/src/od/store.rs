@@ -12,6 +12,8 @@ pub enum StoreError {
     Length,
     /// The OD RAM is smaller than the profile requires (a build error, reported not panicked).
     Layout,
+    /// The value is a domain outside the OD RAM (`Value::Domain`): use the domain store.
+    Domain,
 }
 
 /// A profile's dictionary together with its OD RAM.
@@ -57,6 +59,7 @@ impl<'r> Dictionary<'r> {
     pub fn value(&self, entry: &Entry) -> Result<&[u8], StoreError> {
         match entry.value {
             Value::Const(bytes) => Ok(bytes),
+            Value::Domain(_) => Err(StoreError::Domain),
             Value::Ram(offset) => {
                 let start = offset as usize;
                 self.ram
@@ -69,8 +72,10 @@ impl<'r> Dictionary<'r> {
     /// Overwrites the start of an entry's value with `data` (`data` may be shorter than the entry,
     /// e.g. a shorter string; the rest is zero-filled).
     pub fn set_value(&mut self, entry: &Entry, data: &[u8]) -> Result<(), StoreError> {
-        let Value::Ram(offset) = entry.value else {
-            return Err(StoreError::ReadOnly);
+        let offset = match entry.value {
+            Value::Ram(offset) => offset,
+            Value::Const(_) => return Err(StoreError::ReadOnly),
+            Value::Domain(_) => return Err(StoreError::Domain),
         };
         let start = offset as usize;
         let dst = self

@@ -259,3 +259,37 @@ impl Segment {
         &mut self.escs
     }
 }
+
+/// What a datagram of a frame says, for observers outside the ESC (fault injection, logs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DatagramSummary {
+    /// Command code (ETG.1000.4 Table 20: 4 = FPRD, ...).
+    pub command: u8,
+    /// Address field: ADP in the low 16 bits and ADO in the high 16 bits for physical
+    /// addressing, the logical address for LRD/LWR/LRW.
+    pub address: u32,
+    /// Data length.
+    pub len: usize,
+    /// Working counter.
+    pub wkc: u16,
+}
+
+/// The datagrams of an EtherCAT frame in order; empty for a frame that is not a valid one.
+pub fn datagrams(frame: &[u8]) -> Vec<DatagramSummary> {
+    let Ok(range) = validate(frame) else {
+        return Vec::new();
+    };
+    let mut payload = frame.get(range).unwrap_or(&[]).to_vec();
+    let mut out = Vec::new();
+    for_each_datagram(&mut payload, |dg| {
+        let get = |at: usize| dg.get(at).copied().unwrap_or(0);
+        let len = dg.len().saturating_sub(DG_HEADER_LEN + DG_WKC_LEN);
+        out.push(DatagramSummary {
+            command: get(0),
+            address: u32::from_le_bytes([get(2), get(3), get(4), get(5)]),
+            len,
+            wkc: u16::from_le_bytes([get(dg.len().wrapping_sub(2)), get(dg.len().wrapping_sub(1))]),
+        });
+    });
+    out
+}

@@ -47,7 +47,7 @@ mod watchdog;
 mod tests;
 
 pub use eeprom::sii_crc8;
-pub use frame::{process_frame, FrameError, Segment};
+pub use frame::{datagrams, process_frame, DatagramSummary, FrameError, Segment};
 pub use pdi::SimPdiError;
 
 use hal::esc::{regs, AlEvent, DlStatus, EscFeatures};
@@ -87,6 +87,8 @@ pub struct Et1100 {
     scratch: Vec<u8>,
     /// Second reusable buffer (FMMU write masks).
     scratch_mask: Vec<u8>,
+    /// Modelled PDI bus time spent so far (ns), see [`Et1100::pdi_bus_ns`].
+    pdi_bus_ns: u64,
 }
 
 impl Et1100 {
@@ -111,6 +113,7 @@ impl Et1100 {
             sync1_edge: false,
             scratch: Vec::new(),
             scratch_mask: Vec::new(),
+            pdi_bus_ns: 0,
         };
         esc.power_on_registers();
         esc.load_sii_config(true);

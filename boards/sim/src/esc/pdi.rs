@@ -58,9 +58,34 @@ impl Et1100 {
         if !self.pdi_operational {
             return Err(SimPdiError::NotOperational);
         }
+        self.pdi_bus_ns += pdi_transfer_ns(addr, len);
         let ev = AlEvent(self.al_event());
         self.watchdog_pdi_trigger();
         Ok(ev)
+    }
+}
+
+/// SPI clock the model assumes: the STM32G474 board's 170 MHz / 8 (boards/stm32g474).
+const SPI_CLOCK_HZ: u64 = 21_250_000;
+/// Address/command bytes of an ET1100 SPI access: 2 below 0x2000, 3 with address extension,
+/// plus one wait-state byte on reads (ET1100 datasheet Sec. III, SPI slave interface).
+const SPI_HEADER_BYTES: u64 = 3;
+/// Chip-select deassert time between accesses (conservative, ET1100 Sec. III).
+const SPI_CS_GAP_NS: u64 = 600;
+
+/// Time one PDI access of `len` bytes takes on the SPI bus.
+fn pdi_transfer_ns(_addr: u16, len: usize) -> u64 {
+    const NS_PER_S: u64 = 1_000_000_000;
+    let bits = 8 * (SPI_HEADER_BYTES + len as u64);
+    bits * NS_PER_S / SPI_CLOCK_HZ + SPI_CS_GAP_NS
+}
+
+impl Et1100 {
+    /// Modelled PDI bus time spent by all accesses so far, in ns: what an MCU on an ET1100 SPI
+    /// PDI at 21.25 MHz would have spent transferring. Boards use differences of it to give the
+    /// firmware a realistic duration of its process-data cycle (1C32h:06).
+    pub fn pdi_bus_ns(&self) -> u64 {
+        self.pdi_bus_ns
     }
 }
 

@@ -1,8 +1,11 @@
 //! CoE (CANopen over EtherCAT, ETG.1000.6 §5.6): the CoE header and the service dispatch.
 //!
 //! [`CoeServer::handle`] takes one mailbox payload of type CoE (after the 6-byte mailbox header)
-//! and produces the CoE reply. Only the SDO service is served (see [`sdo`]); SDO information,
-//! emergency and the PDO services are answered with a mailbox error by the caller
+//! and produces the CoE reply. Served: SDO (see [`sdo`], with complete access in
+//! [`complete_access`] and DOMAIN streaming through a [`DomainStore`]) and, when the profile
+//! advertises it, SDO information ([`sdo_info`]; long responses are fragmented: the mailbox layer
+//! fetches each further fragment with [`CoeServer::pending_fragment`] once SM1 is free).
+//! Emergency and the PDO services are answered with a mailbox error by the caller
 //! ([`CoeError::ServiceNotSupported`]).
 //!
 //! CoE header (ETG.1000.6 §5.6.1), one little-endian u16:
@@ -12,18 +15,24 @@
 //! | field | number | reserved | service |
 
 pub mod abort;
+pub mod complete_access;
+pub mod domain;
 pub mod pdo_rules;
 pub mod sdo;
+pub mod sdo_info;
 mod value;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_info_ca;
 
 use core::fmt;
 
 use hal::esc::AlState;
 
 pub use abort::AbortCode;
+pub use domain::{DomainStore, NoDomains, RamDomain};
 pub use sdo::SEGMENT_BUFFER_CAPACITY;
 
 use crate::od::Dictionary;
@@ -143,6 +152,7 @@ const SDO_CS_ABORT: u8 = 4;
 /// struct or a `static`).
 pub struct CoeServer {
     sdo: sdo::SdoServer,
+    info: sdo_info::InfoServer,
 }
 
 impl CoeServer {
@@ -150,6 +160,7 @@ impl CoeServer {
     pub const fn new() -> Self {
         Self {
             sdo: sdo::SdoServer::new(),
+            info: sdo_info::InfoServer::new(),
         }
     }
 
@@ -165,6 +176,9 @@ impl CoeServer {
     /// EtherCAT state; access rights are checked against it. Never panics on any input.
     ///
     /// After `Ok`, [`Self::last_write`] tells which entry (if any) the request wrote.
+    ///
+    /// Without a domain store: DOMAIN entries stored outside the OD RAM are refused (see
+    /// [`NoDomains`]); use [`Self::handle_domains`] to serve them.
     pub fn handle(
         &mut self,
         od: &mut Dictionary<'_>,
@@ -172,12 +186,31 @@ impl CoeServer {
         request: &[u8],
         response: &mut [u8],
     ) -> Result<usize, CoeError> {
+        self.handle_domains(od, state, request, response, &mut NoDomains)
+    }
+
+    /// [`Self::handle`] with the board's domain store for `Value::Domain` entries.
+    ///
+    /// Any request (SDO or SDO information) drops the remaining fragments of an SDO information
+    /// response in progress.
+    pub fn handle_domains(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        state: AlState,
+        request: &[u8],
+        response: &mut [u8],
+        domains: &mut dyn DomainStore,
+    ) -> Result<usize, CoeError> {
+        self.info.reset();
         let Some((&header, sdo_request)) = request.split_first_chunk::<COE_HEADER_LEN>() else {
             return Err(CoeError::SizeTooShort);
         };
         let service = (u16::from_le_bytes(header) >> SERVICE_SHIFT) as u8;
         match CoeService::from_bits(service) {
             Some(CoeService::SdoRequest) => {}
+            Some(CoeService::SdoInformation) if od.profile().device.coe.sdo_info => {
+                return self.handle_info(od, sdo_request, response);
+            }
             Some(_) => return Err(CoeError::ServiceNotSupported),
             None => return Err(CoeError::InvalidHeader),
         }
@@ -185,7 +218,9 @@ impl CoeServer {
         else {
             return Err(CoeError::NoMoreMemory);
         };
-        let n = self.sdo.handle(od, state, sdo_request, sdo_response)?;
+        let n = self
+            .sdo
+            .handle(od, state, sdo_request, sdo_response, domains)?;
         if n == 0 {
             return Ok(0);
         }
@@ -203,9 +238,68 @@ impl CoeServer {
         Ok(COE_HEADER_LEN + n)
     }
 
-    /// Drops any segmented transfer in progress (call on a state change to INIT).
+    /// [`Self::handle`], then, if the request committed a download, lets `hook` act on the
+    /// written entry before the response goes out; a hook error replaces the download response
+    /// by an SDO abort with that code (e.g. 1010h/1011h: wrong signature 0x08000020, storage
+    /// failure 0x06060000, CiA 301 §7.5.2.13/14). The entry stays in [`Self::last_write`].
+    pub fn handle_with<H: DownloadHook + ?Sized>(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        state: AlState,
+        request: &[u8],
+        response: &mut [u8],
+        hook: &mut H,
+    ) -> Result<usize, CoeError> {
+        let n = match hook.domains() {
+            Some(domains) => self.handle_domains(od, state, request, response, domains)?,
+            None => self.handle(od, state, request, response)?,
+        };
+        let Some((index, subindex)) = self.last_write().filter(|_| n > 0) else {
+            return Ok(n);
+        };
+        match hook.downloaded(od, index, subindex) {
+            Ok(()) => Ok(n),
+            Err(code) => Ok(write_abort_response(response, index, subindex, code)),
+        }
+    }
+
+    /// Serves an SDO information request (after the CoE header).
+    fn handle_info(
+        &mut self,
+        od: &Dictionary<'_>,
+        request: &[u8],
+        response: &mut [u8],
+    ) -> Result<usize, CoeError> {
+        let Some((resp_header, info_response)) = response.split_first_chunk_mut::<COE_HEADER_LEN>()
+        else {
+            return Err(CoeError::NoMoreMemory);
+        };
+        let n = self.info.handle(od.profile(), request, info_response)?;
+        *resp_header = CoeService::SdoInformation.header();
+        Ok(COE_HEADER_LEN + n)
+    }
+
+    /// Whether an SDO information response has fragments left to send.
+    pub fn fragment_pending(&self) -> bool {
+        self.info.fragment_pending()
+    }
+
+    /// Writes the next fragment of an SDO information response (CoE header included) to
+    /// `response` (mailbox size − 6 bytes, the same as for the request that started it) and
+    /// returns its length; `None` when no fragment is pending. The mailbox layer calls this
+    /// each time the master has read the previous fragment from SM1.
+    pub fn pending_fragment(&mut self, response: &mut [u8]) -> Option<usize> {
+        let (resp_header, info_response) = response.split_first_chunk_mut::<COE_HEADER_LEN>()?;
+        let n = self.info.next_fragment(info_response)?;
+        *resp_header = CoeService::SdoInformation.header();
+        Some(COE_HEADER_LEN + n)
+    }
+
+    /// Drops any segmented transfer or fragmented response in progress (call on a state change
+    /// to INIT).
     pub fn reset(&mut self) {
         self.sdo.reset();
+        self.info.reset();
     }
 
     /// The entry `(index, subindex)` the last [`Self::handle`] call wrote to the dictionary, or
@@ -221,4 +315,81 @@ impl Default for CoeServer {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// Application action on a committed SDO download, run before the download response is sent
+/// (see [`CoeServer::handle_with`]).
+pub trait DownloadHook {
+    /// `index:subindex` was just written with a value that passed every SDO check; `Err` turns
+    /// the response into an SDO abort with that code (the hook restores the entry's value if
+    /// the write must not stick).
+    fn downloaded(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        subindex: u8,
+    ) -> Result<(), AbortCode>;
+
+    /// The board's store of DOMAIN data outside the OD RAM, if the hook carries one (see
+    /// [`WithDomains`]); `None`: domains are refused as by [`NoDomains`].
+    fn domains(&mut self) -> Option<&mut dyn DomainStore> {
+        None
+    }
+}
+
+/// A download hook together with the board's domain store: what
+/// [`crate::slave::Slave::on_esc_event_full`] passes down to [`CoeServer::handle_with`].
+pub struct WithDomains<'a, H: ?Sized> {
+    /// The hook run on committed downloads.
+    pub hook: &'a mut H,
+    /// The domain store.
+    pub domains: &'a mut dyn DomainStore,
+}
+
+impl<H: DownloadHook + ?Sized> DownloadHook for WithDomains<'_, H> {
+    fn downloaded(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        subindex: u8,
+    ) -> Result<(), AbortCode> {
+        self.hook.downloaded(od, index, subindex)
+    }
+
+    fn domains(&mut self) -> Option<&mut dyn DomainStore> {
+        Some(&mut *self.domains)
+    }
+}
+
+/// No action.
+impl DownloadHook for () {
+    fn downloaded(&mut self, _: &mut Dictionary<'_>, _: u16, _: u8) -> Result<(), AbortCode> {
+        Ok(())
+    }
+}
+
+/// Writes a CoE "Abort SDO Transfer" (CoE header service SDO request, ETG.1000.6 §5.6.2.7) for
+/// `index:subindex` with `code` to `response`; returns its length (0 if `response` is too
+/// short, which [`CoeServer::handle`] has already excluded).
+fn write_abort_response(response: &mut [u8], index: u16, subindex: u8, code: AbortCode) -> usize {
+    const ABORT_LEN: usize = COE_HEADER_LEN + 8;
+    let Some(frame) = response.get_mut(..ABORT_LEN) else {
+        return 0;
+    };
+    let [h0, h1] = CoeService::SdoRequest.header();
+    let [i0, i1] = index.to_le_bytes();
+    let [c0, c1, c2, c3] = code.code().to_le_bytes();
+    frame.copy_from_slice(&[
+        h0,
+        h1,
+        SDO_CS_ABORT << SDO_CS_SHIFT,
+        i0,
+        i1,
+        subindex,
+        c0,
+        c1,
+        c2,
+        c3,
+    ]);
+    ABORT_LEN
 }

@@ -15,10 +15,20 @@
 //! Segmented downloads are buffered in a [`SEGMENT_BUFFER_CAPACITY`]-byte buffer and committed to
 //! the dictionary only when the last segment arrived and every check passed; segmented uploads of
 //! RAM values are served from a snapshot in the same buffer, so the master never sees a torn value.
+//!
+//! Complete access (CA bit in the init request) is served by [`super::complete_access`] through
+//! the same buffer. DOMAIN entries stored outside the OD RAM (`Value::Domain`) are streamed to and
+//! from a [`DomainStore`] segment by segment (no buffer of their size): a download is begun with
+//! the announced size, written per segment and committed only after the last one; any error or
+//! abort in between calls [`DomainStore::abort`], leaving the old content. A domain download
+//! dropped by [`SdoServer::reset`] is never committed (the store's next `begin_write` discards
+//! its staging).
 
 use hal::esc::AlState;
 
 use super::abort::AbortCode;
+use super::complete_access;
+use super::domain::DomainStore;
 use super::pdo_rules;
 use super::value::{as_u32, check_length, check_range};
 use super::CoeError;
@@ -159,6 +169,8 @@ enum UploadSource {
     Const(&'static [u8]),
     /// A snapshot of this many bytes in the segment buffer.
     Buffer(usize),
+    /// Domain `id` of `total` bytes, read from the domain store segment by segment.
+    Domain { id: u8, total: usize },
 }
 
 /// A segmented transfer in progress.
@@ -175,8 +187,18 @@ enum Transfer {
         toggle: bool,
     },
     /// Download of `size` bytes: `received` are in the buffer; the next segment must carry
-    /// `toggle`.
+    /// `toggle`. `complete`: a complete-access download of the whole object.
     Download {
+        index: u16,
+        subindex: u8,
+        size: usize,
+        received: usize,
+        toggle: bool,
+        complete: bool,
+    },
+    /// Download of `size` bytes to domain `id`: `received` are in the store's staging.
+    DomainDownload {
+        id: u8,
         index: u16,
         subindex: u8,
         size: usize,
@@ -222,6 +244,7 @@ impl SdoServer {
         state: AlState,
         req: &[u8],
         resp: &mut [u8],
+        domains: &mut dyn DomainStore,
     ) -> Result<usize, CoeError> {
         self.last_write = None;
         let Some(&[cmd, index_lo, index_hi, subindex, ..]) = req.first_chunk::<SDO_FRAME_LEN>()
@@ -238,21 +261,34 @@ impl SdoServer {
             subindex,
             frame: req,
         };
-        let result = match rq.cmd.specifier() {
-            ccs::DOWNLOAD_INIT => self.download_init(od, state, &rq, resp),
-            ccs::DOWNLOAD_SEGMENT => self.download_segment(od, state, &rq, resp),
-            ccs::UPLOAD_INIT => self.upload_init(od, state, &rq, resp),
-            ccs::UPLOAD_SEGMENT => self.upload_segment(rq.cmd, resp),
-            ccs::ABORT => {
-                self.transfer = Transfer::Idle;
-                return Ok(0);
-            }
+        let specifier = rq.cmd.specifier();
+        if matches!(
+            specifier,
+            ccs::DOWNLOAD_INIT | ccs::UPLOAD_INIT | ccs::ABORT
+        ) {
+            // A new transfer (or the master's abort) ends the one in progress.
+            self.drop_transfer(domains);
+        }
+        let result = match specifier {
+            ccs::DOWNLOAD_INIT => self.download_init(od, state, &rq, resp, domains),
+            ccs::DOWNLOAD_SEGMENT => self.download_segment(od, state, &rq, resp, domains),
+            ccs::UPLOAD_INIT => self.upload_init(od, state, &rq, resp, domains),
+            ccs::UPLOAD_SEGMENT => self.upload_segment(rq.cmd, resp, domains),
+            ccs::ABORT => return Ok(0),
             _ => Err(rq.abort(AbortCode::InvalidCommand)),
         };
         Ok(result.unwrap_or_else(|abort| {
-            self.transfer = Transfer::Idle;
+            self.drop_transfer(domains);
             write_abort(resp, abort)
         }))
+    }
+
+    /// Ends the transfer in progress; a domain download is aborted in the store.
+    fn drop_transfer(&mut self, domains: &mut dyn DomainStore) {
+        if let Transfer::DomainDownload { id, .. } = self.transfer {
+            domains.abort(id);
+        }
+        self.transfer = Transfer::Idle;
     }
 
     /// Initiate download: expedited and normal transfers commit at once, a normal transfer whose
@@ -264,8 +300,8 @@ impl SdoServer {
         state: AlState,
         rq: &Request<'_>,
         resp: &mut [u8],
+        domains: &mut dyn DomainStore,
     ) -> Result<usize, Abort> {
-        self.transfer = Transfer::Idle;
         let Request {
             cmd,
             index,
@@ -273,7 +309,16 @@ impl SdoServer {
             frame: req,
         } = *rq;
         let abort = |code| rq.abort(code);
-        let entry = find_writable(od, state, cmd, index, subindex).map_err(abort)?;
+        if cmd.has(command::COMPLETE_ACCESS) {
+            check_complete_access(od).map_err(abort)?;
+            self.download_init_complete(od, state, rq).map_err(abort)?;
+            return Ok(write_download_init_response(resp, index, subindex));
+        }
+        let entry = find_writable(od, state, index, subindex).map_err(abort)?;
+        if let Value::Domain(id) = entry.value {
+            self.download_init_domain(rq, id, domains).map_err(abort)?;
+            return Ok(write_download_init_response(resp, index, subindex));
+        }
         if cmd.has(command::EXPEDITED) {
             let len = if cmd.has(command::SIZE_INDICATED) {
                 cmd.expedited_len()
@@ -294,12 +339,65 @@ impl SdoServer {
                     .commit(od, state, index, subindex, data)
                     .map_err(abort)?,
                 None => self
-                    .start_download(index, subindex, size, data)
+                    .start_download(index, subindex, size, data, false)
                     .map_err(abort)?,
             }
         }
-        let frame = init_frame(Command::new(scs::DOWNLOAD_INIT, 0), index, subindex, [0; 4]);
-        Ok(write_frame(resp, frame))
+        Ok(write_download_init_response(resp, index, subindex))
+    }
+
+    /// Initiate download with complete access: commits at once when the whole stream is in the
+    /// init frame, else buffers it like a segmented download.
+    fn download_init_complete(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        state: AlState,
+        rq: &Request<'_>,
+    ) -> Result<(), AbortCode> {
+        let object = od.object(rq.index).ok_or(AbortCode::ObjectNotFound)?;
+        let (size, data) = init_data(rq);
+        match data.get(..size) {
+            Some(stream) => {
+                complete_access::download(od, state, object, rq.subindex, stream)?;
+                self.last_write = Some((rq.index, rq.subindex));
+                Ok(())
+            }
+            None => self.start_download(rq.index, rq.subindex, size, data, true),
+        }
+    }
+
+    /// Initiate download to domain `id`: begins the write in the store, writes the init
+    /// frame's data and commits when that was all.
+    fn download_init_domain(
+        &mut self,
+        rq: &Request<'_>,
+        id: u8,
+        domains: &mut dyn DomainStore,
+    ) -> Result<(), AbortCode> {
+        let (size, data) = init_data(rq);
+        let total = u32::try_from(size).map_err(|_| AbortCode::LengthTooHigh)?;
+        domains.begin_write(id, total)?;
+        let first = data.get(..size.min(data.len())).unwrap_or_default();
+        let result = domains.write(id, 0, first).and_then(|()| {
+            if first.len() == size {
+                domains.commit(id, total)?;
+                self.last_write = Some((rq.index, rq.subindex));
+            } else {
+                self.transfer = Transfer::DomainDownload {
+                    id,
+                    index: rq.index,
+                    subindex: rq.subindex,
+                    size,
+                    received: first.len(),
+                    toggle: false,
+                };
+            }
+            Ok(())
+        });
+        if result.is_err() {
+            domains.abort(id);
+        }
+        result
     }
 
     /// Buffers the first part (`data`) of a segmented download of `size` bytes.
@@ -309,6 +407,7 @@ impl SdoServer {
         subindex: u8,
         size: usize,
         data: &[u8],
+        complete: bool,
     ) -> Result<(), AbortCode> {
         if size > SEGMENT_BUFFER_CAPACITY {
             return Err(AbortCode::OutOfMemory);
@@ -323,6 +422,7 @@ impl SdoServer {
             size,
             received: data.len(),
             toggle: false,
+            complete,
         };
         Ok(())
     }
@@ -334,11 +434,78 @@ impl SdoServer {
         state: AlState,
         rq: &Request<'_>,
         resp: &mut [u8],
+        domains: &mut dyn DomainStore,
     ) -> Result<usize, Abort> {
         let Request {
             cmd, frame: req, ..
         } = *rq;
+        if let Transfer::DomainDownload { .. } = self.transfer {
+            return self.domain_segment(cmd, req, resp, domains);
+        }
         let Transfer::Download {
+            index,
+            subindex,
+            size,
+            received,
+            toggle,
+            complete,
+        } = self.transfer
+        else {
+            return Err(Abort {
+                index: 0,
+                subindex: 0,
+                code: AbortCode::InvalidCommand,
+            });
+        };
+        let abort = |code| Abort {
+            index,
+            subindex,
+            code,
+        };
+        if cmd.has(command::TOGGLE) != toggle {
+            return Err(abort(AbortCode::ToggleBit));
+        }
+        let data = segment_data(cmd, req);
+        let end = received + data.len();
+        if end > size {
+            return Err(abort(AbortCode::LengthTooHigh));
+        }
+        let dst = self
+            .buffer
+            .get_mut(received..end)
+            .ok_or(abort(AbortCode::OutOfMemory))?;
+        dst.copy_from_slice(data);
+        if cmd.has(command::LAST_SEGMENT) {
+            if end < size {
+                return Err(abort(AbortCode::LengthTooLow));
+            }
+            self.transfer = Transfer::Idle;
+            self.commit_buffer(od, state, index, subindex, size, complete)
+                .map_err(abort)?;
+        } else {
+            self.transfer = Transfer::Download {
+                index,
+                subindex,
+                size,
+                received: end,
+                toggle: !toggle,
+                complete,
+            };
+        }
+        Ok(write_download_segment_response(resp, toggle))
+    }
+
+    /// Download segment of a domain: checks toggle and size, writes the data to the store and
+    /// commits after the last segment.
+    fn domain_segment(
+        &mut self,
+        cmd: Command,
+        req: &[u8],
+        resp: &mut [u8],
+        domains: &mut dyn DomainStore,
+    ) -> Result<usize, Abort> {
+        let Transfer::DomainDownload {
+            id,
             index,
             subindex,
             size,
@@ -360,27 +527,24 @@ impl SdoServer {
         if cmd.has(command::TOGGLE) != toggle {
             return Err(abort(AbortCode::ToggleBit));
         }
-        let payload = req.get(SEGMENT_DATA_OFFSET..).unwrap_or_default();
-        let data = payload.get(..payload.len().saturating_sub(cmd.segment_unused()));
-        let data = data.unwrap_or_default();
+        let data = segment_data(cmd, req);
         let end = received + data.len();
         if end > size {
             return Err(abort(AbortCode::LengthTooHigh));
         }
-        let dst = self
-            .buffer
-            .get_mut(received..end)
-            .ok_or(abort(AbortCode::OutOfMemory))?;
-        dst.copy_from_slice(data);
+        let offset = u32::try_from(received).map_err(|_| abort(AbortCode::LengthTooHigh))?;
+        domains.write(id, offset, data).map_err(abort)?;
         if cmd.has(command::LAST_SEGMENT) {
             if end < size {
                 return Err(abort(AbortCode::LengthTooLow));
             }
+            let total = u32::try_from(size).map_err(|_| abort(AbortCode::LengthTooHigh))?;
+            domains.commit(id, total).map_err(abort)?;
             self.transfer = Transfer::Idle;
-            self.commit_buffer(od, state, index, subindex, size)
-                .map_err(abort)?;
+            self.last_write = Some((index, subindex));
         } else {
-            self.transfer = Transfer::Download {
+            self.transfer = Transfer::DomainDownload {
+                id,
                 index,
                 subindex,
                 size,
@@ -388,9 +552,7 @@ impl SdoServer {
                 toggle: !toggle,
             };
         }
-        let flags = if toggle { command::TOGGLE } else { 0 };
-        let cmd = Command::new(scs::DOWNLOAD_SEGMENT, flags);
-        Ok(write_frame(resp, [cmd.0, 0, 0, 0, 0, 0, 0, 0]))
+        Ok(write_download_segment_response(resp, toggle))
     }
 
     /// Commits the first `size` buffered bytes.
@@ -401,9 +563,15 @@ impl SdoServer {
         index: u16,
         subindex: u8,
         size: usize,
+        complete: bool,
     ) -> Result<(), AbortCode> {
         let data = self.buffer.get(..size).ok_or(AbortCode::OutOfMemory)?;
-        write_entry(od, state, index, subindex, data)?;
+        if complete {
+            let object = od.object(index).ok_or(AbortCode::ObjectNotFound)?;
+            complete_access::download(od, state, object, subindex, data)?;
+        } else {
+            write_entry(od, state, index, subindex, data)?;
+        }
         self.last_write = Some((index, subindex));
         Ok(())
     }
@@ -430,8 +598,8 @@ impl SdoServer {
         state: AlState,
         rq: &Request<'_>,
         resp: &mut [u8],
+        domains: &mut dyn DomainStore,
     ) -> Result<usize, Abort> {
-        self.transfer = Transfer::Idle;
         let Request {
             cmd,
             index,
@@ -440,10 +608,20 @@ impl SdoServer {
         } = *rq;
         let abort = |code| rq.abort(code);
         if cmd.has(command::COMPLETE_ACCESS) {
-            return Err(abort(AbortCode::UnsupportedAccess));
+            check_complete_access(od).map_err(abort)?;
+            let object = od.object(index).ok_or(abort(AbortCode::ObjectNotFound))?;
+            let len = complete_access::upload(od, state, object, subindex, &mut self.buffer)
+                .map_err(abort)?;
+            return Ok(self.upload_normal(rq, UploadSource::Buffer(len), resp, domains));
         }
         let entry = find_entry(od, index, subindex).map_err(abort)?;
         check_access(entry.access, state, AccessKind::Read).map_err(abort)?;
+        if let Value::Domain(id) = entry.value {
+            let total = domains.size(id).map_err(abort)?;
+            let total = usize::try_from(total).map_err(|_| abort(AbortCode::General))?;
+            let source = UploadSource::Domain { id, total };
+            return Ok(self.upload_normal(rq, source, resp, domains));
+        }
         let data = upload_value(od, entry).map_err(abort)?;
         if (1..=EXPEDITED_DATA_LEN).contains(&data.len()) {
             return Ok(write_expedited_upload(resp, index, subindex, data));
@@ -462,6 +640,72 @@ impl SdoServer {
             dst.copy_from_slice(first);
         }
         Ok(NORMAL_DATA_OFFSET + first.len())
+    }
+
+    /// A normal upload response from `source` (buffer or domain): complete size and as much
+    /// data as fits; the rest follows in segments.
+    fn upload_normal(
+        &mut self,
+        rq: &Request<'_>,
+        source: UploadSource,
+        resp: &mut [u8],
+        domains: &mut dyn DomainStore,
+    ) -> usize {
+        let total = match source {
+            UploadSource::Const(bytes) => bytes.len(),
+            UploadSource::Buffer(len) => len,
+            UploadSource::Domain { total, .. } => total,
+        };
+        let room = resp.len().saturating_sub(NORMAL_DATA_OFFSET);
+        let size = u32::try_from(total).unwrap_or(u32::MAX).to_le_bytes();
+        let cmd = Command::new(scs::UPLOAD_INIT, command::SIZE_INDICATED);
+        write_frame(resp, init_frame(cmd, rq.index, rq.subindex, size));
+        let dst = resp.get_mut(NORMAL_DATA_OFFSET..).unwrap_or_default();
+        let first = match self.read_source(source, 0, dst, domains) {
+            Ok(n) => n,
+            Err(code) => return write_abort(resp, rq.abort(code)),
+        };
+        if first < total {
+            self.transfer = Transfer::Upload {
+                index: rq.index,
+                subindex: rq.subindex,
+                source,
+                sent: first,
+                toggle: false,
+            };
+        }
+        NORMAL_DATA_OFFSET + first.min(room)
+    }
+
+    /// Copies bytes of `source` from `offset` into `dst`; returns how many.
+    fn read_source(
+        &self,
+        source: UploadSource,
+        offset: usize,
+        dst: &mut [u8],
+        domains: &mut dyn DomainStore,
+    ) -> Result<usize, AbortCode> {
+        let data = match source {
+            UploadSource::Const(bytes) => bytes,
+            UploadSource::Buffer(len) => self.buffer.get(..len).unwrap_or_default(),
+            UploadSource::Domain { id, total } => {
+                let want = total.saturating_sub(offset).min(dst.len());
+                let offset = u32::try_from(offset).map_err(|_| AbortCode::General)?;
+                let dst = dst.get_mut(..want).unwrap_or_default();
+                let n = domains.read(id, offset, dst)?;
+                return if n == want {
+                    Ok(n)
+                } else {
+                    Err(AbortCode::General)
+                };
+            }
+        };
+        let rest = data.get(offset..).unwrap_or_default();
+        let n = rest.len().min(dst.len());
+        if let (Some(d), Some(s)) = (dst.get_mut(..n), rest.get(..n)) {
+            d.copy_from_slice(s);
+        }
+        Ok(n)
     }
 
     /// Records a segmented upload of `data` whose first `sent` bytes go in the init response.
@@ -483,6 +727,7 @@ impl SdoServer {
                 dst.copy_from_slice(data);
                 UploadSource::Buffer(data.len())
             }
+            Value::Domain(_) => return Err(AbortCode::UnsupportedAccess),
         };
         self.transfer = Transfer::Upload {
             index,
@@ -495,7 +740,12 @@ impl SdoServer {
     }
 
     /// Upload segment: checks the toggle and sends the next part.
-    fn upload_segment(&mut self, cmd: Command, resp: &mut [u8]) -> Result<usize, Abort> {
+    fn upload_segment(
+        &mut self,
+        cmd: Command,
+        resp: &mut [u8],
+        domains: &mut dyn DomainStore,
+    ) -> Result<usize, Abort> {
         let Transfer::Upload {
             index,
             subindex,
@@ -517,14 +767,24 @@ impl SdoServer {
                 code: AbortCode::ToggleBit,
             });
         }
-        let data = match source {
-            UploadSource::Const(bytes) => bytes,
-            UploadSource::Buffer(len) => self.buffer.get(..len).unwrap_or_default(),
+        let total = match source {
+            UploadSource::Const(bytes) => bytes.len(),
+            UploadSource::Buffer(len) => len,
+            UploadSource::Domain { total, .. } => total,
         };
-        let rest = data.get(sent..).unwrap_or_default();
         let room = resp.len().saturating_sub(SEGMENT_DATA_OFFSET);
-        let chunk = rest.get(..room.min(rest.len())).unwrap_or_default();
-        let last = chunk.len() == rest.len();
+        let mut chunk = [0u8; SEGMENT_BUFFER_CAPACITY];
+        let want = total.saturating_sub(sent).min(room).min(chunk.len());
+        let dst = chunk.get_mut(..want).unwrap_or_default();
+        let n = self
+            .read_source(source, sent, dst, domains)
+            .map_err(|code| Abort {
+                index,
+                subindex,
+                code,
+            })?;
+        let chunk = chunk.get(..n).unwrap_or_default();
+        let last = sent + n >= total;
         let n = write_upload_segment(resp, toggle, last, chunk);
         self.transfer = if last {
             Transfer::Idle
@@ -543,9 +803,21 @@ impl SdoServer {
 
 /// Kind of access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum AccessKind {
+pub(super) enum AccessKind {
+    /// Upload.
     Read,
+    /// Download.
     Write,
+}
+
+/// Complete access is served only when the profile advertises it (SII CoE details, ESI
+/// `CompleteAccess`); else 0x06010000.
+fn check_complete_access(od: &Dictionary<'_>) -> Result<(), AbortCode> {
+    if od.profile().device.coe.complete_access {
+        Ok(())
+    } else {
+        Err(AbortCode::UnsupportedAccess)
+    }
 }
 
 /// The entry `index:subindex`: 0x06020000 if the object is missing, 0x06090011 if the subindex.
@@ -558,13 +830,9 @@ fn find_entry(od: &Dictionary<'_>, index: u16, subindex: u8) -> Result<&'static 
 fn find_writable(
     od: &Dictionary<'_>,
     state: AlState,
-    cmd: Command,
     index: u16,
     subindex: u8,
 ) -> Result<&'static Entry, AbortCode> {
-    if cmd.has(command::COMPLETE_ACCESS) {
-        return Err(AbortCode::UnsupportedAccess);
-    }
     let entry = find_entry(od, index, subindex)?;
     check_access(entry.access, state, AccessKind::Write)?;
     Ok(entry)
@@ -572,7 +840,11 @@ fn find_writable(
 
 /// Checks the entry's access rights: never readable/writable gives 0x06010001/0x06010002, not in
 /// the current state 0x08000022.
-fn check_access(access: Access, state: AlState, kind: AccessKind) -> Result<(), AbortCode> {
+pub(super) fn check_access(
+    access: Access,
+    state: AlState,
+    kind: AccessKind,
+) -> Result<(), AbortCode> {
     let (any, none_code) = match kind {
         AccessKind::Read => (access.readable(), AbortCode::WriteOnlyRead),
         AccessKind::Write => (access.writable(), AbortCode::ReadOnlyWrite),
@@ -601,7 +873,7 @@ fn state_bit(state: AlState, kind: AccessKind) -> u8 {
 
 /// Runs every download check on `data` and stores it: access, length, subindex 0 count, PDO
 /// rules, range.
-fn write_entry(
+pub(super) fn write_entry(
     od: &mut Dictionary<'_>,
     state: AlState,
     index: u16,
@@ -643,6 +915,7 @@ fn store_abort(e: StoreError) -> AbortCode {
         StoreError::ReadOnly => AbortCode::ReadOnlyWrite,
         StoreError::Length => AbortCode::LengthTooHigh,
         StoreError::Layout => AbortCode::General,
+        StoreError::Domain => AbortCode::UnsupportedAccess,
     }
 }
 
@@ -656,6 +929,43 @@ fn upload_value<'a>(od: &'a Dictionary<'_>, entry: &Entry) -> Result<&'a [u8], A
     }
     let len = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
     Ok(bytes.get(..len).unwrap_or_default())
+}
+
+/// The complete size and the data of a download init request: expedited (size from the
+/// command) or normal (bytes 4..8, data from byte 8).
+fn init_data<'a>(rq: &Request<'a>) -> (usize, &'a [u8]) {
+    if rq.cmd.has(command::EXPEDITED) {
+        let len = if rq.cmd.has(command::SIZE_INDICATED) {
+            rq.cmd.expedited_len()
+        } else {
+            EXPEDITED_DATA_LEN
+        };
+        let data = rq.frame.get(INIT_DATA_OFFSET..INIT_DATA_OFFSET + len);
+        (len, data.unwrap_or_default())
+    } else {
+        let data = rq.frame.get(NORMAL_DATA_OFFSET..).unwrap_or_default();
+        (read_size(rq.frame), data)
+    }
+}
+
+/// The data of a download segment without its padding.
+fn segment_data(cmd: Command, req: &[u8]) -> &[u8] {
+    let payload = req.get(SEGMENT_DATA_OFFSET..).unwrap_or_default();
+    let len = payload.len().saturating_sub(cmd.segment_unused());
+    payload.get(..len).unwrap_or_default()
+}
+
+/// Writes an initiate download response and returns its length.
+fn write_download_init_response(resp: &mut [u8], index: u16, subindex: u8) -> usize {
+    let cmd = Command::new(scs::DOWNLOAD_INIT, 0);
+    write_frame(resp, init_frame(cmd, index, subindex, [0; 4]))
+}
+
+/// Writes a download segment response echoing `toggle` and returns its length.
+fn write_download_segment_response(resp: &mut [u8], toggle: bool) -> usize {
+    let flags = if toggle { command::TOGGLE } else { 0 };
+    let cmd = Command::new(scs::DOWNLOAD_SEGMENT, flags);
+    write_frame(resp, [cmd.0, 0, 0, 0, 0, 0, 0, 0])
 }
 
 /// The complete size of a normal init request (bytes 4..8).

@@ -1,0 +1,128 @@
+//! Supervision of the synchronisation (ETG.1020 §5.1 sync error counter with the 10F1h limit)
+//! and of a delayed SAFEOP → OP transition.
+//!
+//! Missed SYNC0 events are detected from time: every entry point passes the board's clock, and
+//! a SYNC0 that has not come half a cycle after it was due counts as missed. Each missed event
+//! adds [`MISSED_WEIGHT`] to the counter, each SYNC0 subtracts 1; above the limit the drive
+//! leaves OP/SAFEOP with AL status code 0x001A (ETG.1020 "Sync Error Counter Limit").
+
+/// Counter increment per missed sync event (ETG.1020: "+3 for every missed event").
+pub const MISSED_WEIGHT: u16 = 3;
+/// Counter decrement per good sync event (ETG.1020: "−1 for every correct cycle").
+pub const GOOD_WEIGHT: u16 = 1;
+/// 10F1h:02 default when the profile has no 10F1h (Beckhoff drives ship 4: two misses in a row
+/// trip, a single one does not).
+pub const DEFAULT_COUNTER_LIMIT: u16 = 4;
+
+/// SYNC0 supervision state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SyncSupervisor {
+    counter: u16,
+    /// When the next SYNC0 is due (ns, board clock); `None` before the first SYNC0.
+    next_due_ns: Option<u64>,
+    /// Sync events missed since supervision started (1C32h:0B).
+    missed_total: u16,
+}
+
+impl SyncSupervisor {
+    /// Forgets everything (on leaving SAFEOP, on a new DC configuration).
+    pub fn reset(&mut self) {
+        *self = Self::default();
+    }
+
+    /// A SYNC0 arrived at `now_ns`; the next one is due one `cycle_ns` later.
+    pub fn on_sync0(&mut self, now_ns: u64, cycle_ns: u32) {
+        self.counter = self.counter.saturating_sub(GOOD_WEIGHT);
+        self.next_due_ns = Some(now_ns.saturating_add(u64::from(cycle_ns)));
+    }
+
+    /// Counts the SYNC0 events that should have arrived by `now_ns` but did not. Returns the
+    /// number newly counted. Nothing is counted before the first SYNC0.
+    pub fn check(&mut self, now_ns: u64, cycle_ns: u32) -> u16 {
+        let (Some(due), true) = (self.next_due_ns, cycle_ns > 0) else {
+            return 0;
+        };
+        let cycle = u64::from(cycle_ns);
+        let late_after = due.saturating_add(cycle / 2);
+        if now_ns <= late_after {
+            return 0;
+        }
+        let missed = (now_ns - late_after) / cycle + 1;
+        let missed = u16::try_from(missed).unwrap_or(u16::MAX);
+        self.next_due_ns = Some(due.saturating_add(u64::from(missed) * cycle));
+        self.counter = self
+            .counter
+            .saturating_add(missed.saturating_mul(MISSED_WEIGHT));
+        self.missed_total = self.missed_total.saturating_add(missed);
+        missed
+    }
+
+    /// Whether the counter is above `limit` (a limit of 0 disables supervision, ETG.1020).
+    pub fn tripped(&self, limit: u16) -> bool {
+        limit != 0 && self.counter > limit
+    }
+
+    /// Whether a SYNC0 has been seen since the last reset.
+    pub fn running(&self) -> bool {
+        self.next_due_ns.is_some()
+    }
+
+    /// Sync events missed since the last reset.
+    pub fn missed_total(&self) -> u16 {
+        self.missed_total
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CYCLE: u32 = 1_000_000;
+
+    #[test]
+    fn nothing_is_missed_before_the_first_sync0() {
+        let mut s = SyncSupervisor::default();
+        assert_eq!(s.check(50_000_000, CYCLE), 0);
+        assert!(!s.running());
+    }
+
+    #[test]
+    fn regular_sync0_never_trips() {
+        let mut s = SyncSupervisor::default();
+        for k in 0..1000u64 {
+            s.on_sync0(k * 1_000_000, CYCLE);
+            assert_eq!(s.check(k * 1_000_000 + 900_000, CYCLE), 0);
+        }
+        assert!(!s.tripped(DEFAULT_COUNTER_LIMIT));
+    }
+
+    #[test]
+    fn one_miss_does_not_trip_but_misses_one_good_cycle_apart_do() {
+        let mut s = SyncSupervisor::default();
+        s.on_sync0(0, CYCLE);
+        // SYNC0 due at 1 ms is late after 1.5 ms.
+        assert_eq!(s.check(1_400_000, CYCLE), 0);
+        assert_eq!(s.check(1_600_000, CYCLE), 1);
+        assert!(!s.tripped(4), "counter 3");
+        s.on_sync0(2_000_000, CYCLE);
+        assert_eq!(s.check(3_600_000, CYCLE), 1);
+        assert!(s.tripped(4), "counter 3 - 1 + 3 = 5 > 4");
+    }
+
+    #[test]
+    fn loss_of_sync0_trips_after_two_cycles() {
+        let mut s = SyncSupervisor::default();
+        s.on_sync0(0, CYCLE);
+        assert_eq!(s.check(2_600_000, CYCLE), 2);
+        assert!(s.tripped(4));
+        assert_eq!(s.missed_total(), 2);
+        assert!(!s.tripped(0), "limit 0 disables supervision");
+    }
+
+    #[test]
+    fn long_outage_is_counted_without_looping_per_cycle() {
+        let mut s = SyncSupervisor::default();
+        s.on_sync0(0, 31_250);
+        assert_eq!(s.check(10_000_000_000, 31_250), u16::MAX);
+    }
+}
