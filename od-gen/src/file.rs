@@ -306,7 +306,7 @@ pub struct ObjectFile {
     #[serde(default, rename = "entry")]
     pub entries: Vec<EntryFile>,
     /// Data type (ESI base type name: BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT,
-    /// INT24, UINT24, REAL, LREAL, STRING, OCTET_STRING, UNICODE_STRING, BIT1..BIT8).
+    /// INT24, UINT24, REAL, LREAL, STRING, OCTET_STRING, UNICODE_STRING, DOMAIN, BIT1..BIT8).
     #[serde(default, rename = "type")]
     pub data_type: Option<String>,
     /// Bit length; required for strings without a default, otherwise implied by the type.
@@ -329,7 +329,8 @@ pub struct ObjectFile {
     /// Maximum.
     #[serde(default)]
     pub max: Option<toml::Value>,
-    /// "ram" or "const"; default: RAM when writable, PDO-mappable or given a role.
+    /// "ram", "const" or "domain" (DOMAIN type only); default: RAM when writable, PDO-mappable
+    /// or given a role.
     #[serde(default)]
     pub storage: Option<String>,
     /// Application role (an `AppVars` field name).
@@ -346,7 +347,7 @@ pub struct EntryFile {
     /// Name.
     pub name: String,
     /// Data type (ESI base type name: BOOL, SINT, INT, DINT, LINT, USINT, UINT, UDINT, ULINT,
-    /// INT24, UINT24, REAL, LREAL, STRING, OCTET_STRING, UNICODE_STRING, BIT1..BIT8).
+    /// INT24, UINT24, REAL, LREAL, STRING, OCTET_STRING, UNICODE_STRING, DOMAIN, BIT1..BIT8).
     #[serde(default, rename = "type")]
     pub data_type: Option<String>,
     /// Bit length; required for strings without a default, otherwise implied by the type.
@@ -369,7 +370,8 @@ pub struct EntryFile {
     /// Maximum.
     #[serde(default)]
     pub max: Option<toml::Value>,
-    /// "ram" or "const"; default: RAM when writable, PDO-mappable or given a role.
+    /// "ram", "const" or "domain" (DOMAIN type only); default: RAM when writable, PDO-mappable
+    /// or given a role.
     #[serde(default)]
     pub storage: Option<String>,
     /// Application role (an `AppVars` field name).

@@ -48,7 +48,11 @@ fn soem_uses_sdo_info_complete_access_and_the_test_domain() {
         if po.code == od_gen::model::ObjectCode::Var {
             // pysoem lists no entries for a VAR; its type is the object's data type.
             let e = &po.entries[0];
-            assert_eq!(u(&o["data_type"]), u64::from(e.data_type.code()), "{idx:#06x}");
+            assert_eq!(
+                u(&o["data_type"]),
+                u64::from(e.data_type.code()),
+                "{idx:#06x}"
+            );
             continue;
         }
         let Some(entries) = o["entries"].as_array() else {
