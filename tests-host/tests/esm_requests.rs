@@ -241,3 +241,55 @@ fn sm_synchronous_cycle_runs_on_every_sm2_event() {
         );
     });
 }
+
+/// Samples drive 0's LEDs every 10 ms for `ms` of simulated time: (RUN lit samples, ERR lit
+/// samples, RUN toggles, ERR toggles).
+fn sample_leds(m: &InProcess, ms: u64) -> (u64, u64, u64, u64) {
+    const STEP_NS: u64 = 10_000_000;
+    let start = m.shared.segment().drives()[0].leds;
+    let (mut run, mut err) = (0, 0);
+    for _ in 0..ms / 10 {
+        m.shared.advance(STEP_NS);
+        let leds = m.shared.segment().drives()[0].leds;
+        run += u64::from(leds.run.on);
+        err += u64::from(leds.err.on);
+    }
+    let end = m.shared.segment().drives()[0].leds;
+    (
+        run,
+        err,
+        end.run.toggles - start.run.toggles,
+        end.err.toggles - start.err.toggles,
+    )
+}
+
+#[test]
+fn run_and_err_leds_show_the_etg1300_patterns() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md = &*m.maindevice;
+        let _group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        // PRE-OP: RUN blinking (200 ms on, 200 ms off), ERR off.
+        let (run, err, run_toggles, _) = sample_leds(&m, 1200);
+        assert_eq!((run, err), (60, 0), "RUN lit half of 1.2 s, ERR off");
+        assert!(
+            (5..=7).contains(&run_toggles),
+            "{run_toggles} RUN toggles in 1.2 s"
+        );
+        // A refused request (INIT → SAFEOP): ERR blinking "invalid configuration".
+        assert_eq!(request(md, INIT).await, (INIT, 0));
+        assert_eq!(request(md, SAFEOP).await, (INIT | ERROR, 0x0011));
+        let (run, err, _, err_toggles) = sample_leds(&m, 1200);
+        assert_eq!(run, 0, "RUN off in INIT");
+        assert_eq!(err, 60, "ERR blinking");
+        assert!((5..=7).contains(&err_toggles));
+        // Acknowledged: ERR off again.
+        assert_eq!(request(md, INIT | ACK).await, (INIT, 0));
+        let (_, err, _, _) = sample_leds(&m, 400);
+        assert_eq!(err, 0);
+    });
+}

@@ -3,10 +3,12 @@
 use firmware::od::Profile;
 use firmware::profiles;
 use firmware::slave::{Slave, SlaveError, SyncMode};
+use hal::io::StatusLeds;
 use hal::pdi::EscSignals;
 
 use crate::domains::SimDomainStore;
 use crate::esc::Et1100;
+use crate::leds::SimLeds;
 use crate::storage::SimStorage;
 use firmware::params::{Loaded, ParamError, ParamStore};
 
@@ -16,6 +18,9 @@ pub const SIM_RAM: usize = profiles::MAX_RAM_SIZE;
 
 /// Free-run cycle of the simulated board's local timer (the target uses a hardware timer).
 pub const FREE_RUN_PERIOD_NS: u64 = 1_000_000;
+
+/// LED update period (ETG.1300 flickering switches every 50 ms; the STM32 board uses 10 ms too).
+pub const LED_PERIOD_NS: u64 = 10_000_000;
 
 /// Background poll of the ESC event handler without an IRQ, as the STM32 board's thread-mode
 /// fallback does every 10 ms: re-evaluates waiting transitions and timeouts.
@@ -36,6 +41,9 @@ pub struct SimDrive {
     profile: &'static Profile,
     next_free_run_ns: u64,
     next_poll_ns: u64,
+    /// RUN/ERR LEDs, switched every [`LED_PERIOD_NS`] from the firmware's ETG.1300 patterns.
+    pub leds: SimLeds,
+    next_led_ns: u64,
 }
 
 impl SimDrive {
@@ -67,6 +75,8 @@ impl SimDrive {
             profile,
             next_free_run_ns: FREE_RUN_PERIOD_NS,
             next_poll_ns: BACKGROUND_POLL_PERIOD_NS,
+            leds: SimLeds::default(),
+            next_led_ns: 0,
         })
     }
 
@@ -92,10 +102,15 @@ impl SimDrive {
     /// Earliest simulated time at which the drive has something to do.
     pub fn next_event_ns(&self) -> Option<u64> {
         let free_run = self.free_running().then_some(self.next_free_run_ns);
-        [self.esc.next_event_ns(), free_run, Some(self.next_poll_ns)]
-            .into_iter()
-            .flatten()
-            .min()
+        [
+            self.esc.next_event_ns(),
+            free_run,
+            Some(self.next_poll_ns),
+            Some(self.next_led_ns),
+        ]
+        .into_iter()
+        .flatten()
+        .min()
     }
 
     fn free_running(&self) -> bool {
@@ -118,6 +133,12 @@ impl SimDrive {
         }
         while self.next_free_run_ns <= now_ns {
             self.next_free_run_ns += FREE_RUN_PERIOD_NS;
+        }
+        if now_ns >= self.next_led_ns {
+            let (run, err) = self.slave.leds(now_ns);
+            self.leds.set_run(run);
+            self.leds.set_err(err);
+            self.next_led_ns = now_ns + LED_PERIOD_NS;
         }
         if now_ns >= self.next_poll_ns {
             self.esc_event(now_ns);

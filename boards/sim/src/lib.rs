@@ -8,6 +8,7 @@ pub mod domains;
 pub mod drive;
 pub mod esc;
 pub mod inproc;
+pub mod leds;
 pub mod rawsock;
 pub mod segment;
 pub mod storage;
