@@ -12,6 +12,7 @@ use crate::od::AppVars;
 pub struct Application {
     pds: PdsState,
     previous_controlword: u16,
+    fault_code: Option<u16>,
 }
 
 impl Default for Application {
@@ -26,6 +27,7 @@ impl Application {
         Self {
             pds: PdsState::NotReadyToSwitchOn,
             previous_controlword: 0,
+            fault_code: None,
         }
     }
 
@@ -34,11 +36,34 @@ impl Application {
         self.pds
     }
 
+    /// The CiA402 error code of the active fault (603Fh), `None` when there is none.
+    pub fn fault_code(&self) -> Option<u16> {
+        self.fault_code
+    }
+
+    /// Raises CiA402 error `code`: the drive goes through Fault Reaction Active to Fault
+    /// (statusword bit 3), controlword reads 0 (the reaction disables the drive; with no motion
+    /// to stop it completes at once), and 603Fh (role `error_code`) holds `code` until a fault
+    /// reset (controlword bit 7 rising edge) leaves Fault. The caller reports the EMCY.
+    pub fn fault(&mut self, code: u16, vars: &AppVars, ram: &mut [u8]) {
+        write_u16(ram, vars.controlword, 0);
+        self.previous_controlword = 0;
+        self.pds = pds::next(pds::fault(self.pds), 0, 0);
+        self.fault_code = Some(code);
+        write_u16(ram, vars.error_code, code);
+        write_u16(ram, vars.statusword, pds::statusword_of(self.pds));
+    }
+
     /// One cycle.
     pub fn step(&mut self, vars: &AppVars, ram: &mut [u8]) {
         let cw = read_u16(ram, vars.controlword).unwrap_or(0);
         self.pds = pds::next(self.pds, cw, self.previous_controlword);
         self.previous_controlword = cw;
+        if self.fault_code.is_some() && self.pds != PdsState::Fault {
+            // Fault reset: the error is gone.
+            self.fault_code = None;
+            write_u16(ram, vars.error_code, 0);
+        }
         write_u16(ram, vars.statusword, pds::statusword_of(self.pds));
         if let Some(mode) = read_bytes::<1>(ram, vars.modes_of_operation) {
             write_bytes(ram, vars.modes_of_operation_display, mode);
@@ -91,11 +116,12 @@ mod tests {
         modes_of_operation_display: Some(5),
         target_position: Some(6),
         position_actual_value: Some(10),
+        error_code: Some(14),
     };
 
     #[test]
     fn actual_position_follows_target_only_when_operation_enabled() {
-        let mut ram = [0u8; 14];
+        let mut ram = [0u8; 16];
         let mut app = Application::new();
         ram[6..10].copy_from_slice(&1234i32.to_le_bytes());
         for cw in [0x00u16, 0x06, 0x07] {
@@ -111,7 +137,7 @@ mod tests {
 
     #[test]
     fn safe_outputs_disable_the_drive() {
-        let mut ram = [0u8; 14];
+        let mut ram = [0u8; 16];
         let mut app = Application::new();
         for cw in [0x00u16, 0x06, 0x07, 0x0F] {
             ram[0..2].copy_from_slice(&cw.to_le_bytes());
@@ -120,5 +146,33 @@ mod tests {
         app.safe_outputs(&VARS, &mut ram);
         assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
         assert_eq!(&ram[0..2], &[0, 0]);
+    }
+
+    #[test]
+    fn fault_sets_error_code_and_statusword_until_fault_reset() {
+        let mut ram = [0u8; 16];
+        let mut app = Application::new();
+        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&VARS, &mut ram);
+        }
+        app.fault(0x8700, &VARS, &mut ram);
+        assert_eq!(app.pds_state(), PdsState::Fault);
+        assert_eq!(app.fault_code(), Some(0x8700));
+        assert_eq!(u16::from_le_bytes([ram[14], ram[15]]), 0x8700);
+        assert_ne!(
+            u16::from_le_bytes([ram[2], ram[3]]) & 0x08,
+            0,
+            "statusword bit 3"
+        );
+        // Controlword ignored while in Fault; a rising edge of bit 7 resets.
+        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
+        app.step(&VARS, &mut ram);
+        assert_eq!(app.pds_state(), PdsState::Fault);
+        ram[0..2].copy_from_slice(&0x80u16.to_le_bytes());
+        app.step(&VARS, &mut ram);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(app.fault_code(), None);
+        assert_eq!(&ram[14..16], &[0, 0]);
     }
 }

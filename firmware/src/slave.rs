@@ -12,6 +12,7 @@ use hal::pdi::EscPdi;
 use hal::storage::NvStorage;
 
 use crate::app::Application;
+use crate::cia402::pds::PdsState;
 use crate::diag::{diag_code_for_emcy, DiagError, DiagMessage, DiagParam, DiagType, Diagnosis};
 use crate::esm::{self, Checks, Outcome};
 use crate::leds::{self, ErrorIndication};
@@ -46,12 +47,6 @@ const ERROR_SETTINGS: u16 = 0x10F1;
 const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
 /// Process-data watchdog status 0x0440 bit 0: 1 = running or disabled, 0 = expired.
 const WATCHDOG_PD_OK: u16 = 1 << 0;
-/// How long a SAFEOP → OP request may wait for the first SYNC0 / the first outputs before it is
-/// refused: the ETG default SafeopOpTimeout of the ESI (ethercat-slave.md §2.4).
-const SAFEOP_OP_TIMEOUT_NS: u64 = 9_000_000_000;
-/// SAFEOP → OP only after the master has written outputs once (Beckhoff SSC `OP_PD_REQUIRED`;
-/// ETG.1000.6 leaves it to the device). A profile rule; the standard profile requires it.
-const OP_REQUIRES_OUTPUTS: bool = true;
 
 /// The EtherCAT slave with its object dictionary. `RAM` is the OD RAM size
 /// (`profiles::<name>::RAM_SIZE`, or `profiles::MAX_RAM_SIZE` to choose the profile at run time).
@@ -412,6 +407,17 @@ impl<const RAM: usize> Slave<RAM> {
         if !dc || !matches!(self.status.state, AlState::SafeOp | AlState::Op) {
             return Ok(());
         }
+        if self.sync_supervisor.pll_lost() && !self.status.error {
+            // The control loop phase-locks to SYNC0; a SYNC0 at another period than the one
+            // configured for SAFEOP cannot be followed (ETG.1000.6 Table 11: 0x0032 PLL error).
+            self.sync_supervisor.reset();
+            return self.raise_fault(
+                pdi,
+                AlState::SafeOp,
+                AlStatusCode::PllError,
+                ErrorIndication::LocalError,
+            );
+        }
         if self.sync_supervisor.check(now_ns, self.sync.cycle_ns) == 0 {
             return Ok(());
         }
@@ -482,7 +488,13 @@ impl<const RAM: usize> Slave<RAM> {
                 self.rx_plan.unpack(&self.rx_image, &mut self.ram);
             }
         }
+        let fault_before = self.app.fault_code();
         self.app.step(&self.profile.vars, &mut self.ram);
+        if let (Some(code), None) = (fault_before, self.app.fault_code()) {
+            // Fault reset (CiA402): the error leaves 1001h; the last one clears with an
+            // error-reset EMCY (CiA 301). A full queue only loses that notification.
+            let _ = self.clear_error(code);
+        }
         self.write_inputs(pdi)?;
         self.cycles = self.cycles.wrapping_add(1);
         Ok(())
@@ -555,7 +567,9 @@ impl<const RAM: usize> Slave<RAM> {
         let waited = self
             .pending_op
             .map_or(0, |(_, since)| now_ns.saturating_sub(since));
-        let timed_out = waited > SAFEOP_OP_TIMEOUT_NS;
+        // Profile rules (`[esm]`): the SAFEOP → OP timeout and whether outputs are required.
+        let rules = &self.profile.device.esm;
+        let timed_out = waited > rules.safeop_op_timeout_ns();
         let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
         if dc && !self.sync_supervisor.running() {
             return if timed_out {
@@ -564,7 +578,7 @@ impl<const RAM: usize> Slave<RAM> {
                 OpGate::Wait
             };
         }
-        if OP_REQUIRES_OUTPUTS && self.rx_plan.byte_len() > 0 && !self.outputs_received {
+        if rules.op_requires_outputs && self.rx_plan.byte_len() > 0 && !self.outputs_received {
             return if timed_out {
                 OpGate::Refuse(AlStatusCode::NoValidOutputs)
             } else {
@@ -689,7 +703,27 @@ impl<const RAM: usize> Slave<RAM> {
         let rank_to = esm::state_rank(to);
         if from == AlState::Op {
             // Leaving OP: outputs go to their safe state (controlword 0 = disable voltage).
+            let was_enabled = self.app.pds_state() == PdsState::OperationEnabled;
             self.app.safe_outputs(&self.profile.vars, &mut self.ram);
+            // Profile rule (`[esm] op_exit_while_enabled_error`): leaving OP while the drive
+            // was in Operation Enabled is a fault: 603Fh, EMCY, PDS Fault.
+            if let Some(code) = self
+                .profile
+                .device
+                .esm
+                .op_exit_while_enabled_error
+                .filter(|_| was_enabled)
+            {
+                self.app.fault(code, &self.profile.vars, &mut self.ram);
+                // A full EMCY queue or a stopped mailbox loses only the EMCY; 1001h/603Fh hold.
+                let _ = self.report_error(
+                    code,
+                    emcy::register::DEVICE_PROFILE,
+                    [0; 5],
+                    None,
+                    self.now_ns,
+                );
+            }
         }
         if rank_to < 2 && rank_from >= 2 {
             self.rx_plan = PdoPlan::default();

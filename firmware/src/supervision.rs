@@ -10,6 +10,14 @@
 pub const MISSED_WEIGHT: u16 = 3;
 /// Counter decrement per good sync event (ETG.1020: "−1 for every correct cycle").
 pub const GOOD_WEIGHT: u16 = 1;
+/// A SYNC0 interval may differ from a whole number of cycles by this fraction (1/N) of the cycle
+/// and still be "on time": the control loop's PLL follows SYNC0 jitter of a few µs, not a
+/// different period.
+pub const PLL_TOLERANCE_DIVISOR: u64 = 10;
+/// Consecutive SYNC0 intervals off the configured period after which the PLL is declared
+/// unable to lock (AL status code 0x0032).
+pub const PLL_LOSS_COUNT: u8 = 3;
+
 /// 10F1h:02 default when the profile has no 10F1h (Beckhoff drives ship 4: two misses in a row
 /// trip, a single one does not).
 pub const DEFAULT_COUNTER_LIMIT: u16 = 4;
@@ -22,6 +30,10 @@ pub struct SyncSupervisor {
     next_due_ns: Option<u64>,
     /// Sync events missed since supervision started (1C32h:0B).
     missed_total: u16,
+    /// Time of the last SYNC0 (board clock, ns).
+    last_sync0_ns: Option<u64>,
+    /// Consecutive SYNC0 intervals that were not a whole number of cycles.
+    off_period: u8,
 }
 
 impl SyncSupervisor {
@@ -34,6 +46,20 @@ impl SyncSupervisor {
     pub fn on_sync0(&mut self, now_ns: u64, cycle_ns: u32) {
         self.counter = self.counter.saturating_sub(GOOD_WEIGHT);
         self.next_due_ns = Some(now_ns.saturating_add(u64::from(cycle_ns)));
+        if let Some(last) = self.last_sync0_ns {
+            if on_period(now_ns.saturating_sub(last), u64::from(cycle_ns)) {
+                self.off_period = 0;
+            } else {
+                self.off_period = self.off_period.saturating_add(1);
+            }
+        }
+        self.last_sync0_ns = Some(now_ns);
+    }
+
+    /// Whether SYNC0 has come at a period other than the configured cycle
+    /// [`PLL_LOSS_COUNT`] times in a row: the control loop cannot phase-lock to it.
+    pub fn pll_lost(&self) -> bool {
+        self.off_period >= PLL_LOSS_COUNT
     }
 
     /// Counts the SYNC0 events that should have arrived by `now_ns` but did not. Returns the
@@ -71,6 +97,16 @@ impl SyncSupervisor {
     pub fn missed_total(&self) -> u16 {
         self.missed_total
     }
+}
+
+/// Whether `interval` is a whole number (≥ 1) of `cycle`s within the PLL tolerance (missed
+/// pulses are the sync error counter's business, not a period change).
+fn on_period(interval: u64, cycle: u64) -> bool {
+    if cycle == 0 {
+        return true;
+    }
+    let k = ((interval + cycle / 2) / cycle).max(1);
+    interval.abs_diff(k * cycle) <= cycle / PLL_TOLERANCE_DIVISOR
 }
 
 #[cfg(test)]
@@ -124,5 +160,29 @@ mod tests {
         let mut s = SyncSupervisor::default();
         s.on_sync0(0, 31_250);
         assert_eq!(s.check(10_000_000_000, 31_250), u16::MAX);
+    }
+
+    #[test]
+    fn pll_is_lost_when_sync0_comes_at_another_period() {
+        let mut s = SyncSupervisor::default();
+        for k in 0..5u64 {
+            s.on_sync0(k * 1_000_000 + (k % 2) * 50_000, CYCLE); // 50 µs jitter: locked
+        }
+        assert!(!s.pll_lost());
+        let mut t = 4_000_000;
+        for _ in 0..3 {
+            t += 1_500_000; // the master changed 0x09A0 to 1.5 ms
+            s.on_sync0(t, CYCLE);
+        }
+        assert!(s.pll_lost());
+    }
+
+    #[test]
+    fn missed_pulses_are_not_a_period_change() {
+        let mut s = SyncSupervisor::default();
+        for t in [0, 1_000_000, 3_000_000, 4_000_000, 7_000_000] {
+            s.on_sync0(t, CYCLE);
+        }
+        assert!(!s.pll_lost());
     }
 }

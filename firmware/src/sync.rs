@@ -51,7 +51,8 @@ impl SyncConfig {
     }
 
     /// Whether the profile accepts this configuration; the AL status code if not
-    /// (ETG.1000.6 Table 11: 0x0027, 0x0028, 0x0030, 0x0035).
+    /// (ETG.1000.6 Table 11: 0x0027, 0x0028, 0x0030, 0x0035 cycle out of range, 0x0036 cycle
+    /// in range but not a whole multiple of [`SyncSupport::cycle_step_ns`]).
     pub fn check(&self, support: &SyncSupport) -> Result<(), AlStatusCode> {
         match self.mode {
             SyncMode::FreeRun if !support.free_run => Err(AlStatusCode::FreeRunNotSupported),
@@ -64,6 +65,11 @@ impl SyncConfig {
                 if self.cycle_ns < support.min_cycle_ns || self.cycle_ns > support.max_cycle_ns =>
             {
                 Err(AlStatusCode::DcInvalidSyncCycleTime)
+            }
+            SyncMode::DcSync0 | SyncMode::DcSync1
+                if support.cycle_step_ns > 1 && self.cycle_ns % support.cycle_step_ns != 0 =>
+            {
+                Err(AlStatusCode::DcSync0CycleTime)
             }
             _ => Ok(()),
         }
@@ -81,6 +87,7 @@ mod tests {
         dc_sync1: false,
         min_cycle_ns: 125_000,
         max_cycle_ns: 10_000_000,
+        cycle_step_ns: 1,
     };
 
     #[test]
@@ -104,6 +111,41 @@ mod tests {
             cycle_ns: 0,
         };
         assert_eq!(c.check(&SUPPORT).map_err(|c| c.code()), Err(0x0035));
+    }
+
+    #[test]
+    fn dc_cycle_in_range_but_not_a_multiple_of_the_step_is_0x36() {
+        let stepped = SyncSupport {
+            min_cycle_ns: 31_250,
+            cycle_step_ns: 31_250,
+            ..SUPPORT
+        };
+        let c = |cycle_ns| SyncConfig {
+            mode: SyncMode::DcSync0,
+            cycle_ns,
+        };
+        for ok in [31_250, 62_500, 1_000_000, 10_000_000] {
+            assert_eq!(c(ok).check(&stepped), Ok(()), "{ok} ns");
+        }
+        for bad in [50_000, 1_000_001, 999_999, 100_000] {
+            assert_eq!(
+                c(bad).check(&stepped).map_err(|c| c.code()),
+                Err(0x0036),
+                "{bad} ns"
+            );
+        }
+        // Out of range stays 0x0035 even when it is not a multiple either.
+        assert_eq!(c(20_000).check(&stepped).map_err(|c| c.code()), Err(0x0035));
+        assert_eq!(
+            c(10_031_250).check(&stepped).map_err(|c| c.code()),
+            Err(0x0035)
+        );
+        // Free run and SM-synchronous have no SYNC0 cycle to check.
+        let free = SyncConfig {
+            mode: SyncMode::FreeRun,
+            cycle_ns: 0,
+        };
+        assert_eq!(free.check(&stepped), Ok(()));
     }
 
     #[test]

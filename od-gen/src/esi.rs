@@ -123,7 +123,10 @@ fn base_types(p: &Profile) -> BTreeMap<String, u16> {
     m
 }
 
-fn flags(x: &mut Xml, e: &Entry) {
+/// `Flags` in the XSD order `Access, Category, PdoMapping, ..., Backup, Setting`
+/// (esi-sii.md §1.4). Backup: the parameter storage stores the entry ([`Object::is_backup`]);
+/// Setting: a startup parameter (profile `setting = true`).
+fn flags(x: &mut Xml, o: &Object, e: &Entry) {
     x.open("Flags", &[]);
     let (access, restriction) = e.access.esi();
     match restriction {
@@ -132,6 +135,12 @@ fn flags(x: &mut Xml, e: &Entry) {
     }
     if let Some(m) = e.pdo.esi() {
         x.text("PdoMapping", &[], m);
+    }
+    if o.is_backup(e) {
+        x.text("Backup", &[], "1");
+    }
+    if e.setting {
+        x.text("Setting", &[], "1");
     }
     x.close("Flags");
 }
@@ -191,7 +200,7 @@ fn data_types(x: &mut Xml, p: &Profile) {
             x.text("Name", &[], &name);
             x.text("BitSize", &[], &(16 + n * elem_bits).to_string());
             if let Some(s0) = sub0 {
-                sub_item(x, Some(0), &s0.name, "USINT", 8, 0, s0);
+                sub_item(x, Some(0), &s0.name, "USINT", 8, 0, (o, s0));
             }
             if let Some(e1) = elems.first() {
                 sub_item(
@@ -201,7 +210,7 @@ fn data_types(x: &mut Xml, p: &Profile) {
                     &format!("{name}ARR"),
                     n * elem_bits,
                     16,
-                    e1,
+                    (o, e1),
                 );
             }
             x.close("DataType");
@@ -217,7 +226,7 @@ fn data_types(x: &mut Xml, p: &Profile) {
                     &type_name(e),
                     u32::from(e.bit_len),
                     off,
-                    e,
+                    (o, e),
                 );
             }
             x.close("DataType");
@@ -233,7 +242,7 @@ fn sub_item(
     ty: &str,
     bits: u32,
     off: u32,
-    flags_of: &Entry,
+    flags_of: (&Object, &Entry),
 ) {
     x.open("SubItem", &[]);
     if let Some(s) = sub {
@@ -243,7 +252,7 @@ fn sub_item(
     x.text("Type", &[], ty);
     x.text("BitSize", &[], &bits.to_string());
     x.text("BitOffs", &[], &off.to_string());
-    flags(x, flags_of);
+    flags(x, flags_of.0, flags_of.1);
     x.close("SubItem");
 }
 
@@ -260,7 +269,7 @@ fn objects(x: &mut Xml, p: &Profile) {
                 x.open("Info", &[]);
                 info_values(x, e);
                 x.close("Info");
-                flags(x, e);
+                flags(x, o, e);
             }
             _ => {
                 let (_, total) = layout(o);
@@ -317,6 +326,13 @@ fn pdo(x: &mut Xml, tag: &str, pdo: &Pdo) {
     x.close(tag);
 }
 
+/// ESI `Info/StateMachine/Timeout/PreopTimeout`: the ETG default, ms (ethercat-slave.md §2.4).
+const PREOP_TIMEOUT_MS: u32 = 2000;
+/// ESI `BackToInitTimeout`: the ETG default, ms.
+const BACK_TO_INIT_TIMEOUT_MS: u32 = 5000;
+/// ESI `BackToSafeopTimeout`: the ETG default, ms.
+const BACK_TO_SAFEOP_TIMEOUT_MS: u32 = 200;
+
 /// The ESI document.
 pub fn xml(p: &Profile) -> String {
     let mut x = Xml {
@@ -362,6 +378,30 @@ pub fn xml(p: &Profile) -> String {
         &p.device.order_number,
     );
     x.text("Name", &[("LcId", "1033".into())], &p.device.name);
+    // Info/StateMachine/Timeout (XSD: all four timeouts, ms, in this order): SafeopOpTimeout
+    // from `[esm]`, the others the ETG defaults (ethercat-slave.md §2.4).
+    x.open("Info", &[]);
+    x.open("StateMachine", &[]);
+    x.open("Timeout", &[]);
+    x.text("PreopTimeout", &[], &PREOP_TIMEOUT_MS.to_string());
+    x.text(
+        "SafeopOpTimeout",
+        &[],
+        &p.esm.safeop_op_timeout_ms.to_string(),
+    );
+    x.text(
+        "BackToInitTimeout",
+        &[],
+        &BACK_TO_INIT_TIMEOUT_MS.to_string(),
+    );
+    x.text(
+        "BackToSafeopTimeout",
+        &[],
+        &BACK_TO_SAFEOP_TIMEOUT_MS.to_string(),
+    );
+    x.close("Timeout");
+    x.close("StateMachine");
+    x.close("Info");
     x.text("GroupType", &[], &p.device.group_type);
 
     x.open("Profile", &[]);

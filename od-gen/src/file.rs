@@ -28,8 +28,11 @@ pub struct ProfileFile {
     /// DC op modes (ESI `Dc/OpMode`, SII DC category).
     #[serde(default, rename = "dc_op_mode")]
     pub dc_op_modes: Vec<DcOpModeFile>,
-    /// PDO limits.
+    /// PDO limits and rules.
     pub pdo: PdoLimitsFile,
+    /// EtherCAT state machine rules (optional: every key has a default).
+    #[serde(default)]
+    pub esm: EsmFile,
     /// RxPDOs (master → slave, SM2).
     #[serde(default, rename = "rxpdo")]
     pub rx_pdos: Vec<PdoFile>,
@@ -205,6 +208,48 @@ pub struct SyncFile {
     /// Delay time in ns (1C32h:09 / 1C33h:09 default).
     #[serde(default)]
     pub delay_ns: u32,
+    /// Granularity of the DC SYNC0 cycle in ns: an accepted cycle is a whole multiple of it
+    /// (default 1: any cycle in range).
+    #[serde(default = "one")]
+    pub cycle_step_ns: u32,
+}
+
+fn one() -> u32 {
+    1
+}
+
+/// `[esm]`: EtherCAT state machine rules of the profile.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EsmFile {
+    /// SAFEOP → OP only after the master wrote the outputs once (default true).
+    #[serde(default = "yes")]
+    pub op_requires_outputs: bool,
+    /// How long a SAFEOP → OP request may wait for the first SYNC0 / outputs, in ms (default
+    /// 9000, the ETG ESI default; ESI `Info/StateMachine/Timeout/SafeopOpTimeout`).
+    #[serde(default = "default_safeop_op_timeout_ms")]
+    pub safeop_op_timeout_ms: u32,
+    /// CiA402 error code (603Fh) raised when the EtherCAT state leaves OP while the drive is in
+    /// Operation Enabled; absent: the drive is only disabled.
+    #[serde(default)]
+    pub op_exit_while_enabled_error: Option<u16>,
+}
+
+/// The ETG default SafeopOpTimeout of the ESI (ms).
+pub const DEFAULT_SAFEOP_OP_TIMEOUT_MS: u32 = 9000;
+
+fn default_safeop_op_timeout_ms() -> u32 {
+    DEFAULT_SAFEOP_OP_TIMEOUT_MS
+}
+
+impl Default for EsmFile {
+    fn default() -> Self {
+        Self {
+            op_requires_outputs: true,
+            safeop_op_timeout_ms: DEFAULT_SAFEOP_OP_TIMEOUT_MS,
+            op_exit_while_enabled_error: None,
+        }
+    }
 }
 
 /// `[[dc_op_mode]]`
@@ -244,6 +289,10 @@ pub struct DcOpModeFile {
 pub struct PdoLimitsFile {
     /// Maximum number of entries in one PDO (capacity of each 16xxh/1Axxh object).
     pub max_entries: u8,
+    /// SDO download to an entry mapped in the active RxPDO mapping in SAFEOP/OP: "blocked"
+    /// (abort 0x06010006) or "allowed" (default).
+    #[serde(default)]
+    pub sdo_write_to_rx_mapped: Option<String>,
 }
 
 /// `[[rxpdo]]` / `[[txpdo]]`
@@ -336,6 +385,10 @@ pub struct ObjectFile {
     /// Application role (an `AppVars` field name).
     #[serde(default)]
     pub role: Option<String>,
+    /// Startup parameter ("setting", SDO information list type 5, ESI `Flags/Setting`); on a
+    /// RECORD/ARRAY it marks every entry.
+    #[serde(default)]
+    pub setting: bool,
 }
 
 /// `[[object.entry]]`
@@ -377,6 +430,9 @@ pub struct EntryFile {
     /// Application role (an `AppVars` field name).
     #[serde(default)]
     pub role: Option<String>,
+    /// Startup parameter (see [`ObjectFile::setting`]).
+    #[serde(default)]
+    pub setting: bool,
 }
 
 /// The attributes of one value (a VAR object or a RECORD/ARRAY entry), as written.
@@ -400,6 +456,8 @@ pub struct EntryAttrs {
     pub storage: Option<String>,
     /// Role.
     pub role: Option<String>,
+    /// Startup parameter.
+    pub setting: bool,
 }
 
 macro_rules! attrs_of {
@@ -417,6 +475,7 @@ macro_rules! attrs_of {
                     max: self.max.clone(),
                     storage: self.storage.clone(),
                     role: self.role.clone(),
+                    setting: self.setting,
                 }
             }
         }

@@ -364,17 +364,20 @@ pub enum Role {
     TargetPosition,
     /// 6064h position actual value (DINT).
     PositionActualValue,
+    /// 603Fh error code (UINT): the CiA402 error the drive reports.
+    ErrorCode,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 6] = [
+    pub const ALL: [Role; 7] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
         Self::ModesOfOperationDisplay,
         Self::TargetPosition,
         Self::PositionActualValue,
+        Self::ErrorCode,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -385,6 +388,7 @@ impl Role {
             Self::ModesOfOperationDisplay => "modes_of_operation_display",
             Self::TargetPosition => "target_position",
             Self::PositionActualValue => "position_actual_value",
+            Self::ErrorCode => "error_code",
         }
     }
     /// Parses the profile-file spelling.
@@ -394,7 +398,7 @@ impl Role {
     /// The data type the role needs.
     pub fn data_type(self) -> DataType {
         match self {
-            Self::Controlword | Self::Statusword => DataType::Uint,
+            Self::Controlword | Self::Statusword | Self::ErrorCode => DataType::Uint,
             Self::ModesOfOperation | Self::ModesOfOperationDisplay => DataType::Sint,
             Self::TargetPosition | Self::PositionActualValue => DataType::Dint,
         }
@@ -426,6 +430,9 @@ pub struct Entry {
     pub max: Vec<u8>,
     /// Application role.
     pub role: Option<Role>,
+    /// Startup parameter (profile `setting = true`): SDO information list type 5, ObjAccess
+    /// bit 9, ESI `Flags/Setting`.
+    pub setting: bool,
 }
 
 impl Entry {
@@ -456,10 +463,26 @@ pub struct Object {
     pub derived: bool,
 }
 
+/// Objects the firmware's parameter storage never stores: 1010h/1011h (store/restore) and the
+/// SM parameters 1C32h/1C33h (the stack overwrites them with the active synchronisation).
+pub const NOT_STORED: [u16; 4] = [0x1010, 0x1011, 0x1C32, 0x1C33];
+
 impl Object {
     /// The entry with this subindex.
     pub fn entry(&self, subindex: u8) -> Option<&Entry> {
         self.entries.iter().find(|e| e.subindex == subindex)
+    }
+
+    /// Whether `e` is stored by the firmware's parameter storage (1010h) and so is a "backup"
+    /// entry (SDO information list type 4, ObjAccess bit 8, ESI `Flags/Backup`): a RAM variable,
+    /// writable in some state, not PDO-mappable, not in [`NOT_STORED`]. The firmware's rule is
+    /// `firmware::params::is_storable`; the generated code asserts at compile time that both
+    /// agree on every entry (`check::backup_agrees`).
+    pub fn is_backup(&self, e: &Entry) -> bool {
+        e.storage == Storage::Ram
+            && e.access.writable()
+            && e.pdo == PdoMapping::No
+            && !NOT_STORED.contains(&self.index)
     }
 }
 
@@ -577,6 +600,8 @@ pub struct Sync {
     pub calc_and_copy_ns: u32,
     /// Delay time, ns.
     pub delay_ns: u32,
+    /// A DC SYNC0 cycle must be a whole multiple of this, ns (1 = any).
+    pub cycle_step_ns: u32,
 }
 
 impl Sync {
@@ -720,6 +745,45 @@ pub struct Eeprom {
     pub reserved: [u16; 2],
 }
 
+/// EtherCAT state machine rules of a profile (`[esm]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EsmRules {
+    /// SAFEOP → OP only after the master wrote the outputs once.
+    pub op_requires_outputs: bool,
+    /// How long a SAFEOP → OP request may wait for the first SYNC0 / outputs, ms.
+    pub safeop_op_timeout_ms: u32,
+    /// CiA402 error code raised when the state leaves OP while the drive is in Operation
+    /// Enabled (`None`: the drive is only disabled).
+    pub op_exit_while_enabled_error: Option<u16>,
+}
+
+/// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP/OP.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RxMappedWrite {
+    /// Refused with abort 0x06010006 (ETG.1000.6 Table 41).
+    Blocked,
+    /// Written (the next process-data cycle overwrites it).
+    Allowed,
+}
+
+impl RxMappedWrite {
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "blocked" => Some(Self::Blocked),
+            "allowed" => Some(Self::Allowed),
+            _ => None,
+        }
+    }
+    /// The variant name of `firmware::od::RxMappedWrite`.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::Blocked => "Blocked",
+            Self::Allowed => "Allowed",
+        }
+    }
+}
+
 /// A checked profile with all derived objects.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Profile {
@@ -745,6 +809,10 @@ pub struct Profile {
     pub dc_op_modes: Vec<DcOpMode>,
     /// Maximum entries per PDO.
     pub max_pdo_entries: u8,
+    /// SDO download to an RxPDO-mapped entry in SAFEOP/OP.
+    pub sdo_write_to_rx_mapped: RxMappedWrite,
+    /// ESM rules.
+    pub esm: EsmRules,
     /// RxPDOs, sorted by index.
     pub rx_pdos: Vec<Pdo>,
     /// TxPDOs, sorted by index.

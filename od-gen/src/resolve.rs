@@ -77,6 +77,21 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         default_cycle_ns: f.sync.default_cycle_ns,
         calc_and_copy_ns: f.sync.calc_and_copy_ns,
         delay_ns: f.sync.delay_ns,
+        cycle_step_ns: f.sync.cycle_step_ns,
+    };
+    let esm = EsmRules {
+        op_requires_outputs: f.esm.op_requires_outputs,
+        safeop_op_timeout_ms: f.esm.safeop_op_timeout_ms,
+        op_exit_while_enabled_error: f.esm.op_exit_while_enabled_error,
+    };
+    let sdo_write_to_rx_mapped = match f.pdo.sdo_write_to_rx_mapped.as_deref() {
+        None => RxMappedWrite::Allowed,
+        Some(s) => RxMappedWrite::parse(s).ok_or_else(|| {
+            fault(
+                "pdo.sdo_write_to_rx_mapped",
+                Invalid::Value(format!("`{s}` is not blocked or allowed")),
+            )
+        })?,
     };
 
     let dc_op_modes = f
@@ -219,6 +234,8 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         sync,
         dc_op_modes,
         max_pdo_entries: max_entries,
+        sdo_write_to_rx_mapped,
+        esm,
         rx_pdos,
         tx_pdos,
         objects: Vec::new(),
@@ -284,7 +301,9 @@ fn object(o: &ObjectFile, key: &str) -> Result<Object, Fault> {
                     Invalid::Value("subindex 0 is generated (highest subindex / count)".into()),
                 ));
             }
-            let en = entry(e.sub, &e.name, &e.attrs(), &ekey)?;
+            let mut attrs = e.attrs();
+            attrs.setting |= o.setting;
+            let en = entry(e.sub, &e.name, &attrs, &ekey)?;
             if subs.insert(e.sub, en).is_some() {
                 return Err(fault(&ekey, Invalid::DuplicateSubindex(e.sub)));
             }
@@ -351,6 +370,7 @@ fn sub0(value: u8, access: Access, storage: Storage) -> Entry {
         min: Vec::new(),
         max: Vec::new(),
         role: None,
+        setting: false,
     }
 }
 
@@ -491,6 +511,7 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         min,
         max,
         role,
+        setting: a.setting,
     })
 }
 
@@ -541,6 +562,7 @@ fn domain_entry(
         min: Vec::new(),
         max: Vec::new(),
         role: None,
+        setting: a.setting,
     })
 }
 
@@ -854,6 +876,7 @@ fn val(
         min,
         max,
         role: None,
+        setting: false,
     }
 }
 

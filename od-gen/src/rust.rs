@@ -9,6 +9,8 @@
 //!     pub const INPUTS_SIZE: usize;      // SM3 default size (default TxPDO assignment)
 //!     pub const DEFAULTS: &[u8];         // initial OD RAM image
 //!     pub const OBJECTS: &[Object];      // sorted by index, entries by subindex
+//!     pub const SETTINGS: &[(u16, u8)];  // startup parameters (`setting = true`)
+//!     pub const BACKUP: &[(u16, u8)];    // entries the parameter storage stores
 //!     pub static PROFILE: Profile;
 //! }
 //! ```
@@ -16,13 +18,14 @@
 //! plus `MAX_RAM_SIZE`, `ALL` and `by_name` at the top level, and `const` assertions that the
 //! objects and entries are sorted, every RAM variable lies inside `RAM_SIZE`, and the default
 //! PDO assignment read back from the generated 1C12h/1C13h and 16xxh/1Axxh adds up to the SM2/SM3
-//! sizes that the SII and the ESI carry. The code uses only `core` and the types of
+//! sizes that the SII and the ESI carry, and that `BACKUP` (od-gen's ESI `Flags/Backup`) is
+//! exactly what `firmware::params::is_storable` stores. The code uses only `core` and the types of
 //! `firmware::od::model`.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::model::{Access, Entry, Profile, Role, Sm, Storage};
+use crate::model::{Access, Entry, Object, Profile, Role, Sm, Storage};
 
 /// Where each RAM variable of a profile lives.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -140,7 +143,7 @@ fn module(out: &mut String, p: &Profile) {
     let _ = writeln!(out, "pub mod {} {{", p.name);
     let _ = writeln!(
         out,
-        "    use crate::od::{{Access, AppVars, CoeDetails, DataType, DeviceInfo, Entry, Object, ObjectCode, PdoMappable, Profile, SmLayout, SyncSupport, Value}};\n"
+        "    use crate::od::{{Access, AppVars, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value}};\n"
     );
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
     let _ = writeln!(
@@ -177,6 +180,24 @@ fn module(out: &mut String, p: &Profile) {
         let _ = writeln!(out, "        ] }},");
     }
     let _ = writeln!(out, "    ];");
+    let _ = writeln!(
+        out,
+        "    /// Startup parameters (`setting = true`), `(index, subindex)` ascending."
+    );
+    let _ = writeln!(
+        out,
+        "    pub const SETTINGS: &[(u16, u8)] = &[{}];",
+        pairs(p, |_, e| e.setting)
+    );
+    let _ = writeln!(
+        out,
+        "    /// Entries the parameter storage stores (\"backup\", ESI `Flags/Backup`), as od-gen sees them."
+    );
+    let _ = writeln!(
+        out,
+        "    pub const BACKUP: &[(u16, u8)] = &[{}];",
+        pairs(p, Object::is_backup)
+    );
 
     let var = |r: Role| -> String {
         p.objects
@@ -221,8 +242,8 @@ fn module(out: &mut String, p: &Profile) {
     let _ = writeln!(out, "            inputs: {},", sm(p.sm.inputs, 0));
     let _ = writeln!(
         out,
-        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {} }},",
-        y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns
+        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {}, cycle_step_ns: {} }},",
+        y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns, y.cycle_step_ns
     );
     let _ = writeln!(out, "            max_pdo_entries: {},", p.max_pdo_entries);
     let _ = writeln!(
@@ -235,6 +256,21 @@ fn module(out: &mut String, p: &Profile) {
         "            coe: CoeDetails {{ sdo: {}, sdo_info: {}, pdo_assign: {}, pdo_config: {}, upload_at_startup: {}, complete_access: {} }},",
         c.sdo, c.sdo_info, c.pdo_assign, c.pdo_config, c.upload_at_startup, c.complete_access
     );
+    let m = &p.esm;
+    let _ = writeln!(
+        out,
+        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {} }},",
+        m.op_requires_outputs,
+        m.safeop_op_timeout_ms,
+        m.op_exit_while_enabled_error
+            .map_or("None".into(), |c| format!("Some({c:#06x})"))
+    );
+    let _ = writeln!(
+        out,
+        "            sdo_write_to_rx_mapped: RxMappedWrite::{},",
+        p.sdo_write_to_rx_mapped.rust_variant()
+    );
+    let _ = writeln!(out, "            settings: SETTINGS,");
     let _ = writeln!(out, "        }},");
     let _ = writeln!(out, "        objects: OBJECTS,");
     let _ = writeln!(out, "        defaults: DEFAULTS,");
@@ -256,7 +292,23 @@ fn module(out: &mut String, p: &Profile) {
         out,
         "    const _: () = assert!(super::check::assigned_bits(OBJECTS, DEFAULTS, 0x1c13) == INPUTS_SIZE * 8, \"default TxPDO mapping differs from the SM3 size in SII/ESI\");"
     );
+    let _ = writeln!(
+        out,
+        "    const _: () = assert!(super::check::backup_agrees(OBJECTS, BACKUP), \"od-gen's backup flags differ from params::is_storable\");"
+    );
     let _ = writeln!(out, "}}\n");
+}
+
+/// `(index, subindex)` of every entry that `keep` selects, in dictionary order, as Rust tuples.
+fn pairs(p: &Profile, keep: impl Fn(&Object, &Entry) -> bool) -> String {
+    let items: Vec<String> = p
+        .objects
+        .iter()
+        .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
+        .filter(|(o, e)| keep(o, e))
+        .map(|(o, e)| format!("({:#06x}, {:#04x})", o.index, e.subindex))
+        .collect();
+    items.join(", ")
 }
 
 const CHECK: &str = r#"/// `const` cross-checks of the generated tables (evaluated at compile time only).
@@ -337,6 +389,37 @@ mod check {
             i += 1;
         }
         0
+    }
+
+    /// Whether the entries `crate::params::is_storable` selects are exactly `backup` (the
+    /// ESI `Flags/Backup` od-gen wrote): one rule, checked against the firmware's.
+    pub(super) const fn backup_agrees(o: &[Object], backup: &[(u16, u8)]) -> bool {
+        let mut n = 0;
+        let mut i = 0;
+        while i < o.len() {
+            let e = o[i].entries;
+            let mut j = 0;
+            while j < e.len() {
+                let storable = crate::params::is_storable(&o[i], &e[j]);
+                let mut listed = false;
+                let mut k = 0;
+                while k < backup.len() {
+                    if backup[k].0 == o[i].index && backup[k].1 == e[j].subindex {
+                        listed = true;
+                    }
+                    k += 1;
+                }
+                if storable != listed {
+                    return false;
+                }
+                if storable {
+                    n += 1;
+                }
+                j += 1;
+            }
+            i += 1;
+        }
+        n == backup.len()
     }
 
     /// Sum of the mapped bit lengths of the PDOs assigned by default in `assign` (1C12h/1C13h).

@@ -14,6 +14,8 @@ pub(crate) fn check(p: &Profile) -> Result<(), Fault> {
     mailbox(p)?;
     sync(p)?;
     roles(p)?;
+    settings(p)?;
+    esm(p)?;
     strings(p)?;
     eeprom(p)?;
     Ok(())
@@ -227,6 +229,26 @@ fn sync(p: &Profile) -> Result<(), Fault> {
             Invalid::Sync("need 0 < min_cycle_ns <= max_cycle_ns".into()),
         ));
     }
+    if y.cycle_step_ns == 0 {
+        return Err(fault(
+            "sync.cycle_step_ns",
+            Invalid::Sync("must be at least 1".into()),
+        ));
+    }
+    for (key, v) in [
+        ("sync.min_cycle_ns", y.min_cycle_ns),
+        ("sync.default_cycle_ns", y.default_cycle_ns),
+    ] {
+        if v % y.cycle_step_ns != 0 {
+            return Err(fault(
+                key,
+                Invalid::Sync(format!(
+                    "{v} ns is not a multiple of sync.cycle_step_ns = {}",
+                    y.cycle_step_ns
+                )),
+            ));
+        }
+    }
     if !(y.min_cycle_ns..=y.max_cycle_ns).contains(&y.default_cycle_ns) {
         return Err(fault(
             "sync.default_cycle_ns",
@@ -378,6 +400,42 @@ fn eeprom(p: &Profile) -> Result<(), Fault> {
                 needed,
                 declared: n,
             },
+        ));
+    }
+    Ok(())
+}
+
+/// A setting (startup parameter) is downloaded by the master at start-up, so it must be
+/// writable.
+fn settings(p: &Profile) -> Result<(), Fault> {
+    let bad = p.objects.iter().find_map(|o| {
+        o.entries
+            .iter()
+            .find(|e| e.setting && !e.access.writable())
+            .map(|e| (o.index, e.subindex))
+    });
+    match bad {
+        Some((index, sub)) => Err(fault(
+            &format!("object[{index:#06x}].entry[{sub:#04x}].setting"),
+            Invalid::Value("a setting (startup parameter) must be writable".into()),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// `[esm]`: a zero SAFEOP → OP timeout would refuse every DC start; error code 0 means "no
+/// error" in 603Fh (CiA402), so it cannot be raised.
+fn esm(p: &Profile) -> Result<(), Fault> {
+    if p.esm.safeop_op_timeout_ms == 0 {
+        return Err(fault(
+            "esm.safeop_op_timeout_ms",
+            Invalid::Value("must be at least 1".into()),
+        ));
+    }
+    if p.esm.op_exit_while_enabled_error == Some(0) {
+        return Err(fault(
+            "esm.op_exit_while_enabled_error",
+            Invalid::Value("0 is \"no error\" (603Fh)".into()),
         ));
     }
     Ok(())

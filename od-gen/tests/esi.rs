@@ -358,3 +358,65 @@ fn bootstrap_mailbox_reaches_sii_and_esi() {
         "{xml}"
     );
 }
+
+#[test]
+fn state_machine_timeouts_in_info() {
+    let p = standard();
+    let xml = p.esi_xml();
+    let doc = Document::parse(&xml).expect("well-formed XML");
+    let device = child(
+        child(child(doc.root_element(), "Descriptions"), "Devices"),
+        "Device",
+    );
+    let timeout = child(child(child(device, "Info"), "StateMachine"), "Timeout");
+    // XSD order: PreopTimeout, SafeopOpTimeout, BackToInitTimeout, BackToSafeopTimeout (ms).
+    assert_eq!(
+        elements(timeout)
+            .iter()
+            .map(|n| (n.tag_name().name(), n.text().unwrap()))
+            .collect::<Vec<_>>(),
+        [
+            ("PreopTimeout", "2000"),
+            ("SafeopOpTimeout", "9000"),
+            ("BackToInitTimeout", "5000"),
+            ("BackToSafeopTimeout", "200"),
+        ]
+    );
+    assert_eq!(p.esm.safeop_op_timeout_ms, 9000);
+}
+
+#[test]
+fn backup_and_setting_flags_follow_access_order() {
+    let p = standard();
+    let xml = p.esi_xml();
+    let doc = Document::parse(&xml).expect("well-formed XML");
+    let objects: Vec<Node> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("Object"))
+        .collect();
+    let flags_of = |index: u16| {
+        let o = objects
+            .iter()
+            .find(|o| hexdec(text(**o, "Index")) == u32::from(index))
+            .unwrap_or_else(|| panic!("object {index:#06x}"));
+        elements(child(*o, "Flags"))
+            .iter()
+            .map(|n| n.tag_name().name().to_string())
+            .collect::<Vec<_>>()
+    };
+    // XSD Flags order: Access, Category, PdoMapping, ..., Backup, Setting.
+    assert_eq!(flags_of(0x2F00), ["Access", "Backup", "Setting"]);
+    assert_eq!(flags_of(0x6060), ["Access", "PdoMapping", "Setting"]);
+    assert_eq!(flags_of(0x6040), ["Access", "PdoMapping"]);
+    assert_eq!(flags_of(0x1000), ["Access"]);
+    // Record entries carry theirs in the DataType SubItems: 1C12h:01 is stored.
+    let dt = doc
+        .descendants()
+        .find(|n| n.has_tag_name("DataType") && text(*n, "Name") == "DT10F1")
+        .expect("DT10F1");
+    let sub1 = dt
+        .children()
+        .find(|n| n.has_tag_name("SubItem") && text(*n, "SubIdx") == "1")
+        .expect("10F1h:01");
+    assert_eq!(text(child(sub1, "Flags"), "Backup"), "1");
+}

@@ -398,3 +398,122 @@ fn domain_ids_follow_dictionary_order() {
     assert_eq!(layout.domains.get(&(0x2005, 0)), Some(&0));
     assert_eq!(layout.domains.get(&(0x2FF0, 0)), Some(&1));
 }
+
+#[test]
+fn esm_rules_parse_with_defaults_and_are_checked() {
+    use od_gen::model::RxMappedWrite;
+    let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
+    assert!(p.esm.op_requires_outputs);
+    assert_eq!(p.esm.safeop_op_timeout_ms, 9000);
+    assert_eq!(p.esm.op_exit_while_enabled_error, None);
+    assert_eq!(p.sdo_write_to_rx_mapped, RxMappedWrite::Blocked);
+    assert_eq!(p.sync.cycle_step_ns, 31_250);
+
+    let set = with(
+        "safeop_op_timeout_ms = 9000",
+        "safeop_op_timeout_ms = 2500\nop_exit_while_enabled_error = 0x8700\nop_requires_outputs = false",
+    );
+    let set = set.replacen("op_requires_outputs = true\n", "", 1);
+    let p = od_gen::parse(&set, "standard.toml").unwrap();
+    assert_eq!(
+        (
+            p.esm.op_requires_outputs,
+            p.esm.safeop_op_timeout_ms,
+            p.esm.op_exit_while_enabled_error
+        ),
+        (false, 2500, Some(0x8700))
+    );
+    let rust = od_gen::rust::generate(&[p]);
+    assert!(rust.contains(
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(0x8700) },"
+    ));
+
+    // Without [esm] and the new keys: the documented defaults.
+    let bare = STANDARD
+        .replacen("cycle_step_ns = 31_250\n", "", 1)
+        .replacen("sdo_write_to_rx_mapped = \"blocked\"\n", "", 1);
+    let start = bare.find("[esm]").unwrap();
+    let end = bare[start..].find("[[dc_op_mode]]").unwrap() + start;
+    let bare = format!("{}{}", &bare[..start], &bare[end..]);
+    let p = od_gen::parse(&bare, "standard.toml").unwrap();
+    assert!(p.esm.op_requires_outputs);
+    assert_eq!(p.esm.safeop_op_timeout_ms, 9000);
+    assert_eq!(p.sync.cycle_step_ns, 1);
+    assert_eq!(p.sdo_write_to_rx_mapped, RxMappedWrite::Allowed);
+
+    let (key, _) = invalid(&with(
+        "safeop_op_timeout_ms = 9000",
+        "safeop_op_timeout_ms = 0",
+    ));
+    assert_eq!(key, "esm.safeop_op_timeout_ms");
+    let (key, _) = invalid(&with(
+        "safeop_op_timeout_ms = 9000",
+        "safeop_op_timeout_ms = 9000\nop_exit_while_enabled_error = 0",
+    ));
+    assert_eq!(key, "esm.op_exit_while_enabled_error");
+    let (key, _) = invalid(&with(
+        "sdo_write_to_rx_mapped = \"blocked\"",
+        "sdo_write_to_rx_mapped = \"sometimes\"",
+    ));
+    assert_eq!(key, "pdo.sdo_write_to_rx_mapped");
+}
+
+#[test]
+fn cycle_step_must_divide_min_and_default_cycle() {
+    let (key, e) = invalid(&with("cycle_step_ns = 31_250", "cycle_step_ns = 0"));
+    assert_eq!(key, "sync.cycle_step_ns");
+    assert!(matches!(e, Invalid::Sync(_)));
+    let (key, _) = invalid(&with("cycle_step_ns = 31_250", "cycle_step_ns = 40_000"));
+    assert_eq!(key, "sync.min_cycle_ns");
+    let (key, _) = invalid(&with(
+        "default_cycle_ns = 1_000_000",
+        "default_cycle_ns = 1_000_001",
+    ));
+    assert_eq!(key, "sync.default_cycle_ns");
+}
+
+#[test]
+fn settings_are_marked_per_entry_and_must_be_writable() {
+    let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
+    let settings: Vec<u16> = p
+        .objects
+        .iter()
+        .filter(|o| o.entries.iter().any(|e| e.setting))
+        .map(|o| o.index)
+        .collect();
+    assert_eq!(settings, [0x2F00, 0x6060]);
+    // On a RECORD object: every declared entry (not the generated subindex 0).
+    let p = od_gen::parse(
+        &appended(
+            "[[object]]\nindex = 0x2001\nname = \"R\"\ncode = \"record\"\nsetting = true\n\
+             [[object.entry]]\nsub = 1\nname = \"a\"\ntype = \"UINT\"\naccess = \"rw\"\n\
+             [[object.entry]]\nsub = 2\nname = \"b\"\ntype = \"UINT\"\naccess = \"rw\"",
+        ),
+        "standard.toml",
+    )
+    .unwrap();
+    let o = p.object(0x2001).unwrap();
+    assert_eq!(
+        o.entries.iter().map(|e| e.setting).collect::<Vec<_>>(),
+        [false, true, true]
+    );
+    let (key, _) = invalid(&appended(
+        "[[object]]\nindex = 0x2001\nname = \"C\"\ntype = \"UINT\"\naccess = \"ro\"\nsetting = true",
+    ));
+    assert_eq!(key, "object[0x2001].entry[0x00].setting");
+}
+
+#[test]
+fn backup_follows_the_parameter_storage_rule() {
+    let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
+    let backup = |i: u16, s: u8| {
+        let o = p.object(i).unwrap();
+        o.is_backup(o.entry(s).unwrap())
+    };
+    assert!(backup(0x2F00, 0), "RW RAM parameter");
+    assert!(backup(0x1C12, 1), "PDO assignment");
+    assert!(!backup(0x6040, 0), "process data");
+    assert!(!backup(0x1010, 1), "store command");
+    assert!(!backup(0x1C32, 1), "SM parameters");
+    assert!(!backup(0x1018, 1), "constant");
+}

@@ -9,6 +9,10 @@ import time
 
 import pysoem
 
+# SOEM's receive timeout for process data: generous, so that a busy host (CI) is not mistaken
+# for a lost frame; the simulated drive answers within microseconds.
+RECEIVE_TIMEOUT_US = 20_000
+
 CYCLE_S = 0.001
 CYCLES = 1000
 # SOEM's dc_sync starts SYNC0 about 100 ms after the call (SyncDelay in ecx_dcsync0), so each
@@ -50,7 +54,7 @@ def main():
     m.write_state()
     for _ in range(2000):
         m.send_processdata()
-        m.receive_processdata(2000)
+        m.receive_processdata(RECEIVE_TIMEOUT_US)
         if m.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
             break
         time.sleep(CYCLE_S)
@@ -65,7 +69,7 @@ def main():
         for s in m.slaves:
             s.output = struct.pack("<HiB", cw, target, 8)
         m.send_processdata()
-        wkc = m.receive_processdata(2000)
+        wkc = m.receive_processdata(RECEIVE_TIMEOUT_US)
         sw, actual, mode = struct.unpack("<HiB", bytes(s0.input)[:7])
         samples.append([wkc, cw, target, sw, actual, mode])
         next_t += CYCLE_S

@@ -4,6 +4,54 @@
 pub mod soem;
 
 use std::future::Future;
+use std::time::Duration;
+
+use board_sim::inproc::{InMemoryTxRx, InProcess};
+use board_sim::Segment;
+use ethercrab::{Command, MainDevice, MainDeviceConfig, Timeouts};
+use hal::esc::regs;
+
+/// Station address ethercrab gives the first drive.
+pub const FIRST_STATION: u16 = 0x1000;
+
+/// An ethercrab master connected in process to one simulated drive of the standard profile
+/// (spawn the returned transport with `tokio::task::spawn_local` before using the master).
+pub fn master() -> (InProcess, InMemoryTxRx) {
+    master_for(Segment::new("standard", 1).expect("standard profile"))
+}
+
+/// An ethercrab master connected in process to `segment`. The wall-clock timeouts are generous
+/// so that a loaded CI machine does not time out; the simulated drives answer at once.
+pub fn master_for(segment: Segment) -> (InProcess, InMemoryTxRx) {
+    const GENEROUS: Duration = Duration::from_secs(2);
+    InProcess::connect(
+        segment,
+        Timeouts {
+            pdu: Duration::from_millis(500),
+            state_transition: GENEROUS,
+            eeprom: GENEROUS,
+            mailbox_response: GENEROUS,
+            ..Timeouts::default()
+        },
+        MainDeviceConfig {
+            dc_static_sync_iterations: 100,
+            ..MainDeviceConfig::default()
+        },
+    )
+}
+
+/// AL status and AL status code of the first drive, read by the master.
+pub async fn al_status(md: &MainDevice<'_>) -> (u16, u16) {
+    let status: u16 = Command::fprd(FIRST_STATION, regs::AL_STATUS.addr)
+        .receive(md)
+        .await
+        .expect("AL status");
+    let code: u16 = Command::fprd(FIRST_STATION, regs::AL_STATUS_CODE.addr)
+        .receive(md)
+        .await
+        .expect("AL status code");
+    (status, code)
+}
 
 /// Runs `f` on a current-thread tokio runtime with a `LocalSet` (the in-process transport is
 /// spawned locally).

@@ -2,29 +2,8 @@
 //! object lists (ETG.1000.6 §5.6.3.3) match the standard profile's dictionary as od-gen
 //! generates it.
 
-use std::time::Duration;
-
-use board_sim::inproc::InProcess;
-use board_sim::Segment;
-use ethercrab::{MainDeviceConfig, ObjectDescriptionListQuery, Timeouts};
-use tests_host::block_on;
-
-fn master() -> (InProcess, board_sim::inproc::InMemoryTxRx) {
-    let segment = Segment::new("standard", 1).expect("standard profile");
-    InProcess::connect(
-        segment,
-        Timeouts {
-            pdu: Duration::from_millis(500),
-            state_transition: Duration::from_millis(500),
-            mailbox_response: Duration::from_millis(1000),
-            ..Timeouts::default()
-        },
-        MainDeviceConfig {
-            dc_static_sync_iterations: 10,
-            ..MainDeviceConfig::default()
-        },
-    )
-}
+use ethercrab::ObjectDescriptionListQuery;
+use tests_host::{block_on, master};
 
 /// Indices of the standard profile's objects that satisfy `pred`, in index order.
 fn profile_indices(pred: impl Fn(&od_gen::model::Object) -> bool) -> Vec<u16> {
@@ -59,6 +38,11 @@ fn sdo_info_lists_match_the_profile() {
     let all = profile_indices(|_| true);
     let rx = profile_indices(|o| o.entries.iter().any(|e| e.pdo.rx()));
     let tx = profile_indices(|o| o.entries.iter().any(|e| e.pdo.tx()));
+    // List 4: what the parameter storage stores (od-gen's copy of params::is_storable, checked
+    // against it at compile time); list 5: the profile's `setting = true` entries.
+    let backup = profile_indices(|o| o.entries.iter().any(|e| o.is_backup(e)));
+    let settings = profile_indices(|o| o.entries.iter().any(|e| e.setting));
+    assert!(!backup.is_empty() && !settings.is_empty());
     assert!(
         all.contains(&0x2FF0),
         "the test domain is in the dictionary"
@@ -83,16 +67,21 @@ fn sdo_info_lists_match_the_profile() {
                 usize::from(counts.all),
                 usize::from(counts.rx_pdo_mappable),
                 usize::from(counts.tx_pdo_mappable),
-                counts.stored_for_device_replacement,
-                counts.startup_parameters
+                usize::from(counts.stored_for_device_replacement),
+                usize::from(counts.startup_parameters)
             ),
-            (all.len(), rx.len(), tx.len(), 0, 0)
+            (all.len(), rx.len(), tx.len(), backup.len(), settings.len())
         );
 
         for (query, expected) in [
             (ObjectDescriptionListQuery::All, &all),
             (ObjectDescriptionListQuery::RxPdoMappable, &rx),
             (ObjectDescriptionListQuery::TxPdoMappable, &tx),
+            (
+                ObjectDescriptionListQuery::StoredForDeviceReplacement,
+                &backup,
+            ),
+            (ObjectDescriptionListQuery::StartupParameters, &settings),
         ] {
             let list = sd
                 .sdo_info_object_description_list(query)

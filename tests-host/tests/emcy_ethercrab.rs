@@ -6,11 +6,9 @@
 
 use std::cell::Cell;
 use std::rc::Rc;
-use std::time::Duration;
 
-use board_sim::inproc::InProcess;
-use board_sim::Segment;
-use ethercrab::{Command, MainDeviceConfig, Timeouts};
+use ethercrab::Command;
+use tests_host::master;
 use tests_host::{block_on, expected_identity};
 
 const FIRST_STATION: u16 = 0x1000;
@@ -20,22 +18,6 @@ const AL_CONTROL: u16 = 0x0120;
 const AL_STATUS: u16 = 0x0130;
 /// CiA 301 Table 21 class 0x81xx (communication) → 1001h bits 0 and 4.
 const COMM_ERROR: u16 = 0x8130;
-
-fn master() -> (InProcess, board_sim::inproc::InMemoryTxRx) {
-    let segment = Segment::new("standard", 1).expect("standard profile");
-    InProcess::connect(
-        segment,
-        Timeouts {
-            pdu: Duration::from_millis(500),
-            state_transition: Duration::from_millis(500),
-            ..Timeouts::default()
-        },
-        MainDeviceConfig {
-            dc_static_sync_iterations: 10,
-            ..MainDeviceConfig::default()
-        },
-    )
-}
 
 #[test]
 fn errors_raised_while_ethercrab_reads_sdos_never_answer_an_sdo_request() {

@@ -4,12 +4,11 @@
 
 use std::time::Duration;
 
-use board_sim::inproc::{InMemoryTxRx, InProcess};
-use board_sim::Segment;
-use ethercrab::{Command, DcSync, MainDevice, MainDeviceConfig, Timeouts};
+use board_sim::inproc::InProcess;
+use ethercrab::{Command, DcSync, MainDevice};
 use hal::esc::regs;
 use hal::pdi::EscPdi;
-use tests_host::block_on;
+use tests_host::{block_on, master};
 
 const STATION: u16 = 0x1000;
 /// AL status / control values (ETG.1000.6 Table 9).
@@ -22,22 +21,6 @@ const ERROR: u16 = 0x10;
 const ACK: u16 = 0x10;
 const ID_REQUEST: u16 = 0x20;
 const ID_LOADED: u16 = 0x20;
-
-fn master() -> (InProcess, InMemoryTxRx) {
-    let segment = Segment::new("standard", 1).expect("standard profile");
-    InProcess::connect(
-        segment,
-        Timeouts {
-            pdu: Duration::from_millis(500),
-            state_transition: Duration::from_millis(500),
-            ..Timeouts::default()
-        },
-        MainDeviceConfig {
-            dc_static_sync_iterations: 10,
-            ..MainDeviceConfig::default()
-        },
-    )
-}
 
 async fn request(md: &MainDevice<'_>, control: u16) -> (u16, u16) {
     Command::fpwr(STATION, regs::AL_CONTROL.addr)

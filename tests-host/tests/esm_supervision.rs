@@ -4,13 +4,10 @@
 
 use std::time::Duration;
 
-use board_sim::inproc::{InMemoryTxRx, InProcess};
-use board_sim::Segment;
+use board_sim::inproc::InProcess;
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op};
-use ethercrab::{
-    Command, DcSync, DefaultLock, MainDevice, MainDeviceConfig, SubDeviceGroup, Timeouts,
-};
-use tests_host::block_on;
+use ethercrab::{Command, DcSync, DefaultLock, MainDevice, SubDeviceGroup};
+use tests_host::{block_on, master};
 
 const STATION: u16 = 0x1000;
 const AL_CONTROL: u16 = 0x0120;
@@ -25,21 +22,6 @@ const OP: u16 = 0x08;
 const ERROR: u16 = 0x10;
 
 type DcGroup = SubDeviceGroup<4, 64, DefaultLock, Op, HasDc>;
-
-fn master() -> (InProcess, InMemoryTxRx) {
-    let segment = Segment::new("standard", 1).expect("standard profile");
-    InProcess::connect(
-        segment,
-        Timeouts {
-            pdu: Duration::from_millis(500),
-            ..Timeouts::default()
-        },
-        MainDeviceConfig {
-            dc_static_sync_iterations: 100,
-            ..MainDeviceConfig::default()
-        },
-    )
-}
 
 async fn al(md: &MainDevice<'_>) -> (u16, u16) {
     let status: u16 = Command::fprd(STATION, AL_STATUS)
@@ -281,6 +263,37 @@ fn sm_parameters_report_measured_calc_and_copy_time() {
             sd.sdo_read::<u32>(0x1C32, 0x05).await.expect("1C32:05"),
             31_250,
             "min cycle"
+        );
+    });
+}
+
+#[test]
+fn sync0_at_another_period_than_configured_is_a_pll_error_0x32() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md = &*m.maindevice;
+        let group = into_op_with_dc(&m).await;
+        for _ in 0..10 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(al(md).await, (OP, 0));
+        // SYNC0 now comes every 1.4 ms while the drive was configured for 1 ms: its control
+        // loop cannot phase-lock (3 intervals off the period in a row).
+        const SYNC0_CYCLE: u16 = 0x09A0;
+        Command::fpwr(STATION, SYNC0_CYCLE)
+            .send(md, 1_400_000u32)
+            .await
+            .expect("0x09A0");
+        for _ in 0..10 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(
+            al(md).await,
+            (SAFEOP | ERROR, 0x0032),
+            "SAFEOP + error, PLL error"
         );
     });
 }

@@ -1,34 +1,14 @@
 //! Wrong requests from ethercrab get the answers ETG.1000 specifies, not a hang.
 
-use std::time::Duration;
-
-use board_sim::inproc::InProcess;
-use board_sim::Segment;
 use ethercrab::error::{CoeAbortCode, Error, MailboxError};
-use ethercrab::{Command, MainDeviceConfig, Timeouts};
-use tests_host::block_on;
+use ethercrab::Command;
+use tests_host::{block_on, master};
 
 const FIRST_STATION: u16 = 0x1000;
 const AL_STATUS: u16 = 0x0130;
 const AL_STATUS_CODE: u16 = 0x0134;
 const SM2_LENGTH: u16 = 0x0812;
 const SM2_ACTIVATE: u16 = 0x0816;
-
-fn master() -> (InProcess, board_sim::inproc::InMemoryTxRx) {
-    let segment = Segment::new("standard", 1).expect("standard profile");
-    InProcess::connect(
-        segment,
-        Timeouts {
-            pdu: Duration::from_millis(500),
-            state_transition: Duration::from_millis(500),
-            ..Timeouts::default()
-        },
-        MainDeviceConfig {
-            dc_static_sync_iterations: 10,
-            ..MainDeviceConfig::default()
-        },
-    )
-}
 
 #[test]
 fn sdo_read_of_missing_object_aborts_0x06020000() {

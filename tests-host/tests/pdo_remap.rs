@@ -3,13 +3,9 @@
 //! orders, padding, every mappable object), checked through the process data that flows in OP;
 //! and the mappings and edits the profile refuses, with their SDO abort codes.
 
-use std::time::Duration;
-
-use board_sim::inproc::{InMemoryTxRx, InProcess};
-use board_sim::Segment;
 use ethercrab::error::{CoeAbortCode, Error, MailboxError};
-use ethercrab::{MainDevice, MainDeviceConfig, SubDeviceRef, Timeouts};
-use tests_host::block_on;
+use ethercrab::{MainDevice, SubDeviceRef};
+use tests_host::{block_on, master};
 
 const RX_ASSIGN: u16 = 0x1C12;
 const TX_ASSIGN: u16 = 0x1C13;
@@ -37,21 +33,6 @@ const ERROR_REGISTER: Map = Map(0x1001, 0, 8);
 const ERROR_CODE: Map = Map(0x603F, 0, 16);
 const fn pad(bits: u8) -> Map {
     Map(0x0000, 0, bits)
-}
-
-fn master() -> (InProcess, InMemoryTxRx) {
-    let segment = Segment::new("standard", 1).expect("standard profile");
-    InProcess::connect(
-        segment,
-        Timeouts {
-            pdu: Duration::from_millis(500),
-            ..Timeouts::default()
-        },
-        MainDeviceConfig {
-            dc_static_sync_iterations: 10,
-            ..MainDeviceConfig::default()
-        },
-    )
 }
 
 /// Writes a mapping with the ETG sequence: assignment SI0 = 0, mapping SI0 = 0, entries,

@@ -119,6 +119,16 @@ pub fn next(state: PdsState, cw: u16, previous_cw: u16) -> PdsState {
     }
 }
 
+/// The state a fault puts the drive in (CiA402 transition 13: any state → Fault Reaction
+/// Active; a drive already in Fault stays there). [`next`] then completes the reaction
+/// (transition 14 → Fault).
+pub fn fault(state: PdsState) -> PdsState {
+    match state {
+        PdsState::Fault => PdsState::Fault,
+        _ => PdsState::FaultReactionActive,
+    }
+}
+
 /// Statusword of a state (bits 0..6 per CiA402 Table 30, plus remote).
 pub fn statusword_of(state: PdsState) -> u16 {
     use statusword::*;
@@ -173,6 +183,21 @@ mod tests {
         assert_eq!(next(OperationEnabled, 0x00, 0x0F), SwitchOnDisabled);
         assert_eq!(next(OperationEnabled, 0x07, 0x0F), SwitchedOn);
         assert_eq!(next(OperationEnabled, 0x06, 0x0F), ReadyToSwitchOn);
+    }
+
+    #[test]
+    fn a_fault_passes_fault_reaction_active_to_fault() {
+        for s in [
+            SwitchOnDisabled,
+            SwitchedOn,
+            OperationEnabled,
+            QuickStopActive,
+        ] {
+            assert_eq!(fault(s), FaultReactionActive);
+            assert_eq!(next(fault(s), 0, 0), Fault);
+        }
+        assert_eq!(fault(Fault), Fault);
+        assert_ne!(statusword_of(Fault) & statusword::FAULT, 0);
     }
 
     #[test]

@@ -48,6 +48,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             dc_sync1: false,
             min_cycle_ns: 0,
             max_cycle_ns: 0,
+            cycle_step_ns: 1,
         },
         max_pdo_entries: 8,
         mailbox_protocols: 0,
@@ -59,5 +60,12 @@ pub(crate) const fn test_device() -> DeviceInfo {
             upload_at_startup: false,
             complete_access: false,
         },
+        esm: EsmRules {
+            op_requires_outputs: true,
+            safeop_op_timeout_ms: 9000,
+            op_exit_while_enabled_error: None,
+        },
+        sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
+        settings: &[],
     }
 }

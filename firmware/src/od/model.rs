@@ -252,6 +252,43 @@ pub struct SyncSupport {
     pub min_cycle_ns: u32,
     /// Longest accepted cycle in ns.
     pub max_cycle_ns: u32,
+    /// Granularity of the DC SYNC0 cycle in ns: an accepted cycle is a whole multiple of it
+    /// (e.g. the control-loop period); 1 accepts any cycle in range.
+    pub cycle_step_ns: u32,
+}
+
+/// EtherCAT state machine rules of a profile (profile section `[esm]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EsmRules {
+    /// SAFEOP → OP only after the master wrote the outputs once (Beckhoff SSC
+    /// `OP_PD_REQUIRED`; ETG.1000.6 leaves it to the device).
+    pub op_requires_outputs: bool,
+    /// How long a SAFEOP → OP request may wait for the first SYNC0 / the first outputs before
+    /// it is refused, in ms (ESI `Info/StateMachine/Timeout/SafeopOpTimeout`).
+    pub safeop_op_timeout_ms: u32,
+    /// CiA402 error code (603Fh) the drive raises when the EtherCAT state leaves OP while the
+    /// drive is in Operation Enabled (EMCY, PDS Fault); `None`: the drive is only disabled.
+    pub op_exit_while_enabled_error: Option<u16>,
+}
+
+impl EsmRules {
+    /// [`Self::safeop_op_timeout_ms`] in ns.
+    pub const fn safeop_op_timeout_ns(&self) -> u64 {
+        self.safeop_op_timeout_ms as u64 * 1_000_000
+    }
+}
+
+/// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP and OP
+/// (profile key `pdo.sdo_write_to_rx_mapped`). In PREOP no PDO runs and the write is always
+/// served.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RxMappedWrite {
+    /// Refused with abort 0x06010006 "object mapped to RxPDO, SDO download blocked"
+    /// (ETG.1000.6 Table 41).
+    Blocked,
+    /// Written; the next process-data cycle overwrites the value.
+    Allowed,
 }
 
 /// CoE services the device supports (SII General CoE details, ESI `Mailbox/CoE` attributes).
@@ -306,6 +343,20 @@ pub struct DeviceInfo {
     pub mailbox_protocols: u16,
     /// CoE services.
     pub coe: CoeDetails,
+    /// ESM rules.
+    pub esm: EsmRules,
+    /// SDO download to an RxPDO-mapped entry in SAFEOP/OP.
+    pub sdo_write_to_rx_mapped: RxMappedWrite,
+    /// The startup parameters ("settings": profile `setting = true`; SDO information list
+    /// type 5, ObjAccess bit 9), as `(index, subindex)` sorted ascending.
+    pub settings: &'static [(u16, u8)],
+}
+
+impl DeviceInfo {
+    /// Whether `index:subindex` is a startup parameter ([`Self::settings`]).
+    pub fn is_setting(&self, index: u16, subindex: u8) -> bool {
+        self.settings.binary_search(&(index, subindex)).is_ok()
+    }
 }
 
 /// OD RAM offsets of the variables the generic application reads and writes, by role. A role the
@@ -324,6 +375,8 @@ pub struct AppVars {
     pub target_position: Option<u16>,
     /// 6064h position actual value (i32).
     pub position_actual_value: Option<u16>,
+    /// 603Fh error code (u16).
+    pub error_code: Option<u16>,
 }
 
 impl AppVars {
@@ -335,6 +388,7 @@ impl AppVars {
         modes_of_operation_display: None,
         target_position: None,
         position_actual_value: None,
+        error_code: None,
     };
 }
 

@@ -136,12 +136,26 @@ impl Group {
     }
 }
 
-/// Whether `entry` of `object` is a stored parameter (see the module documentation).
-pub fn is_storable(object: &Object, entry: &Entry) -> bool {
+/// Whether `entry` of `object` is a stored parameter (see the module documentation). The one
+/// rule for "backup" entries too: SDO information list type 4 and ObjAccess bit 8 use it, and
+/// the generated dictionary asserts at compile time that od-gen's ESI `Flags/Backup` agree.
+pub const fn is_storable(object: &Object, entry: &Entry) -> bool {
     matches!(entry.value, Value::Ram(_))
         && entry.access.writable()
-        && entry.pdo == PdoMappable::No
-        && !NOT_STORED.contains(&object.index)
+        && matches!(entry.pdo, PdoMappable::No)
+        && !is_not_stored(object.index)
+}
+
+/// Whether `index` is one of [`NOT_STORED`].
+const fn is_not_stored(index: u16) -> bool {
+    let mut i = 0;
+    while i < NOT_STORED.len() {
+        if NOT_STORED[i] == index {
+            return true;
+        }
+        i += 1;
+    }
+    false
 }
 
 /// Why parameters could not be loaded, stored or restored.

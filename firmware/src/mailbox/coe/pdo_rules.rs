@@ -13,12 +13,19 @@
 //!   16xxh/17xxh, 1C13h → 1Axxh/1Bxxh), else 0x06090030; writing SI0 = n re-checks entries 1..=n.
 //!
 //! The generic checks (access rights per state, length, SI0 ≤ highest subindex) run before these.
+//!
+//! One more rule guards the process data ([`check_rx_mapped`]): in SAFEOP and OP, a download to
+//! an entry that a PDO assigned in 1C12h maps is refused with 0x06010006 "object mapped to
+//! RxPDO, SDO download blocked" when the profile says so
+//! ([`RxMappedWrite::Blocked`](crate::od::RxMappedWrite::Blocked)).
 
 use core::ops::RangeInclusive;
 
+use hal::esc::AlState;
+
 use super::abort::AbortCode;
 use super::value::as_u32;
-use crate::od::Dictionary;
+use crate::od::{Dictionary, RxMappedWrite};
 
 /// RxPDO mapping objects (outputs, master → slave), ETG.1000.6 Table 67.
 pub const RX_MAPPING: RangeInclusive<u16> = 0x1600..=0x17FF;
@@ -201,5 +208,47 @@ fn check_assignment_entry(
     match u16::try_from(value) {
         Ok(pdo) if range.contains(&pdo) && od.object(pdo).is_some() => Ok(()),
         _ => Err(AbortCode::ValueRange),
+    }
+}
+
+/// Whether `index:subindex` is mapped by a PDO assigned in 1C12h: the active RxPDO mapping
+/// (fixed from PREOP → SAFEOP on, because 1C12h and 16xxh are writable in PREOP only).
+pub fn is_rx_mapped(od: &Dictionary<'_>, index: u16, subindex: u8) -> bool {
+    let assigned = od.read_u32(RX_ASSIGN, 0).unwrap_or(0);
+    (1..=assigned).any(|a| {
+        let pdo = u8::try_from(a)
+            .ok()
+            .and_then(|a| od.read_u32(RX_ASSIGN, a))
+            .and_then(|v| u16::try_from(v).ok());
+        let Some(pdo) = pdo.filter(|p| RX_MAPPING.contains(p)) else {
+            return false;
+        };
+        let count = od.read_u32(pdo, 0).unwrap_or(0);
+        (1..=count).any(|si| {
+            u8::try_from(si)
+                .ok()
+                .and_then(|si| od.read_u32(pdo, si))
+                .map(MappingEntry::from_u32)
+                .is_some_and(|m| m.index == index && m.subindex == subindex)
+        })
+    })
+}
+
+/// ETG.1000.6 Table 41, 0x06010006: in SAFEOP and OP, with the profile's
+/// `pdo.sdo_write_to_rx_mapped = "blocked"`, a download to an entry of the active RxPDO mapping
+/// is refused (the next process-data cycle would overwrite it). PREOP (no PDO runs) and
+/// `"allowed"` profiles pass.
+pub(super) fn check_rx_mapped(
+    od: &Dictionary<'_>,
+    state: AlState,
+    index: u16,
+    subindex: u8,
+) -> Result<(), AbortCode> {
+    let blocked = od.profile().device.sdo_write_to_rx_mapped == RxMappedWrite::Blocked
+        && matches!(state, AlState::SafeOp | AlState::Op);
+    if blocked && is_rx_mapped(od, index, subindex) {
+        Err(AbortCode::MappedToRxPdo)
+    } else {
+        Ok(())
     }
 }

@@ -835,6 +835,7 @@ fn find_writable(
 ) -> Result<&'static Entry, AbortCode> {
     let entry = find_entry(od, index, subindex)?;
     check_access(entry.access, state, AccessKind::Write)?;
+    pdo_rules::check_rx_mapped(od, state, index, subindex)?;
     Ok(entry)
 }
 
@@ -871,8 +872,8 @@ fn state_bit(state: AlState, kind: AccessKind) -> u8 {
     }
 }
 
-/// Runs every download check on `data` and stores it: access, length, subindex 0 count, PDO
-/// rules, range.
+/// Runs every download check on `data` and stores it: access, RxPDO-mapped (0x06010006),
+/// length, subindex 0 count, PDO rules, range.
 pub(super) fn write_entry(
     od: &mut Dictionary<'_>,
     state: AlState,
@@ -882,6 +883,7 @@ pub(super) fn write_entry(
 ) -> Result<(), AbortCode> {
     let entry = find_entry(od, index, subindex)?;
     check_access(entry.access, state, AccessKind::Write)?;
+    pdo_rules::check_rx_mapped(od, state, index, subindex)?;
     check_length(entry, data.len())?;
     check_subindex0(od, index, subindex, data)?;
     pdo_rules::check_write(od, index, subindex, data)?;

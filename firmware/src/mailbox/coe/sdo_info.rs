@@ -20,8 +20,11 @@
 //! [`InfoServer::next_fragment`] (the mailbox layer calls it each time SM1 is free again). The
 //! response is regenerated from the static dictionary for each fragment, so no buffer holds it.
 //!
-//! Lists 4 (stored for device replacement) and 5 (startup parameters) are empty: no entry of
-//! the model carries the backup or setting flag (ObjAccess bits 8/9 are never set).
+//! List 4 (stored for device replacement, "backup") holds the objects with an entry the
+//! parameter storage stores ([`crate::params::is_storable`], the one rule for 1010h and for
+//! this list); list 5 (startup parameters, "settings") the objects with an entry the profile
+//! marks `setting = true` ([`crate::od::DeviceInfo::settings`]). The same entries carry
+//! ObjAccess bit 8 (backup) and bit 9 (setting) in their entry description.
 //!
 //! The data type of an object description is the entry type for VAR and ARRAY; for RECORD it is
 //! the CiA 301 complex type where one applies (0x0023 IDENTITY for 1018h, 0x0021 PDO_MAPPING for
@@ -31,6 +34,7 @@ use super::abort::AbortCode;
 use super::pdo_rules::{RX_MAPPING, TX_MAPPING};
 use super::CoeError;
 use crate::od::{Entry, Object, ObjectCode, PdoMappable, Profile};
+use crate::params::is_storable;
 
 /// Length of the SDO information header.
 pub const INFO_HEADER_LEN: usize = 4;
@@ -92,6 +96,10 @@ mod obj_access {
     pub const RX_PDO: u16 = 1 << 6;
     /// Mappable into a TxPDO.
     pub const TX_PDO: u16 = 1 << 7;
+    /// Stored for device replacement (backup).
+    pub const BACKUP: u16 = 1 << 8;
+    /// Startup parameter (setting).
+    pub const SETTING: u16 = 1 << 9;
 }
 
 /// CiA 301 complex data types used as object data types of records.
@@ -337,7 +345,7 @@ fn payload(profile: &'static Profile, reply: Reply, sink: &mut Sink<'_>) -> usiz
     match reply {
         Reply::OdList(t) => od_list(profile, t, sink),
         Reply::Object(o) => object_description(o, sink),
-        Reply::Entry(index, e, info) => entry_description(index, e, info, sink),
+        Reply::Entry(index, e, info) => entry_description(profile, index, e, info, sink),
     }
     sink.pos
 }
@@ -346,24 +354,36 @@ fn od_list(profile: &Profile, list_type: u16, sink: &mut Sink<'_>) {
     sink.u16(list_type);
     if list_type == list::COUNTS {
         for t in list::ALL..=list::STARTUP {
-            let n = profile.objects.iter().filter(|o| in_list(o, t)).count();
+            let n = profile
+                .objects
+                .iter()
+                .filter(|o| in_list(profile, o, t))
+                .count();
             sink.u16(u16::try_from(n).unwrap_or(u16::MAX));
         }
         return;
     }
-    for o in profile.objects.iter().filter(|o| in_list(o, list_type)) {
+    for o in profile
+        .objects
+        .iter()
+        .filter(|o| in_list(profile, o, list_type))
+    {
         sink.u16(o.index);
     }
 }
 
 /// Whether object `o` belongs to OD list `list_type` (1..=5).
-fn in_list(o: &Object, list_type: u16) -> bool {
+fn in_list(profile: &Profile, o: &Object, list_type: u16) -> bool {
     let any = |f: fn(PdoMappable) -> bool| o.entries.iter().any(|e| f(e.pdo));
     match list_type {
         list::ALL => true,
         list::RX_MAPPABLE => any(PdoMappable::rx),
         list::TX_MAPPABLE => any(PdoMappable::tx),
-        list::BACKUP | list::STARTUP => false,
+        list::BACKUP => o.entries.iter().any(|e| is_storable(o, e)),
+        list::STARTUP => o
+            .entries
+            .iter()
+            .any(|e| profile.device.is_setting(o.index, e.subindex)),
         _ => false,
     }
 }
@@ -394,12 +414,12 @@ fn object_data_type(o: &Object) -> u16 {
     }
 }
 
-fn entry_description(index: u16, e: &Entry, info: u8, sink: &mut Sink<'_>) {
+fn entry_description(profile: &Profile, index: u16, e: &Entry, info: u8, sink: &mut Sink<'_>) {
     sink.u16(index);
     sink.put(&[e.subindex, info]);
     sink.u16(e.data_type.code());
     sink.u16(e.bit_len);
-    sink.u16(entry_access(e));
+    sink.u16(entry_access(profile, index, e));
     if info & value_info::UNIT_TYPE != 0 {
         sink.u16(NO_UNIT);
     }
@@ -415,14 +435,20 @@ fn entry_description(index: u16, e: &Entry, info: u8, sink: &mut Sink<'_>) {
     sink.put(e.name.as_bytes());
 }
 
-/// ObjAccess: the per-state access bits and the PDO mapping bits.
-fn entry_access(e: &Entry) -> u16 {
+/// ObjAccess: the per-state access bits, the PDO mapping bits, backup and setting.
+fn entry_access(profile: &Profile, index: u16, e: &Entry) -> u16 {
     let mut access = u16::from(e.access.0);
     if e.pdo.rx() {
         access |= obj_access::RX_PDO;
     }
     if e.pdo.tx() {
         access |= obj_access::TX_PDO;
+    }
+    if profile.object(index).is_some_and(|o| is_storable(o, e)) {
+        access |= obj_access::BACKUP;
+    }
+    if profile.device.is_setting(index, e.subindex) {
+        access |= obj_access::SETTING;
     }
     access
 }

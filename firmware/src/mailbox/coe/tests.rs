@@ -264,6 +264,7 @@ static PROFILE: Profile = Profile {
             dc_sync1: false,
             min_cycle_ns: 1_000_000,
             max_cycle_ns: 10_000_000,
+            cycle_step_ns: 1,
         },
         max_pdo_entries: 4,
         mailbox_protocols: COE_PROTOCOL,
@@ -275,6 +276,9 @@ static PROFILE: Profile = Profile {
             upload_at_startup: false,
             complete_access: false,
         },
+        esm: crate::od::test_device().esm,
+        sdo_write_to_rx_mapped: crate::od::RxMappedWrite::Allowed,
+        settings: &[],
     },
     objects: &OBJECTS,
     defaults: &DEFAULTS,
@@ -298,13 +302,19 @@ const TEXT: &[u8; 42] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnop";
 struct Bench {
     ram: [u8; RAM_SIZE],
     coe: CoeServer,
+    profile: &'static Profile,
 }
 
 impl Bench {
     fn new() -> Self {
+        Self::with_profile(&PROFILE)
+    }
+
+    fn with_profile(profile: &'static Profile) -> Self {
         Self {
             ram: DEFAULTS,
             coe: CoeServer::new(),
+            profile,
         }
     }
 
@@ -315,7 +325,7 @@ impl Bench {
         mailbox: usize,
         request: &[u8],
     ) -> Result<Vec<u8>, CoeError> {
-        let mut od = Dictionary::new(&PROFILE, &mut self.ram);
+        let mut od = Dictionary::new(self.profile, &mut self.ram);
         let mut response = [0xEEu8; MAILBOX];
         let response = &mut response[..mailbox - MBX_HEADER];
         let n = self.coe.handle(&mut od, state, request, response)?;
@@ -338,13 +348,13 @@ impl Bench {
     }
 
     fn value(&mut self, index: u16, subindex: u8) -> Vec<u8> {
-        let od = Dictionary::new(&PROFILE, &mut self.ram);
+        let od = Dictionary::new(self.profile, &mut self.ram);
         let e = od.entry(index, subindex).expect("entry");
         od.value(e).expect("value").to_vec()
     }
 
     fn set(&mut self, index: u16, subindex: u8, data: &[u8]) {
-        let mut od = Dictionary::new(&PROFILE, &mut self.ram);
+        let mut od = Dictionary::new(self.profile, &mut self.ram);
         let e = od.entry(index, subindex).expect("entry");
         od.set_value(e, data).expect("set");
     }
@@ -1152,4 +1162,83 @@ fn never_panics_on_arbitrary_requests() {
         let state = states[usize::from(next()) % states.len()];
         let _ = b.call(state, mailbox, &req);
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// RxPDO-mapped entries (profile rule `pdo.sdo_write_to_rx_mapped`)
+// ---------------------------------------------------------------------------------------------
+
+/// ETG.1000.6 Table 41: object mapped to RxPDO, SDO download blocked.
+const MAPPED_TO_RX_PDO: u32 = 0x0601_0006;
+
+/// The fixture profile with `sdo_write_to_rx_mapped = "blocked"`.
+fn blocking_profile() -> &'static Profile {
+    std::boxed::Box::leak(std::boxed::Box::new(Profile {
+        device: DeviceInfo {
+            sdo_write_to_rx_mapped: crate::od::RxMappedWrite::Blocked,
+            ..PROFILE.device
+        },
+        ..PROFILE
+    }))
+}
+
+#[test]
+fn download_to_rx_mapped_entry_is_blocked_in_safeop_and_op_only() {
+    // 1C12h:01 = 1600h, 1600h:01 = 6040:00/16.
+    let mut b = Bench::with_profile(blocking_profile());
+    for state in [AlState::SafeOp, AlState::Op] {
+        assert_eq!(
+            b.in_state(state, &download_u16(0x6040, 0, 0x000F)),
+            abort(0x6040, 0, MAPPED_TO_RX_PDO),
+            "{state:?}"
+        );
+        assert_eq!(b.value(0x6040, 0), [0, 0], "value untouched");
+        // Normal (non-expedited) download, 2 bytes announced.
+        let normal = [0x00, 0x20, 0x21, 0x40, 0x60, 0x00, 2, 0, 0, 0, 0x0F, 0x00];
+        assert_eq!(
+            b.in_state(state, &normal),
+            abort(0x6040, 0, MAPPED_TO_RX_PDO)
+        );
+        // Mappable but not mapped: served.
+        assert_eq!(
+            b.in_state(state, &download_u32(0x607A, 0, 7)),
+            download_ok(0x607A, 0)
+        );
+    }
+    assert_eq!(
+        b.preop(&download_u16(0x6040, 0, 0x0006)),
+        download_ok(0x6040, 0)
+    );
+    assert_eq!(b.value(0x6040, 0), [0x06, 0]);
+}
+
+#[test]
+fn the_active_mapping_decides_what_is_blocked() {
+    let mut b = Bench::with_profile(blocking_profile());
+    // Remap 1600h:01 to 607A:00/32 (as PREOP editing would leave it).
+    b.set(0x1600, 1, &0x607A_0020u32.to_le_bytes());
+    assert_eq!(
+        b.in_state(AlState::Op, &download_u16(0x6040, 0, 1)),
+        download_ok(0x6040, 0)
+    );
+    assert_eq!(
+        b.in_state(AlState::Op, &download_u32(0x607A, 0, 1)),
+        abort(0x607A, 0, MAPPED_TO_RX_PDO)
+    );
+    // Nothing assigned: nothing blocked.
+    b.set(0x1C12, 0, &[0]);
+    assert_eq!(
+        b.in_state(AlState::Op, &download_u32(0x607A, 0, 2)),
+        download_ok(0x607A, 0)
+    );
+}
+
+#[test]
+fn allowed_profile_serves_download_to_rx_mapped_entry_in_op() {
+    let mut b = Bench::new();
+    assert_eq!(
+        b.in_state(AlState::Op, &download_u16(0x6040, 0, 0x000F)),
+        download_ok(0x6040, 0)
+    );
+    assert_eq!(b.value(0x6040, 0), [0x0F, 0]);
 }

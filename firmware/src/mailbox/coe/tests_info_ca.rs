@@ -12,6 +12,7 @@ use hal::esc::AlState;
 
 use super::{CoeServer, RamDomain};
 use crate::od::{Dictionary, Profile};
+use crate::params::is_storable;
 use crate::profiles::standard;
 
 const MAILBOX: usize = 256;
@@ -107,11 +108,14 @@ fn od_list_type_0_answers_the_count_of_each_list_type() {
     let all = profile().objects.len() as u16;
     let rx = indices(|o| o.entries.iter().any(|e| e.pdo.rx())).len() as u16;
     let tx = indices(|o| o.entries.iter().any(|e| e.pdo.tx())).len() as u16;
+    let backup = indices(|o| o.entries.iter().any(|e| is_storable(o, e))).len() as u16;
+    let settings = profile().device.settings.len() as u16;
+    assert!(backup > 0 && settings > 0);
     let expected = cat(&[
         &INFO,
         &[0x02, 0, 0, 0],
         &le16(0),
-        &words(&[all, rx, tx, 0, 0]),
+        &words(&[all, rx, tx, backup, settings]),
     ]);
     assert_eq!(Bench::new().call(&od_list_request(0)), expected);
 }
@@ -132,12 +136,43 @@ fn od_list_types_1_to_3_list_the_matching_objects_in_index_order() {
 }
 
 #[test]
-fn od_list_types_4_and_5_are_empty() {
+fn od_list_type_4_lists_the_objects_the_parameter_storage_stores() {
     let mut b = Bench::new();
-    for t in [4u16, 5] {
-        let expected = cat(&[&INFO, &[0x02, 0, 0, 0], &le16(t)]);
-        assert_eq!(b.call(&od_list_request(t)), expected);
-    }
+    // The storable objects of the standard profile (params::is_storable): 10F1h, 10F3h, the PDO
+    // mapping and assignment, 2F00h; not 1010h/1011h, 1C32h/1C33h or process data.
+    let backup = [0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2F00];
+    assert_eq!(
+        indices(|o| o.entries.iter().any(|e| is_storable(o, e))),
+        backup
+    );
+    let expected = cat(&[&INFO, &[0x02, 0, 0, 0], &le16(4), &words(&backup)]);
+    assert_eq!(b.call(&od_list_request(4)), expected);
+}
+
+#[test]
+fn od_list_type_5_lists_the_profiles_startup_parameters() {
+    let mut b = Bench::new();
+    // standard.toml: `setting = true` on 2F00h and 6060h.
+    let expected = cat(&[&INFO, &[0x02, 0, 0, 0], &le16(5), &words(&[0x2F00, 0x6060])]);
+    assert_eq!(b.call(&od_list_request(5)), expected);
+}
+
+#[test]
+fn entry_description_carries_backup_and_setting_bits() {
+    let mut b = Bench::new();
+    let access = |b: &mut Bench, index: u16| {
+        let r = b.call(&cat(&[&INFO, &[0x05, 0, 0, 0], &le16(index), &[0, 0]]));
+        // CoE 2 + info header 4 + index 2 + subindex/value info 2 + type 2 + bit length 2.
+        u16::from_le_bytes([r[14], r[15]])
+    };
+    const BACKUP: u16 = 1 << 8;
+    const SETTING: u16 = 1 << 9;
+    // 2F00h: RW, stored, startup parameter.
+    assert_eq!(access(&mut b, 0x2F00), 0x003F | BACKUP | SETTING);
+    // 6060h: RW, RxPDO-mappable (process data: not stored), startup parameter.
+    assert_eq!(access(&mut b, 0x6060), 0x003F | 0x0040 | SETTING);
+    // 6040h: neither.
+    assert_eq!(access(&mut b, 0x6040), 0x003F | 0x0040);
 }
 
 #[test]
