@@ -95,7 +95,7 @@ fn sm_watchdog_expiry_in_op_drops_to_safeop_with_0x1b() {
 }
 
 #[test]
-fn loss_of_sync0_in_op_gives_sync_error_0x1a() {
+fn sync_unit_switched_off_in_op_is_a_fatal_sync_error_0x2c() {
     block_on(async {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
@@ -111,13 +111,13 @@ fn loss_of_sync0_in_op_gives_sync_error_0x1a() {
             0,
             "no sync error yet"
         );
-        // SYNC0 stops (cyclic unit deactivated) while the master keeps cycling.
+        // The master deactivates the cyclic unit (0x0981) while it keeps cycling: SYNC0 is gone
+        // for good. One missed SYNC0 adds 3 to the counter; the limit 10F1:02 is 4.
         Command::fpwr(STATION, DC_ACTIVATION)
             .send(md, 0u8)
             .await
             .expect("0x0981 = 0");
         m.shared.advance(CYCLE_NS / 2);
-        // One missed SYNC0 adds 3 to the counter; the limit 10F1:02 is 4, so the second trips.
         let mut tripped_after = None;
         for k in 1..=10 {
             group.tx_rx_dc(md).await.expect("tx/rx");
@@ -129,8 +129,8 @@ fn loss_of_sync0_in_op_gives_sync_error_0x1a() {
         }
         assert_eq!(
             al(md).await,
-            (SAFEOP | ERROR, 0x001A),
-            "SAFEOP + error, sync error"
+            (SAFEOP | ERROR, 0x002C),
+            "SAFEOP + error, fatal sync error"
         );
         assert!(
             matches!(tripped_after, Some(1..=3)),
@@ -155,7 +155,37 @@ fn loss_of_sync0_in_op_gives_sync_error_0x1a() {
 }
 
 #[test]
-fn disabling_sm2_in_safeop_drops_to_preop_with_0x1d() {
+fn missed_sync0_pulses_give_sync_error_0x1a() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md = &*m.maindevice;
+        let group = into_op_with_dc(&m).await;
+        for _ in 0..10 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        // SYNC0 keeps running but only every second cycle: every other pulse is missed
+        // (+3 per miss, -1 per pulse: 3, 2, 5 > 4 trips within a few cycles).
+        const SYNC0_CYCLE: u16 = 0x09A0;
+        Command::fpwr(STATION, SYNC0_CYCLE)
+            .send(md, 2 * CYCLE_NS as u32)
+            .await
+            .expect("0x09A0");
+        for _ in 0..10 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(
+            al(md).await,
+            (SAFEOP | ERROR, 0x001A),
+            "SAFEOP + error, synchronization error"
+        );
+    });
+}
+
+#[test]
+fn disabling_sm2_in_safeop_gives_0x1d_with_safeop_and_error() {
     block_on(async {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
@@ -172,8 +202,8 @@ fn disabling_sm2_in_safeop_drops_to_preop_with_0x1d() {
             .expect("disable SM2");
         assert_eq!(
             al(md).await,
-            (0x0002 | ERROR, 0x001D),
-            "PREOP + error, invalid output config"
+            (SAFEOP | ERROR, 0x001D),
+            "ETG.1000.6 Table 11: 0x001D in SAFEOP/OP → SAFEOP + error"
         );
     });
 }
@@ -254,6 +284,11 @@ fn sm_parameters_report_measured_calc_and_copy_time() {
         );
         assert_eq!(in_calc, out_calc);
         assert_eq!(delay, out_calc);
+        assert_eq!(
+            sd.sdo_read::<u32>(0x1C32, 0x03).await.expect("1C32:03"),
+            out_calc,
+            "shift"
+        );
         assert_eq!(
             sd.sdo_read::<u16>(0x1C32, 0x0C).await.expect("1C32:0C"),
             0,
