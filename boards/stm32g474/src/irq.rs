@@ -60,7 +60,9 @@ use crate::et1100_spi::{Error as PdiError, Et1100Spi};
 use crate::lock::BasepriRawMutex;
 use crate::pins::SYNC0_EXTI_LINE;
 use crate::profile::RAM_SIZE;
+use crate::storage::FlashStorage;
 use crate::time::now_ns;
+use firmware::params::ParamStore;
 
 /// Interrupt priorities (see the module table).
 pub mod prio {
@@ -97,6 +99,8 @@ pub struct Drive {
     pub slave: Slave<RAM_SIZE>,
     /// The ET1100.
     pub pdi: Et1100Spi<'static>,
+    /// 1010h/1011h parameter storage in flash bank 2.
+    pub params: ParamStore<FlashStorage>,
 }
 
 /// Storage of the [`Drive`] (in .bss: `StaticCell` is uninitialised memory, where a
@@ -320,6 +324,9 @@ where
 /// context and from the thread-mode fallback poll.
 pub fn service_esc_events() {
     let started = DWT::cycle_count();
-    let result = with_drive(|d| d.slave.on_esc_event(&mut d.pdi, now_ns()));
+    let result = with_drive(|d| {
+        d.slave
+            .on_esc_event_with(&mut d.pdi, &mut d.params, now_ns())
+    });
     EVENT_STATS.record(started, result);
 }

@@ -24,18 +24,22 @@ mod leds;
 mod lock;
 mod pins;
 mod profile;
+mod storage;
 mod tasks;
 mod time;
 
-use defmt::{error, info, unwrap};
+use defmt::{error, info, unwrap, warn};
 use embassy_executor::Spawner;
+use embassy_stm32::flash::{Blocking, Flash};
 use embassy_time::{Duration, Timer};
+use firmware::params::ParamStore;
 use firmware::slave::Slave;
 use hal::esc::regs;
 use hal::pdi::EscPdi;
 use {defmt_rtt as _, panic_probe as _};
 
 use crate::et1100_spi::Et1100Spi;
+use crate::storage::FlashStorage;
 
 /// Start-up probe: attempts and spacing. The ET1100 loads its SII EEPROM after reset (tens of
 /// ms for a few KiB at 100/400 kHz I²C) and only then enables the SPI PDI; 100 × 10 ms = 1 s.
@@ -74,18 +78,27 @@ async fn probe_esc(pdi: &mut Et1100Spi<'_>) -> bool {
 /// Creates the slave, starts it if the ESC is ready, and installs slave and PDI as the shared
 /// drive. Returns whether the slave was started. A plain function, so that the multi-KiB
 /// `Slave` never becomes part of the main task's future.
-fn install_drive(mut pdi: Et1100Spi<'static>, ready: bool) -> bool {
+fn install_drive(
+    mut pdi: Et1100Spi<'static>,
+    flash: Flash<'static, Blocking>,
+    ready: bool,
+) -> bool {
     let mut started = false;
     irq::install(|| {
         // A profile whose OD RAM does not fit RAM_SIZE is a build error of od-gen: stop here.
         let mut slave: Slave<{ profile::RAM_SIZE }> = unwrap!(Slave::new(&profile::PROFILE));
+        // Parameters saved with 1010h, before the ESM starts (CiA 301: effective at power-on).
+        let mut params = ParamStore::new(FlashStorage::new(flash));
+        if slave.load_parameters(&mut params).is_err() {
+            warn!("stored parameters not loaded: defaults in use");
+        }
         // AL status INIT and the AL event mask (drives SPI_IRQ). If the ESC is not ready yet,
         // the fallback poll task keeps probing and calls `start` once it is.
         started = ready && slave.start(&mut pdi).is_ok();
         if ready && !started {
             error!("Slave::start failed; the fallback poll retries");
         }
-        irq::Drive { slave, pdi }
+        irq::Drive { slave, pdi, params }
     });
     started
 }
@@ -109,7 +122,7 @@ async fn main(spawner: Spawner) {
     info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
     let ready = probe_esc(&mut pdi).await;
 
-    let started = install_drive(pdi, ready);
+    let started = install_drive(pdi, Flash::new_blocking(board.flash), ready);
 
     // Unmask the ESC lines only now that the drive is installed.
     let sync0 = irq::sync0_input(esc.sync0, esc.sync0_exti, irq::Irqs);

@@ -66,6 +66,8 @@ pub struct BoardPins {
     pub esc: EscPins,
     /// Status LEDs.
     pub leds: LedPins,
+    /// Internal flash (the 1010h parameter pages, see `storage`).
+    pub flash: Peri<'static, p::FLASH>,
 }
 
 /// Splits the peripheral set into the board's functional groups.
@@ -86,5 +88,6 @@ pub fn split(p: Peripherals) -> BoardPins {
             run: p.PB10,
             err: p.PB11,
         },
+        flash: p.FLASH,
     }
 }
