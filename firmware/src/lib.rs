@@ -25,6 +25,7 @@ pub mod diag;
 pub mod esm;
 pub mod leds;
 pub mod mailbox;
+pub mod motor;
 pub mod od;
 pub mod params;
 pub mod pdo;

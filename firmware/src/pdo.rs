@@ -292,6 +292,7 @@ mod tests {
         objects: &OBJECTS,
         defaults: &DEFAULTS,
         vars: AppVars::NONE,
+        motor_faults: &crate::profiles::standard::MOTOR_FAULTS,
     };
 
     fn od_with(ram: &mut [u8; 31], mapping: &[u32]) {

@@ -3,6 +3,8 @@
 use std::fmt;
 use std::path::PathBuf;
 
+use crate::model::MOTOR_FAULT_NAMES;
+
 /// Everything that can go wrong while loading a profile or writing an output.
 #[derive(Debug)]
 pub enum Error {
@@ -143,6 +145,10 @@ pub enum Invalid {
     Sync(String),
     /// Inconsistent mailbox / CoE settings.
     Mailbox(String),
+    /// A `[motor_faults]` key that is not the name of an internal motor fault.
+    UnknownMotorFault(String),
+    /// Internal motor faults that `[motor_faults]` does not map to an error code.
+    MissingMotorFaults(Vec<&'static str>),
     /// The SII image does not fit the declared EEPROM size.
     EepromTooSmall {
         /// Bytes needed.
@@ -201,6 +207,17 @@ impl fmt::Display for Invalid {
                 write!(f, "{sm} control byte {control:#04x}: {why}")
             }
             Self::Sync(s) | Self::Mailbox(s) => write!(f, "{s}"),
+            Self::UnknownMotorFault(name) => write!(
+                f,
+                "`{name}` is not an internal motor fault; the names are: {}",
+                MOTOR_FAULT_NAMES.join(", ")
+            ),
+            Self::MissingMotorFaults(missing) => write!(
+                f,
+                "every motor fault needs an error code; missing: {} (the names are: {})",
+                missing.join(", "),
+                MOTOR_FAULT_NAMES.join(", ")
+            ),
             Self::EepromTooSmall { needed, declared } => {
                 write!(f, "the SII image needs {needed} bytes, eeprom.byte_size is {declared}")
             }

@@ -2,6 +2,8 @@
 //! meaning of every key; [`crate::resolve`] turns a [`ProfileFile`] into a checked
 //! [`crate::Profile`].
 
+use std::collections::BTreeMap;
+
 use serde::Deserialize;
 
 /// A whole profile file.
@@ -33,6 +35,11 @@ pub struct ProfileFile {
     /// EtherCAT state machine rules (optional: every key has a default).
     #[serde(default)]
     pub esm: EsmFile,
+    /// `[motor_faults]`: the CiA402 error code (603Fh, EMCY) of each internal motor fault, by
+    /// fault name ([`crate::model::MOTOR_FAULT_NAMES`]). Every fault must be mapped; an absent
+    /// table is reported as every name missing.
+    #[serde(default)]
+    pub motor_faults: BTreeMap<String, u16>,
     /// RxPDOs (master → slave, SM2).
     #[serde(default, rename = "rxpdo")]
     pub rx_pdos: Vec<PdoFile>,

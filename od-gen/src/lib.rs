@@ -13,7 +13,7 @@
 //! |---|---|
 //! | [`file`] | the TOML format (serde types; every key is documented there and in `README.md`) |
 //! | [`resolve`] | file → checked [`Profile`] with the derived objects |
-//! | `validate` | profile-wide checks (SM layout, mailbox, sync, roles, EEPROM size) |
+//! | `validate` | profile-wide checks (SM layout, mailbox, sync, roles, motor-fault codes, EEPROM size) |
 //! | [`model`] | the resolved profile |
 //! | [`rust`] | the generated Rust (`OUT_DIR/profiles.rs` of the firmware) |
 //! | [`sii`] | the SII EEPROM image |

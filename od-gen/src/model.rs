@@ -784,6 +784,31 @@ impl RxMappedWrite {
     }
 }
 
+/// Number of internal motor faults (`firmware::motor::MotorFault::ALL.len()`).
+pub const MOTOR_FAULT_COUNT: usize = 15;
+
+/// The names of the firmware's internal motor faults (`firmware::motor::MotorFault::name()`), in
+/// code order (fault code 1 first): the keys of the profile's `[motor_faults]` table. od-gen
+/// cannot depend on the firmware, so the list is kept here; the generated code checks at compile
+/// time that it equals the firmware's (`check::motor_fault_names_agree`).
+pub const MOTOR_FAULT_NAMES: [&str; MOTOR_FAULT_COUNT] = [
+    "over_current",
+    "motor_overload",
+    "drive_overload",
+    "bus_over_voltage",
+    "bus_under_voltage",
+    "over_speed",
+    "encoder_signal_loss",
+    "encoder_jump",
+    "encoder_crc",
+    "drive_over_temperature",
+    "motor_over_temperature",
+    "following_error",
+    "current_offset",
+    "alignment",
+    "identification",
+];
+
 /// A checked profile with all derived objects.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Profile {
@@ -813,6 +838,9 @@ pub struct Profile {
     pub sdo_write_to_rx_mapped: RxMappedWrite,
     /// ESM rules.
     pub esm: EsmRules,
+    /// CiA402 error code (603Fh, EMCY) of each internal motor fault, in the order of
+    /// [`MOTOR_FAULT_NAMES`] (`[motor_faults]`).
+    pub motor_faults: [u16; MOTOR_FAULT_COUNT],
     /// RxPDOs, sorted by index.
     pub rx_pdos: Vec<Pdo>,
     /// TxPDOs, sorted by index.

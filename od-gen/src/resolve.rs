@@ -84,6 +84,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         safeop_op_timeout_ms: f.esm.safeop_op_timeout_ms,
         op_exit_while_enabled_error: f.esm.op_exit_while_enabled_error,
     };
+    let motor_faults = motor_faults(&f.motor_faults)?;
     let sdo_write_to_rx_mapped = match f.pdo.sdo_write_to_rx_mapped.as_deref() {
         None => RxMappedWrite::Allowed,
         Some(s) => RxMappedWrite::parse(s).ok_or_else(|| {
@@ -236,6 +237,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         max_pdo_entries: max_entries,
         sdo_write_to_rx_mapped,
         esm,
+        motor_faults,
         rx_pdos,
         tx_pdos,
         objects: Vec::new(),
@@ -246,6 +248,33 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     profile.objects = declared.into_values().collect();
     crate::validate::check(&profile)?;
     Ok(profile)
+}
+
+/// `[motor_faults]` → the codes in the order of [`MOTOR_FAULT_NAMES`]. Unknown names are reported
+/// first (the first in key order), then every missing name at once. Zero codes are checked in
+/// [`crate::validate`].
+fn motor_faults(map: &BTreeMap<String, u16>) -> Result<[u16; MOTOR_FAULT_COUNT], Fault> {
+    if let Some(name) = map
+        .keys()
+        .find(|k| !MOTOR_FAULT_NAMES.contains(&k.as_str()))
+    {
+        return Err(fault(
+            &format!("motor_faults.{name}"),
+            Invalid::UnknownMotorFault(name.clone()),
+        ));
+    }
+    let missing: Vec<&'static str> = MOTOR_FAULT_NAMES
+        .into_iter()
+        .filter(|n| !map.contains_key(*n))
+        .collect();
+    if !missing.is_empty() {
+        return Err(fault("motor_faults", Invalid::MissingMotorFaults(missing)));
+    }
+    let mut codes = [0u16; MOTOR_FAULT_COUNT];
+    for (code, name) in codes.iter_mut().zip(MOTOR_FAULT_NAMES) {
+        *code = map.get(name).copied().unwrap_or(0);
+    }
+    Ok(codes)
 }
 
 pub(crate) fn fault(key: &str, error: Invalid) -> Fault {

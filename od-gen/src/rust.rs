@@ -11,21 +11,24 @@
 //!     pub const OBJECTS: &[Object];      // sorted by index, entries by subindex
 //!     pub const SETTINGS: &[(u16, u8)];  // startup parameters (`setting = true`)
 //!     pub const BACKUP: &[(u16, u8)];    // entries the parameter storage stores
+//!     pub const MOTOR_FAULTS: [u16; N];  // 603Fh/EMCY code per motor fault (`[motor_faults]`)
 //!     pub static PROFILE: Profile;
 //! }
 //! ```
 //!
-//! plus `MAX_RAM_SIZE`, `ALL` and `by_name` at the top level, and `const` assertions that the
+//! plus `MAX_RAM_SIZE`, `ALL`, `by_name` and `MOTOR_FAULT_NAMES` (od-gen's list of the internal
+//! motor faults, the order of every `MOTOR_FAULTS`) at the top level, and `const` assertions that
+//! `MOTOR_FAULT_NAMES` equals `firmware::motor::MotorFault::ALL` (names, in code order), that the
 //! objects and entries are sorted, every RAM variable lies inside `RAM_SIZE`, and the default
 //! PDO assignment read back from the generated 1C12h/1C13h and 16xxh/1Axxh adds up to the SM2/SM3
 //! sizes that the SII and the ESI carry, and that `BACKUP` (od-gen's ESI `Flags/Backup`) is
-//! exactly what `firmware::params::is_storable` stores. The code uses only `core` and the types of
-//! `firmware::od::model`.
+//! exactly what `firmware::params::is_storable` stores. The code uses only `core`, the types of
+//! `firmware::od::model` and, in the checks, `firmware::params` and `firmware::motor::MotorFault`.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::model::{Access, Entry, Object, Profile, Role, Sm, Storage};
+use crate::model::{Access, Entry, Object, Profile, Role, Sm, Storage, MOTOR_FAULT_NAMES};
 
 /// Where each RAM variable of a profile lives.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -198,6 +201,19 @@ fn module(out: &mut String, p: &Profile) {
         "    pub const BACKUP: &[(u16, u8)] = &[{}];",
         pairs(p, Object::is_backup)
     );
+    let _ = writeln!(
+        out,
+        "    /// 603Fh / EMCY error code of each internal motor fault (`[motor_faults]`), indexed by\n    /// `MotorFault::code() - 1` (the order of `super::MOTOR_FAULT_NAMES`)."
+    );
+    let _ = writeln!(
+        out,
+        "    pub const MOTOR_FAULTS: [u16; {}] = [",
+        p.motor_faults.len()
+    );
+    for (code, name) in p.motor_faults.iter().zip(MOTOR_FAULT_NAMES) {
+        let _ = writeln!(out, "        {code:#06x}, // {name}");
+    }
+    let _ = writeln!(out, "    ];");
 
     let var = |r: Role| -> String {
         p.objects
@@ -279,6 +295,7 @@ fn module(out: &mut String, p: &Profile) {
         let _ = writeln!(out, "            {}: {},", r.field(), var(r));
     }
     let _ = writeln!(out, "        }},");
+    let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
     let _ = writeln!(out, "    }};\n");
     let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");
     let _ = writeln!(out, "    const _: () = assert!(super::check::objects_sorted(OBJECTS), \"objects not sorted by index\");");
@@ -320,6 +337,35 @@ mod check {
         while i < o.len() {
             if o[i - 1].index >= o[i].index {
                 return false;
+            }
+            i += 1;
+        }
+        true
+    }
+
+    /// Whether `names` are the names of `crate::motor::MotorFault::ALL`, in code order (code
+    /// `i + 1` at position `i`): od-gen's list agrees with the firmware's enum.
+    pub(super) const fn motor_fault_names_agree(names: &[&str]) -> bool {
+        let all = crate::motor::MotorFault::ALL;
+        if all.len() != names.len() {
+            return false;
+        }
+        let mut i = 0;
+        while i < all.len() {
+            if all[i].code() as usize != i + 1 {
+                return false;
+            }
+            let a = all[i].name().as_bytes();
+            let b = names[i].as_bytes();
+            if a.len() != b.len() {
+                return false;
+            }
+            let mut k = 0;
+            while k < a.len() {
+                if a[k] != b[k] {
+                    return false;
+                }
+                k += 1;
             }
             i += 1;
         }
@@ -484,6 +530,21 @@ pub fn generate(profiles: &[Profile]) -> String {
         "    ALL.iter().copied().find(|p| p.device.profile == name)"
     );
     let _ = writeln!(out, "}}\n");
+    let names: Vec<String> = MOTOR_FAULT_NAMES.iter().map(|n| format!("{n:?}")).collect();
+    let _ = writeln!(
+        out,
+        "/// The internal motor faults as od-gen knows them (`MotorFault::name()`), in code order:\n/// the order of every profile's `MOTOR_FAULTS`."
+    );
+    let _ = writeln!(
+        out,
+        "pub const MOTOR_FAULT_NAMES: [&str; {}] = [{}];",
+        names.len(),
+        names.join(", ")
+    );
+    let _ = writeln!(
+        out,
+        "const _: () = assert!(check::motor_fault_names_agree(&MOTOR_FAULT_NAMES), \"od-gen's MOTOR_FAULT_NAMES differ from firmware::motor::MotorFault\");\n"
+    );
     for p in &sorted {
         module(&mut out, p);
     }

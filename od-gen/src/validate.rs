@@ -1,5 +1,6 @@
 //! Profile-wide consistency checks that need the whole resolved profile: name, SM layout and
-//! control bytes, mailbox and CoE flags, sync and DC op modes, roles, EEPROM size.
+//! control bytes, mailbox and CoE flags, sync and DC op modes, roles, motor-fault codes, EEPROM
+//! size.
 
 use std::collections::BTreeSet;
 
@@ -16,6 +17,7 @@ pub(crate) fn check(p: &Profile) -> Result<(), Fault> {
     roles(p)?;
     settings(p)?;
     esm(p)?;
+    motor_faults(p)?;
     strings(p)?;
     eeprom(p)?;
     Ok(())
@@ -439,4 +441,24 @@ fn esm(p: &Profile) -> Result<(), Fault> {
         ));
     }
     Ok(())
+}
+
+/// `[motor_faults]`: error code 0 is "no error" in 603Fh (CiA402) and in an EMCY it means "error
+/// reset", so a fault mapped to it would be invisible to the master.
+fn motor_faults(p: &Profile) -> Result<(), Fault> {
+    match MOTOR_FAULT_NAMES
+        .iter()
+        .zip(p.motor_faults)
+        .find(|(_, code)| *code == 0)
+    {
+        Some((name, _)) => Err(fault(
+            &format!("motor_faults.{name}"),
+            Invalid::Value(
+                "0x0000 is \"no error\" (603Fh) / \"error reset\" (EMCY); a fault needs a non-zero \
+                 error code"
+                    .into(),
+            ),
+        )),
+        None => Ok(()),
+    }
 }

@@ -132,3 +132,35 @@ fn sync_manager_parameters_and_access() {
         }
     }
 }
+
+/// `MOTOR_FAULTS` lists the codes in the order of `MOTOR_FAULT_NAMES` (index = fault code − 1),
+/// each commented with its name, and the profile points at it.
+#[test]
+fn motor_fault_table_order_matches_the_names() {
+    use od_gen::model::MOTOR_FAULT_NAMES;
+    let (p, code) = generated();
+    let names: Vec<String> = MOTOR_FAULT_NAMES.iter().map(|n| format!("{n:?}")).collect();
+    assert!(code.contains(&format!(
+        "pub const MOTOR_FAULT_NAMES: [&str; 15] = [{}];",
+        names.join(", ")
+    )));
+    assert!(code.contains("check::motor_fault_names_agree(&MOTOR_FAULT_NAMES)"));
+    let start = code.find("pub const MOTOR_FAULTS: [u16; 15] = [").unwrap();
+    let rows: Vec<&str> = code[start..]
+        .lines()
+        .skip(1)
+        .take_while(|l| l.trim() != "];")
+        .map(str::trim)
+        .collect();
+    let expected: Vec<String> = p
+        .motor_faults
+        .iter()
+        .zip(MOTOR_FAULT_NAMES)
+        .map(|(c, n)| format!("{c:#06x}, // {n}"))
+        .collect();
+    assert_eq!(rows, expected);
+    // over_current (code 1) first, identification (code 15) last, as in standard.toml.
+    assert_eq!(rows.first().copied(), Some("0x2320, // over_current"));
+    assert_eq!(rows.last().copied(), Some("0x6320, // identification"));
+    assert!(code.contains("        motor_faults: &MOTOR_FAULTS,\n"));
+}

@@ -517,3 +517,109 @@ fn backup_follows_the_parameter_storage_rule() {
     assert!(!backup(0x1C32, 1), "SM parameters");
     assert!(!backup(0x1018, 1), "constant");
 }
+
+/// The standard profile with its `[motor_faults]` table replaced by `table` (the whole section,
+/// header included; empty: no table).
+fn with_motor_faults(table: &str) -> String {
+    let start = STANDARD.find("[motor_faults]").unwrap();
+    let end = STANDARD[start..].find("[[rxpdo]]").unwrap() + start;
+    format!("{}{table}\n{}", &STANDARD[..start], &STANDARD[end..])
+}
+
+/// A `[motor_faults]` section mapping each of `names` (in that order) to `code(name)`.
+fn fault_table(names: &[&str], code: impl Fn(&str) -> u16) -> String {
+    let mut t = String::from("[motor_faults]\n");
+    for n in names {
+        t.push_str(&format!("{n} = {:#06x}\n", code(n)));
+    }
+    t
+}
+
+#[test]
+fn motor_faults_map_every_fault_of_the_standard_profile() {
+    use od_gen::model::{MOTOR_FAULT_COUNT, MOTOR_FAULT_NAMES};
+    let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
+    assert_eq!(p.motor_faults.len(), MOTOR_FAULT_COUNT);
+    // Spot checks against the CiA402 table: DC link over-voltage, following error.
+    let code = |name: &str| {
+        let i = MOTOR_FAULT_NAMES.iter().position(|n| *n == name).unwrap();
+        p.motor_faults[i]
+    };
+    assert_eq!(code("bus_over_voltage"), 0x3210);
+    assert_eq!(code("following_error"), 0x8611);
+    assert!(p.motor_faults.iter().all(|&c| c != 0));
+}
+
+#[test]
+fn motor_faults_unknown_name_rejected() {
+    let text = with(
+        "over_current = 0x2320",
+        "over_current = 0x2320\nover_currant = 0x2310",
+    );
+    let (key, e) = invalid(&text);
+    assert_eq!(key, "motor_faults.over_currant");
+    assert_eq!(e, Invalid::UnknownMotorFault("over_currant".into()));
+    // The message names the profile, the key and the valid names.
+    let msg = od_gen::parse(&text, "mine.toml").unwrap_err().to_string();
+    assert!(
+        msg.starts_with("mine.toml: `motor_faults.over_currant`: `over_currant` is not"),
+        "{msg}"
+    );
+    for name in od_gen::model::MOTOR_FAULT_NAMES {
+        assert!(msg.contains(name), "{msg} lacks {name}");
+    }
+}
+
+#[test]
+fn motor_faults_missing_name_rejected() {
+    let (key, e) = invalid(&with("encoder_crc = 0x7300", ""));
+    assert_eq!(key, "motor_faults");
+    assert_eq!(e, Invalid::MissingMotorFaults(vec!["encoder_crc"]));
+    let msg = od_gen::parse(&with("encoder_crc = 0x7300", ""), "mine.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.starts_with("mine.toml: `motor_faults`:"), "{msg}");
+    assert!(msg.contains("missing: encoder_crc"), "{msg}");
+
+    // No table at all: every fault is missing, listed in code order.
+    let (key, e) = invalid(&with_motor_faults(""));
+    assert_eq!(key, "motor_faults");
+    assert_eq!(
+        e,
+        Invalid::MissingMotorFaults(od_gen::model::MOTOR_FAULT_NAMES.to_vec())
+    );
+}
+
+#[test]
+fn motor_faults_zero_code_rejected() {
+    let (key, e) = invalid(&with(
+        "following_error = 0x8611",
+        "following_error = 0x0000",
+    ));
+    assert_eq!(key, "motor_faults.following_error");
+    assert!(
+        matches!(e, Invalid::Value(ref s) if s.contains("no error")),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn motor_faults_code_wider_than_16_bits_is_a_parse_error() {
+    let text = with("over_speed = 0x8400", "over_speed = 0x18400");
+    match od_gen::parse(&text, "bad.toml") {
+        Err(Error::Parse { message, .. }) => assert!(message.contains("over_speed"), "{message}"),
+        other => panic!("expected a parse error, got {other:?}"),
+    }
+}
+
+#[test]
+fn motor_faults_are_ordered_by_fault_not_by_file_order() {
+    use od_gen::model::MOTOR_FAULT_NAMES;
+    // Written in reverse order, each code = 0x1000 + its position in MOTOR_FAULT_NAMES + 1.
+    let position = |n: &str| MOTOR_FAULT_NAMES.iter().position(|m| *m == n).unwrap();
+    let reversed: Vec<&str> = MOTOR_FAULT_NAMES.iter().rev().copied().collect();
+    let text = with_motor_faults(&fault_table(&reversed, |n| 0x1001 + position(n) as u16));
+    let p = od_gen::parse(&text, "standard.toml").unwrap();
+    let expected: Vec<u16> = (0x1001..=0x100F).collect();
+    assert_eq!(p.motor_faults.to_vec(), expected);
+}

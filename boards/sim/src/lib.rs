@@ -9,8 +9,11 @@ pub mod drive;
 pub mod esc;
 pub mod inproc;
 pub mod leds;
+pub mod plant;
+pub mod plot;
 pub mod rawsock;
 pub mod segment;
+pub mod servo;
 pub mod storage;
 
 pub use segment::{Segment, SegmentError};

@@ -6,6 +6,8 @@
 //! initial content of that array. Multi-byte values are little-endian, exactly as on the wire, so
 //! SDO transfers and PDO copies are plain byte copies.
 
+use crate::motor::MotorFault;
+
 /// CoE data types (ETG.1000.6 Table 64 / CiA 301), as used in SDO information and SII PDO entries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -403,7 +405,19 @@ pub struct Profile {
     pub defaults: &'static [u8],
     /// Application variables by role.
     pub vars: AppVars,
+    /// The CiA402 error code (603Fh, also the EMCY error code) of each internal motor fault,
+    /// indexed by `MotorFault::code() - 1` (profile table `[motor_faults]`); read it with
+    /// [`Self::motor_fault_code`].
+    pub motor_faults: &'static [u16; MOTOR_FAULT_COUNT],
 }
+
+/// Number of internal motor faults: the length of [`Profile::motor_faults`].
+pub const MOTOR_FAULT_COUNT: usize = MotorFault::ALL.len();
+
+/// CiA 301 "generic error": what [`Profile::motor_fault_code`] answers for a fault outside the
+/// table (cannot happen while the table and [`MotorFault`] agree, which the generated code checks
+/// at compile time).
+pub const GENERIC_ERROR_CODE: u16 = 0x1000;
 
 impl Profile {
     /// The object with this index.
@@ -416,5 +430,68 @@ impl Profile {
     /// Size of the OD RAM in bytes.
     pub const fn ram_size(&self) -> usize {
         self.defaults.len()
+    }
+    /// The CiA402 error code (603Fh, EMCY) this profile maps `fault` to.
+    pub fn motor_fault_code(&self, fault: MotorFault) -> u16 {
+        usize::from(fault.code())
+            .checked_sub(1)
+            .and_then(|i| self.motor_faults.get(i))
+            .copied()
+            .unwrap_or(GENERIC_ERROR_CODE)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::profiles::{self, standard};
+
+    /// od-gen keeps its own copy of the fault names (it cannot depend on the firmware): the
+    /// generated list must be the firmware's, in code order, so that a profile's table is indexed
+    /// by the fault it names.
+    #[test]
+    fn od_gen_fault_names_are_the_firmware_faults() {
+        assert_eq!(profiles::MOTOR_FAULT_NAMES.len(), MotorFault::ALL.len());
+        for (i, (fault, name)) in MotorFault::ALL
+            .iter()
+            .zip(profiles::MOTOR_FAULT_NAMES)
+            .enumerate()
+        {
+            assert_eq!(usize::from(fault.code()), i + 1, "ALL is in code order");
+            assert_eq!(fault.name(), name);
+        }
+    }
+
+    /// The standard profile's codes, read through the profile: each fault gets the CiA402 code
+    /// `od-gen/profiles/standard.toml` gives its name.
+    #[test]
+    fn standard_profile_maps_every_fault_to_its_cia402_code() {
+        let expected = [
+            (MotorFault::OverCurrent, 0x2320),
+            (MotorFault::MotorOverload, 0x2350),
+            (MotorFault::DriveOverload, 0x2310),
+            (MotorFault::BusOverVoltage, 0x3210),
+            (MotorFault::BusUnderVoltage, 0x3220),
+            (MotorFault::OverSpeed, 0x8400),
+            (MotorFault::EncoderSignalLoss, 0x7305),
+            (MotorFault::EncoderJump, 0x7320),
+            (MotorFault::EncoderCrc, 0x7300),
+            (MotorFault::DriveOverTemperature, 0x4210),
+            (MotorFault::MotorOverTemperature, 0x4310),
+            (MotorFault::FollowingError, 0x8611),
+            (MotorFault::CurrentOffset, 0x5210),
+            (MotorFault::Alignment, 0x7122),
+            (MotorFault::Identification, 0x6320),
+        ];
+        assert_eq!(expected.len(), MotorFault::ALL.len());
+        let p = &standard::PROFILE;
+        for (fault, code) in expected {
+            assert_eq!(p.motor_fault_code(fault), code, "{}", fault.name());
+        }
+        for p in profiles::ALL {
+            for fault in MotorFault::ALL {
+                assert_ne!(p.motor_fault_code(fault), 0, "{}", fault.name());
+            }
+        }
     }
 }

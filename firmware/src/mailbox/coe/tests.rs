@@ -283,6 +283,7 @@ static PROFILE: Profile = Profile {
     objects: &OBJECTS,
     defaults: &DEFAULTS,
     vars: AppVars::NONE,
+    motor_faults: &crate::profiles::standard::MOTOR_FAULTS,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -830,7 +831,7 @@ fn master_abort_drops_the_transfer_and_sends_nothing() {
     let [init, seg1, _] = segmented_text_download();
     b.small(&init);
     let master_abort = [0x00, 0x20, 0x80, 0x04, 0x20, 0x00, 0x00, 0x00, 0x04, 0x05];
-    assert_eq!(b.small(&master_abort), []);
+    assert!(b.small(&master_abort).is_empty());
     assert_eq!(b.small(&seg1), abort(0, 0, 0x0504_0001));
 }
 

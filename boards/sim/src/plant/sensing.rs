@@ -1,0 +1,105 @@
+//! Current and bus-voltage sensing: an ADC sampled at the PWM period boundary.
+//!
+//! Phase current: `counts = zero_count + round((i + offset + noise) / amps_per_count)`,
+//! saturating at `0 ..= 2^bits − 1`; the noise is Gaussian with `noise_a_rms` from the plant's
+//! seeded PRNG. Bus voltage: `counts = round(V / bus_volts_per_count)`, saturating.
+
+/// ADC and sensor scaling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensingParams {
+    /// ADC resolution in bits (1..=16).
+    pub adc_bits: u32,
+    /// Current per ADC count in A (positive: current out of the leg reads above `zero_count`).
+    pub amps_per_count: f64,
+    /// ADC reading at zero current (nominally mid-scale, e.g. 2048 for 12 bits).
+    pub zero_count: u16,
+    /// True offset error of each phase's current sensor, in A.
+    pub offset_a: [f64; 3],
+    /// RMS of the Gaussian noise on each current reading, in A.
+    pub noise_a_rms: f64,
+    /// Bus voltage per ADC count in V.
+    pub bus_volts_per_count: f64,
+}
+
+/// Highest ADC code for a given resolution (`bits` already validated to 1..=16).
+pub fn full_scale(bits: u32) -> f64 {
+    ((1u32 << bits) - 1) as f64
+}
+
+/// Quantises `value / per_count + zero` to an ADC code, rounding to nearest and saturating.
+pub fn quantise(value: f64, per_count: f64, zero: u16, bits: u32) -> u16 {
+    let code = (f64::from(zero) + value / per_count).round();
+    if code.is_nan() {
+        return zero; // not reachable with validated parameters; never panic
+    }
+    // Saturating float→int cast after the clamp; the range fits u16 since bits <= 16.
+    code.clamp(0.0, full_scale(bits)) as u16
+}
+
+impl SensingParams {
+    /// ADC code of phase `phase` for true current `current_a` and noise sample `noise_a`.
+    pub fn current_counts(&self, phase: usize, current_a: f64, noise_a: f64) -> u16 {
+        quantise(
+            current_a + self.offset_a[phase] + noise_a,
+            self.amps_per_count,
+            self.zero_count,
+            self.adc_bits,
+        )
+    }
+
+    /// ADC code of the bus voltage.
+    pub fn bus_counts(&self, bus_v: f64) -> u16 {
+        quantise(bus_v, self.bus_volts_per_count, 0, self.adc_bits)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> SensingParams {
+        SensingParams {
+            adc_bits: 12,
+            amps_per_count: 0.02,
+            zero_count: 2048,
+            offset_a: [0.0; 3],
+            noise_a_rms: 0.0,
+            bus_volts_per_count: 0.02,
+        }
+    }
+
+    #[test]
+    fn quantisation_step_is_one_count_per_amps_per_count() {
+        let p = params();
+        for k in -100i32..=100 {
+            let i = f64::from(k) * p.amps_per_count;
+            let expected = (2048 + k) as u16;
+            assert_eq!(p.current_counts(0, i, 0.0), expected);
+            // Anything within ±0.49 LSB maps to the same code.
+            assert_eq!(p.current_counts(0, i + 0.49 * 0.02, 0.0), expected);
+            assert_eq!(p.current_counts(0, i - 0.49 * 0.02, 0.0), expected);
+        }
+        assert_eq!(p.current_counts(0, 0.51 * 0.02, 0.0), 2049);
+    }
+
+    #[test]
+    fn saturates_at_the_adc_range() {
+        let p = params();
+        assert_eq!(p.current_counts(1, 1e6, 0.0), 4095);
+        assert_eq!(p.current_counts(1, -1e6, 0.0), 0);
+        assert_eq!(p.bus_counts(1e6), 4095);
+        assert_eq!(p.bus_counts(-5.0), 0);
+        assert_eq!(p.bus_counts(48.0), 2400);
+    }
+
+    #[test]
+    fn offset_is_added_per_phase() {
+        let p = SensingParams {
+            offset_a: [0.1, -0.2, 0.0],
+            ..params()
+        };
+        assert_eq!(p.current_counts(0, 0.0, 0.0), 2053);
+        assert_eq!(p.current_counts(1, 0.0, 0.0), 2038);
+        assert_eq!(p.current_counts(2, 0.0, 0.0), 2048);
+    }
+}

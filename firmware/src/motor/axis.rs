@@ -1,0 +1,856 @@
+//! The whole control interrupt of one axis: sensing → protections → commutation → (at the loop
+//! sub-rate) interpolation, position and speed loops → current loop → PWM.
+//!
+//! # Contexts
+//! [`Axis::control_step`] is the body of the highest-priority interrupt (PWM/ADC, every PWM
+//! period). The EtherCAT SYNC0 handler talks to it only through an [`AxisLink`]: it publishes an
+//! [`AxisCommand`] per bus cycle ([`AxisLink::publish`]) and reads the latest [`AxisFeedback`]
+//! ([`AxisLink::feedback`]); neither side ever waits for the other (see [`handoff`]).
+//!
+//! # Sequence at enable
+//! Disabled (gates off) → phase-current offset calibration (gates off, N samples) → commutation
+//! alignment (incremental encoders without a known offset) → running. Any protection trip turns
+//! the gates off in the same period and latches the fault until a rising `fault_reset`.
+//!
+//! Timing budget (whole interrupt, Cortex-M4F, measured under QEMU): ≤ 1,500 instructions in the
+//! worst period (the one running the position and speed loops); the current loop alone ≤ 250.
+
+use hal::encoder::EncoderFault;
+use hal::power::PhaseCurrents;
+
+use super::calibration::{AlignStep, Alignment, AlignmentConfig, Commutation, OffsetCalibration};
+use super::commissioning::{
+    ElectricalIdentConfig, ElectricalIdentification, IdentCommand, IdentMeasurement,
+    InertiaIdentConfig, InertiaIdentification, InertiaStep,
+};
+use super::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
+use super::handoff::{FeedbackHandoff, SetpointHandoff};
+use super::interpolate::Interpolator;
+use super::math::{self, TAU};
+use super::position::PositionLoop;
+use super::protection::{ProtectionConfig, ProtectionInputs, Protections};
+use super::speed::{SpeedLoop, SpeedLoopConfig};
+use super::svpwm;
+use super::velocity::VelocityEstimator;
+use super::{Duties, ElectricalAngle, MotorFault};
+
+/// The bus voltage the modulator assumes at least (a lower reading would make 1/Vbus explode;
+/// the under-voltage protection trips long before).
+const MIN_BUS_VOLTAGE: f32 = 1.0;
+
+/// Motor nameplate and encoder data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MotorData {
+    /// Phase resistance, Ω.
+    pub resistance_ohm: f32,
+    /// d-axis inductance, H.
+    pub ld_h: f32,
+    /// q-axis inductance, H.
+    pub lq_h: f32,
+    /// Permanent-magnet flux linkage, Wb (peak, per phase).
+    pub flux_wb: f32,
+    /// Pole pairs.
+    pub pole_pairs: u32,
+    /// Encoder increments per mechanical revolution.
+    pub counts_per_rev: u32,
+    /// The encoder position where the electrical angle is zero, if known (absolute encoders
+    /// after commissioning); `None` runs the alignment at every enable.
+    pub commutation_offset: Option<i64>,
+}
+
+impl MotorData {
+    /// Torque constant 1.5·p·ψ, N·m per A of q current (amplitude-invariant transform).
+    pub fn torque_constant(&self) -> f32 {
+        1.5 * self.pole_pairs as f32 * self.flux_wb
+    }
+}
+
+/// Everything an axis needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisConfig {
+    /// Motor and encoder.
+    pub motor: MotorData,
+    /// PWM frequency = current-loop rate, Hz.
+    pub pwm_hz: f32,
+    /// The position and speed loops run every `loop_divider`-th PWM period.
+    pub loop_divider: u32,
+    /// Current loop (its `pwm_hz` and motor fields are overwritten from the above).
+    pub current_loop: CurrentLoopConfig,
+    /// Speed loop (its `sample_hz` is overwritten).
+    pub speed_loop: SpeedLoopConfig,
+    /// Position loop gain, 1/s.
+    pub position_kp: f32,
+    /// Velocity limit of the position loop, increments/s.
+    pub velocity_limit: f32,
+    /// Velocity estimator bandwidth, Hz.
+    pub velocity_bandwidth_hz: f32,
+    /// Protections.
+    pub protection: ProtectionConfig,
+    /// Current limit (peak, vector magnitude), A.
+    pub current_limit_a: f32,
+    /// Samples of the offset calibration.
+    pub offset_samples: u32,
+    /// Largest plausible current-sensor offset, A.
+    pub max_offset_a: f32,
+    /// Alignment (incremental encoders).
+    pub alignment: AlignmentConfig,
+    /// Bus cycle of the set-points, s (for the interpolator).
+    pub bus_cycle_s: f32,
+}
+
+/// Why a configuration was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AxisConfigError {
+    /// A rate, divider or gain is zero, negative or not finite.
+    Rates,
+    /// The current loop refused its configuration.
+    CurrentLoop,
+    /// The speed loop refused its configuration.
+    SpeedLoop,
+    /// The commutation (encoder resolution / pole pairs) is not usable.
+    Commutation,
+    /// The interpolator refused the bus cycle.
+    Interpolator,
+    /// The alignment settings are not usable.
+    Alignment,
+    /// The velocity-estimator bandwidth is not usable at the loop rate.
+    VelocityEstimator,
+}
+
+/// The control mode of the cascade.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ControlMode {
+    /// Torque set-point (CST).
+    #[default]
+    Torque,
+    /// Velocity set-point (CSV).
+    Velocity,
+    /// Position set-point (CSP).
+    Position,
+}
+
+/// What the SYNC0 side asks for, once per bus cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AxisCommand {
+    /// Power the motor (CiA402 "operation enabled").
+    pub enable: bool,
+    /// Rising edge clears a latched fault (CiA402 fault reset).
+    pub fault_reset: bool,
+    /// Run the identification (commissioning) instead of the cascade when enabled.
+    pub identify: bool,
+    /// Mode.
+    pub mode: ControlMode,
+    /// Target position, increments.
+    pub position: i64,
+    /// Target velocity (CSV) or velocity offset (CSP), increments/s.
+    pub velocity: f32,
+    /// Target torque (CST) or torque offset (CSP/CSV), N·m.
+    pub torque: f32,
+}
+
+/// The state of the axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AxisState {
+    /// Gates off, waiting for enable.
+    #[default]
+    Disabled,
+    /// Measuring the current-sensor offsets (gates off).
+    CalibratingOffsets,
+    /// Finding the commutation offset.
+    Aligning,
+    /// Closed loop.
+    Running,
+    /// Identifying R and L (open-loop voltages).
+    IdentifyingElectrical,
+    /// Identifying the inertia (torque steps).
+    IdentifyingInertia,
+    /// Identification finished (results in the feedback); gates off until enable falls.
+    Identified,
+    /// Gates off until a fault reset.
+    Faulted,
+}
+
+/// What the control interrupt reports back, once per loop tick.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AxisFeedback {
+    /// State.
+    pub state: AxisState,
+    /// The latched fault, if any.
+    pub fault: Option<MotorFault>,
+    /// Position, increments.
+    pub position: i64,
+    /// Velocity estimate, increments/s.
+    pub velocity: f32,
+    /// Torque (from the measured q current), N·m.
+    pub torque: f32,
+    /// Position following error, increments.
+    pub following_error: i64,
+    /// Identification results, when the last identification finished.
+    pub identified: Option<Identification>,
+}
+
+/// Results of a commissioning run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Identification {
+    /// Phase resistance, Ω.
+    pub resistance_ohm: f32,
+    /// d inductance, H.
+    pub ld_h: f32,
+    /// q inductance, H.
+    pub lq_h: f32,
+    /// Inertia, N·m per (increment/s²).
+    pub inertia: f32,
+}
+
+/// One PWM period's measurements, as the board read them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Phase currents, A, as measured (offsets not yet removed).
+    pub currents: PhaseCurrents,
+    /// DC-bus voltage, V.
+    pub bus_voltage: f32,
+    /// Power-stage temperature, °C.
+    pub temperature: f32,
+    /// Motor over-temperature input.
+    pub motor_overtemp: bool,
+    /// Multi-turn encoder position, increments.
+    pub position: Result<i64, EncoderFault>,
+}
+
+/// What the board applies during the next PWM period.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output {
+    /// Gate drivers on.
+    pub gates: bool,
+    /// Duties (meaningful when `gates`).
+    pub duties: Duties,
+}
+
+impl Output {
+    const OFF: Self = Self {
+        gates: false,
+        duties: Duties::CENTRED,
+    };
+}
+
+/// The two mailboxes between the SYNC0 handler and the control interrupt.
+pub struct AxisLink {
+    commands: SetpointHandoff<AxisCommand>,
+    feedback: FeedbackHandoff<AxisFeedback>,
+}
+
+impl AxisLink {
+    /// Empty mailboxes.
+    ///
+    /// # Safety
+    /// [`AxisLink::publish`] and [`AxisLink::feedback`] are called from one context (the SYNC0
+    /// handler) and [`Axis::control_step`] from one other context of higher priority on the same
+    /// core, which never lets the lower one run while it is active (the contract of
+    /// [`SetpointHandoff::new`] and [`FeedbackHandoff::new`]). A single-threaded simulation
+    /// meets it trivially.
+    pub const unsafe fn new() -> Self {
+        Self {
+            // SAFETY: the caller's contract, passed on.
+            commands: unsafe {
+                SetpointHandoff::new(AxisCommand {
+                    enable: false,
+                    fault_reset: false,
+                    identify: false,
+                    mode: ControlMode::Torque,
+                    position: 0,
+                    velocity: 0.0,
+                    torque: 0.0,
+                })
+            },
+            // SAFETY: as above.
+            feedback: unsafe {
+                FeedbackHandoff::new(AxisFeedback {
+                    state: AxisState::Disabled,
+                    fault: None,
+                    position: 0,
+                    velocity: 0.0,
+                    torque: 0.0,
+                    following_error: 0,
+                    identified: None,
+                })
+            },
+        }
+    }
+
+    /// SYNC0 side: hands over this bus cycle's command.
+    pub fn publish(&self, command: AxisCommand) {
+        self.commands.write(command);
+    }
+
+    /// SYNC0 side: the latest feedback.
+    pub fn feedback(&self) -> AxisFeedback {
+        self.feedback.read().0
+    }
+}
+
+/// One axis.
+pub struct Axis {
+    cfg: AxisConfig,
+    state: AxisState,
+    fault: Option<MotorFault>,
+    tick: u32,
+    command: AxisCommand,
+    /// Sequence number of the last command taken (0 = the initial value of the link).
+    command_seq: u32,
+    previous_fault_reset: bool,
+    offsets: PhaseCurrents,
+    offset_calibration: OffsetCalibration,
+    alignment: Alignment,
+    commutation: Commutation,
+    current_loop: CurrentLoop,
+    speed_loop: SpeedLoop,
+    position_loop: PositionLoop,
+    velocity: VelocityEstimator,
+    interpolator: Interpolator,
+    protections: Protections,
+    electrical_ident: Option<ElectricalIdentification>,
+    inertia_ident: Option<InertiaIdentification>,
+    identified: Option<Identification>,
+    /// Last good encoder position (held over a bad serial frame).
+    position: i64,
+    position_valid: bool,
+    omega_e: f32,
+    /// Bus voltage and its reciprocal, refreshed at the loop rate (the bus changes slowly; one
+    /// division per loop tick instead of one per PWM period).
+    vbus: f32,
+    inv_vbus: f32,
+    /// Electrical rad/s per increment/s.
+    omega_e_per_velocity: f32,
+    /// A of q current per N·m.
+    iq_per_nm: f32,
+    nm_per_iq: f32,
+    id_ref: f32,
+    iq_ref: f32,
+    last_id: f32,
+    last_iq: f32,
+    last_velocity: f32,
+    /// Test signal added to the current references while running (d, q), A.
+    injection: (f32, f32),
+}
+
+impl Axis {
+    /// An axis in the disabled state; checks the whole configuration.
+    pub fn new(cfg: AxisConfig) -> Result<Self, AxisConfigError> {
+        let finite_positive = |v: f32| v.is_finite() && v > 0.0;
+        if !(finite_positive(cfg.pwm_hz)
+            && cfg.loop_divider > 0
+            && finite_positive(cfg.motor.flux_wb)
+            && cfg.motor.pole_pairs > 0
+            && finite_positive(cfg.current_limit_a))
+        {
+            return Err(AxisConfigError::Rates);
+        }
+        let loop_hz = cfg.pwm_hz / cfg.loop_divider as f32;
+        let m = cfg.motor;
+        let current_loop = CurrentLoop::new(&CurrentLoopConfig {
+            resistance_ohm: m.resistance_ohm,
+            ld_h: m.ld_h,
+            lq_h: m.lq_h,
+            flux_wb: m.flux_wb,
+            pwm_hz: cfg.pwm_hz,
+            ..cfg.current_loop
+        })
+        .map_err(|_| AxisConfigError::CurrentLoop)?;
+        let speed_loop = SpeedLoop::new(&SpeedLoopConfig {
+            sample_hz: loop_hz,
+            ..cfg.speed_loop
+        })
+        .map_err(|_| AxisConfigError::SpeedLoop)?;
+        let commutation = Commutation::new(
+            m.counts_per_rev,
+            m.pole_pairs,
+            m.commutation_offset.unwrap_or(0),
+        )
+        .map_err(|_| AxisConfigError::Commutation)?;
+        let interpolator = Interpolator::new(cfg.bus_cycle_s, loop_hz)
+            .map_err(|_| AxisConfigError::Interpolator)?;
+        let alignment = Alignment::new(
+            &cfg.alignment,
+            m.counts_per_rev,
+            m.pole_pairs,
+            1.0 / cfg.pwm_hz,
+        )
+        .map_err(|_| AxisConfigError::Alignment)?;
+        let velocity = VelocityEstimator::new(cfg.velocity_bandwidth_hz, loop_hz)
+            .map_err(|_| AxisConfigError::VelocityEstimator)?;
+        let kt = m.torque_constant();
+        Ok(Self {
+            state: AxisState::Disabled,
+            fault: None,
+            tick: 0,
+            command: AxisCommand::default(),
+            command_seq: 0,
+            previous_fault_reset: false,
+            offsets: PhaseCurrents::default(),
+            offset_calibration: OffsetCalibration::new(cfg.offset_samples, cfg.max_offset_a),
+            alignment,
+            commutation,
+            current_loop,
+            speed_loop,
+            position_loop: PositionLoop::new(cfg.position_kp, cfg.velocity_limit),
+            velocity,
+            interpolator,
+            protections: Protections::new(&cfg.protection, 1.0 / loop_hz),
+            electrical_ident: None,
+            inertia_ident: None,
+            identified: None,
+            position: 0,
+            position_valid: false,
+            omega_e: 0.0,
+            vbus: MIN_BUS_VOLTAGE,
+            inv_vbus: 1.0 / MIN_BUS_VOLTAGE,
+            omega_e_per_velocity: TAU * m.pole_pairs as f32 / m.counts_per_rev as f32,
+            iq_per_nm: 1.0 / kt,
+            nm_per_iq: kt,
+            id_ref: 0.0,
+            iq_ref: 0.0,
+            last_id: 0.0,
+            last_iq: 0.0,
+            last_velocity: 0.0,
+            injection: (0.0, 0.0),
+            cfg,
+        })
+    }
+
+    /// The state.
+    pub fn state(&self) -> AxisState {
+        self.state
+    }
+
+    /// The latched fault.
+    pub fn fault(&self) -> Option<MotorFault> {
+        self.fault
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &AxisConfig {
+        &self.cfg
+    }
+
+    /// Sets a test signal added to the d and q current references in every period while
+    /// running: the excitation of a current-loop frequency-response measurement (what drive
+    /// commissioning tools inject; 0 in normal operation).
+    pub fn set_current_injection(&mut self, id_a: f32, iq_a: f32) {
+        let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
+        self.injection = (finite(id_a), finite(iq_a));
+    }
+
+    /// Measured d and q currents of the last period, A.
+    pub fn currents_dq(&self) -> (f32, f32) {
+        (self.last_id, self.last_iq)
+    }
+
+    /// The body of the control interrupt: one PWM period.
+    ///
+    /// Timing: ≤ 1,500 instructions on a Cortex-M4F in the loop period (benchmark
+    /// `control-interrupt`), of which the current loop ≤ 250 (`foc-step`).
+    pub fn control_step(&mut self, sample: &Sample, link: &AxisLink) -> Output {
+        let c = sample.currents;
+        let currents = PhaseCurrents {
+            a: c.a - self.offsets.a,
+            b: c.b - self.offsets.b,
+            c: c.c - self.offsets.c,
+        };
+        // Over-current first: gates off in this very period.
+        if self.state != AxisState::CalibratingOffsets {
+            if let Some(fault) = self
+                .protections
+                .check_over_current(currents.a, currents.b, currents.c)
+            {
+                return self.trip(fault, link);
+            }
+        }
+        self.read_encoder(sample);
+        let loop_tick = self.tick == 0;
+        self.tick += 1;
+        if self.tick >= self.cfg.loop_divider {
+            self.tick = 0;
+        }
+        if loop_tick {
+            self.take_command(link);
+            self.vbus = math::max(sample.bus_voltage, MIN_BUS_VOLTAGE);
+            self.inv_vbus = 1.0 / self.vbus;
+        }
+        let output = match self.state {
+            AxisState::Disabled => {
+                if self.command.enable && self.fault.is_none() {
+                    self.offset_calibration.restart();
+                    self.state = AxisState::CalibratingOffsets;
+                }
+                Output::OFF
+            }
+            AxisState::Identified => Output::OFF,
+            AxisState::Faulted => {
+                let reset = self.command.fault_reset && !self.previous_fault_reset;
+                if reset {
+                    self.fault = None;
+                    self.protections.reset();
+                    self.state = AxisState::Disabled;
+                }
+                Output::OFF
+            }
+            AxisState::CalibratingOffsets => self.calibrate_offsets(c),
+            AxisState::Aligning => self.align(&currents),
+            AxisState::Running => self.run(&currents, loop_tick),
+            AxisState::IdentifyingElectrical => self.identify_electrical(&currents),
+            AxisState::IdentifyingInertia => self.identify_inertia(&currents, loop_tick),
+        };
+        self.previous_fault_reset = self.command.fault_reset;
+        if !self.command.enable && !matches!(self.state, AxisState::Faulted | AxisState::Disabled) {
+            self.electrical_ident = None;
+            self.inertia_ident = None;
+            self.state = AxisState::Disabled;
+            return Output::OFF;
+        }
+        if loop_tick {
+            let enabled = output.gates;
+            let fault = self.protections.check(&ProtectionInputs {
+                id: self.last_id,
+                iq: self.last_iq,
+                bus_voltage: sample.bus_voltage,
+                velocity: self.last_velocity,
+                encoder: sample.position,
+                temperature: sample.temperature,
+                motor_overtemp: sample.motor_overtemp,
+                following_error: self.position_loop.following_error(),
+                enabled,
+            });
+            if let Some(fault) = fault {
+                return self.trip(fault, link);
+            }
+            self.publish(link);
+        }
+        output
+    }
+
+    fn trip(&mut self, fault: MotorFault, link: &AxisLink) -> Output {
+        if self.fault.is_none() {
+            self.fault = Some(fault);
+        }
+        self.state = AxisState::Faulted;
+        self.current_loop.reset();
+        self.speed_loop.reset();
+        self.publish(link);
+        Output::OFF
+    }
+
+    fn publish(&self, link: &AxisLink) {
+        link.feedback.write(AxisFeedback {
+            state: self.state,
+            fault: self.fault,
+            position: self.position,
+            velocity: self.last_velocity,
+            torque: self.last_iq * self.nm_per_iq,
+            following_error: self.position_loop.following_error(),
+            identified: self.identified,
+        });
+    }
+
+    fn read_encoder(&mut self, sample: &Sample) {
+        // A bad frame keeps the last good position (the protections count the errors).
+        if let Ok(p) = sample.position {
+            self.position = p;
+            self.position_valid = true;
+        }
+    }
+
+    fn take_command(&mut self, link: &AxisLink) {
+        if let Some((command, seq)) = link.commands.read_if_new(self.command_seq) {
+            self.command_seq = seq;
+            self.command = command;
+            if self.state == AxisState::Running {
+                self.push_setpoint();
+            }
+        }
+    }
+
+    /// Hands the command's set-point of its mode to the interpolator.
+    fn push_setpoint(&mut self) {
+        let c = self.command;
+        match c.mode {
+            ControlMode::Position => self.interpolator.push_position(c.position, None),
+            ControlMode::Velocity => self.interpolator.push_velocity(c.velocity),
+            ControlMode::Torque => self.interpolator.push_torque(c.torque),
+        }
+    }
+
+    fn calibrate_offsets(&mut self, raw: PhaseCurrents) -> Output {
+        match self.offset_calibration.add(raw) {
+            None => Output::OFF,
+            Some(Err(fault)) => {
+                self.fault = Some(fault);
+                self.state = AxisState::Faulted;
+                Output::OFF
+            }
+            Some(Ok(offsets)) => {
+                self.offsets = offsets;
+                self.current_loop.reset();
+                if self.command.identify {
+                    self.start_identification();
+                } else if self.cfg.motor.commutation_offset.is_none() {
+                    self.alignment.restart();
+                    self.state = AxisState::Aligning;
+                } else {
+                    self.start_running();
+                }
+                Output::OFF
+            }
+        }
+    }
+
+    fn start_identification(&mut self) {
+        match ElectricalIdentification::new(ElectricalIdentConfig::small_servo(self.cfg.pwm_hz)) {
+            Ok(ident) => {
+                self.electrical_ident = Some(ident);
+                self.state = AxisState::IdentifyingElectrical;
+            }
+            Err(fault) => {
+                self.fault = Some(fault);
+                self.state = AxisState::Faulted;
+            }
+        }
+    }
+
+    fn start_running(&mut self) {
+        self.speed_loop.reset();
+        self.velocity.reset(self.position);
+        self.interpolator.reset(self.position);
+        self.position_loop.reset();
+        self.state = AxisState::Running;
+    }
+
+    fn align(&mut self, currents: &PhaseCurrents) -> Output {
+        match self.alignment.step(self.position) {
+            AlignStep::Drive { angle, id_ref } => {
+                self.current_step(currents, angle, 0.0, id_ref, 0.0)
+            }
+            AlignStep::Done(Ok(offset)) => {
+                self.commutation.set_offset(offset);
+                self.start_running();
+                Output::OFF
+            }
+            AlignStep::Done(Err(fault)) => {
+                self.fault = Some(fault);
+                self.state = AxisState::Faulted;
+                Output::OFF
+            }
+        }
+    }
+
+    fn run(&mut self, currents: &PhaseCurrents, loop_tick: bool) -> Output {
+        if loop_tick {
+            let velocity = self.velocity.update(self.position);
+            self.last_velocity = velocity;
+            self.omega_e = velocity * self.omega_e_per_velocity;
+            let set = self.interpolator.tick();
+            let torque = match self.command.mode {
+                ControlMode::Position => {
+                    let v_cmd = self
+                        .position_loop
+                        .step(set.position, self.position, set.velocity);
+                    self.speed_loop
+                        .step(v_cmd, velocity, set.acceleration, self.command.torque)
+                }
+                ControlMode::Velocity => self.speed_loop.step(
+                    set.velocity,
+                    velocity,
+                    set.acceleration,
+                    self.command.torque,
+                ),
+                ControlMode::Torque => set.torque,
+            };
+            let limit = self.cfg.current_limit_a;
+            self.iq_ref = math::clamp_symmetric(torque * self.iq_per_nm, limit);
+            self.id_ref = 0.0;
+        }
+        let angle = self.commutation.angle(self.position);
+        let (id_ref, iq_ref) = (
+            self.id_ref + self.injection.0,
+            self.iq_ref + self.injection.1,
+        );
+        self.current_step(currents, angle, self.omega_e, id_ref, iq_ref)
+    }
+
+    fn current_step(
+        &mut self,
+        currents: &PhaseCurrents,
+        angle: ElectricalAngle,
+        omega_e: f32,
+        id_ref: f32,
+        iq_ref: f32,
+    ) -> Output {
+        let out = self.current_loop.step(&CurrentLoopInput {
+            currents: *currents,
+            angle,
+            omega_e,
+            vbus: self.vbus,
+            inv_vbus: self.inv_vbus,
+            id_ref,
+            iq_ref,
+        });
+        self.last_id = out.id;
+        self.last_iq = out.iq;
+        Output {
+            gates: true,
+            duties: out.duties,
+        }
+    }
+
+    fn identify_electrical(&mut self, currents: &PhaseCurrents) -> Output {
+        let Some(ident) = self.electrical_ident.as_mut() else {
+            self.state = AxisState::Disabled;
+            return Output::OFF;
+        };
+        // Currents in the frame of the commanded angle (always 0 here: the a-phase axis).
+        let i_alpha = (2.0 * currents.a - currents.b - currents.c) * (1.0 / 3.0);
+        let i_beta = (currents.b - currents.c) * math::INV_SQRT3;
+        let m = IdentMeasurement {
+            id: i_alpha,
+            iq: i_beta,
+            velocity: self.last_velocity,
+        };
+        self.last_id = i_alpha;
+        self.last_iq = i_beta;
+        match ident.step(&m) {
+            IdentCommand::Voltage { angle, vd, vq } => {
+                let (s, c) = math::sin_cos(angle);
+                let v_alpha = vd * c - vq * s;
+                let v_beta = vd * s + vq * c;
+                let modulation = svpwm::modulate(v_alpha, v_beta, self.inv_vbus);
+                Output {
+                    gates: true,
+                    duties: modulation.duties,
+                }
+            }
+            IdentCommand::Done(Ok(result)) => {
+                self.identified = Some(Identification {
+                    resistance_ohm: result.resistance_ohm,
+                    ld_h: result.ld_h,
+                    lq_h: result.lq_h,
+                    inertia: 0.0,
+                });
+                self.electrical_ident = None;
+                // The inertia test runs the current loop: tune it to what was just measured.
+                let tuned = CurrentLoop::new(&CurrentLoopConfig {
+                    resistance_ohm: result.resistance_ohm,
+                    ld_h: result.ld_h,
+                    lq_h: result.lq_h,
+                    flux_wb: self.cfg.motor.flux_wb,
+                    pwm_hz: self.cfg.pwm_hz,
+                    ..self.cfg.current_loop
+                });
+                match tuned {
+                    Ok(current_loop) => {
+                        self.current_loop = current_loop;
+                        self.start_inertia_identification();
+                    }
+                    Err(_) => {
+                        self.fault = Some(MotorFault::Identification);
+                        self.state = AxisState::Faulted;
+                    }
+                }
+                Output::OFF
+            }
+            IdentCommand::Done(Err(fault)) => {
+                self.electrical_ident = None;
+                self.fault = Some(fault);
+                self.state = AxisState::Faulted;
+                Output::OFF
+            }
+        }
+    }
+
+    fn start_inertia_identification(&mut self) {
+        let loop_hz = self.cfg.pwm_hz / self.cfg.loop_divider as f32;
+        let counts = self.cfg.motor.counts_per_rev as f32;
+        let cfg = InertiaIdentConfig {
+            sample_hz: loop_hz,
+            current_a: 0.25 * self.cfg.current_limit_a,
+            torque_constant_nm_per_a: self.cfg.motor.torque_constant(),
+            // Two revolutions per second at most, 0.25 s per half.
+            max_speed: 2.0 * counts,
+            max_time_s: 0.25,
+        };
+        match InertiaIdentification::new(cfg) {
+            Ok(ident) => {
+                self.inertia_ident = Some(ident);
+                self.current_loop.reset();
+                if self.cfg.motor.commutation_offset.is_none() {
+                    // The inertia test needs commutation: align first, then come back.
+                    self.alignment.restart();
+                }
+                self.velocity.reset(self.position);
+                self.state = AxisState::IdentifyingInertia;
+            }
+            Err(fault) => {
+                self.fault = Some(fault);
+                self.state = AxisState::Faulted;
+            }
+        }
+    }
+
+    fn identify_inertia(&mut self, currents: &PhaseCurrents, loop_tick: bool) -> Output {
+        if self.cfg.motor.commutation_offset.is_none() && !self.alignment.is_done() {
+            return match self.alignment.step(self.position) {
+                AlignStep::Drive { angle, id_ref } => {
+                    self.current_step(currents, angle, 0.0, id_ref, 0.0)
+                }
+                AlignStep::Done(Ok(offset)) => {
+                    self.commutation.set_offset(offset);
+                    self.velocity.reset(self.position);
+                    Output::OFF
+                }
+                AlignStep::Done(Err(fault)) => {
+                    self.fault = Some(fault);
+                    self.state = AxisState::Faulted;
+                    Output::OFF
+                }
+            };
+        }
+        if loop_tick {
+            let velocity = self.velocity.update(self.position);
+            self.last_velocity = velocity;
+            self.omega_e = velocity * self.omega_e_per_velocity;
+            let Some(ident) = self.inertia_ident.as_mut() else {
+                self.state = AxisState::Disabled;
+                return Output::OFF;
+            };
+            match ident.step(&IdentMeasurement {
+                id: self.last_id,
+                iq: self.last_iq,
+                velocity,
+            }) {
+                InertiaStep::Current { iq_ref } => {
+                    self.iq_ref = iq_ref;
+                    self.id_ref = 0.0;
+                }
+                InertiaStep::Done(result) => {
+                    self.inertia_ident = None;
+                    match result {
+                        Ok(j) => {
+                            if let Some(id) = self.identified.as_mut() {
+                                id.inertia = j;
+                            }
+                            self.state = AxisState::Identified;
+                        }
+                        Err(fault) => {
+                            self.fault = Some(fault);
+                            self.state = AxisState::Faulted;
+                        }
+                    }
+                    return Output::OFF;
+                }
+            }
+        }
+        let angle = self.commutation.angle(self.position);
+        self.current_step(currents, angle, self.omega_e, self.id_ref, self.iq_ref)
+    }
+}
