@@ -115,26 +115,46 @@ impl Harness {
         description: fmt::Arguments<'_>,
         op: &mut dyn FnMut(),
     ) -> Option<u32> {
+        let cost = self.measure(name, op)?;
+        self.report(name, cost, budget, description);
+        Some(cost)
+    }
+
+    /// Measures `op` without printing a result (for a benchmark derived from several
+    /// measurements, printed with [`report`](Self::report)). Returns the cost of one call, or
+    /// `None` after reporting the failure as benchmark `name`.
+    pub fn measure(&mut self, name: &str, op: &mut dyn FnMut()) -> Option<u32> {
         let cost = self.instructions(op);
-        match cost {
-            Some(n) => self.record(format_args!(
-                "BENCH\t{name}\t{n}\t{}\t{description}",
-                Display(budget)
-            )),
-            None => self.fail(
+        if cost.is_none() {
+            self.fail(
                 name,
                 format_args!("no whole number of instructions per call (overflow or varying cost)"),
-            ),
+            );
         }
-        if let (Some(n), Some(b)) = (cost, budget) {
-            if n > b {
+        cost
+    }
+
+    /// Prints benchmark `name` with its cost `instructions` (measured by [`bench`](Self::bench)
+    /// or derived from [`measure`](Self::measure)d costs) and checks its `budget`.
+    pub fn report(
+        &mut self,
+        name: &str,
+        instructions: u32,
+        budget: Option<u32>,
+        description: fmt::Arguments<'_>,
+    ) {
+        self.record(format_args!(
+            "BENCH\t{name}\t{instructions}\t{}\t{description}",
+            Display(budget)
+        ));
+        if let Some(b) = budget {
+            if instructions > b {
                 self.fail(
                     name,
-                    format_args!("{n} instructions exceed the budget of {b}"),
+                    format_args!("{instructions} instructions exceed the budget of {b}"),
                 );
             }
         }
-        cost
     }
 
     /// Reports a failed check of a benchmark (e.g. the operation did not give the expected

@@ -7,6 +7,7 @@ pub mod demo;
 pub mod domains;
 pub mod drive;
 pub mod esc;
+pub mod experiments;
 pub mod inproc;
 pub mod leds;
 pub mod plant;

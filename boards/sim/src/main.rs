@@ -8,6 +8,10 @@
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
+//! sim-drive plots [--out DIR]
+//!     measure the motor control on the simulated servo (current-loop frequency response,
+//!     speed step, load step, S-curve following error) and write the plots as SVG
+//!     (default directory: docs/plots)
 //! ```
 
 use std::process::ExitCode;
@@ -19,7 +23,8 @@ use board_sim::{rawsock, Segment};
 const USAGE: &str =
     "usage: sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N]
        sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S] [--drop-mailbox-read K]
-       sim-drive list-profiles";
+       sim-drive list-profiles
+       sim-drive plots [--out DIR]";
 
 struct Args {
     command: String,
@@ -31,6 +36,7 @@ struct Args {
     seconds: Option<u64>,
     free_run: bool,
     drop_mailbox_read: Option<u32>,
+    out: String,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -44,12 +50,14 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         seconds: None,
         free_run: false,
         drop_mailbox_read: None,
+        out: "docs/plots".into(),
     };
     let mut first = true;
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().ok_or_else(|| format!("{name} needs a value"));
         match arg.as_str() {
-            "demo" | "attach" | "list-profiles" if first => a.command = arg.clone(),
+            "demo" | "attach" | "list-profiles" | "plots" if first => a.command = arg.clone(),
+            "--out" => a.out = value("--out")?,
             "--profile" => a.profile = value("--profile")?,
             "--drives" => a.drives = number(&value("--drives")?, "--drives")?,
             "--cycle-us" => a.cycle_us = number(&value("--cycle-us")?, "--cycle-us")?,
@@ -102,6 +110,7 @@ fn main() -> ExitCode {
             Ok(())
         }
         "attach" => attach(&args),
+        "plots" => plots(&args),
         _ => run_demo(&args),
     };
     match result {
@@ -111,6 +120,16 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn plots(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
+    let dir = std::path::Path::new(&args.out);
+    for file in
+        board_sim::experiments::write_plots(dir).map_err(|e| format!("{}: {e}", dir.display()))?
+    {
+        println!("{}", file.display());
+    }
+    Ok(())
 }
 
 fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {

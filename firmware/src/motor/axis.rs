@@ -647,10 +647,14 @@ impl Axis {
 
     fn run(&mut self, currents: &PhaseCurrents, loop_tick: bool) -> Output {
         if loop_tick {
-            let velocity = self.velocity.update(self.position);
+            let set = self.interpolator.tick();
+            // The observer is told the commanded acceleration, so it tracks set-point ramps
+            // without its 2a/ω lag; disturbances are what its integrator has left to find.
+            let velocity = self
+                .velocity
+                .update_with_acceleration(self.position, set.acceleration);
             self.last_velocity = velocity;
             self.omega_e = velocity * self.omega_e_per_velocity;
-            let set = self.interpolator.tick();
             let torque = match self.command.mode {
                 ControlMode::Position => {
                     let v_cmd = self

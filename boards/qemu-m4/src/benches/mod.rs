@@ -1,17 +1,19 @@
-//! The benchmarks: each module sets up the real firmware code with the real generated
-//! `standard` profile, checks that the operation does what it should, and measures it with the
+//! The benchmarks: each module sets up the real firmware code (with the real generated
+//! `standard` profile, or the motor control with the simulated servo's configuration), brings it
+//! to a steady state, checks that the operation does what it should, and measures it with the
 //! [`Harness`].
 //!
-//! To add one (issue 4: the FOC step), write a module with a `run(&mut Harness)` and list it in
-//! [`ALL`]; budgets come from DESIGN.md §6.
+//! To add one, write a module with a `run(&mut Harness)` and list it in [`ALL`]; budgets come
+//! from DESIGN.md §6.
 
+mod motor;
 mod process_data;
 mod sdo;
 
 use crate::harness::Harness;
 
 /// Every benchmark, in report order.
-pub const ALL: &[fn(&mut Harness)] = &[process_data::run, sdo::run];
+pub const ALL: &[fn(&mut Harness)] = &[process_data::run, sdo::run, motor::run];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.
 fn read<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {

@@ -1,6 +1,8 @@
 //! Serving one expedited SDO request through `CoeServer::handle`: an upload of the statusword
-//! 6041h and a download of the controlword 6040h, in OP (SDO traffic beside running process
-//! data). The request is the mailbox payload after the 6-byte mailbox header (CoE header + SDO
+//! 6041h and a download of the user parameter 2F00h, in OP (SDO traffic beside running process
+//! data). The download target is not the controlword 6040h: it is mapped to the RxPDO, and the
+//! profile (`pdo.sdo_write_to_rx_mapped = "blocked"`) refuses SDO writes to it in SAFEOP and OP
+//! with abort 0x06010006. The request is the mailbox payload after the 6-byte mailbox header (CoE header + SDO
 //! frame), the response buffer is as long as the profile's input mailbox allows; the mailbox
 //! data-link layer and the PDI transfers are not included.
 
@@ -18,11 +20,11 @@ use crate::harness::Harness;
 
 /// The EtherCAT state the requests are served in.
 const STATE: AlState = AlState::Op;
-/// Controlword 6040h and statusword 6041h (CiA402), subindex 0.
-const CONTROLWORD: (u16, u8) = (0x6040, 0);
+/// Statusword 6041h (CiA402) and the user parameter 2F00h (UDINT, not PDO-mapped), subindex 0.
 const STATUSWORD: (u16, u8) = (0x6041, 0);
-/// The controlword value the download writes (enable operation).
-const CONTROLWORD_VALUE: u16 = 0x000F;
+const USER_PARAMETER: (u16, u8) = (0x2F00, 0);
+/// The value the download writes; any value other than the default 0.
+const USER_PARAMETER_VALUE: u32 = 0x1234_5678;
 /// Largest response buffer the benchmark provides (the standard profile's mailbox is 256 bytes).
 const RESPONSE_CAPACITY: usize = 512;
 
@@ -37,13 +39,15 @@ mod command {
     const UNUSED_OF_U16: u8 = 2;
     /// Expedited 2-byte frame flags.
     const EXPEDITED_U16: u8 = (UNUSED_OF_U16 << UNUSED_SHIFT) | EXPEDITED | SIZE_INDICATED;
+    /// Expedited 4-byte frame flags (no unused bytes).
+    const EXPEDITED_U32: u8 = EXPEDITED | SIZE_INDICATED;
 
     /// Initiate upload request (ccs 2).
     pub const UPLOAD_REQUEST: u8 = 2 << SPECIFIER_SHIFT;
     /// Initiate upload response (scs 2), expedited, 2 bytes.
     pub const UPLOAD_RESPONSE_U16: u8 = (2 << SPECIFIER_SHIFT) | EXPEDITED_U16;
-    /// Initiate download request (ccs 1), expedited, 2 bytes.
-    pub const DOWNLOAD_REQUEST_U16: u8 = (1 << SPECIFIER_SHIFT) | EXPEDITED_U16;
+    /// Initiate download request (ccs 1), expedited, 4 bytes.
+    pub const DOWNLOAD_REQUEST_U32: u8 = (1 << SPECIFIER_SHIFT) | EXPEDITED_U32;
     /// Initiate download response (scs 3).
     pub const DOWNLOAD_RESPONSE: u8 = 3 << SPECIFIER_SHIFT;
 }
@@ -103,24 +107,29 @@ pub fn run(h: &mut Harness) {
         },
     );
 
-    let [v0, v1] = CONTROLWORD_VALUE.to_le_bytes();
-    let download = request(command::DOWNLOAD_REQUEST_U16, CONTROLWORD, [v0, v1, 0, 0]);
+    let download = request(
+        command::DOWNLOAD_REQUEST_U32,
+        USER_PARAMETER,
+        USER_PARAMETER_VALUE.to_le_bytes(),
+    );
     let r = server.handle(&mut od, STATE, &download, response);
     let answered = r.ok() == Some(FRAME_LEN)
         && response.get(COE_HEADER_LEN) == Some(&command::DOWNLOAD_RESPONSE)
-        && server.last_write() == Some(CONTROLWORD)
-        && read::<2>(od.ram(), PROFILE.vars.controlword) == Some([v0, v1]);
+        && server.last_write() == Some(USER_PARAMETER)
+        && od.read_u32(USER_PARAMETER.0, USER_PARAMETER.1) == Some(USER_PARAMETER_VALUE);
     if !answered {
         h.fail(
             "sdo-download",
-            format_args!("6040h download was not answered"),
+            format_args!("2F00h download was not answered"),
         );
         return;
     }
     h.bench(
         "sdo-download-expedited",
         None,
-        format_args!("CoeServer::handle, expedited download of 6040h (2 bytes) in OP"),
+        format_args!(
+            "CoeServer::handle, expedited download of 2F00h (4 bytes, not PDO-mapped) in OP"
+        ),
         &mut || {
             let _ = server.handle(&mut od, STATE, black_box(&download), response);
         },

@@ -2,36 +2,10 @@
 
 #![allow(dead_code)]
 
-use board_sim::plant::PlantConfig;
-use board_sim::servo::{axis_config, SimServo, Tuning};
-use firmware::motor::axis::{AxisCommand, AxisState, ControlMode};
-
-/// PWM periods per 1 ms bus cycle at 40 kHz.
-pub const PERIODS_PER_CYCLE: u64 = 40;
+pub use board_sim::experiments::{running_servo, PERIODS_PER_CYCLE};
 
 /// Increments per revolution of the servo's 20-bit encoder.
 pub const CPR: f64 = 1_048_576.0;
-
-/// The servo with `tuning`, enabled in `mode` and running (offsets calibrated).
-pub fn running_servo(plant: PlantConfig, tuning: &Tuning, mode: ControlMode) -> SimServo {
-    let cfg = axis_config(&plant, tuning);
-    let mut servo = SimServo::new(plant, cfg).expect("valid configuration");
-    let command = AxisCommand {
-        enable: true,
-        mode,
-        ..Default::default()
-    };
-    for _ in 0..50 {
-        let mut c = command;
-        c.position = servo.feedback().position;
-        servo.publish(c);
-        servo.run_periods(PERIODS_PER_CYCLE);
-        if servo.axis.state() == AxisState::Running {
-            return servo;
-        }
-    }
-    panic!("the axis did not start: {:?}", servo.feedback());
-}
 
 /// Mechanical rad/s → increments/s.
 pub fn rad_s_to_counts(rad_s: f64) -> f32 {
