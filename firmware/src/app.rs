@@ -1,18 +1,56 @@
 //! The per-cycle application: reads the set-points the master wrote (already unpacked into the OD
 //! RAM), runs the drive, writes the actual values back to the OD RAM for packing.
 //!
-//! First cut, until motor control lands: the CiA402 power drive state machine on controlword /
-//! statusword, the mode display mirroring the requested mode, and an ideal axis whose position
-//! actual value follows the target position while operation is enabled.
+//! The CiA402 power drive state machine on controlword / statusword, the mode display mirroring
+//! the requested mode, and the axis:
+//! - with a motor attached ([`Application::attach_axis`]): the cyclic set-points of the mode
+//!   (CSP 607Ah, CSV 60FFh, CST 6071h) go to the control interrupt through its
+//!   [`AxisLink`], the actual values (6064h, 606Ch, 6077h) come back from it, and a motor fault
+//!   becomes a CiA402 fault with the profile's 603Fh code for it;
+//! - without one (a board with no power stage, the benchmarks): an ideal axis whose position
+//!   actual value follows the target position while operation is enabled.
+//!
+//! Units at this boundary (the standard profile): positions in increments (the 32-bit objects
+//! wrap; the axis works on 64-bit positions), velocities in increments/s, torques in ‰ of the
+//! motor rated torque 6076h (mN·m).
 
 use crate::cia402::pds::{self, PdsState};
-use crate::od::AppVars;
+use crate::motor::axis::{AxisCommand, AxisLink, ControlMode};
+use crate::motor::MotorFault;
+use crate::od::{AppVars, MOTOR_FAULT_COUNT};
+
+/// CiA402 modes of operation (6060h) the axis runs.
+mod mode {
+    /// Cyclic synchronous position.
+    pub const CSP: i8 = 8;
+    /// Cyclic synchronous velocity.
+    pub const CSV: i8 = 9;
+    /// Cyclic synchronous torque.
+    pub const CST: i8 = 10;
+}
+
+/// Controlword bit 7: fault reset (rising edge).
+const CONTROLWORD_FAULT_RESET: u16 = 0x0080;
+/// Rated torque assumed when 6076h is absent or 0, mN·m (so that torques stay finite).
+const FALLBACK_RATED_TORQUE_MNM: u32 = 1_000;
+
+/// The connection to a motor's control interrupt.
+struct AxisPort {
+    link: &'static AxisLink,
+    /// 603Fh code per motor fault (the profile's `[motor_faults]`).
+    fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
+    /// The axis' trip counter at the last fault raised here.
+    trips_seen: u32,
+}
 
 /// Application state.
 pub struct Application {
     pds: PdsState,
     previous_controlword: u16,
     fault_code: Option<u16>,
+    axis: Option<AxisPort>,
+    /// The process-data cycle, ns (0 = unknown), for the axis' set-point interpolation.
+    cycle_ns: u32,
 }
 
 impl Default for Application {
@@ -28,7 +66,29 @@ impl Application {
             pds: PdsState::NotReadyToSwitchOn,
             previous_controlword: 0,
             fault_code: None,
+            axis: None,
+            cycle_ns: 0,
         }
+    }
+
+    /// Tells the application the process-data cycle (1C32h:02), ns; 0 if unknown.
+    pub fn set_cycle_ns(&mut self, cycle_ns: u32) {
+        self.cycle_ns = cycle_ns;
+    }
+
+    /// Connects the motor's control interrupt: from now on the set-points go to it and the
+    /// actual values come from it. `fault_codes` maps each [`MotorFault`] (by code − 1) to its
+    /// 603Fh error code.
+    pub fn attach_axis(
+        &mut self,
+        link: &'static AxisLink,
+        fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
+    ) {
+        self.axis = Some(AxisPort {
+            link,
+            fault_codes,
+            trips_seen: link.feedback().trips,
+        });
     }
 
     /// The PDS state.
@@ -65,14 +125,84 @@ impl Application {
             write_u16(ram, vars.error_code, 0);
         }
         write_u16(ram, vars.statusword, pds::statusword_of(self.pds));
-        if let Some(mode) = read_bytes::<1>(ram, vars.modes_of_operation) {
+        let mode = read_bytes::<1>(ram, vars.modes_of_operation);
+        if let Some(mode) = mode {
             write_bytes(ram, vars.modes_of_operation_display, mode);
         }
-        if self.pds == PdsState::OperationEnabled {
+        if self.axis.is_some() {
+            self.exchange_with_axis(vars, ram, cw, mode.map_or(0, |m| m[0] as i8));
+        } else if self.pds == PdsState::OperationEnabled {
             if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
                 write_bytes(ram, vars.position_actual_value, target);
             }
         }
+    }
+
+    /// Raises a new motor fault, hands the set-points of this cycle to the axis, and writes its
+    /// actual values.
+    fn exchange_with_axis(&mut self, vars: &AppVars, ram: &mut [u8], cw: u16, mode: i8) {
+        let Some(port) = self.axis.as_mut() else {
+            return;
+        };
+        let link = port.link;
+        let feedback = link.feedback();
+        let new_fault = if feedback.trips != port.trips_seen {
+            port.trips_seen = feedback.trips;
+            feedback.fault.map(|f| fault_code(port.fault_codes, f))
+        } else {
+            None
+        };
+        if let Some(code) = new_fault {
+            if !matches!(self.pds, PdsState::Fault | PdsState::FaultReactionActive) {
+                self.fault(code, vars, ram);
+            }
+        }
+        let rated_nm = read_u32(ram, vars.motor_rated_torque)
+            .filter(|&t| t > 0)
+            .unwrap_or(FALLBACK_RATED_TORQUE_MNM) as f32
+            * 1e-3;
+        // The 32-bit target is taken relative to the 32-bit image of the actual position, so
+        // the 64-bit target is right across any number of wraps.
+        let relative = |target: i32| {
+            feedback.position + i64::from(target.wrapping_sub(feedback.position as i32))
+        };
+        let target_position =
+            read_i32(ram, vars.target_position).map_or(feedback.position, relative);
+        let (mode, position) = match mode {
+            mode::CSP => (ControlMode::Position, target_position),
+            mode::CSV => (ControlMode::Velocity, feedback.position),
+            mode::CST => (ControlMode::Torque, feedback.position),
+            // No mode (or one the axis does not run): hold the position.
+            _ => (ControlMode::Position, feedback.position),
+        };
+        let torque_permille =
+            read_bytes::<2>(ram, vars.target_torque).map_or(0, i16::from_le_bytes);
+        link.publish(AxisCommand {
+            enable: self.pds == PdsState::OperationEnabled,
+            fault_reset: cw & CONTROLWORD_FAULT_RESET != 0,
+            identify: false,
+            mode,
+            position,
+            velocity: read_i32(ram, vars.target_velocity).map_or(0.0, |v| v as f32),
+            torque: f32::from(torque_permille) * 1e-3 * rated_nm,
+            bus_cycle_ns: self.cycle_ns,
+        });
+        write_bytes(
+            ram,
+            vars.position_actual_value,
+            (feedback.position as i32).to_le_bytes(),
+        );
+        // `as` saturates float → integer conversions (NaN → 0).
+        write_bytes(
+            ram,
+            vars.velocity_actual_value,
+            (feedback.velocity as i32).to_le_bytes(),
+        );
+        write_bytes(
+            ram,
+            vars.torque_actual_value,
+            ((feedback.torque / rated_nm * 1e3) as i16).to_le_bytes(),
+        );
     }
 
     /// Puts the outputs the master drives into their safe state (on leaving OP, on a watchdog).
@@ -97,6 +227,23 @@ fn write_bytes<const N: usize>(ram: &mut [u8], at: Option<u16>, v: [u8; N]) {
     }
 }
 
+/// The 603Fh code of `fault` in the profile's table (0x1000 "generic error" if it has none).
+fn fault_code(codes: &[u16; MOTOR_FAULT_COUNT], fault: MotorFault) -> u16 {
+    const GENERIC_ERROR: u16 = 0x1000;
+    codes
+        .get(usize::from(fault.code()).wrapping_sub(1))
+        .copied()
+        .unwrap_or(GENERIC_ERROR)
+}
+
+fn read_i32(ram: &[u8], at: Option<u16>) -> Option<i32> {
+    read_bytes::<4>(ram, at).map(i32::from_le_bytes)
+}
+
+fn read_u32(ram: &[u8], at: Option<u16>) -> Option<u32> {
+    read_bytes::<4>(ram, at).map(u32::from_le_bytes)
+}
+
 fn read_u16(ram: &[u8], at: Option<u16>) -> Option<u16> {
     read_bytes::<2>(ram, at).map(u16::from_le_bytes)
 }
@@ -117,6 +264,7 @@ mod tests {
         target_position: Some(6),
         position_actual_value: Some(10),
         error_code: Some(14),
+        ..AppVars::NONE
     };
 
     #[test]

@@ -366,11 +366,21 @@ pub enum Role {
     PositionActualValue,
     /// 603Fh error code (UINT): the CiA402 error the drive reports.
     ErrorCode,
+    /// 60FFh target velocity (DINT).
+    TargetVelocity,
+    /// 6071h target torque (INT, ‰ of the motor rated torque).
+    TargetTorque,
+    /// 606Ch velocity actual value (DINT).
+    VelocityActualValue,
+    /// 6077h torque actual value (INT, ‰ of the motor rated torque).
+    TorqueActualValue,
+    /// 6076h motor rated torque (UDINT, mN·m): the unit of the torque objects.
+    MotorRatedTorque,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 7] = [
+    pub const ALL: [Role; 12] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -378,6 +388,11 @@ impl Role {
         Self::TargetPosition,
         Self::PositionActualValue,
         Self::ErrorCode,
+        Self::TargetVelocity,
+        Self::TargetTorque,
+        Self::VelocityActualValue,
+        Self::TorqueActualValue,
+        Self::MotorRatedTorque,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -389,6 +404,11 @@ impl Role {
             Self::TargetPosition => "target_position",
             Self::PositionActualValue => "position_actual_value",
             Self::ErrorCode => "error_code",
+            Self::TargetVelocity => "target_velocity",
+            Self::TargetTorque => "target_torque",
+            Self::VelocityActualValue => "velocity_actual_value",
+            Self::TorqueActualValue => "torque_actual_value",
+            Self::MotorRatedTorque => "motor_rated_torque",
         }
     }
     /// Parses the profile-file spelling.
@@ -400,7 +420,12 @@ impl Role {
         match self {
             Self::Controlword | Self::Statusword | Self::ErrorCode => DataType::Uint,
             Self::ModesOfOperation | Self::ModesOfOperationDisplay => DataType::Sint,
-            Self::TargetPosition | Self::PositionActualValue => DataType::Dint,
+            Self::TargetPosition
+            | Self::PositionActualValue
+            | Self::TargetVelocity
+            | Self::VelocityActualValue => DataType::Dint,
+            Self::TargetTorque | Self::TorqueActualValue => DataType::Int,
+            Self::MotorRatedTorque => DataType::Udint,
         }
     }
 }

@@ -85,12 +85,12 @@ fn derived_object_declared() {
 fn pdo_entry_missing() {
     let (key, e) = invalid(&with(
         "{ index = 0x6060, sub = 0, bits = 8 }",
-        "{ index = 0x6071, sub = 0, bits = 16 }",
+        "{ index = 0x6072, sub = 0, bits = 16 }",
     ));
     assert_eq!(
         e,
         Invalid::PdoEntryMissing {
-            index: 0x6071,
+            index: 0x6072,
             subindex: 0
         }
     );
@@ -481,7 +481,7 @@ fn settings_are_marked_per_entry_and_must_be_writable() {
         .filter(|o| o.entries.iter().any(|e| e.setting))
         .map(|o| o.index)
         .collect();
-    assert_eq!(settings, [0x2F00, 0x6060]);
+    assert_eq!(settings, [0x2F00, 0x6060, 0x6076]);
     // On a RECORD object: every declared entry (not the generated subindex 0).
     let p = od_gen::parse(
         &appended(

@@ -199,7 +199,7 @@ fn sm_synchronous_cycle_runs_on_every_sm2_event() {
         assert_eq!(sd.sdo_read::<u16>(0x1C32, 1).await.expect("1C32:01"), 1);
         let cycles_before = m.shared.segment().drives()[0].slave.cycles();
         // No simulated time passes: only the master's frames (SM2 events) drive the cycle.
-        let mut actual = 0;
+        let mut statuswords = Vec::new();
         for i in 0..40u16 {
             let cw: u16 = match i {
                 0..=9 => 0x06,
@@ -209,17 +209,19 @@ fn sm_synchronous_cycle_runs_on_every_sm2_event() {
             {
                 let mut out = sd.outputs_raw_mut();
                 out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[2..6].copy_from_slice(&(i32::from(i) * 10).to_le_bytes());
             }
             group.tx_rx(md).await.expect("tx/rx");
             let inp = sd.inputs_raw();
-            actual = i32::from_le_bytes(inp[2..6].try_into().expect("4 bytes"));
+            statuswords.push(u16::from_le_bytes([inp[0], inp[1]]) & 0x6F);
         }
         let cycles = m.shared.segment().drives()[0].slave.cycles() - cycles_before;
         assert_eq!(cycles, 40, "one cycle per SM2 event");
+        // Frame 10 carries "switch on" (0x07) for the first time; its own inputs still show
+        // the cycle frame 9 triggered (ready to switch on, 0x21), frame 11's inputs the cycle
+        // frame 10 triggered (switched on, 0x23): CiA402 Table 3 statusword patterns.
         assert_eq!(
-            actual,
-            38 * 10,
+            (statuswords[10], statuswords[11]),
+            (0x21, 0x23),
             "inputs of a frame show the cycle the previous frame triggered"
         );
     });

@@ -70,12 +70,25 @@ fn check(report: &Report, drives: usize, cycles: u32) {
         report.samples[15].first_drive.3, 0,
         "position actual while only switched on"
     );
-    // Enabled: the ideal axis's actual position is the target of the previous cycle.
-    for k in 30..cycles as usize {
-        assert_eq!(
-            report.samples[k].first_drive.3,
-            report.samples[k - 1].first_drive.1,
-            "cycle {k}"
+    // Enabled (CSP): the motor follows the target ramp (100 increments per cycle). The drive
+    // interpolates the targets one bus cycle late, and the in-process master's frames fall at
+    // varying points of the simulated cycle (at 250 µs the set-points also arrive with jitter
+    // the interpolator absorbs), so the position a sample carries is from zero to four cycles
+    // behind the target sent with it: the actual position of cycle k lies between the targets
+    // of cycles k − 4 and k, up to the following error of a constant-velocity move
+    // with feed-forward (a few increments; the bound allows a quarter of a cycle's travel; the
+    // following error itself is measured in boards/sim/tests/motor_speed_position.rs). The
+    // first quarter of the run covers enabling (offset calibration, 6.4 ms) and the catch-up
+    // from standstill.
+    for k in cycles as usize / 4..cycles as usize {
+        let actual = report.samples[k].first_drive.3;
+        let (from, to) = (
+            report.samples[k - 4].first_drive.1,
+            report.samples[k].first_drive.1,
+        );
+        assert!(
+            (from - 25..=to + 25).contains(&actual),
+            "cycle {k}: actual {actual}, targets {from} and {to}"
         );
     }
     for (i, c) in report.firmware_cycles.iter().enumerate() {

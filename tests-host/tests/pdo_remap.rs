@@ -12,6 +12,15 @@ const TX_ASSIGN: u16 = 0x1C13;
 const RXPDO: u16 = 0x1600;
 const TXPDO: u16 = 0x1A00;
 const CYCLE_NS: u64 = 1_000_000;
+/// Cycles of each remapping run: enabling (cycles 20..) takes the offset calibration (6.4 ms)
+/// and the motor's catch-up to the target, the rest shows it following.
+const CYCLES: u32 = 80;
+/// Following error allowed at the end of the run, increments (2^20 per revolution): the ramp
+/// crawls at 1 increment per ms, where the Coulomb friction makes the cascade stick and slip
+/// (bound of boards/sim/tests/motor_speed_position.rs at standstill).
+const FOLLOWING_TOLERANCE: i32 = 150;
+/// Modes of operation 6060h: cyclic synchronous position.
+const MODE_CSP: u8 = 8;
 
 /// One mapping entry (CiA 301 §7.4.7.1): index, subindex, bit length.
 #[derive(Clone, Copy)]
@@ -130,7 +139,7 @@ async fn run_mapping(rx: &[Map], tx: &[Map]) {
     let mut last_target = 0i32;
     let mut statusword = 0u16;
     let mut actual = 0i32;
-    for i in 0..40u32 {
+    for i in 0..CYCLES {
         let cw: u16 = match i {
             0..=9 => 0x06,
             10..=19 => 0x07,
@@ -147,6 +156,9 @@ async fn run_mapping(rx: &[Map], tx: &[Map]) {
                 let o = offset(rx, TARGET);
                 out[o..o + 4].copy_from_slice(&target.to_le_bytes());
             }
+            if rx.iter().any(|e| e.0 == MODE.0) {
+                out[offset(rx, MODE)] = MODE_CSP;
+            }
         }
         group.tx_rx(md).await.expect("tx/rx");
         m.shared.advance(CYCLE_NS);
@@ -159,7 +171,7 @@ async fn run_mapping(rx: &[Map], tx: &[Map]) {
             let o = offset(tx, ACTUAL);
             actual = i32::from_le_bytes(inp[o..o + 4].try_into().expect("4 bytes"));
         }
-        if i == 38 {
+        if i == CYCLES - 1 {
             last_target = target;
         }
     }
@@ -171,9 +183,13 @@ async fn run_mapping(rx: &[Map], tx: &[Map]) {
         );
     }
     if has_cw && has_target && tx.iter().any(|e| e.0 == ACTUAL.0) {
-        assert_eq!(
-            actual, last_target,
-            "position actual follows the remapped target"
+        // The motor (CSP, the profile's default mode) follows the 1-increment-per-cycle ramp
+        // one to four cycles late (interpolation, input latency), plus a few increments of
+        // following error.
+        assert!(
+            (last_target - 4 - FOLLOWING_TOLERANCE..=last_target + FOLLOWING_TOLERANCE)
+                .contains(&actual),
+            "position actual {actual} follows the remapped target {last_target}"
         );
     }
 }

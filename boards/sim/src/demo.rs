@@ -174,13 +174,20 @@ fn set_points(i: u32) -> (u16, i32) {
     (controlword, i as i32 * 100)
 }
 
-/// Writes controlword and target position into a drive's outputs (default RxPDO 1600h layout).
+/// Modes of operation 6060h: cyclic synchronous position (CiA402).
+const MODE_CSP: u8 = 8;
+
+/// Writes controlword, target position and the mode (CSP) into a drive's outputs (default
+/// RxPDO 1600h layout: 6040h, 607Ah, 6060h).
 fn write_outputs(out: &mut [u8], controlword: u16, target: i32) {
     if let Some(b) = out.get_mut(0..2) {
         b.copy_from_slice(&controlword.to_le_bytes());
     }
     if let Some(b) = out.get_mut(2..6) {
         b.copy_from_slice(&target.to_le_bytes());
+    }
+    if let Some(b) = out.get_mut(6) {
+        *b = MODE_CSP;
     }
 }
 

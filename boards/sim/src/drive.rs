@@ -9,6 +9,8 @@ use hal::pdi::EscSignals;
 use crate::domains::SimDomainStore;
 use crate::esc::Et1100;
 use crate::leds::SimLeds;
+use crate::plant::PlantConfig;
+use crate::servo::{axis_config, SimServo, Tuning};
 use crate::storage::SimStorage;
 use firmware::params::{Loaded, ParamError, ParamStore};
 
@@ -44,6 +46,20 @@ pub struct SimDrive {
     /// RUN/ERR LEDs, switched every [`LED_PERIOD_NS`] from the firmware's ETG.1300 patterns.
     pub leds: SimLeds,
     next_led_ns: u64,
+    /// The motor, inverter and encoder with the firmware's control interrupt, attached to the
+    /// slave's application; it runs PWM period by PWM period as simulated time passes.
+    pub servo: SimServo,
+}
+
+/// The simulated drive's motor: the 400 W servo with the default tuning.
+fn new_servo() -> SimServo {
+    let plant = PlantConfig::servo_400w();
+    let cfg = axis_config(&plant, &Tuning::default());
+    match SimServo::new(plant, cfg) {
+        Ok(servo) => servo,
+        // Both configurations are constants of this crate, checked by its tests.
+        Err(e) => panic!("the built-in servo configuration is invalid: {e:?}"),
+    }
 }
 
 impl SimDrive {
@@ -63,6 +79,8 @@ impl SimDrive {
         let mut params = ParamStore::new(storage);
         let mut slave = Box::new(Slave::new(profile)?);
         let loaded = slave.load_parameters(&mut params);
+        let servo = new_servo();
+        slave.attach_axis(servo.link());
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.
         let _ = slave.start(&mut esc);
@@ -77,6 +95,7 @@ impl SimDrive {
             next_poll_ns: BACKGROUND_POLL_PERIOD_NS,
             leds: SimLeds::default(),
             next_led_ns: 0,
+            servo,
         })
     }
 
@@ -90,6 +109,8 @@ impl SimDrive {
         esc.advance_to(now);
         let mut slave = Box::new(Slave::new(self.profile)?);
         self.loaded = slave.load_parameters(&mut self.params);
+        self.servo.restart_firmware();
+        slave.attach_axis(self.servo.link());
         // As in `with_storage`: the simulated PDI does not fail.
         let _ = slave.start(&mut esc);
         self.esc = esc;
@@ -124,6 +145,9 @@ impl SimDrive {
     /// Moves the drive to simulated time `now_ns` and runs the firmware handlers that are due:
     /// SYNC0 → cycle, free-run tick → cycle, IRQ line → ESC event handler.
     pub fn run_until(&mut self, now_ns: u64) {
+        // The control interrupt runs every PWM period up to now, before SYNC0 reads its
+        // feedback.
+        self.servo.advance_to(now_ns);
         self.esc.advance_to(now_ns);
         if self.esc.take_sync0() {
             self.cycle(now_ns);

@@ -215,9 +215,10 @@ pub struct SimServo {
     pub plant: Plant,
     /// The firmware's control interrupt.
     pub axis: Axis,
-    /// The SYNC0 ↔ control-interrupt mailboxes (private: `publish` takes `&mut self`, so
-    /// there is never more than one writer).
-    link: AxisLink,
+    /// The SYNC0 ↔ control-interrupt mailboxes. `'static` because on a board they are a
+    /// `static` shared by two interrupts (and the slave's application keeps a reference);
+    /// here each servo leaks one (a few hundred bytes per servo, for the life of the process).
+    link: &'static AxisLink,
     latched: Output,
     extender: PositionExtender,
     last_sample: Option<Sample>,
@@ -230,10 +231,11 @@ impl SimServo {
         Ok(Self {
             plant: Plant::new(plant).map_err(ServoError::Plant)?,
             axis: Axis::new(axis).map_err(ServoError::Axis)?,
-            // SAFETY: the simulation calls the SYNC0 side (`publish`, `feedback`) and the control
-            // interrupt (`period`) from one thread, one after the other, through `&mut self`
-            // or `&self` of this one value: they never overlap.
-            link: unsafe { AxisLink::new() },
+            // SAFETY: the simulation runs the SYNC0 side (`publish`, `feedback`, or the slave's
+            // application holding `link()`) and the control interrupt (`period`) on one thread,
+            // one after the other: they never overlap. `AxisLink` is not `Send`-restricted, but
+            // the simulated drive that owns this servo is driven from one thread at a time.
+            link: Box::leak(Box::new(unsafe { AxisLink::new() })),
             latched: Output {
                 gates: false,
                 duties: Duties::CENTRED,
@@ -244,9 +246,45 @@ impl SimServo {
         })
     }
 
+    /// Restarts the firmware side (a power cycle of the board): a new axis in its power-on
+    /// state with a new link; the plant (the motor's physical state) goes on.
+    pub fn restart_firmware(&mut self) {
+        let cfg = *self.axis.config();
+        if let Ok(axis) = Axis::new(cfg) {
+            self.axis = axis;
+        }
+        // SAFETY: as in `new`.
+        self.link = Box::leak(Box::new(unsafe { AxisLink::new() }));
+        self.latched = Output {
+            gates: false,
+            duties: Duties::CENTRED,
+        };
+        self.extender = PositionExtender::default();
+    }
+
+    /// The PWM period, ns.
+    pub fn period_ns(&self) -> u64 {
+        (self.plant.period_s() * 1e9).round() as u64
+    }
+
+    /// Runs PWM periods until the plant's time reaches `now_ns` (the boards's clock).
+    pub fn advance_to(&mut self, now_ns: u64) {
+        let period = self.period_ns().max(1);
+        while (self.periods + 1) * period <= now_ns {
+            self.period();
+        }
+    }
+
     /// The SYNC0 side: hands over a command.
     pub fn publish(&mut self, command: AxisCommand) {
         self.link.publish(command);
+    }
+
+    /// The link, for the slave's application ([`firmware::slave::Slave::attach_axis`]). Only
+    /// one context may publish: a servo whose link is attached is commanded by the slave, not
+    /// by [`SimServo::publish`].
+    pub fn link(&self) -> &'static AxisLink {
+        self.link
     }
 
     /// The SYNC0 side: the latest feedback.
@@ -273,7 +311,7 @@ impl SimServo {
     /// over the period with the duties latched at its start.
     pub fn period(&mut self) {
         let sample = self.board_sample();
-        let next = self.axis.control_step(&sample, &self.link);
+        let next = self.axis.control_step(&sample, self.link);
         let applied = self.latched;
         // A gate-off decision acts at once (the board's disable is immediate), duties at the
         // next period boundary.

@@ -148,6 +148,9 @@ pub struct AxisCommand {
     pub velocity: f32,
     /// Target torque (CST) or torque offset (CSP/CSV), N·m.
     pub torque: f32,
+    /// The bus cycle the set-points come at, ns (0: unchanged). A change re-times the
+    /// interpolator (a configuration-time computation, once per change).
+    pub bus_cycle_ns: u32,
 }
 
 /// The state of the axis.
@@ -190,6 +193,9 @@ pub struct AxisFeedback {
     pub following_error: i64,
     /// Identification results, when the last identification finished.
     pub identified: Option<Identification>,
+    /// Faults latched so far (wrapping): a change tells the SYNC0 side that a new fault
+    /// occurred, even when a reset and a new trip of the same fault fall between two reads.
+    pub trips: u32,
 }
 
 /// Results of a commissioning run.
@@ -263,6 +269,7 @@ impl AxisLink {
                     position: 0,
                     velocity: 0.0,
                     torque: 0.0,
+                    bus_cycle_ns: 0,
                 })
             },
             // SAFETY: as above.
@@ -275,6 +282,7 @@ impl AxisLink {
                     torque: 0.0,
                     following_error: 0,
                     identified: None,
+                    trips: 0,
                 })
             },
         }
@@ -334,6 +342,10 @@ pub struct Axis {
     last_velocity: f32,
     /// Test signal added to the current references while running (d, q), A.
     injection: (f32, f32),
+    /// The bus cycle the interpolator is timed for, ns.
+    bus_cycle_ns: u32,
+    /// Faults latched so far (wrapping).
+    trips: u32,
 }
 
 impl Axis {
@@ -416,6 +428,8 @@ impl Axis {
             last_iq: 0.0,
             last_velocity: 0.0,
             injection: (0.0, 0.0),
+            trips: 0,
+            bus_cycle_ns: (cfg.bus_cycle_s * 1e9) as u32,
             cfg,
         })
     }
@@ -531,11 +545,17 @@ impl Axis {
         output
     }
 
-    fn trip(&mut self, fault: MotorFault, link: &AxisLink) -> Output {
+    /// Latches `fault` (the first one stays until a reset) and stops: gates off.
+    fn latch(&mut self, fault: MotorFault) {
         if self.fault.is_none() {
             self.fault = Some(fault);
+            self.trips = self.trips.wrapping_add(1);
         }
         self.state = AxisState::Faulted;
+    }
+
+    fn trip(&mut self, fault: MotorFault, link: &AxisLink) -> Output {
+        self.latch(fault);
         self.current_loop.reset();
         self.speed_loop.reset();
         self.publish(link);
@@ -551,6 +571,7 @@ impl Axis {
             torque: self.last_iq * self.nm_per_iq,
             following_error: self.position_loop.following_error(),
             identified: self.identified,
+            trips: self.trips,
         });
     }
 
@@ -566,9 +587,23 @@ impl Axis {
         if let Some((command, seq)) = link.commands.read_if_new(self.command_seq) {
             self.command_seq = seq;
             self.command = command;
+            if command.bus_cycle_ns != 0 && command.bus_cycle_ns != self.bus_cycle_ns {
+                self.retime_interpolator(command.bus_cycle_ns);
+            }
             if self.state == AxisState::Running {
                 self.push_setpoint();
             }
+        }
+    }
+
+    /// Rebuilds the interpolator for set-points every `bus_cycle_ns` (a cycle it cannot serve
+    /// keeps the previous timing; the SYNC supervision of the slave reports such cycles).
+    fn retime_interpolator(&mut self, bus_cycle_ns: u32) {
+        let loop_hz = self.cfg.pwm_hz / self.cfg.loop_divider as f32;
+        if let Ok(interpolator) = Interpolator::new(bus_cycle_ns as f32 * 1e-9, loop_hz) {
+            self.interpolator = interpolator;
+            self.interpolator.reset(self.position);
+            self.bus_cycle_ns = bus_cycle_ns;
         }
     }
 
@@ -586,8 +621,7 @@ impl Axis {
         match self.offset_calibration.add(raw) {
             None => Output::OFF,
             Some(Err(fault)) => {
-                self.fault = Some(fault);
-                self.state = AxisState::Faulted;
+                self.latch(fault);
                 Output::OFF
             }
             Some(Ok(offsets)) => {
@@ -613,8 +647,7 @@ impl Axis {
                 self.state = AxisState::IdentifyingElectrical;
             }
             Err(fault) => {
-                self.fault = Some(fault);
-                self.state = AxisState::Faulted;
+                self.latch(fault);
             }
         }
     }
@@ -638,8 +671,7 @@ impl Axis {
                 Output::OFF
             }
             AlignStep::Done(Err(fault)) => {
-                self.fault = Some(fault);
-                self.state = AxisState::Faulted;
+                self.latch(fault);
                 Output::OFF
             }
         }
@@ -757,16 +789,14 @@ impl Axis {
                         self.start_inertia_identification();
                     }
                     Err(_) => {
-                        self.fault = Some(MotorFault::Identification);
-                        self.state = AxisState::Faulted;
+                        self.latch(MotorFault::Identification);
                     }
                 }
                 Output::OFF
             }
             IdentCommand::Done(Err(fault)) => {
                 self.electrical_ident = None;
-                self.fault = Some(fault);
-                self.state = AxisState::Faulted;
+                self.latch(fault);
                 Output::OFF
             }
         }
@@ -795,8 +825,7 @@ impl Axis {
                 self.state = AxisState::IdentifyingInertia;
             }
             Err(fault) => {
-                self.fault = Some(fault);
-                self.state = AxisState::Faulted;
+                self.latch(fault);
             }
         }
     }
@@ -813,8 +842,7 @@ impl Axis {
                     Output::OFF
                 }
                 AlignStep::Done(Err(fault)) => {
-                    self.fault = Some(fault);
-                    self.state = AxisState::Faulted;
+                    self.latch(fault);
                     Output::OFF
                 }
             };
@@ -846,8 +874,7 @@ impl Axis {
                             self.state = AxisState::Identified;
                         }
                         Err(fault) => {
-                            self.fault = Some(fault);
-                            self.state = AxisState::Faulted;
+                            self.latch(fault);
                         }
                     }
                     return Output::OFF;

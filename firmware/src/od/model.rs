@@ -379,6 +379,16 @@ pub struct AppVars {
     pub position_actual_value: Option<u16>,
     /// 603Fh error code (u16).
     pub error_code: Option<u16>,
+    /// 60FFh target velocity (i32).
+    pub target_velocity: Option<u16>,
+    /// 6071h target torque (i16, ‰ of the rated torque).
+    pub target_torque: Option<u16>,
+    /// 606Ch velocity actual value (i32).
+    pub velocity_actual_value: Option<u16>,
+    /// 6077h torque actual value (i16, ‰ of the rated torque).
+    pub torque_actual_value: Option<u16>,
+    /// 6076h motor rated torque (u32, mN·m).
+    pub motor_rated_torque: Option<u16>,
 }
 
 impl AppVars {
@@ -391,6 +401,11 @@ impl AppVars {
         target_position: None,
         position_actual_value: None,
         error_code: None,
+        target_velocity: None,
+        target_torque: None,
+        velocity_actual_value: None,
+        torque_actual_value: None,
+        motor_rated_torque: None,
     };
 }
 

@@ -190,6 +190,13 @@ impl<const RAM: usize> Slave<RAM> {
         params.load(&mut self.dictionary())
     }
 
+    /// Connects the motor's control interrupt to the application: set-points go to it and
+    /// actual values and motor faults (as the profile's 603Fh codes, with EMCY) come from it.
+    /// The board calls [`crate::motor::axis::Axis::control_step`] with the same `link`.
+    pub fn attach_axis(&mut self, link: &'static crate::motor::axis::AxisLink) {
+        self.app.attach_axis(link, self.profile.motor_faults);
+    }
+
     /// The profile.
     pub fn profile(&self) -> &'static Profile {
         self.profile
@@ -385,11 +392,21 @@ impl<const RAM: usize> Slave<RAM> {
             }
         }
         let fault_before = self.app.fault_code();
+        self.app.set_cycle_ns(self.cycle_ns());
         self.app.step(&self.profile.vars, &mut self.ram);
-        if let (Some(code), None) = (fault_before, self.app.fault_code()) {
-            // Fault reset (CiA402): the error leaves 1001h; the last one clears with an
-            // error-reset EMCY (CiA 301). A full queue only loses that notification.
-            let _ = self.clear_error(code);
+        match (fault_before, self.app.fault_code()) {
+            (Some(code), None) => {
+                // Fault reset (CiA402): the error leaves 1001h; the last one clears with an
+                // error-reset EMCY (CiA 301). A full queue only loses that notification.
+                let _ = self.clear_error(code);
+            }
+            (None, Some(code)) => {
+                // A motor fault (protection, encoder, ...): 603Fh, 1001h and the EMCY. A full
+                // EMCY queue loses only the message; 1001h/603Fh hold the error.
+                let _ =
+                    self.report_error(code, emcy::register::DEVICE_PROFILE, [0; 5], None, now_ns);
+            }
+            _ => {}
         }
         self.write_inputs(pdi)?;
         self.cycles = self.cycles.wrapping_add(1);

@@ -277,6 +277,8 @@ const COMMAND: AxisCommand = AxisCommand {
     position: POSITION,
     velocity: 0.0,
     torque: 0.0,
+    // Unchanged: the interpolator keeps the bus cycle of the configuration.
+    bus_cycle_ns: 0,
 };
 
 /// The sample of the measurement: no current, 48 V, 25 °C, the encoder at rest.

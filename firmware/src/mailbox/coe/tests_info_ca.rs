@@ -139,8 +139,11 @@ fn od_list_types_1_to_3_list_the_matching_objects_in_index_order() {
 fn od_list_type_4_lists_the_objects_the_parameter_storage_stores() {
     let mut b = Bench::new();
     // The storable objects of the standard profile (params::is_storable): 10F1h, 10F3h, the PDO
-    // mapping and assignment, 2F00h; not 1010h/1011h, 1C32h/1C33h or process data.
-    let backup = [0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2F00];
+    // mapping and assignment, 2F00h, 6076h (motor rated torque); not 1010h/1011h, 1C32h/1C33h
+    // or process data.
+    let backup = [
+        0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2F00, 0x6076,
+    ];
     assert_eq!(
         indices(|o| o.entries.iter().any(|e| is_storable(o, e))),
         backup
@@ -152,8 +155,13 @@ fn od_list_type_4_lists_the_objects_the_parameter_storage_stores() {
 #[test]
 fn od_list_type_5_lists_the_profiles_startup_parameters() {
     let mut b = Bench::new();
-    // standard.toml: `setting = true` on 2F00h and 6060h.
-    let expected = cat(&[&INFO, &[0x02, 0, 0, 0], &le16(5), &words(&[0x2F00, 0x6060])]);
+    // standard.toml: `setting = true` on 2F00h, 6060h and 6076h.
+    let expected = cat(&[
+        &INFO,
+        &[0x02, 0, 0, 0],
+        &le16(5),
+        &words(&[0x2F00, 0x6060, 0x6076]),
+    ]);
     assert_eq!(b.call(&od_list_request(5)), expected);
 }
 
@@ -272,11 +280,14 @@ fn unknown_info_opcode_is_an_sdo_info_error() {
 
 #[test]
 fn long_od_list_is_fragmented_one_fragment_per_call() {
-    const SMALL: usize = 32; // 26-byte CoE payload: 22 data bytes per fragment
+    // 32-byte mailbox: 6 bytes mailbox header, 2 CoE header, 4 SDO-information header, so 20
+    // data bytes per fragment.
+    const SMALL: usize = 32;
+    const DATA_PER_FRAGMENT: usize = SMALL - 6 - 2 - 4;
     let mut b = Bench::new();
     let all = indices(|_| true);
     let total = 2 + 2 * all.len();
-    let frags = total.div_ceil(22);
+    let frags = total.div_ceil(DATA_PER_FRAGMENT);
     assert!(frags > 2, "test needs several fragments");
     let mut data = Vec::new();
     let mut frame = b.call_in(AlState::PreOp, SMALL, &od_list_request(1));

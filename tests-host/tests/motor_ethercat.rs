@@ -1,0 +1,161 @@
+//! The motor behind the bus: a CSP move commanded by ethercrab over the default PDO mapping
+//! moves the simulated motor, and a motor protection trip reaches the master as a CiA402 fault
+//! with the profile's 603Fh code and the error register 1001h, cleared by a fault reset once
+//! its cause is gone.
+
+use ethercrab::MainDevice;
+use tests_host::{block_on, master};
+
+/// Simulated time per cycle (free run).
+const CYCLE_NS: u64 = 1_000_000;
+/// Increments per revolution of the simulated servo's encoder.
+const CPR: i64 = 1 << 20;
+/// CiA402 controlwords (Table 5) and statusword masks/patterns (Table 3).
+const SHUTDOWN: u16 = 0x06;
+const SWITCH_ON: u16 = 0x07;
+const ENABLE_OPERATION: u16 = 0x0F;
+const FAULT_RESET: u16 = 0x80;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const SWITCH_ON_DISABLED: u16 = 0x40;
+const FAULT_BIT: u16 = 0x08;
+/// Modes of operation 6060h: cyclic synchronous position.
+const MODE_CSP: u8 = 8;
+/// The standard profile's 603Fh code of `drive_over_temperature` (od-gen/profiles/standard.toml:
+/// 0x4210 "excess temperature device").
+const DRIVE_OVER_TEMPERATURE: u16 = 0x4210;
+/// 1001h bit 3: temperature (CiA 301 Table 48, class 0x4xxx).
+const ERROR_REGISTER_TEMPERATURE: u8 = 0x08;
+
+/// One cycle with controlword `cw` and target `target` (default RxPDO 1600h: 6040h, 607Ah,
+/// 6060h = CSP); evaluates to (statusword, position actual) from the default TxPDO 1A00h
+/// (6041h, 6064h). Simulated time advances by one cycle (free run).
+macro_rules! cycle {
+    ($m:expr, $md:expr, $group:expr, $cw:expr, $target:expr) => {{
+        let sd = $group.subdevice($md, 0).expect("drive");
+        {
+            let mut out = sd.outputs_raw_mut();
+            out[0..2].copy_from_slice(&($cw as u16).to_le_bytes());
+            out[2..6].copy_from_slice(&($target as i32).to_le_bytes());
+            out[6] = MODE_CSP;
+        }
+        $group.tx_rx($md).await.expect("tx/rx");
+        $m.shared.advance(CYCLE_NS);
+        let inp = sd.inputs_raw();
+        (
+            u16::from_le_bytes([inp[0], inp[1]]),
+            i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
+        )
+    }};
+}
+
+#[test]
+fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+
+        // Power up (CiA402) and hold: the axis calibrates its current offsets and runs.
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            (sw, _) = cycle!(m, md, group, cw, 0);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+
+        // A quarter revolution in 250 ms, then hold: the rotor (the plant's true angle) ends
+        // where the master sent it.
+        let quarter = (CPR / 4) as i32;
+        let mut actual = 0;
+        for k in 0..=250 {
+            (_, actual) = cycle!(m, md, group, ENABLE_OPERATION, quarter * k / 250);
+        }
+        for _ in 0..50 {
+            (_, actual) = cycle!(m, md, group, ENABLE_OPERATION, quarter);
+        }
+        let rotor = {
+            let seg = m.shared.segment();
+            seg.drives()[0].servo.plant.mech_angle_rad()
+        };
+        let rotor_counts = rotor / std::f64::consts::TAU * CPR as f64;
+        assert!(
+            (rotor_counts - f64::from(quarter)).abs() < 150.0,
+            "rotor at {rotor_counts:.0} increments, target {quarter}"
+        );
+        assert!((actual - quarter).abs() < 150, "6064h {actual}");
+
+        // The power stage overheats: after the protection's confirmation time the drive is in
+        // Fault, the gates are off, 603Fh holds the profile's code and 1001h the temperature bit.
+        m.shared.segment().drives_mut()[0]
+            .servo
+            .plant
+            .set_drive_temperature(120.0);
+        let mut cycles_to_fault = None;
+        for k in 0..300 {
+            (sw, _) = cycle!(m, md, group, ENABLE_OPERATION, quarter);
+            if sw & FAULT_BIT != 0 {
+                cycles_to_fault = Some(k);
+                break;
+            }
+        }
+        let k = cycles_to_fault.expect("the drive faults");
+        // ProtectionConfig default: 0.1 s of confirmation; the cycle grid adds a few ms.
+        assert!((95..=110).contains(&k), "fault after {k} ms");
+        {
+            let seg = m.shared.segment();
+            let servo = &seg.drives()[0].servo;
+            assert!(!servo.latched().gates, "gates off");
+        }
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(
+            sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"),
+            DRIVE_OVER_TEMPERATURE
+        );
+        let register = sd.sdo_read::<u8>(0x1001, 0).await.expect("1001h");
+        assert_ne!(
+            register & ERROR_REGISTER_TEMPERATURE,
+            0,
+            "1001h {register:#04x}"
+        );
+
+        // Reset while still hot: the axis trips again at once.
+        cycle!(m, md, group, 0, quarter);
+        for _ in 0..5 {
+            (sw, _) = cycle!(m, md, group, FAULT_RESET, quarter);
+        }
+        for _ in 0..150 {
+            (sw, _) = cycle!(m, md, group, 0, quarter);
+        }
+        assert_ne!(sw & FAULT_BIT, 0, "still hot: the fault stays");
+        // Cooled down: a reset leaves Fault, 603Fh and 1001h clear.
+        m.shared.segment().drives_mut()[0]
+            .servo
+            .plant
+            .set_drive_temperature(25.0);
+        cycle!(m, md, group, 0, quarter);
+        for _ in 0..5 {
+            (sw, _) = cycle!(m, md, group, FAULT_RESET, quarter);
+        }
+        for _ in 0..5 {
+            (sw, _) = cycle!(m, md, group, 0, quarter);
+        }
+        assert_eq!(sw & STATE_MASK, SWITCH_ON_DISABLED, "fault reset");
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), 0);
+        assert_eq!(sd.sdo_read::<u8>(0x1001, 0).await.expect("1001h"), 0);
+    });
+}
