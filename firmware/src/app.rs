@@ -15,7 +15,7 @@
 //! motor rated torque 6076h (mN·m).
 
 use crate::cia402::pds::{self, PdsState};
-use crate::motor::axis::{AxisCommand, AxisLink, ControlMode};
+use crate::motor::axis::{AxisCommand, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::MotorFault;
 use crate::od::{AppVars, MOTOR_FAULT_COUNT};
 
@@ -27,7 +27,16 @@ mod mode {
     pub const CSV: i8 = 9;
     /// Cyclic synchronous torque.
     pub const CST: i8 = 10;
+    /// Manufacturer-specific (negative, CiA402): motor identification (commissioning). The
+    /// results land in the commissioned motor data (2100h in the standard profile).
+    pub const IDENTIFICATION: i8 = -1;
 }
+
+/// Statusword bit 12 (operation-mode specific): in mode −1, the identification finished.
+const STATUSWORD_IDENTIFIED: u16 = 0x1000;
+/// Units of the commissioned motor data objects: µΩ, nH, g·mm² (1e-9 kg·m²).
+const MICRO: f32 = 1e-6;
+const NANO: f32 = 1e-9;
 
 /// Controlword bit 7: fault reset (rising edge).
 const CONTROLWORD_FAULT_RESET: u16 = 0x0080;
@@ -41,6 +50,10 @@ struct AxisPort {
     fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
     /// The axis' trip counter at the last fault raised here.
     trips_seen: u32,
+    /// The motor model last handed to the axis.
+    model_sent: Option<MotorModel>,
+    /// The results of the finished identification are in the OD.
+    results_written: bool,
 }
 
 /// Application state.
@@ -88,6 +101,8 @@ impl Application {
             link,
             fault_codes,
             trips_seen: link.feedback().trips,
+            model_sent: None,
+            results_written: false,
         });
     }
 
@@ -138,10 +153,35 @@ impl Application {
         }
     }
 
+    /// Hands the commissioned motor data (stored parameters, identification results, SDO
+    /// writes) to the axis when they changed since the last call; the axis applies them when it
+    /// is not running. Also called when the axis is attached (after the parameters were
+    /// loaded at power-on).
+    pub fn publish_motor_model(&mut self, vars: &AppVars, ram: &[u8]) {
+        if let Some(port) = self.axis.as_mut() {
+            Self::sync_motor_model(port, vars, ram);
+        }
+    }
+
+    fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
+        let link = port.link;
+        let model = MotorModel {
+            resistance_ohm: read_u32(ram, vars.motor_resistance).unwrap_or(0) as f32 * MICRO,
+            ld_h: read_u32(ram, vars.motor_ld).unwrap_or(0) as f32 * NANO,
+            lq_h: read_u32(ram, vars.motor_lq).unwrap_or(0) as f32 * NANO,
+            inertia_kgm2: read_u32(ram, vars.motor_inertia).unwrap_or(0) as f32 * NANO,
+        };
+        if port.model_sent != Some(model) {
+            link.set_motor_model(model);
+            port.model_sent = Some(model);
+        }
+    }
+
     /// Raises a new motor fault, hands the set-points of this cycle to the axis, and writes its
     /// actual values.
     fn exchange_with_axis(&mut self, vars: &AppVars, ram: &mut [u8], cw: u16, mode: i8) {
-        let Some(port) = self.axis.as_mut() else {
+        // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
+        let Some(mut port) = self.axis.take() else {
             return;
         };
         let link = port.link;
@@ -168,6 +208,33 @@ impl Application {
         };
         let target_position =
             read_i32(ram, vars.target_position).map_or(feedback.position, relative);
+        Self::sync_motor_model(&mut port, vars, ram);
+        let identifying = mode == mode::IDENTIFICATION;
+        match (feedback.state, feedback.identified) {
+            (AxisState::Identified, Some(result)) if identifying => {
+                if !port.results_written {
+                    port.results_written = true;
+                    let to_u32 = |x: f32| (x + 0.5) as u32;
+                    write_bytes(
+                        ram,
+                        vars.motor_resistance,
+                        to_u32(result.resistance_ohm / MICRO).to_le_bytes(),
+                    );
+                    write_bytes(ram, vars.motor_ld, to_u32(result.ld_h / NANO).to_le_bytes());
+                    write_bytes(ram, vars.motor_lq, to_u32(result.lq_h / NANO).to_le_bytes());
+                    write_bytes(
+                        ram,
+                        vars.motor_inertia,
+                        to_u32(result.inertia_kgm2 / NANO).to_le_bytes(),
+                    );
+                }
+                if let Some(sw) = read_u16(ram, vars.statusword) {
+                    write_u16(ram, vars.statusword, sw | STATUSWORD_IDENTIFIED);
+                }
+            }
+            (AxisState::Identified, _) => {}
+            _ => port.results_written = false,
+        }
         let (mode, position) = match mode {
             mode::CSP => (ControlMode::Position, target_position),
             mode::CSV => (ControlMode::Velocity, feedback.position),
@@ -180,7 +247,7 @@ impl Application {
         link.publish(AxisCommand {
             enable: self.pds == PdsState::OperationEnabled,
             fault_reset: cw & CONTROLWORD_FAULT_RESET != 0,
-            identify: false,
+            identify: identifying,
             mode,
             position,
             velocity: read_i32(ram, vars.target_velocity).map_or(0.0, |v| v as f32),
@@ -203,6 +270,7 @@ impl Application {
             vars.torque_actual_value,
             ((feedback.torque / rated_nm * 1e3) as i16).to_le_bytes(),
         );
+        self.axis = Some(port);
     }
 
     /// Puts the outputs the master drives into their safe state (on leaving OP, on a watchdog).

@@ -376,11 +376,19 @@ pub enum Role {
     TorqueActualValue,
     /// 6076h motor rated torque (UDINT, mN·m): the unit of the torque objects.
     MotorRatedTorque,
+    /// Commissioned phase resistance (UDINT, µΩ; 0 = use the board's value).
+    MotorResistance,
+    /// Commissioned d-axis inductance (UDINT, nH; 0 = use the board's value).
+    MotorLd,
+    /// Commissioned q-axis inductance (UDINT, nH; 0 = use the board's value).
+    MotorLq,
+    /// Commissioned rotor + load inertia (UDINT, g·mm²; 0 = use the board's value).
+    MotorInertia,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 12] = [
+    pub const ALL: [Role; 16] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -393,6 +401,10 @@ impl Role {
         Self::VelocityActualValue,
         Self::TorqueActualValue,
         Self::MotorRatedTorque,
+        Self::MotorResistance,
+        Self::MotorLd,
+        Self::MotorLq,
+        Self::MotorInertia,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -409,6 +421,10 @@ impl Role {
             Self::VelocityActualValue => "velocity_actual_value",
             Self::TorqueActualValue => "torque_actual_value",
             Self::MotorRatedTorque => "motor_rated_torque",
+            Self::MotorResistance => "motor_resistance",
+            Self::MotorLd => "motor_ld",
+            Self::MotorLq => "motor_lq",
+            Self::MotorInertia => "motor_inertia",
         }
     }
     /// Parses the profile-file spelling.
@@ -425,7 +441,11 @@ impl Role {
             | Self::TargetVelocity
             | Self::VelocityActualValue => DataType::Dint,
             Self::TargetTorque | Self::TorqueActualValue => DataType::Int,
-            Self::MotorRatedTorque => DataType::Udint,
+            Self::MotorRatedTorque
+            | Self::MotorResistance
+            | Self::MotorLd
+            | Self::MotorLq
+            | Self::MotorInertia => DataType::Udint,
         }
     }
 }

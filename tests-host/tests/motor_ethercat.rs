@@ -159,3 +159,120 @@ fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
         assert_eq!(sd.sdo_read::<u8>(0x1001, 0).await.expect("1001h"), 0);
     });
 }
+
+/// Modes of operation 6060h −1 (manufacturer-specific): motor identification.
+const MODE_IDENTIFICATION: u8 = 0xFF;
+/// Statusword bit 12 in mode −1: identification finished.
+const IDENTIFIED_BIT: u16 = 0x1000;
+/// 1010h:01 "save all parameters" signature (CiA 301: ASCII "save").
+const SAVE: u32 = 0x6576_6173;
+
+#[test]
+fn commissioning_over_ethercat_identifies_stores_and_applies_the_motor_data() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let run = |cw: u16| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            let mut out = sd.outputs_raw_mut();
+            out[0..2].copy_from_slice(&cw.to_le_bytes());
+            out[6] = MODE_IDENTIFICATION;
+        };
+        // Power up in mode −1: the drive identifies R, L and the inertia and sets bit 12.
+        let mut sw = 0u16;
+        let mut finished_at = None;
+        for k in 0..3_000 {
+            let cw = match k {
+                0..=4 => SHUTDOWN,
+                5..=9 => SWITCH_ON,
+                _ => ENABLE_OPERATION,
+            };
+            run(cw);
+            group.tx_rx(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+            let sd = group.subdevice(md, 0).expect("drive");
+            let inp = sd.inputs_raw();
+            sw = u16::from_le_bytes([inp[0], inp[1]]);
+            if sw & IDENTIFIED_BIT != 0 {
+                finished_at = Some(k);
+                break;
+            }
+        }
+        assert!(
+            finished_at.is_some(),
+            "identification finished (statusword {sw:#06x})"
+        );
+        assert_eq!(sw & FAULT_BIT, 0, "no fault");
+
+        // The results, read by SDO, against the simulated motor's true parameters.
+        let truth = m.shared.segment().drives()[0].servo.plant.config().clone();
+        let sd = group.subdevice(md, 0).expect("drive");
+        let read = |sub: u8| {
+            let sd = &sd;
+            async move { sd.sdo_read::<u32>(0x2100, sub).await.expect("2100h") as f64 }
+        };
+        let r = read(1).await * 1e-6;
+        let ld = read(2).await * 1e-9;
+        let lq = read(3).await * 1e-9;
+        let j = read(4).await * 1e-9;
+        let within = |what: &str, x: f64, truth: f64, tol: f64| {
+            assert!(
+                (x / truth - 1.0).abs() < tol,
+                "{what}: identified {x:e}, true {truth:e}"
+            );
+        };
+        within("R", r, truth.motor.r_ohm, 0.05);
+        within("Ld", ld, truth.motor.ld_h, 0.10);
+        within("Lq", lq, truth.motor.lq_h, 0.10);
+        within(
+            "J",
+            j,
+            truth.motor.rotor_inertia_kgm2 + truth.mechanics.load_inertia_kgm2,
+            0.10,
+        );
+
+        // Stored (1010h) and applied after a power cycle: the loops are tuned for them.
+        sd.sdo_write(0x1010, 1, SAVE).await.expect("save");
+        let stored = [read(1).await, read(2).await, read(3).await, read(4).await];
+        {
+            let mut seg = m.shared.segment();
+            let drive = &mut seg.drives_mut()[0];
+            drive.power_cycle().expect("power cycle");
+            let od = drive.slave.dictionary();
+            for (sub, value) in (1..=4).zip(stored) {
+                assert_eq!(
+                    od.read_u32(0x2100, sub).expect("2100h") as f64,
+                    value,
+                    "2100:{sub:02} restored at power-on"
+                );
+            }
+        }
+        m.shared.advance(CYCLE_NS);
+        let model = m.shared.segment().drives()[0].servo.axis.motor_model();
+        within(
+            "applied R",
+            f64::from(model.resistance_ohm),
+            stored[0] * 1e-6,
+            1e-4,
+        );
+        within("applied Ld", f64::from(model.ld_h), stored[1] * 1e-9, 1e-4);
+        within("applied Lq", f64::from(model.lq_h), stored[2] * 1e-9, 1e-4);
+        within(
+            "applied J",
+            f64::from(model.inertia_kgm2),
+            stored[3] * 1e-9,
+            1e-4,
+        );
+    });
+}

@@ -29,7 +29,7 @@ use super::interpolate::Interpolator;
 use super::math::{self, TAU};
 use super::position::PositionLoop;
 use super::protection::{ProtectionConfig, ProtectionInputs, Protections};
-use super::speed::{SpeedLoop, SpeedLoopConfig};
+use super::speed::{self, SpeedLoop, SpeedLoopConfig};
 use super::svpwm;
 use super::velocity::VelocityEstimator;
 use super::{Duties, ElectricalAngle, MotorFault};
@@ -209,6 +209,23 @@ pub struct Identification {
     pub lq_h: f32,
     /// Inertia, N·m per (increment/s²).
     pub inertia: f32,
+    /// The same inertia in kg·m².
+    pub inertia_kgm2: f32,
+}
+
+/// Motor parameters from commissioning (stored as parameters), handed to the axis to replace
+/// those of its configuration: the current loop and the speed loop are re-tuned for them at
+/// the same bandwidths. A value of 0 keeps the configured one.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotorModel {
+    /// Phase resistance, Ω.
+    pub resistance_ohm: f32,
+    /// d-axis inductance, H.
+    pub ld_h: f32,
+    /// q-axis inductance, H.
+    pub lq_h: f32,
+    /// Rotor + load inertia, kg·m².
+    pub inertia_kgm2: f32,
 }
 
 /// One PWM period's measurements, as the board read them.
@@ -242,10 +259,12 @@ impl Output {
     };
 }
 
-/// The two mailboxes between the SYNC0 handler and the control interrupt.
+/// The mailboxes between the SYNC0 handler and the control interrupt.
 pub struct AxisLink {
     commands: SetpointHandoff<AxisCommand>,
     feedback: FeedbackHandoff<AxisFeedback>,
+    /// Motor parameters, written rarely (after commissioning, after loading parameters).
+    model: SetpointHandoff<MotorModel>,
 }
 
 impl AxisLink {
@@ -285,7 +304,22 @@ impl AxisLink {
                     trips: 0,
                 })
             },
+            // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
+            model: unsafe {
+                SetpointHandoff::new(MotorModel {
+                    resistance_ohm: 0.0,
+                    ld_h: 0.0,
+                    lq_h: 0.0,
+                    inertia_kgm2: 0.0,
+                })
+            },
         }
+    }
+
+    /// SYNC0 side: hands over motor parameters; the axis applies them the next time it is
+    /// not running (never in the middle of a move).
+    pub fn set_motor_model(&self, model: MotorModel) {
+        self.model.write(model);
     }
 
     /// SYNC0 side: hands over this bus cycle's command.
@@ -344,6 +378,10 @@ pub struct Axis {
     injection: (f32, f32),
     /// The bus cycle the interpolator is timed for, ns.
     bus_cycle_ns: u32,
+    /// Sequence number of the last motor model taken from the link.
+    model_seq: u32,
+    /// The motor parameters in use (from the configuration or the last model applied).
+    model: MotorModel,
     /// Faults latched so far (wrapping).
     trips: u32,
 }
@@ -430,6 +468,13 @@ impl Axis {
             injection: (0.0, 0.0),
             trips: 0,
             bus_cycle_ns: (cfg.bus_cycle_s * 1e9) as u32,
+            model_seq: 0,
+            model: MotorModel {
+                resistance_ohm: m.resistance_ohm,
+                ld_h: m.ld_h,
+                lq_h: m.lq_h,
+                inertia_kgm2: cfg.speed_loop.inertia_nm_per_inc_s2 * m.counts_per_rev as f32 / TAU,
+            },
             cfg,
         })
     }
@@ -455,6 +500,64 @@ impl Axis {
     pub fn set_current_injection(&mut self, id_a: f32, iq_a: f32) {
         let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
         self.injection = (finite(id_a), finite(iq_a));
+    }
+
+    /// The motor parameters the loops are tuned for.
+    pub fn motor_model(&self) -> MotorModel {
+        self.model
+    }
+
+    /// Re-tunes the current and speed loops for `model` at their configured bandwidths
+    /// (configuration-time work: called only while the axis is not running). Zero fields keep
+    /// the present values; a model the loops refuse is ignored.
+    fn apply_model(&mut self, model: MotorModel) {
+        let keep = |new: f32, old: f32| {
+            if new > 0.0 && new.is_finite() {
+                new
+            } else {
+                old
+            }
+        };
+        let merged = MotorModel {
+            resistance_ohm: keep(model.resistance_ohm, self.model.resistance_ohm),
+            ld_h: keep(model.ld_h, self.model.ld_h),
+            lq_h: keep(model.lq_h, self.model.lq_h),
+            inertia_kgm2: keep(model.inertia_kgm2, self.model.inertia_kgm2),
+        };
+        let loop_hz = self.cfg.pwm_hz / self.cfg.loop_divider as f32;
+        let current_loop = CurrentLoop::new(&CurrentLoopConfig {
+            resistance_ohm: merged.resistance_ohm,
+            ld_h: merged.ld_h,
+            lq_h: merged.lq_h,
+            flux_wb: self.cfg.motor.flux_wb,
+            pwm_hz: self.cfg.pwm_hz,
+            ..self.cfg.current_loop
+        });
+        // The speed bandwidth the configuration was tuned for: kp = J·ωs.
+        let old = self.cfg.speed_loop;
+        let inertia = merged.inertia_kgm2 * TAU / self.cfg.motor.counts_per_rev as f32;
+        let omega_s = if old.inertia_nm_per_inc_s2 > 0.0 {
+            old.kp / old.inertia_nm_per_inc_s2
+        } else {
+            0.0
+        };
+        let (kp, ki) = if omega_s > 0.0 {
+            speed::gains_for_bandwidth(omega_s / TAU, inertia)
+        } else {
+            (old.kp, old.ki)
+        };
+        let speed_loop = SpeedLoop::new(&SpeedLoopConfig {
+            kp,
+            ki,
+            inertia_nm_per_inc_s2: inertia,
+            sample_hz: loop_hz,
+            ..old
+        });
+        if let (Ok(current_loop), Ok(speed_loop)) = (current_loop, speed_loop) {
+            self.current_loop = current_loop;
+            self.speed_loop = speed_loop;
+            self.model = merged;
+        }
     }
 
     /// Measured d and q currents of the last period, A.
@@ -490,6 +593,15 @@ impl Axis {
         }
         if loop_tick {
             self.take_command(link);
+            if matches!(
+                self.state,
+                AxisState::Disabled | AxisState::Faulted | AxisState::Identified
+            ) {
+                if let Some((model, seq)) = link.model.read_if_new(self.model_seq) {
+                    self.model_seq = seq;
+                    self.apply_model(model);
+                }
+            }
             self.vbus = math::max(sample.bus_voltage, MIN_BUS_VOLTAGE);
             self.inv_vbus = 1.0 / self.vbus;
         }
@@ -772,6 +884,7 @@ impl Axis {
                     ld_h: result.ld_h,
                     lq_h: result.lq_h,
                     inertia: 0.0,
+                    inertia_kgm2: 0.0,
                 });
                 self.electrical_ident = None;
                 // The inertia test runs the current loop: tune it to what was just measured.
@@ -870,6 +983,7 @@ impl Axis {
                         Ok(j) => {
                             if let Some(id) = self.identified.as_mut() {
                                 id.inertia = j;
+                                id.inertia_kgm2 = j * self.cfg.motor.counts_per_rev as f32 / TAU;
                             }
                             self.state = AxisState::Identified;
                         }

@@ -389,6 +389,14 @@ pub struct AppVars {
     pub torque_actual_value: Option<u16>,
     /// 6076h motor rated torque (u32, mN·m).
     pub motor_rated_torque: Option<u16>,
+    /// Commissioned phase resistance (u32, µΩ; 0 = not commissioned).
+    pub motor_resistance: Option<u16>,
+    /// Commissioned d-axis inductance (u32, nH; 0 = not commissioned).
+    pub motor_ld: Option<u16>,
+    /// Commissioned q-axis inductance (u32, nH; 0 = not commissioned).
+    pub motor_lq: Option<u16>,
+    /// Commissioned rotor + load inertia (u32, g·mm²; 0 = not commissioned).
+    pub motor_inertia: Option<u16>,
 }
 
 impl AppVars {
@@ -406,6 +414,10 @@ impl AppVars {
         velocity_actual_value: None,
         torque_actual_value: None,
         motor_rated_torque: None,
+        motor_resistance: None,
+        motor_ld: None,
+        motor_lq: None,
+        motor_inertia: None,
     };
 }
 

@@ -195,6 +195,7 @@ impl<const RAM: usize> Slave<RAM> {
     /// The board calls [`crate::motor::axis::Axis::control_step`] with the same `link`.
     pub fn attach_axis(&mut self, link: &'static crate::motor::axis::AxisLink) {
         self.app.attach_axis(link, self.profile.motor_faults);
+        self.app.publish_motor_model(&self.profile.vars, &self.ram);
     }
 
     /// The profile.
