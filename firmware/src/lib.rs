@@ -16,6 +16,7 @@
 //! | [`od`] | object dictionary model and store; [`profiles`] the generated profiles |
 //! | [`params`] | 1010h/1011h store/restore on power-loss-safe parameter storage |
 //! | [`cia402`], [`app`] | the drive application |
+//! | [`motor`] | motor control: FOC current loop, speed/position loops, protections, commissioning |
 #![no_std]
 #![deny(missing_docs)]
 
