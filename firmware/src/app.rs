@@ -274,11 +274,21 @@ impl Application {
     }
 
     /// Puts the outputs the master drives into their safe state (on leaving OP, on a watchdog).
+    /// With a motor, the axis is disabled at once (gates off): below SAFEOP no cycle runs that
+    /// would tell it. (On the board the slave's callers share one lock, so this and the cycle
+    /// never publish at the same time: the link keeps a single writer at a time.)
     pub fn safe_outputs(&mut self, vars: &AppVars, ram: &mut [u8]) {
         write_u16(ram, vars.controlword, 0);
         self.pds = pds::next(self.pds, 0, self.previous_controlword);
         self.previous_controlword = 0;
         write_u16(ram, vars.statusword, pds::statusword_of(self.pds));
+        if let Some(port) = &self.axis {
+            port.link.publish(AxisCommand {
+                enable: false,
+                bus_cycle_ns: self.cycle_ns,
+                ..AxisCommand::default()
+            });
+        }
     }
 }
 

@@ -276,3 +276,43 @@ fn commissioning_over_ethercat_identifies_stores_and_applies_the_motor_data() {
         );
     });
 }
+
+#[test]
+fn leaving_op_disables_the_motor() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            (sw, _) = cycle!(m, md, group, cw, 0);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        assert!(
+            m.shared.segment().drives()[0].servo.latched().gates,
+            "motor powered"
+        );
+        // The master takes the drive down to PRE-OP: no more cycles run, the motor must still
+        // stop.
+        let group = group.into_safe_op(md).await.expect("SAFE-OP");
+        let _group = group.into_pre_op(md).await.expect("PRE-OP");
+        m.shared.advance(5 * CYCLE_NS);
+        let seg = m.shared.segment();
+        let servo = &seg.drives()[0].servo;
+        assert!(!servo.latched().gates, "gates off after leaving OP");
+    });
+}
