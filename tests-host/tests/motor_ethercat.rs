@@ -49,33 +49,48 @@ macro_rules! cycle {
     }};
 }
 
+/// The drive from INIT to OP (free run), as an ethercrab group in OP.
+macro_rules! into_op {
+    ($m:expr, $md:expr) => {
+        $md.init_single_group::<4, 64>($m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op($md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op($md)
+            .await
+            .expect("request OP")
+    };
+}
+
+/// Shutdown, switch on, enable operation (CiA402 Table 5) in CSP holding position 0; the axis
+/// calibrates its current offsets and runs. Evaluates to the last statusword.
+macro_rules! power_up {
+    ($m:expr, $md:expr, $group:expr) => {{
+        let mut sw = 0u16;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            (sw, _) = cycle!($m, $md, $group, cw, 0);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        sw
+    }};
+}
+
 #[test]
 fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
     block_on(async {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
+        let group = into_op!(m, md);
 
         // Power up (CiA402) and hold: the axis calibrates its current offsets and runs.
-        let mut sw = 0;
-        for cw in [SHUTDOWN; 5]
-            .into_iter()
-            .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 30])
-        {
-            (sw, _) = cycle!(m, md, group, cw, 0);
-        }
-        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        let mut sw = power_up!(m, md, group);
 
         // A quarter revolution in 250 ms, then hold: the rotor (the plant's true angle) ends
         // where the master sent it.
@@ -173,16 +188,7 @@ fn commissioning_over_ethercat_identifies_stores_and_applies_the_motor_data() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
+        let group = into_op!(m, md);
         let run = |cw: u16| {
             let sd = group.subdevice(md, 0).expect("drive");
             let mut out = sd.outputs_raw_mut();
@@ -283,25 +289,8 @@ fn leaving_op_disables_the_motor() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
-        let mut sw = 0;
-        for cw in [SHUTDOWN; 5]
-            .into_iter()
-            .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 30])
-        {
-            (sw, _) = cycle!(m, md, group, cw, 0);
-        }
-        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        let group = into_op!(m, md);
+        power_up!(m, md, group);
         assert!(
             m.shared.segment().drives()[0].servo.latched().gates,
             "motor powered"
