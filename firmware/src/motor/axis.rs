@@ -773,18 +773,27 @@ impl Axis {
     }
 
     fn align(&mut self, currents: &PhaseCurrents) -> Output {
+        self.alignment_period(currents).unwrap_or_else(|| {
+            self.start_running();
+            Output::OFF
+        })
+    }
+
+    /// One period of the commutation alignment: the current loop at the alignment angle, or,
+    /// when the alignment failed, its fault latched and the gates off. `None` when it has just
+    /// finished: the commutation offset is set and the caller goes on.
+    fn alignment_period(&mut self, currents: &PhaseCurrents) -> Option<Output> {
         match self.alignment.step(self.position) {
             AlignStep::Drive { angle, id_ref } => {
-                self.current_step(currents, angle, 0.0, id_ref, 0.0)
+                Some(self.current_step(currents, angle, 0.0, id_ref, 0.0))
             }
             AlignStep::Done(Ok(offset)) => {
                 self.commutation.set_offset(offset);
-                self.start_running();
-                Output::OFF
+                None
             }
             AlignStep::Done(Err(fault)) => {
                 self.latch(fault);
-                Output::OFF
+                Some(Output::OFF)
             }
         }
     }
@@ -945,20 +954,10 @@ impl Axis {
 
     fn identify_inertia(&mut self, currents: &PhaseCurrents, loop_tick: bool) -> Output {
         if self.cfg.motor.commutation_offset.is_none() && !self.alignment.is_done() {
-            return match self.alignment.step(self.position) {
-                AlignStep::Drive { angle, id_ref } => {
-                    self.current_step(currents, angle, 0.0, id_ref, 0.0)
-                }
-                AlignStep::Done(Ok(offset)) => {
-                    self.commutation.set_offset(offset);
-                    self.velocity.reset(self.position);
-                    Output::OFF
-                }
-                AlignStep::Done(Err(fault)) => {
-                    self.latch(fault);
-                    Output::OFF
-                }
-            };
+            return self.alignment_period(currents).unwrap_or_else(|| {
+                self.velocity.reset(self.position);
+                Output::OFF
+            });
         }
         if loop_tick {
             let velocity = self.velocity.update(self.position);
