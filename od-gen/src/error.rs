@@ -158,6 +158,15 @@ pub enum Invalid {
     },
 }
 
+/// A key and what is wrong with it, as found while resolving or validating a profile (the file
+/// name is added when it becomes an [`Error::Invalid`]).
+pub(crate) type Fault = (String, Invalid);
+
+/// The [`Fault`] of `key`.
+pub(crate) fn fault(key: &str, error: Invalid) -> Fault {
+    (key.to_string(), error)
+}
+
 impl fmt::Display for Invalid {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -28,7 +28,9 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use crate::model::{Access, Entry, Object, Profile, Role, Sm, Storage, MOTOR_FAULT_NAMES};
+use crate::model::{
+    Access, DataType, Entry, Object, Profile, Role, Sm, Storage, MOTOR_FAULT_NAMES,
+};
 
 /// Where each RAM variable of a profile lives.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -131,7 +133,7 @@ fn entry(out: &mut String, index: u16, e: &Entry, layout: &RamLayout) {
     );
 }
 
-fn module(out: &mut String, p: &Profile) {
+fn module(out: &mut String, p: &Profile, target: &Target) {
     let layout = ram_layout(p);
     let out_size = p.outputs_bits() / 8;
     let in_size = p.inputs_bits() / 8;
@@ -146,8 +148,12 @@ fn module(out: &mut String, p: &Profile) {
     let _ = writeln!(out, "pub mod {} {{", p.name);
     let _ = writeln!(
         out,
-        "    use crate::od::{{Access, AppVars, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value}};\n"
+        "    use {}::od::{{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value}};\n",
+        target.slave
     );
+    if let Some(drive) = target.drive {
+        let _ = writeln!(out, "    use {drive}::profile::{{AppVars, DriveProfile}};\n");
+    }
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
     let _ = writeln!(
         out,
@@ -201,19 +207,21 @@ fn module(out: &mut String, p: &Profile) {
         "    pub const BACKUP: &[(u16, u8)] = &[{}];",
         pairs(p, Object::is_backup)
     );
-    let _ = writeln!(
-        out,
-        "    /// 603Fh / EMCY error code of each internal motor fault (`[motor_faults]`), indexed by\n    /// `MotorFault::code() - 1` (the order of `super::MOTOR_FAULT_NAMES`)."
-    );
-    let _ = writeln!(
-        out,
-        "    pub const MOTOR_FAULTS: [u16; {}] = [",
-        p.motor_faults.len()
-    );
-    for (code, name) in p.motor_faults.iter().zip(MOTOR_FAULT_NAMES) {
-        let _ = writeln!(out, "        {code:#06x}, // {name}");
+    if target.drive.is_some() {
+        let _ = writeln!(
+            out,
+            "    /// 603Fh / EMCY error code of each internal motor fault (`[motor_faults]`), indexed by\n    /// `MotorFault::code() - 1` (the order of `super::MOTOR_FAULT_NAMES`)."
+        );
+        let _ = writeln!(
+            out,
+            "    pub const MOTOR_FAULTS: [u16; {}] = [",
+            p.motor_faults.len()
+        );
+        for (code, name) in p.motor_faults.iter().zip(MOTOR_FAULT_NAMES) {
+            let _ = writeln!(out, "        {code:#06x}, // {name}");
+        }
+        let _ = writeln!(out, "    ];");
     }
-    let _ = writeln!(out, "    ];");
 
     let var = |r: Role| -> String {
         p.objects
@@ -226,8 +234,24 @@ fn module(out: &mut String, p: &Profile) {
     let boot = |s: Option<Sm>| s.map_or("None".into(), |s| format!("Some({})", sm(s, s.length)));
     let c = p.mailbox.coe;
     let y = &p.sync;
-    let _ = writeln!(out, "    /// The profile.");
-    let _ = writeln!(out, "    pub static PROFILE: Profile = Profile {{");
+    // The object dictionary: `PROFILE` itself, or the `od` of the drive profile.
+    let (od_open, od_close, pad) = if target.drive.is_some() {
+        (
+            "    /// The profile.\n    pub static PROFILE: DriveProfile = DriveProfile {\n        od: Profile {",
+            "        },",
+            "    ",
+        )
+    } else {
+        (
+            "    /// The object dictionary of the profile.\n    pub static PROFILE: Profile = Profile {",
+            "",
+            "",
+        )
+    };
+    let _ = writeln!(out, "{od_open}");
+    let mut body = String::new();
+    let out_outer = out;
+    let out = &mut body;
     let _ = writeln!(out, "        device: DeviceInfo {{");
     let _ = writeln!(out, "            profile: {:?},", p.name);
     let _ = writeln!(out, "            name: {:?},", p.device.name);
@@ -290,12 +314,19 @@ fn module(out: &mut String, p: &Profile) {
     let _ = writeln!(out, "        }},");
     let _ = writeln!(out, "        objects: OBJECTS,");
     let _ = writeln!(out, "        defaults: DEFAULTS,");
-    let _ = writeln!(out, "        vars: AppVars {{");
-    for r in Role::ALL {
-        let _ = writeln!(out, "            {}: {},", r.field(), var(r));
+    let out = out_outer;
+    for line in body.lines() {
+        let _ = writeln!(out, "{pad}{line}");
     }
-    let _ = writeln!(out, "        }},");
-    let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
+    if target.drive.is_some() {
+        let _ = writeln!(out, "{od_close}");
+        let _ = writeln!(out, "        vars: AppVars {{");
+        for r in Role::ALL {
+            let _ = writeln!(out, "            {}: {},", r.field(), var(r));
+        }
+        let _ = writeln!(out, "        }},");
+        let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
+    }
     let _ = writeln!(out, "    }};\n");
     let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");
     let _ = writeln!(out, "    const _: () = assert!(super::check::objects_sorted(OBJECTS), \"objects not sorted by index\");");
@@ -330,42 +361,13 @@ fn pairs(p: &Profile, keep: impl Fn(&Object, &Entry) -> bool) -> String {
 
 const CHECK: &str = r#"/// `const` cross-checks of the generated tables (evaluated at compile time only).
 mod check {
-    use crate::od::{Object, Value};
+    use $SLAVE::od::{Object, Value};
 
     pub(super) const fn objects_sorted(o: &[Object]) -> bool {
         let mut i = 1;
         while i < o.len() {
             if o[i - 1].index >= o[i].index {
                 return false;
-            }
-            i += 1;
-        }
-        true
-    }
-
-    /// Whether `names` are the names of `crate::motor::MotorFault::ALL`, in code order (code
-    /// `i + 1` at position `i`): od-gen's list agrees with the firmware's enum.
-    pub(super) const fn motor_fault_names_agree(names: &[&str]) -> bool {
-        let all = crate::motor::MotorFault::ALL;
-        if all.len() != names.len() {
-            return false;
-        }
-        let mut i = 0;
-        while i < all.len() {
-            if all[i].code() as usize != i + 1 {
-                return false;
-            }
-            let a = all[i].name().as_bytes();
-            let b = names[i].as_bytes();
-            if a.len() != b.len() {
-                return false;
-            }
-            let mut k = 0;
-            while k < a.len() {
-                if a[k] != b[k] {
-                    return false;
-                }
-                k += 1;
             }
             i += 1;
         }
@@ -446,7 +448,7 @@ mod check {
             let e = o[i].entries;
             let mut j = 0;
             while j < e.len() {
-                let storable = crate::params::is_storable(&o[i], &e[j]);
+                let storable = $SLAVE::params::is_storable(&o[i], &e[j]);
                 let mut listed = false;
                 let mut k = 0;
                 while k < backup.len() {
@@ -485,11 +487,141 @@ mod check {
         }
         bits
     }
-}
 "#;
 
-/// The Rust source of `OUT_DIR/profiles.rs` for these profiles (sorted by name in `ALL`).
+/// The check of od-gen's motor fault names against the drive's `MotorFault` (drive targets).
+const CHECK_MOTOR_FAULTS: &str = r#"
+    /// Whether `names` are the names of `$DRIVE::motor::MotorFault::ALL`, in code order (code
+    /// `i + 1` at position `i`): od-gen's list agrees with the firmware's enum.
+    pub(super) const fn motor_fault_names_agree(names: &[&str]) -> bool {
+        let all = $DRIVE::motor::MotorFault::ALL;
+        if all.len() != names.len() {
+            return false;
+        }
+        let mut i = 0;
+        while i < all.len() {
+            if all[i].code() as usize != i + 1 {
+                return false;
+            }
+            let a = all[i].name().as_bytes();
+            let b = names[i].as_bytes();
+            if a.len() != b.len() {
+                return false;
+            }
+            let mut k = 0;
+            while k < a.len() {
+                if a[k] != b[k] {
+                    return false;
+                }
+                k += 1;
+            }
+            i += 1;
+        }
+        true
+    }
+
+"#;
+
+/// Every data type od-gen writes into SII and ESI, so that their codes are checked against the
+/// slave stack's `od::DataType`.
+const ALL_DATA_TYPES: [DataType; 25] = [
+    DataType::Bool,
+    DataType::Sint,
+    DataType::Int,
+    DataType::Int24,
+    DataType::Dint,
+    DataType::Lint,
+    DataType::Usint,
+    DataType::Uint,
+    DataType::Uint24,
+    DataType::Udint,
+    DataType::Ulint,
+    DataType::Real,
+    DataType::Lreal,
+    DataType::VisibleString,
+    DataType::OctetString,
+    DataType::UnicodeString,
+    DataType::Domain,
+    DataType::Bit(1),
+    DataType::Bit(2),
+    DataType::Bit(3),
+    DataType::Bit(4),
+    DataType::Bit(5),
+    DataType::Bit(6),
+    DataType::Bit(7),
+    DataType::Bit(8),
+];
+
+/// `const` assertions that tie od-gen's CoE codes (written into SII and ESI) to the slave
+/// stack's own definitions (used by SDO information): data type codes (ETG.1000.6 Table 64) and
+/// the access bits (Table 48). The two must stay apart (od-gen is a host tool the stack cannot
+/// depend on at build time), so the compiler checks that they agree.
+fn data_type_codes(out: &mut String, target: &Target) {
+    let od = format!("{}::od", target.slave);
+    for t in ALL_DATA_TYPES {
+        let _ = writeln!(
+            out,
+            "const _: () = assert!({od}::DataType::{}.code() == {:#06x}, \"od-gen's code of {} differs from the stack's\");",
+            t.rust_variant(),
+            t.code(),
+            t.rust_variant()
+        );
+    }
+    let _ = writeln!(
+        out,
+        "const _: () = assert!({od}::Access::READ_PREOP | {od}::Access::READ_SAFEOP | {od}::Access::READ_OP == {:#04x}, \"od-gen's read bits differ from the stack's\");",
+        Access::READ_ALL
+    );
+    for (name, bits) in [
+        ("WRITE_PREOP", Access::WRITE_PREOP),
+        ("WRITE_SAFEOP", Access::WRITE_SAFEOP),
+        ("WRITE_OP", Access::WRITE_OP),
+    ] {
+        let _ = writeln!(
+            out,
+            "const _: () = assert!({od}::Access::{name} == {bits:#04x}, \"od-gen's access bit {name} differs from the stack's\");"
+        );
+    }
+    out.push('\n');
+}
+
+/// Where the generated code is compiled and what it holds besides the object dictionaries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Target {
+    /// Path of the `ethercat-slave` crate root as the generated code sees it (`od`, `params`).
+    pub slave: &'static str,
+    /// Path of the drive crate root (`profile::{DriveProfile, AppVars}`, `motor::MotorFault`):
+    /// each profile becomes a `DriveProfile` with its CiA402 variables and motor fault table.
+    /// `None`: the object dictionaries alone (any EtherCAT device).
+    pub drive: Option<&'static str>,
+}
+
+impl Target {
+    /// The drive firmware (crate `firmware`, `OUT_DIR/profiles.rs`).
+    pub const DRIVE_CRATE: Self = Self {
+        slave: "::ethercat_slave",
+        drive: Some("crate"),
+    };
+    /// Inside the `ethercat-slave` crate itself (its unit tests).
+    pub const SLAVE_CRATE: Self = Self {
+        slave: "crate",
+        drive: None,
+    };
+    /// Any other crate that uses `ethercat-slave` for a device that is not a drive.
+    pub const DEVICE_CRATE: Self = Self {
+        slave: "::ethercat_slave",
+        drive: None,
+    };
+}
+
+/// The Rust source of `OUT_DIR/profiles.rs` of the drive firmware ([`Target::DRIVE_CRATE`]).
 pub fn generate(profiles: &[Profile]) -> String {
+    generate_with(profiles, &Target::DRIVE_CRATE)
+}
+
+/// The Rust source of the object dictionaries of these profiles (sorted by name in `ALL`) for
+/// `target`.
+pub fn generate_with(profiles: &[Profile], target: &Target) -> String {
     let mut sorted: Vec<&Profile> = profiles.iter().collect();
     sorted.sort_by(|a, b| a.name.cmp(&b.name));
     let mut out = String::new();
@@ -506,6 +638,15 @@ pub fn generate(profiles: &[Profile]) -> String {
         "/// The largest OD RAM of all profiles (bytes): size a shared RAM buffer with it."
     );
     let _ = writeln!(out, "pub const MAX_RAM_SIZE: usize = {max};\n");
+    let profile_type = match target.drive {
+        Some(drive) => format!("{drive}::profile::DriveProfile"),
+        None => format!("{}::od::Profile", target.slave),
+    };
+    let device = if target.drive.is_some() {
+        "od.device"
+    } else {
+        "device"
+    };
     let _ = writeln!(out, "/// All compiled-in profiles, sorted by name.");
     let refs: Vec<String> = sorted
         .iter()
@@ -513,7 +654,7 @@ pub fn generate(profiles: &[Profile]) -> String {
         .collect();
     let _ = writeln!(
         out,
-        "pub static ALL: [&crate::od::Profile; {}] = [{}];\n",
+        "pub static ALL: [&{profile_type}; {}] = [{}];\n",
         sorted.len(),
         refs.join(", ")
     );
@@ -523,31 +664,38 @@ pub fn generate(profiles: &[Profile]) -> String {
     );
     let _ = writeln!(
         out,
-        "pub fn by_name(name: &str) -> Option<&'static crate::od::Profile> {{"
+        "pub fn by_name(name: &str) -> Option<&'static {profile_type}> {{"
     );
     let _ = writeln!(
         out,
-        "    ALL.iter().copied().find(|p| p.device.profile == name)"
+        "    ALL.iter().copied().find(|p| p.{device}.profile == name)"
     );
     let _ = writeln!(out, "}}\n");
-    let names: Vec<String> = MOTOR_FAULT_NAMES.iter().map(|n| format!("{n:?}")).collect();
-    let _ = writeln!(
-        out,
-        "/// The internal motor faults as od-gen knows them (`MotorFault::name()`), in code order:\n/// the order of every profile's `MOTOR_FAULTS`."
-    );
-    let _ = writeln!(
-        out,
-        "pub const MOTOR_FAULT_NAMES: [&str; {}] = [{}];",
-        names.len(),
-        names.join(", ")
-    );
-    let _ = writeln!(
-        out,
-        "const _: () = assert!(check::motor_fault_names_agree(&MOTOR_FAULT_NAMES), \"od-gen's MOTOR_FAULT_NAMES differ from firmware::motor::MotorFault\");\n"
-    );
-    for p in &sorted {
-        module(&mut out, p);
+    if target.drive.is_some() {
+        let names: Vec<String> = MOTOR_FAULT_NAMES.iter().map(|n| format!("{n:?}")).collect();
+        let _ = writeln!(
+            out,
+            "/// The internal motor faults as od-gen knows them (`MotorFault::name()`), in code order:\n/// the order of every profile's `MOTOR_FAULTS`."
+        );
+        let _ = writeln!(
+            out,
+            "pub const MOTOR_FAULT_NAMES: [&str; {}] = [{}];",
+            names.len(),
+            names.join(", ")
+        );
+        let _ = writeln!(
+            out,
+            "const _: () = assert!(check::motor_fault_names_agree(&MOTOR_FAULT_NAMES), \"od-gen's MOTOR_FAULT_NAMES differ from the drive's motor::MotorFault\");\n"
+        );
     }
-    out.push_str(CHECK);
+    data_type_codes(&mut out, target);
+    for p in &sorted {
+        module(&mut out, p, target);
+    }
+    out.push_str(&CHECK.replace("$SLAVE", target.slave));
+    if let Some(drive) = target.drive {
+        out.push_str(&CHECK_MOTOR_FAULTS.replace("$DRIVE", drive));
+    }
+    out.push_str("}\n");
     out
 }

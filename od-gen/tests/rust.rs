@@ -14,13 +14,23 @@ fn module_shape() {
     let (_, code) = generated();
     for needle in [
         "pub const MAX_RAM_SIZE: usize = ",
-        "pub static ALL: [&crate::od::Profile; 1] = [&standard::PROFILE];",
-        "pub fn by_name(name: &str) -> Option<&'static crate::od::Profile>",
+        "pub static ALL: [&crate::profile::DriveProfile; 1] = [&standard::PROFILE];",
+        "pub fn by_name(name: &str) -> Option<&'static crate::profile::DriveProfile>",
+        "    ALL.iter().copied().find(|p| p.od.device.profile == name)",
+        "use ::ethercat_slave::od::{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value};",
+        "use crate::profile::{AppVars, DriveProfile};",
         "pub mod standard {",
         "pub const RAM_SIZE: usize = ",
         "pub const OUTPUTS_SIZE: usize = 7;",
         "pub const INPUTS_SIZE: usize = 7;",
-        "pub static PROFILE: Profile = Profile {",
+        "pub static PROFILE: DriveProfile = DriveProfile {",
+        "        od: Profile {",
+        "        vars: AppVars {",
+        "        motor_faults: &MOTOR_FAULTS,",
+        "pub const MOTOR_FAULTS: [u16; ",
+        "const _: () = assert!(check::motor_fault_names_agree(&MOTOR_FAULT_NAMES)",
+        "const _: () = assert!(::ethercat_slave::od::DataType::Unsigned16.code() == 0x0006",
+        "const _: () = assert!(::ethercat_slave::od::Access::WRITE_PREOP == 0x08",
         "const _: () = assert!(super::check::objects_sorted(OBJECTS)",
         "const _: () = assert!(super::check::assigned_bits(OBJECTS, DEFAULTS, 0x1c12) == OUTPUTS_SIZE * 8",
         "vendor_id: 0x7e570402,",
@@ -31,6 +41,31 @@ fn module_shape() {
         assert!(code.contains(needle), "missing `{needle}`");
     }
     assert!(!code.contains("std::"), "generated code must be no_std");
+}
+
+/// For a device that is not a drive (and for the slave stack's own tests) the code holds the
+/// object dictionaries alone: no CiA402 variables, no motor faults, paths into the stack.
+#[test]
+fn device_target_has_the_dictionary_only() {
+    let p = od_gen::builtin("standard").unwrap();
+    for (target, slave) in [
+        (od_gen::rust::Target::DEVICE_CRATE, "::ethercat_slave"),
+        (od_gen::rust::Target::SLAVE_CRATE, "crate"),
+    ] {
+        let code = od_gen::rust::generate_with(std::slice::from_ref(&p), &target);
+        for needle in [
+            format!("pub static ALL: [&{slave}::od::Profile; 1] = [&standard::PROFILE];"),
+            "pub static PROFILE: Profile = Profile {".to_string(),
+            "    ALL.iter().copied().find(|p| p.device.profile == name)".to_string(),
+            format!("let storable = {slave}::params::is_storable(&o[i], &e[j]);"),
+            format!("const _: () = assert!({slave}::od::DataType::Bit8.code() == 0x0037"),
+        ] {
+            assert!(code.contains(&needle), "missing `{needle}`");
+        }
+        for absent in ["AppVars", "MOTOR_FAULT", "DriveProfile", "motor::"] {
+            assert!(!code.contains(absent), "{absent} in a device target");
+        }
+    }
 }
 
 #[test]

@@ -1,8 +1,9 @@
 //! One simulated drive: a software ET1100 and the firmware core running against it.
 
-use firmware::od::Profile;
+use firmware::profile::DriveProfile;
 use firmware::profiles;
-use firmware::slave::{Slave, SlaveError, SyncMode};
+use firmware::slave::{SlaveError, SyncMode};
+use firmware::DriveSlave;
 use hal::io::StatusLeds;
 use hal::pdi::EscSignals;
 
@@ -33,14 +34,14 @@ pub struct SimDrive {
     /// The simulated ESC.
     pub esc: Et1100,
     /// The firmware core.
-    pub slave: Box<Slave<SIM_RAM>>,
+    pub slave: Box<DriveSlave<SIM_RAM>>,
     /// DOMAIN objects outside the OD RAM (e.g. the standard profile's 64 KiB test domain).
     pub domains: SimDomainStore,
     /// Parameter storage (1010h/1011h); kept across [`Self::power_cycle`].
     pub params: ParamStore<SimStorage>,
     /// What loading the stored parameters gave at the last power-on.
     pub loaded: Result<Option<Loaded>, ParamError>,
-    profile: &'static Profile,
+    profile: &'static DriveProfile,
     next_free_run_ns: u64,
     next_poll_ns: u64,
     /// RUN/ERR LEDs, switched every [`LED_PERIOD_NS`] from the firmware's ETG.1300 patterns.
@@ -64,23 +65,24 @@ fn new_servo() -> SimServo {
 
 impl SimDrive {
     /// A drive running `profile` with the SII image `sii` in its EEPROM.
-    pub fn new(profile: &'static Profile, sii: &[u8]) -> Result<Self, SlaveError> {
+    pub fn new(profile: &'static DriveProfile, sii: &[u8]) -> Result<Self, SlaveError> {
         Self::with_storage(profile, sii, SimStorage::new())
     }
 
     /// A drive whose parameter storage holds `storage`; the stored parameters are loaded at
     /// power-on, before the firmware starts (see `firmware::params`).
     pub fn with_storage(
-        profile: &'static Profile,
+        profile: &'static DriveProfile,
         sii: &[u8],
         storage: SimStorage,
     ) -> Result<Self, SlaveError> {
         let mut esc = Et1100::new(sii);
         let mut params = ParamStore::new(storage);
-        let mut slave = Box::new(Slave::new(profile)?);
+        let mut slave = Box::new(firmware::new_slave(profile)?);
         let loaded = slave.load_parameters(&mut params);
         let servo = new_servo();
-        slave.attach_axis(servo.link());
+        let (drive, ram) = slave.application();
+        drive.attach_axis(servo.link(), ram);
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.
         let _ = slave.start(&mut esc);
@@ -107,10 +109,11 @@ impl SimDrive {
         let now = self.esc.now();
         let mut esc = Et1100::new(self.esc.sii());
         esc.advance_to(now);
-        let mut slave = Box::new(Slave::new(self.profile)?);
+        let mut slave = Box::new(firmware::new_slave(self.profile)?);
         self.loaded = slave.load_parameters(&mut self.params);
         self.servo.restart_firmware();
-        slave.attach_axis(self.servo.link());
+        let (drive, ram) = slave.application();
+        drive.attach_axis(self.servo.link(), ram);
         // As in `with_storage`: the simulated PDI does not fail.
         let _ = slave.start(&mut esc);
         self.esc = esc;

@@ -53,7 +53,8 @@ use embassy_stm32::{bind_interrupts, pac, Peri};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
-use firmware::slave::{Slave, SyncMode};
+use firmware::slave::SyncMode;
+use firmware::DriveSlave;
 use static_cell::StaticCell;
 
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
@@ -96,7 +97,7 @@ bind_interrupts!(
 /// What the cycle and the ESC-event contexts share.
 pub struct Drive {
     /// The EtherCAT slave with its object dictionary.
-    pub slave: Slave<RAM_SIZE>,
+    pub slave: DriveSlave<RAM_SIZE>,
     /// The ET1100.
     pub pdi: Et1100Spi<'static>,
     /// 1010h/1011h parameter storage in flash bank 2.

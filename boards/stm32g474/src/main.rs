@@ -33,7 +33,7 @@ use embassy_executor::Spawner;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_time::{Duration, Timer};
 use firmware::params::ParamStore;
-use firmware::slave::Slave;
+use firmware::DriveSlave;
 use hal::esc::regs;
 use hal::pdi::EscPdi;
 use {defmt_rtt as _, panic_probe as _};
@@ -86,7 +86,8 @@ fn install_drive(
     let mut started = false;
     irq::install(|| {
         // A profile whose OD RAM does not fit RAM_SIZE is a build error of od-gen: stop here.
-        let mut slave: Slave<{ profile::RAM_SIZE }> = unwrap!(Slave::new(&profile::PROFILE));
+        let mut slave: DriveSlave<{ profile::RAM_SIZE }> =
+            unwrap!(firmware::new_slave(&profile::PROFILE));
         // Parameters saved with 1010h, before the ESM starts (CiA 301: effective at power-on).
         let mut params = ParamStore::new(FlashStorage::new(flash));
         if slave.load_parameters(&mut params).is_err() {
@@ -113,7 +114,7 @@ async fn main(spawner: Spawner) {
     info!(
         "board-stm32g474: SYSCLK {} Hz, profile {}",
         clocks::SYSCLK_HZ,
-        profile::PROFILE.device.profile
+        profile::PROFILE.od.device.profile
     );
 
     let board = pins::split(p);

@@ -9,8 +9,8 @@
 
 use core::hint::black_box;
 
-use firmware::app::Application;
 use firmware::cia402::pds::{controlword, PdsState};
+use firmware::drive::Drive;
 use firmware::od::Dictionary;
 use firmware::pdo::{Direction, PdoPlan, MAX_IMAGE};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
@@ -38,7 +38,7 @@ struct Cycle {
     ram: [u8; RAM_SIZE],
     rx: PdoPlan,
     tx: PdoPlan,
-    app: Application,
+    app: Drive,
     rx_image: [u8; MAX_IMAGE],
     tx_image: [u8; MAX_IMAGE],
 }
@@ -47,7 +47,7 @@ impl Cycle {
     /// The OD at its defaults and the copy plans of the default mapping, as at PREOP → SAFEOP.
     fn new() -> Option<Self> {
         let mut ram = [0; RAM_SIZE];
-        let mut od = Dictionary::new(&PROFILE, &mut ram);
+        let mut od = Dictionary::new(&PROFILE.od, &mut ram);
         od.load_defaults();
         let rx = PdoPlan::build(&od, Direction::Rx).ok()?;
         let tx = PdoPlan::build(&od, Direction::Tx).ok()?;
@@ -55,7 +55,7 @@ impl Cycle {
             ram,
             rx,
             tx,
-            app: Application::new(),
+            app: Drive::new(&PROFILE),
             rx_image: [0; MAX_IMAGE],
             tx_image: [0; MAX_IMAGE],
         })
@@ -84,7 +84,7 @@ impl Cycle {
     /// The measured cycle.
     fn run(&mut self) {
         self.rx.unpack(&self.rx_image, &mut self.ram);
-        self.app.step(&PROFILE.vars, &mut self.ram);
+        self.app.step(&mut self.ram, 0);
         self.tx.pack(&self.ram, &mut self.tx_image);
     }
 
@@ -142,8 +142,8 @@ pub fn run(h: &mut Harness) {
     h.bench(
         "cia402-step",
         None,
-        format_args!("Application::step in operation enabled (CiA402 + axis)"),
-        &mut || app.step(black_box(&PROFILE.vars), ram),
+        format_args!("Drive::step in operation enabled (CiA402, no axis attached)"),
+        &mut || app.step(ram, black_box(0)),
     );
     h.bench(
         "pdo-pack",

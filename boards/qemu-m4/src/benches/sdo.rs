@@ -80,11 +80,11 @@ fn response_u16(result: Result<usize, impl Sized>, response: &[u8], command: u8)
 /// Measures the upload and the download.
 pub fn run(h: &mut Harness) {
     let mut ram = [0; RAM_SIZE];
-    let mut od = Dictionary::new(&PROFILE, &mut ram);
+    let mut od = Dictionary::new(&PROFILE.od, &mut ram);
     od.load_defaults();
     let mut server = CoeServer::new();
     let mut buffer = [0; RESPONSE_CAPACITY];
-    let response_len = usize::from(PROFILE.device.mailbox_in.length) - MAILBOX_HEADER_LEN;
+    let response_len = usize::from(PROFILE.od.device.mailbox_in.length) - MAILBOX_HEADER_LEN;
     let Some(response) = buffer.get_mut(..response_len) else {
         h.fail("sdo", format_args!("the input mailbox exceeds the buffer"));
         return;

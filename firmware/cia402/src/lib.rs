@@ -1,0 +1,22 @@
+//! CiA402 (IEC 61800-7-201) drive profile, independent of the fieldbus and of the motor: the
+//! power drive system state machine, controlword/statusword, the modes of operation and the
+//! set-point each mode gives, unit conversions at the object boundary, and the mapping of
+//! internal faults to the profile's error codes (603Fh).
+//!
+//! | module | what |
+//! |---|---|
+//! | [`pds`] | the PDS state machine as a pure decision on the controlword; statusword bits |
+//! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
+//! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
+//! | [`units`] | conversions between object units (‰ of rated torque, 32-bit positions, µΩ, nH, g·mm²) and SI |
+//! | [`faults`] | the profile's error code for each internal fault; CiA 301 generic error |
+//!
+//! The drive application (crate `firmware`) binds these to the object dictionary and to the axis.
+#![no_std]
+#![deny(missing_docs)]
+
+pub mod device;
+pub mod faults;
+pub mod modes;
+pub mod pds;
+pub mod units;

@@ -1,0 +1,35 @@
+//! An EtherCAT slave stack that knows no drive: the Rust counterpart of SOES.
+//!
+//! `no_std`, no allocation, generic over [`hal::pdi::EscPdi`] (the ESC's process-data
+//! interface) and over the device [`Application`](slave::Application) that runs in the
+//! process-data cycle. A profile file (od-gen) gives the object dictionary; boards call the
+//! entry points of [`slave::Slave`] from their interrupts and executor tasks. A servo drive
+//! (crate `firmware`) and a digital I/O module (`tests-host`, example `io_slave`) use it alike.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`slave`] | [`Slave`](slave::Slave): owns the state and the OD RAM; the entry points and the glue between the modules below; the [`Application`](slave::Application) trait |
+//! | [`esm`] | EtherCAT state machine: the decision function, SM checks, sync modes, SYNC0 supervision |
+//! | [`mailbox`] | mailbox data-link layer, CoE (SDO, SDO information, complete access) and emergencies |
+//! | [`pdo`] | PDO mapping → copy plan, pack/unpack, and the rules for writing the PDO objects |
+//! | [`od`] | object dictionary: generated model, run-time store, abort codes, value checks, domains |
+//! | [`diag`] | diagnosis history 10F3h (ETG.1020 §13) |
+//! | [`params`] | 1010h/1011h store/restore on power-loss-safe parameter storage |
+//! | [`leds`] | ETG.1300 RUN/ERR indicator patterns |
+//!
+//! Dependencies inside the crate point one way: `slave` → `esm`, `mailbox`, `pdo`, `diag`,
+//! `params`, `leds` → `od`.
+#![no_std]
+#![deny(missing_docs)]
+
+pub mod diag;
+pub mod esm;
+pub mod leds;
+pub mod mailbox;
+pub mod od;
+pub mod params;
+pub mod pdo;
+pub mod slave;
+
+#[cfg(test)]
+pub(crate) mod test_profiles;

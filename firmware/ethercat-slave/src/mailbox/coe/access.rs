@@ -1,0 +1,142 @@
+//! The checks every SDO access runs, shared by single-entry transfers ([`super::sdo`]) and
+//! complete access ([`super::complete_access`]): existence, access rights per state, the PDO
+//! rules, length, subindex 0 and range, then the store.
+
+use hal::esc::AlState;
+
+use crate::od::value::{as_u32, check_length, check_range};
+use crate::od::{Access, AbortCode, DataType, Dictionary, Entry, ObjectCode, StoreError, Value};
+use crate::pdo::rules as pdo_rules;
+
+/// Kind of access.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum AccessKind {
+    /// Upload.
+    Read,
+    /// Download.
+    Write,
+}
+
+/// Complete access is served only when the profile advertises it (SII CoE details, ESI
+/// `CompleteAccess`); else 0x06010000.
+pub(crate) fn check_complete_access(od: &Dictionary<'_>) -> Result<(), AbortCode> {
+    if od.profile().device.coe.complete_access {
+        Ok(())
+    } else {
+        Err(AbortCode::UnsupportedAccess)
+    }
+}
+
+/// The entry `index:subindex`: 0x06020000 if the object is missing, 0x06090011 if the subindex.
+pub(crate) fn find_entry(od: &Dictionary<'_>, index: u16, subindex: u8) -> Result<&'static Entry, AbortCode> {
+    let object = od.object(index).ok_or(AbortCode::ObjectNotFound)?;
+    object.entry(subindex).ok_or(AbortCode::SubindexNotFound)
+}
+
+/// The entry of a download request, if it exists and may be written now.
+pub(crate) fn find_writable(
+    od: &Dictionary<'_>,
+    state: AlState,
+    index: u16,
+    subindex: u8,
+) -> Result<&'static Entry, AbortCode> {
+    let entry = find_entry(od, index, subindex)?;
+    check_access(entry.access, state, AccessKind::Write)?;
+    pdo_rules::check_rx_mapped(od, state, index, subindex)?;
+    Ok(entry)
+}
+
+/// Checks the entry's access rights: never readable/writable gives 0x06010001/0x06010002, not in
+/// the current state 0x08000022.
+pub(crate) fn check_access(
+    access: Access,
+    state: AlState,
+    kind: AccessKind,
+) -> Result<(), AbortCode> {
+    let (any, none_code) = match kind {
+        AccessKind::Read => (access.readable(), AbortCode::WriteOnlyRead),
+        AccessKind::Write => (access.writable(), AbortCode::ReadOnlyWrite),
+    };
+    if !any {
+        return Err(none_code);
+    }
+    if access.0 & state_bit(state, kind) == 0 {
+        return Err(AbortCode::DataNotStoredDeviceState);
+    }
+    Ok(())
+}
+
+/// The [`Access`] bit for `kind` in `state` (none in INIT and BOOT, where no SDO is served).
+fn state_bit(state: AlState, kind: AccessKind) -> u8 {
+    match (state, kind) {
+        (AlState::PreOp, AccessKind::Read) => Access::READ_PREOP,
+        (AlState::SafeOp, AccessKind::Read) => Access::READ_SAFEOP,
+        (AlState::Op, AccessKind::Read) => Access::READ_OP,
+        (AlState::PreOp, AccessKind::Write) => Access::WRITE_PREOP,
+        (AlState::SafeOp, AccessKind::Write) => Access::WRITE_SAFEOP,
+        (AlState::Op, AccessKind::Write) => Access::WRITE_OP,
+        (AlState::Init | AlState::Boot, _) => 0,
+    }
+}
+
+/// Runs every download check on `data` and stores it: access, RxPDO-mapped (0x06010006),
+/// length, subindex 0 count, PDO rules, range.
+pub(crate) fn write_entry(
+    od: &mut Dictionary<'_>,
+    state: AlState,
+    index: u16,
+    subindex: u8,
+    data: &[u8],
+) -> Result<(), AbortCode> {
+    let entry = find_entry(od, index, subindex)?;
+    check_access(entry.access, state, AccessKind::Write)?;
+    pdo_rules::check_rx_mapped(od, state, index, subindex)?;
+    check_length(entry, data.len())?;
+    check_subindex0(od, index, subindex, data)?;
+    pdo_rules::check_write(od, index, subindex, data)?;
+    check_range(entry, data)?;
+    od.set_value(entry, data).map_err(store_abort)
+}
+
+/// Subindex 0 of an ARRAY or RECORD may not exceed the highest existing subindex (0x06090031).
+fn check_subindex0(
+    od: &Dictionary<'_>,
+    index: u16,
+    subindex: u8,
+    data: &[u8],
+) -> Result<(), AbortCode> {
+    let Some(object) = od.object(index) else {
+        return Err(AbortCode::ObjectNotFound);
+    };
+    if subindex != 0 || object.code == ObjectCode::Var {
+        return Ok(());
+    }
+    let highest = object.entries.last().map_or(0, |e| e.subindex);
+    match as_u32(data) {
+        Some(count) if count <= u32::from(highest) => Ok(()),
+        _ => Err(AbortCode::ValueTooHigh),
+    }
+}
+
+/// The abort for a storage failure.
+pub(crate) fn store_abort(e: StoreError) -> AbortCode {
+    match e {
+        StoreError::ReadOnly => AbortCode::ReadOnlyWrite,
+        StoreError::Length => AbortCode::LengthTooHigh,
+        StoreError::Layout => AbortCode::General,
+        StoreError::Domain => AbortCode::UnsupportedAccess,
+    }
+}
+
+/// The bytes an upload sends: a RAM VISIBLE_STRING up to its first NUL, anything else whole.
+pub(crate) fn upload_value<'a>(od: &'a Dictionary<'_>, entry: &Entry) -> Result<&'a [u8], AbortCode> {
+    let bytes = od.value(entry).map_err(store_abort)?;
+    let is_ram_string =
+        entry.data_type == DataType::VisibleString && matches!(entry.value, Value::Ram(_));
+    if !is_ram_string {
+        return Ok(bytes);
+    }
+    let len = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+    Ok(bytes.get(..len).unwrap_or_default())
+}
+

@@ -1,0 +1,81 @@
+//! Object dictionary (CiA 301 / ETG.1000.6): the data model od-gen generates ([`model`]), the
+//! run-time store over the OD RAM ([`store`]), the access rules every path into it shares (SDO
+//! abort codes [`abort`], value checks [`value`]), DOMAIN data outside the RAM ([`domain`]) and
+//! the hook run after a committed download ([`hook`]).
+
+pub mod abort;
+pub mod domain;
+pub mod hook;
+pub mod model;
+pub mod store;
+pub mod value;
+
+pub use abort::AbortCode;
+pub use domain::{DomainStore, NoDomains, RamDomain};
+pub use hook::{DownloadHook, WithDomains};
+pub use model::*;
+pub use store::{Dictionary, StoreError};
+
+/// A device description for unit tests: the standard mailbox layout (SM0 0x1000/256, SM1
+/// 0x1100/256), process data at 0x1200/0x1600, free run only, CoE with PDO assign/config.
+#[cfg(test)]
+pub(crate) const fn test_device() -> DeviceInfo {
+    const NONE: SmLayout = SmLayout {
+        start: 0,
+        length: 0,
+        control: 0,
+    };
+    DeviceInfo {
+        profile: "test",
+        name: "",
+        vendor_id: 0,
+        product_code: 0,
+        revision: 0,
+        mailbox_out: SmLayout {
+            start: 0x1000,
+            length: 256,
+            control: 0x26,
+        },
+        mailbox_in: SmLayout {
+            start: 0x1100,
+            length: 256,
+            control: 0x22,
+        },
+        boot_mailbox_out: None,
+        boot_mailbox_in: None,
+        outputs: SmLayout {
+            start: 0x1200,
+            ..NONE
+        },
+        inputs: SmLayout {
+            start: 0x1600,
+            ..NONE
+        },
+        sync: SyncSupport {
+            free_run: true,
+            sm_synchronous: false,
+            dc_sync0: false,
+            dc_sync1: false,
+            min_cycle_ns: 0,
+            max_cycle_ns: 0,
+            cycle_step_ns: 1,
+        },
+        max_pdo_entries: 8,
+        mailbox_protocols: 0,
+        coe: CoeDetails {
+            sdo: true,
+            sdo_info: false,
+            pdo_assign: true,
+            pdo_config: true,
+            upload_at_startup: false,
+            complete_access: false,
+        },
+        esm: EsmRules {
+            op_requires_outputs: true,
+            safeop_op_timeout_ms: 9000,
+            op_exit_while_enabled_error: None,
+        },
+        sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
+        settings: &[],
+    }
+}

@@ -1,0 +1,386 @@
+//! The object dictionary as data: what od-gen generates for every profile.
+//!
+//! Generated code (`OUT_DIR/profiles.rs`, from `od-gen/profiles/*.toml`) builds `static`
+//! [`Profile`]s out of these types. Values that can change at run time live in one byte array
+//! (the *OD RAM*) at the offset given by [`Value::Ram`]; a profile's [`Profile::defaults`] is the
+//! initial content of that array. Multi-byte values are little-endian, exactly as on the wire, so
+//! SDO transfers and PDO copies are plain byte copies.
+
+/// CoE data types (ETG.1000.6 Table 64 / CiA 301), as used in SDO information and SII PDO entries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u16)]
+pub enum DataType {
+    /// BOOLEAN (1 bit).
+    Boolean = 0x0001,
+    /// INTEGER8.
+    Integer8 = 0x0002,
+    /// INTEGER16.
+    Integer16 = 0x0003,
+    /// INTEGER32.
+    Integer32 = 0x0004,
+    /// UNSIGNED8.
+    Unsigned8 = 0x0005,
+    /// UNSIGNED16.
+    Unsigned16 = 0x0006,
+    /// UNSIGNED32.
+    Unsigned32 = 0x0007,
+    /// REAL32.
+    Real32 = 0x0008,
+    /// VISIBLE_STRING.
+    VisibleString = 0x0009,
+    /// OCTET_STRING.
+    OctetString = 0x000A,
+    /// UNICODE_STRING.
+    UnicodeString = 0x000B,
+    /// DOMAIN.
+    Domain = 0x000F,
+    /// INTEGER24.
+    Integer24 = 0x0010,
+    /// REAL64.
+    Real64 = 0x0011,
+    /// INTEGER64.
+    Integer64 = 0x0015,
+    /// UNSIGNED24.
+    Unsigned24 = 0x0016,
+    /// UNSIGNED64.
+    Unsigned64 = 0x001B,
+    /// BIT1..BIT8 padding/bit types (ETG.1000.6: 0x0030 + n - 1).
+    Bit1 = 0x0030,
+    /// BIT2.
+    Bit2 = 0x0031,
+    /// BIT3.
+    Bit3 = 0x0032,
+    /// BIT4.
+    Bit4 = 0x0033,
+    /// BIT5.
+    Bit5 = 0x0034,
+    /// BIT6.
+    Bit6 = 0x0035,
+    /// BIT7.
+    Bit7 = 0x0036,
+    /// BIT8.
+    Bit8 = 0x0037,
+}
+
+impl DataType {
+    /// The CoE type code.
+    pub const fn code(self) -> u16 {
+        self as u16
+    }
+    /// Whether values of the type have a length given by the entry rather than the type
+    /// (strings and domains).
+    pub const fn is_variable_length(self) -> bool {
+        matches!(
+            self,
+            Self::VisibleString | Self::OctetString | Self::UnicodeString | Self::Domain
+        )
+    }
+}
+
+/// Object code (ETG.1000.6 Table 63).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum ObjectCode {
+    /// VAR: a single value at subindex 0.
+    Var = 0x07,
+    /// ARRAY: subindex 0 holds the number of entries, all entries share one type.
+    Array = 0x08,
+    /// RECORD: subindex 0 holds the highest subindex, entries may differ in type.
+    Record = 0x09,
+}
+
+/// Access rights of one entry per EtherCAT state (same bit layout as the ObjAccess field of the
+/// SDO information entry description, ETG.1000.6 Table 48).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Access(pub u8);
+
+impl Access {
+    /// Readable in PREOP.
+    pub const READ_PREOP: u8 = 1 << 0;
+    /// Readable in SAFEOP.
+    pub const READ_SAFEOP: u8 = 1 << 1;
+    /// Readable in OP.
+    pub const READ_OP: u8 = 1 << 2;
+    /// Writable in PREOP.
+    pub const WRITE_PREOP: u8 = 1 << 3;
+    /// Writable in SAFEOP.
+    pub const WRITE_SAFEOP: u8 = 1 << 4;
+    /// Writable in OP.
+    pub const WRITE_OP: u8 = 1 << 5;
+    const READ_ALL: u8 = Self::READ_PREOP | Self::READ_SAFEOP | Self::READ_OP;
+    const WRITE_ALL: u8 = Self::WRITE_PREOP | Self::WRITE_SAFEOP | Self::WRITE_OP;
+
+    /// Read-only in every state.
+    pub const RO: Self = Self(Self::READ_ALL);
+    /// Read/write in every state.
+    pub const RW: Self = Self(Self::READ_ALL | Self::WRITE_ALL);
+    /// Readable always, writable in PREOP only (ESI `WriteRestrictions="PreOP"`).
+    pub const RW_PREOP: Self = Self(Self::READ_ALL | Self::WRITE_PREOP);
+    /// Readable always, writable in PREOP and SAFEOP.
+    pub const RW_PREOP_SAFEOP: Self = Self(Self::READ_ALL | Self::WRITE_PREOP | Self::WRITE_SAFEOP);
+    /// Write-only in every state.
+    pub const WO: Self = Self(Self::WRITE_ALL);
+
+    /// Readable in any state.
+    pub const fn readable(self) -> bool {
+        self.0 & Self::READ_ALL != 0
+    }
+    /// Writable in any state.
+    pub const fn writable(self) -> bool {
+        self.0 & Self::WRITE_ALL != 0
+    }
+}
+
+/// Whether and how an entry may be mapped into a PDO.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PdoMappable {
+    /// Not mappable.
+    No,
+    /// Mappable into RxPDOs (outputs, master → slave).
+    Rx,
+    /// Mappable into TxPDOs (inputs, slave → master).
+    Tx,
+    /// Mappable into both.
+    RxTx,
+}
+
+impl PdoMappable {
+    /// Mappable into an RxPDO.
+    pub const fn rx(self) -> bool {
+        matches!(self, Self::Rx | Self::RxTx)
+    }
+    /// Mappable into a TxPDO.
+    pub const fn tx(self) -> bool {
+        matches!(self, Self::Tx | Self::RxTx)
+    }
+}
+
+/// Where an entry's value lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Value {
+    /// A constant that never changes (identity, device name, ...): the bytes themselves.
+    Const(&'static [u8]),
+    /// A variable in the OD RAM at this byte offset; its length is the entry's byte length.
+    Ram(u16),
+    /// A DOMAIN whose data lives outside the OD RAM (up to 64 KiB, e.g. in flash), reached
+    /// through a `DomainStore` by this domain id; the entry's `bit_len` is 0 and the current
+    /// size comes from the store. Served by segmented SDO transfers only.
+    Domain(u8),
+}
+
+/// One subindex of an object.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Entry {
+    /// Subindex.
+    pub subindex: u8,
+    /// Name (SDO information).
+    pub name: &'static str,
+    /// Data type.
+    pub data_type: DataType,
+    /// Size in bits (for strings: 8 × maximum length).
+    pub bit_len: u16,
+    /// Access rights per state.
+    pub access: Access,
+    /// PDO mappability.
+    pub pdo: PdoMappable,
+    /// Storage of the value.
+    pub value: Value,
+    /// Default value, little-endian (empty when the profile gives none).
+    pub default: &'static [u8],
+    /// Minimum value, little-endian (empty = no limit beyond the type's).
+    pub min: &'static [u8],
+    /// Maximum value, little-endian (empty = no limit beyond the type's).
+    pub max: &'static [u8],
+}
+
+impl Entry {
+    /// Size in whole bytes (bit-sized entries round up).
+    pub const fn byte_len(&self) -> usize {
+        (self.bit_len as usize).div_ceil(8)
+    }
+}
+
+/// One object (index) of the dictionary.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Object {
+    /// Index.
+    pub index: u16,
+    /// Object code.
+    pub code: ObjectCode,
+    /// Name (SDO information).
+    pub name: &'static str,
+    /// Entries sorted by subindex; for ARRAY and RECORD, `entries[0]` is subindex 0.
+    pub entries: &'static [Entry],
+}
+
+impl Object {
+    /// The entry with this subindex.
+    pub fn entry(&self, subindex: u8) -> Option<&'static Entry> {
+        self.entries
+            .binary_search_by_key(&subindex, |e| e.subindex)
+            .ok()
+            .and_then(|i| self.entries.get(i))
+    }
+}
+
+/// Placement of one SyncManager as the profile declares it (and the SII/ESI carry it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SmLayout {
+    /// Physical start address.
+    pub start: u16,
+    /// Default length in bytes (mailbox size; 0 for process data, whose size comes from the mapping).
+    pub length: u16,
+    /// Control byte.
+    pub control: u8,
+}
+
+/// Synchronisation modes and cycle-time limits the device accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SyncSupport {
+    /// Free-run (no synchronisation).
+    pub free_run: bool,
+    /// Synchronous with the SM2 event.
+    pub sm_synchronous: bool,
+    /// DC SYNC0.
+    pub dc_sync0: bool,
+    /// DC SYNC0 + SYNC1.
+    pub dc_sync1: bool,
+    /// Shortest accepted cycle in ns.
+    pub min_cycle_ns: u32,
+    /// Longest accepted cycle in ns.
+    pub max_cycle_ns: u32,
+    /// Granularity of the DC SYNC0 cycle in ns: an accepted cycle is a whole multiple of it
+    /// (e.g. the control-loop period); 1 accepts any cycle in range.
+    pub cycle_step_ns: u32,
+}
+
+/// EtherCAT state machine rules of a profile (profile section `[esm]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EsmRules {
+    /// SAFEOP → OP only after the master wrote the outputs once (Beckhoff SSC
+    /// `OP_PD_REQUIRED`; ETG.1000.6 leaves it to the device).
+    pub op_requires_outputs: bool,
+    /// How long a SAFEOP → OP request may wait for the first SYNC0 / the first outputs before
+    /// it is refused, in ms (ESI `Info/StateMachine/Timeout/SafeopOpTimeout`).
+    pub safeop_op_timeout_ms: u32,
+    /// CiA402 error code (603Fh) the drive raises when the EtherCAT state leaves OP while the
+    /// drive is in Operation Enabled (EMCY, PDS Fault); `None`: the drive is only disabled.
+    pub op_exit_while_enabled_error: Option<u16>,
+}
+
+impl EsmRules {
+    /// [`Self::safeop_op_timeout_ms`] in ns.
+    pub const fn safeop_op_timeout_ns(&self) -> u64 {
+        self.safeop_op_timeout_ms as u64 * 1_000_000
+    }
+}
+
+/// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP and OP
+/// (profile key `pdo.sdo_write_to_rx_mapped`). In PREOP no PDO runs and the write is always
+/// served.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RxMappedWrite {
+    /// Refused with abort 0x06010006 "object mapped to RxPDO, SDO download blocked"
+    /// (ETG.1000.6 Table 41).
+    Blocked,
+    /// Written; the next process-data cycle overwrites the value.
+    Allowed,
+}
+
+/// CoE services the device supports (SII General CoE details, ESI `Mailbox/CoE` attributes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CoeDetails {
+    /// SDO upload/download.
+    pub sdo: bool,
+    /// SDO information service.
+    pub sdo_info: bool,
+    /// PDO assignment (1C12h/1C13h) writable.
+    pub pdo_assign: bool,
+    /// PDO mapping (16xxh/1Axxh) writable.
+    pub pdo_config: bool,
+    /// Upload of the PDO configuration at start-up.
+    pub upload_at_startup: bool,
+    /// SDO complete access.
+    pub complete_access: bool,
+}
+
+/// Identity and communication layout of a device: the facts the ESM checks the master's
+/// configuration against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DeviceInfo {
+    /// Profile name (the od-gen file stem).
+    pub profile: &'static str,
+    /// Device name (1008h, SII name string).
+    pub name: &'static str,
+    /// Vendor ID (1018h:01).
+    pub vendor_id: u32,
+    /// Product code (1018h:02).
+    pub product_code: u32,
+    /// Revision (1018h:03).
+    pub revision: u32,
+    /// SM0: mailbox master → slave.
+    pub mailbox_out: SmLayout,
+    /// SM1: mailbox slave → master.
+    pub mailbox_in: SmLayout,
+    /// Bootstrap mailbox out, if BOOT is supported.
+    pub boot_mailbox_out: Option<SmLayout>,
+    /// Bootstrap mailbox in, if BOOT is supported.
+    pub boot_mailbox_in: Option<SmLayout>,
+    /// SM2: process data outputs.
+    pub outputs: SmLayout,
+    /// SM3: process data inputs.
+    pub inputs: SmLayout,
+    /// Accepted synchronisation.
+    pub sync: SyncSupport,
+    /// Maximum number of entries in one PDO.
+    pub max_pdo_entries: u8,
+    /// Mailbox protocols (SII word 0x1C bits: 0x01 AoE, 0x02 EoE, 0x04 CoE, 0x08 FoE, 0x10 SoE,
+    /// 0x20 VoE).
+    pub mailbox_protocols: u16,
+    /// CoE services.
+    pub coe: CoeDetails,
+    /// ESM rules.
+    pub esm: EsmRules,
+    /// SDO download to an RxPDO-mapped entry in SAFEOP/OP.
+    pub sdo_write_to_rx_mapped: RxMappedWrite,
+    /// The startup parameters ("settings": profile `setting = true`; SDO information list
+    /// type 5, ObjAccess bit 9), as `(index, subindex)` sorted ascending.
+    pub settings: &'static [(u16, u8)],
+}
+
+impl DeviceInfo {
+    /// Whether `index:subindex` is a startup parameter ([`Self::settings`]).
+    pub fn is_setting(&self, index: u16, subindex: u8) -> bool {
+        self.settings.binary_search(&(index, subindex)).is_ok()
+    }
+}
+
+/// The object dictionary of one device: what the slave stack knows about a profile.
+#[derive(Clone, Copy, Debug)]
+pub struct Profile {
+    /// Identity and SM layout.
+    pub device: DeviceInfo,
+    /// All objects, sorted by index.
+    pub objects: &'static [Object],
+    /// Initial OD RAM content; its length is the OD RAM size.
+    pub defaults: &'static [u8],
+}
+
+impl Profile {
+    /// The object with this index.
+    pub fn object(&self, index: u16) -> Option<&'static Object> {
+        self.objects
+            .binary_search_by_key(&index, |o| o.index)
+            .ok()
+            .and_then(|i| self.objects.get(i))
+    }
+    /// Size of the OD RAM in bytes.
+    pub const fn ram_size(&self) -> usize {
+        self.defaults.len()
+    }
+}
+

@@ -1,0 +1,166 @@
+//! Value checks of an SDO download: length against the entry, range against the entry's
+//! minimum/maximum, interpreted by [`DataType`].
+
+use core::cmp::Ordering;
+
+use super::abort::AbortCode;
+use crate::od::{DataType, Entry};
+
+/// Bits per byte.
+const BITS_PER_BYTE: usize = 8;
+/// Widest integer the range check decodes (INTEGER64 / UNSIGNED64), in bytes.
+const MAX_INT_BYTES: usize = 8;
+
+/// A numeric value decoded by its data type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Number {
+    /// INTEGERn, sign-extended.
+    Signed(i64),
+    /// UNSIGNEDn, BOOLEAN, BITn.
+    Unsigned(u64),
+    /// REAL32 / REAL64.
+    Real(f64),
+}
+
+impl Number {
+    /// Decodes little-endian `bytes` as `data_type`; `None` for non-numeric types and for lengths
+    /// the type cannot have.
+    fn decode(data_type: DataType, bytes: &[u8]) -> Option<Self> {
+        match data_type {
+            DataType::Integer8
+            | DataType::Integer16
+            | DataType::Integer24
+            | DataType::Integer32
+            | DataType::Integer64 => signed(bytes).map(Self::Signed),
+            DataType::Unsigned8
+            | DataType::Unsigned16
+            | DataType::Unsigned24
+            | DataType::Unsigned32
+            | DataType::Unsigned64
+            | DataType::Boolean
+            | DataType::Bit1
+            | DataType::Bit2
+            | DataType::Bit3
+            | DataType::Bit4
+            | DataType::Bit5
+            | DataType::Bit6
+            | DataType::Bit7
+            | DataType::Bit8 => unsigned(bytes).map(Self::Unsigned),
+            DataType::Real32 => {
+                let b: [u8; 4] = bytes.try_into().ok()?;
+                Some(Self::Real(f64::from(f32::from_le_bytes(b))))
+            }
+            DataType::Real64 => {
+                let b: [u8; 8] = bytes.try_into().ok()?;
+                Some(Self::Real(f64::from_le_bytes(b)))
+            }
+            DataType::VisibleString
+            | DataType::OctetString
+            | DataType::UnicodeString
+            | DataType::Domain => None,
+        }
+    }
+
+    /// Compares two values of the same data type; `None` if they are incomparable (NaN).
+    fn compare(self, other: Self) -> Option<Ordering> {
+        match (self, other) {
+            (Self::Signed(a), Self::Signed(b)) => Some(a.cmp(&b)),
+            (Self::Unsigned(a), Self::Unsigned(b)) => Some(a.cmp(&b)),
+            (Self::Real(a), Self::Real(b)) => a.partial_cmp(&b),
+            _ => None,
+        }
+    }
+}
+
+/// Little-endian unsigned integer of 1..=8 bytes.
+fn unsigned(bytes: &[u8]) -> Option<u64> {
+    if bytes.is_empty() || bytes.len() > MAX_INT_BYTES {
+        return None;
+    }
+    let mut b = [0u8; MAX_INT_BYTES];
+    b.get_mut(..bytes.len())?.copy_from_slice(bytes);
+    Some(u64::from_le_bytes(b))
+}
+
+/// Little-endian two's-complement integer of 1..=8 bytes, sign-extended.
+fn signed(bytes: &[u8]) -> Option<i64> {
+    let raw = unsigned(bytes)?;
+    let unused_bits = (MAX_INT_BYTES - bytes.len()) * BITS_PER_BYTE;
+    // Shift the sign bit to bit 63, then arithmetic-shift back.
+    Some(((raw << unused_bits) as i64) >> unused_bits)
+}
+
+/// Checks the length of downloaded `data` against the entry: fixed-size types need exactly the
+/// entry's byte length, strings and domains at most that.
+pub(crate) fn check_length(entry: &Entry, len: usize) -> Result<(), AbortCode> {
+    let expected = entry.byte_len();
+    match len.cmp(&expected) {
+        Ordering::Greater => Err(AbortCode::LengthTooHigh),
+        Ordering::Less if !entry.data_type.is_variable_length() => Err(AbortCode::LengthTooLow),
+        _ => Ok(()),
+    }
+}
+
+/// Checks downloaded `data` (already of a valid length) against the entry's bit width and its
+/// minimum/maximum (ETG.1000.6 Table 41: 0x06090031 too high, 0x06090032 too low, 0x06090030 for
+/// a value that compares with neither, e.g. NaN).
+pub(crate) fn check_range(entry: &Entry, data: &[u8]) -> Result<(), AbortCode> {
+    let Some(value) = Number::decode(entry.data_type, data) else {
+        return Ok(());
+    };
+    check_bit_width(entry, value)?;
+    if let Some(min) = Number::decode(entry.data_type, entry.min) {
+        match value.compare(min) {
+            Some(Ordering::Less) => return Err(AbortCode::ValueTooLow),
+            None => return Err(AbortCode::ValueRange),
+            _ => {}
+        }
+    }
+    if let Some(max) = Number::decode(entry.data_type, entry.max) {
+        match value.compare(max) {
+            Some(Ordering::Greater) => return Err(AbortCode::ValueTooHigh),
+            None => return Err(AbortCode::ValueRange),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// An unsigned entry narrower than its bytes (BOOLEAN, BITn) must not set the unused high bits.
+fn check_bit_width(entry: &Entry, value: Number) -> Result<(), AbortCode> {
+    let bits = u32::from(entry.bit_len);
+    match value {
+        Number::Unsigned(v) if bits < u64::BITS && v >> bits != 0 => Err(AbortCode::ValueTooHigh),
+        _ => Ok(()),
+    }
+}
+
+/// The value as an unsigned integer of up to 4 bytes (u8 subindex 0, u16 assignment entries, u32
+/// mapping entries); `None` for anything longer or empty.
+pub(crate) fn as_u32(data: &[u8]) -> Option<u32> {
+    let narrow = u32::BITS as usize / BITS_PER_BYTE;
+    if data.len() > narrow {
+        return None;
+    }
+    unsigned(data).and_then(|v| u32::try_from(v).ok())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn signed_values_are_sign_extended_from_their_length() {
+        assert_eq!(signed(&[0xFF]), Some(-1));
+        assert_eq!(signed(&[0x9C, 0xFF]), Some(-100));
+        assert_eq!(signed(&[0x00, 0x00, 0x80]), Some(-0x80_0000));
+        assert_eq!(signed(&[0x7F]), Some(127));
+        assert_eq!(signed(&[]), None);
+    }
+
+    #[test]
+    fn real_nan_is_out_of_range() {
+        let nan = Number::Real(f64::NAN);
+        assert_eq!(nan.compare(Number::Real(0.0)), None);
+    }
+}

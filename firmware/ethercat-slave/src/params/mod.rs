@@ -1,0 +1,487 @@
+//! Parameter storage: 1010h "Store parameters" and 1011h "Restore default parameters"
+//! (CiA 301 §7.5.2.13 and §7.5.2.14) on a power-loss-safe record store over
+//! [`hal::storage::NvStorage`].
+//!
+//! # Objects
+//!
+//! Both objects are ARRAYs of UNSIGNED32 with sub 0 = highest subindex (4). The subindex selects
+//! a parameter group ([`Group`]): 1 all parameters, 2 communication parameters (1000h–1FFFh),
+//! 3 application parameters (6000h–9FFFh), 4 manufacturer parameters (2000h–5FFFh; CiA 301
+//! leaves sub 4..7Fh to the manufacturer).
+//!
+//! - Writing the signature `"save"` = 0x6576_6173 to 1010h:n stores the group's current values;
+//!   `"load"` = 0x6461_6F6C to 1011h:n makes the group's defaults apply again from the next
+//!   power-on (CiA 301: "the default values shall be set valid after the device is reset or
+//!   power cycled"); the current values do not change. The SDO response is sent after the
+//!   storage write completed and was verified.
+//! - Another value: abort 0x0800_0020 "data cannot be stored" (CiA 301 specifies 0800 002xh for a
+//!   wrong signature), nothing is written. A storage failure: abort 0x0606_0000 "hardware error".
+//! - Reading returns the capabilities: 1010h bit 0 = saves on command, bit 1 = saves
+//!   autonomously (not done: 0); 1011h bit 0 = restores defaults. Both read 1 in every state,
+//!   also after a write (the hook puts the value back).
+//!
+//! The objects are writable in PREOP, SAFEOP and OP (SDOs are not served in INIT). CiA 301 sets
+//! no state restriction; the store runs from the mailbox handler, never from the process-data
+//! cycle, so on a board whose flash stalls the CPU during erase/program the cycle may be
+//! delayed while a store runs in OP (a board can defer that by refusing in OP in its storage).
+//!
+//! # What is stored
+//!
+//! An entry is stored ([`is_storable`]) if it is an OD RAM variable, writable over SDO in some
+//! state, and not PDO-mappable; objects 1010h/1011h themselves and the SM parameters
+//! 1C32h/1C33h (which the stack overwrites with the active synchronisation) are never stored.
+//! So the PDO mapping (16xxh/1Axxh) and assignment (1C12h/1C13h) ARE stored: CiA 301 counts
+//! them among the communication parameters. They load at power-on in INIT, before the first
+//! PREOP → SAFEOP transition builds the copy plan, i.e. a stored mapping behaves exactly like
+//! the profile's default mapping (checked against SM2/SM3 at that transition; a master that
+//! relies on the SII default must write its mapping, as ETG masters do from the ESI).
+//! PDO-mappable entries (controlword, target position, modes of operation, ...) are process
+//! data, not parameters: storing a controlword would re-enable a drive at power-on.
+//!
+//! # Power-loss safety
+//!
+//! Two slots (0 and 1 of the storage), each holding at most one [`record`] with a CRC-32.
+//! Every store and every restore writes one complete new record, with the sequence number of
+//! the newest valid record + 1, into the slot that does NOT hold the newest valid record; at
+//! power-on the valid record with the highest sequence number (wrap-aware) is loaded. A write
+//! interrupted at any byte can only damage the slot being written, and a damaged record fails
+//! the length or CRC check, so the load falls back to the untouched newest record: the old
+//! values. Once the write completed, the new record is the newest: the new values. A record is
+//! applied only after it was fully validated, so a load never mixes two records.
+//!
+//! Restore writes a record too, instead of erasing: the new record holds the entries of the
+//! other groups (copied from the newest record) and omits the restored group, whose entries
+//! then load their defaults. "Restore all" writes an empty, valid record. Erasing the slots
+//! instead would need two writes and a torn state between them ("slot 1 erased, slot 0 still
+//! has the old record" would bring back values older than the newest).
+//! Storing one group likewise copies the other groups' entries from the newest record, so a
+//! group store never loses what an earlier store of another group saved.
+
+pub mod record;
+
+#[cfg(test)]
+mod tests;
+
+use hal::storage::{NvStorage, StorageError};
+
+use crate::od::{AbortCode, DownloadHook};
+use crate::od::{Dictionary, Entry, Object, PdoMappable, Profile, StoreError, Value};
+
+use record::{Identity, Record, RecordError, Writer};
+
+/// Store parameters (CiA 301 §7.5.2.13).
+pub const STORE_PARAMETERS: u16 = 0x1010;
+/// Restore default parameters (CiA 301 §7.5.2.14).
+pub const RESTORE_DEFAULTS: u16 = 0x1011;
+/// Signature that triggers a store: ASCII `"save"` as a little-endian u32 (CiA 301: MSB 'e'
+/// 65h, 'v' 76h, 'a' 61h, LSB 's' 73h).
+pub const SIGNATURE_SAVE: u32 = u32::from_le_bytes(*b"save");
+/// Signature that triggers a restore: ASCII `"load"` (MSB 'd' 64h, 'a' 61h, 'o' 6Fh, LSB 'l' 6Ch).
+pub const SIGNATURE_LOAD: u32 = u32::from_le_bytes(*b"load");
+/// 1010h read value bit 0: the device saves parameters on command (CiA 301 Figure "storage read
+/// access structure").
+pub const SAVES_ON_COMMAND: u32 = 1 << 0;
+/// 1010h read value bit 1: the device saves parameters autonomously.
+pub const SAVES_AUTONOMOUSLY: u32 = 1 << 1;
+/// What 1010h:n reads: saves on command only.
+pub const STORE_CAPABILITIES: u32 = SAVES_ON_COMMAND;
+/// What 1011h:n reads: bit 0 = the device restores default parameters (CiA 301 §7.5.2.14).
+pub const RESTORE_CAPABILITIES: u32 = 1 << 0;
+/// Objects never stored: the store/restore commands themselves and the SM parameters the stack
+/// maintains from the active synchronisation (ETG.1020 §5.1).
+pub const NOT_STORED: [u16; 4] = [STORE_PARAMETERS, RESTORE_DEFAULTS, 0x1C32, 0x1C33];
+/// The two storage slots the records alternate between.
+pub const SLOTS: [usize; 2] = [0, 1];
+/// Default capacity of one record buffer; [`ParamStore`] holds two. Enough for the standard
+/// profile with full PDO mapping objects (`record_len` is checked against it in the tests).
+pub const DEFAULT_RECORD_CAPACITY: usize = 1024;
+/// Sequence number of the first record written to empty storage.
+const FIRST_SEQUENCE: u32 = 1;
+
+/// A parameter group, selected by the subindex of 1010h/1011h (CiA 301 §7.5.2.13).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Group {
+    /// Sub 1: all storable parameters.
+    All = 1,
+    /// Sub 2: communication parameters, 1000h–1FFFh.
+    Communication = 2,
+    /// Sub 3: application (device profile) parameters, 6000h–9FFFh.
+    Application = 3,
+    /// Sub 4: manufacturer-specific parameters, 2000h–5FFFh (CiA 301: sub 4..7Fh are the
+    /// manufacturer's choice).
+    Manufacturer = 4,
+}
+
+impl Group {
+    /// The group of a 1010h/1011h subindex.
+    pub const fn from_subindex(subindex: u8) -> Option<Self> {
+        match subindex {
+            1 => Some(Self::All),
+            2 => Some(Self::Communication),
+            3 => Some(Self::Application),
+            4 => Some(Self::Manufacturer),
+            _ => None,
+        }
+    }
+
+    /// Whether objects of `index` belong to the group.
+    pub const fn contains(self, index: u16) -> bool {
+        match self {
+            Self::All => true,
+            Self::Communication => matches!(index, 0x1000..=0x1FFF),
+            Self::Application => matches!(index, 0x6000..=0x9FFF),
+            Self::Manufacturer => matches!(index, 0x2000..=0x5FFF),
+        }
+    }
+}
+
+/// Whether `entry` of `object` is a stored parameter (see the module documentation). The one
+/// rule for "backup" entries too: SDO information list type 4 and ObjAccess bit 8 use it, and
+/// the generated dictionary asserts at compile time that od-gen's ESI `Flags/Backup` agree.
+pub const fn is_storable(object: &Object, entry: &Entry) -> bool {
+    matches!(entry.value, Value::Ram(_))
+        && entry.access.writable()
+        && matches!(entry.pdo, PdoMappable::No)
+        && !is_not_stored(object.index)
+}
+
+/// Whether `index` is one of [`NOT_STORED`].
+const fn is_not_stored(index: u16) -> bool {
+    let mut i = 0;
+    while i < NOT_STORED.len() {
+        if NOT_STORED[i] == index {
+            return true;
+        }
+        i += 1;
+    }
+    false
+}
+
+/// Why parameters could not be loaded, stored or restored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ParamError {
+    /// The storage has fewer than two slots.
+    TooFewSlots,
+    /// The storage failed.
+    Storage(StorageError),
+    /// The record does not fit the record buffer or a slot.
+    TooLarge,
+    /// The written record did not read back identically.
+    Verify,
+    /// The OD RAM does not hold a value of the profile (a build error).
+    Dictionary(StoreError),
+    /// Loading was requested outside INIT.
+    NotInInit,
+}
+
+impl From<StorageError> for ParamError {
+    fn from(e: StorageError) -> Self {
+        Self::Storage(e)
+    }
+}
+
+/// What [`ParamStore::load`] applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Loaded {
+    /// Slot the record came from.
+    pub slot: usize,
+    /// Its sequence number.
+    pub sequence: u32,
+    /// Entries written into the OD RAM.
+    pub applied: u16,
+    /// Entries skipped because the OD has no such storable entry of that length (an OD layout
+    /// change within one revision).
+    pub skipped: u16,
+}
+
+/// What a new record does to the selected group.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Action {
+    /// Store the current values.
+    Store,
+    /// Leave the entries out, so they load their defaults.
+    Restore,
+}
+
+/// Storage that does not exist: every access fails with [`StorageError::OutOfRange`]. For
+/// boards without parameter storage; 1010h/1011h then answer 0x0606_0000.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoStorage;
+
+impl NvStorage for NoStorage {
+    fn slots(&self) -> usize {
+        0
+    }
+    fn slot_size(&self) -> usize {
+        0
+    }
+    fn read(&mut self, _: usize, _: &mut [u8]) -> Result<(), StorageError> {
+        Err(StorageError::OutOfRange)
+    }
+    fn write(&mut self, _: usize, _: &[u8]) -> Result<(), StorageError> {
+        Err(StorageError::OutOfRange)
+    }
+}
+
+/// The parameter store: the board's storage plus two record buffers of `CAP` bytes (the newest
+/// record and the one being built). The board owns it (a `static` on target) and hands it to
+/// [`crate::slave::Slave::load_parameters`] at start-up and to
+/// [`crate::slave::Slave::on_esc_event_with`] for the 1010h/1011h commands.
+pub struct ParamStore<S, const CAP: usize = DEFAULT_RECORD_CAPACITY> {
+    storage: S,
+    bufs: [[u8; CAP]; 2],
+}
+
+impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
+    /// A store over `storage` (slots 0 and 1 are used).
+    pub const fn new(storage: S) -> Self {
+        Self {
+            storage,
+            bufs: [[0; CAP]; 2],
+        }
+    }
+
+    /// The storage.
+    pub fn storage(&self) -> &S {
+        &self.storage
+    }
+
+    /// The storage, mutable (fault injection in tests).
+    pub fn storage_mut(&mut self) -> &mut S {
+        &mut self.storage
+    }
+
+    /// Gives the storage back.
+    pub fn into_storage(self) -> S {
+        self.storage
+    }
+
+    /// Applies the newest valid record over the current OD RAM (which holds the defaults after
+    /// [`crate::slave::Slave::new`]). `Ok(None)`: no valid record, the defaults stay.
+    pub fn load(&mut self, od: &mut Dictionary<'_>) -> Result<Option<Loaded>, ParamError> {
+        let identity = identity(od.profile());
+        let Some((slot, sequence)) = self.newest(&identity)? else {
+            return Ok(None);
+        };
+        let [b0, b1] = &self.bufs;
+        let buf: &[u8] = if slot == 0 { b0 } else { b1 };
+        let Ok(record) = Record::parse(buf, &identity) else {
+            return Ok(None); // validated by `newest`; unreachable in practice
+        };
+        let mut loaded = Loaded {
+            slot,
+            sequence,
+            applied: 0,
+            skipped: 0,
+        };
+        for stored in record.entries() {
+            let entry = od
+                .object(stored.index)
+                .and_then(|o| o.entry(stored.subindex).filter(|e| is_storable(o, e)))
+                .filter(|e| e.byte_len() == stored.value.len());
+            match entry.map(|e| od.set_value(e, stored.value)) {
+                Some(Ok(())) => loaded.applied = loaded.applied.saturating_add(1),
+                _ => loaded.skipped = loaded.skipped.saturating_add(1),
+            }
+        }
+        Ok(Some(loaded))
+    }
+
+    /// Stores the current values of `group` (1010h); other groups keep what the newest record
+    /// holds. Returns the new record's sequence number.
+    pub fn store(&mut self, od: &Dictionary<'_>, group: Group) -> Result<u32, ParamError> {
+        self.write_record(od, group, Action::Store)
+    }
+
+    /// Makes `group` load its defaults from the next power-on (1011h); the current values do not
+    /// change. Returns the new record's sequence number.
+    pub fn restore_defaults(
+        &mut self,
+        od: &Dictionary<'_>,
+        group: Group,
+    ) -> Result<u32, ParamError> {
+        self.write_record(od, group, Action::Restore)
+    }
+
+    /// The slot and sequence number of the newest valid record; each slot's content is left in
+    /// the buffer of the same number.
+    fn newest(&mut self, identity: &Identity) -> Result<Option<(usize, u32)>, ParamError> {
+        if self.storage.slots() < SLOTS.len() {
+            return Err(ParamError::TooFewSlots);
+        }
+        let s0 = self.read_slot(0, identity)?;
+        let s1 = self.read_slot(1, identity)?;
+        Ok(match (s0, s1) {
+            (Some(a), Some(b)) if record::is_newer(b, a) => Some((1, b)),
+            (Some(a), _) => Some((0, a)),
+            (None, Some(b)) => Some((1, b)),
+            (None, None) => None,
+        })
+    }
+
+    /// Reads the record in `slot` into buffer `slot`; its sequence number if it is valid.
+    fn read_slot(&mut self, slot: usize, identity: &Identity) -> Result<Option<u32>, ParamError> {
+        let limit = CAP.min(self.storage.slot_size());
+        let Some(buf) = self.bufs.get_mut(slot) else {
+            return Ok(None);
+        };
+        let Some(header) = buf.get_mut(..record::HEADER_LEN.min(limit)) else {
+            return Ok(None);
+        };
+        if header.len() < record::HEADER_LEN {
+            return Ok(None);
+        }
+        self.storage.read(slot, header)?;
+        let Ok(total) = record::announced_len(header, identity) else {
+            return Ok(None);
+        };
+        let Some(bytes) = buf.get_mut(..total).filter(|b| b.len() <= limit) else {
+            return Ok(None);
+        };
+        self.storage.read(slot, bytes)?;
+        Ok(Record::parse(bytes, identity).ok().map(|r| r.sequence()))
+    }
+
+    /// Builds the next record and writes it to the slot not holding the newest valid one, then
+    /// reads it back.
+    fn write_record(
+        &mut self,
+        od: &Dictionary<'_>,
+        group: Group,
+        action: Action,
+    ) -> Result<u32, ParamError> {
+        let profile = od.profile();
+        let identity = identity(profile);
+        let newest = self.newest(&identity)?;
+        let (target, sequence) = match newest {
+            Some((slot, seq)) => (1 - slot, seq.wrapping_add(1)),
+            None => (0, FIRST_SEQUENCE),
+        };
+        let [b0, b1] = &mut self.bufs;
+        let (new_buf, old_buf) = if target == 0 { (b0, b1) } else { (b1, b0) };
+        let old = newest.and_then(|_| Record::parse(&old_buf[..], &identity).ok());
+        let len = build(
+            od,
+            profile,
+            group,
+            action,
+            old.as_ref(),
+            new_buf,
+            &identity,
+            sequence,
+        )?;
+        if len > self.storage.slot_size() {
+            return Err(ParamError::TooLarge);
+        }
+        let data = new_buf.get(..len).ok_or(ParamError::TooLarge)?;
+        self.storage.write(target, data)?;
+        // Read back into the other buffer (its old record is no longer needed).
+        let check = old_buf.get_mut(..len).ok_or(ParamError::TooLarge)?;
+        self.storage.read(target, check)?;
+        if check != data {
+            return Err(ParamError::Verify);
+        }
+        Ok(sequence)
+    }
+}
+
+/// Writes the record for `action` on `group` into `buf`; returns its length.
+#[allow(clippy::too_many_arguments)]
+fn build(
+    od: &Dictionary<'_>,
+    profile: &Profile,
+    group: Group,
+    action: Action,
+    old: Option<&Record<'_>>,
+    buf: &mut [u8],
+    identity: &Identity,
+    sequence: u32,
+) -> Result<usize, ParamError> {
+    let capacity = |_: RecordError| ParamError::TooLarge;
+    let mut writer = Writer::new(buf).map_err(capacity)?;
+    for object in profile.objects {
+        for entry in object.entries.iter().filter(|e| is_storable(object, e)) {
+            let value = if group.contains(object.index) {
+                match action {
+                    Action::Store => Some(od.value(entry).map_err(ParamError::Dictionary)?),
+                    Action::Restore => None,
+                }
+            } else {
+                old.and_then(|r| r.find(object.index, entry.subindex))
+                    .filter(|v| v.len() == entry.byte_len())
+            };
+            if let Some(v) = value {
+                writer
+                    .push(object.index, entry.subindex, v)
+                    .map_err(capacity)?;
+            }
+        }
+    }
+    Ok(writer.finish(identity, sequence))
+}
+
+/// Length of the record that stores every storable entry of `profile` (the largest record the
+/// profile can produce).
+pub fn max_record_len(profile: &Profile) -> usize {
+    let payload: usize = profile
+        .objects
+        .iter()
+        .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
+        .filter(|(o, e)| is_storable(o, e))
+        .map(|(_, e)| record::ENTRY_HEAD_LEN + e.byte_len())
+        .sum();
+    record::HEADER_LEN + payload + record::CRC_LEN
+}
+
+/// The identity a profile's records carry (1018h:01..03).
+pub fn identity(profile: &Profile) -> Identity {
+    Identity {
+        vendor_id: profile.device.vendor_id,
+        product_code: profile.device.product_code,
+        revision: profile.device.revision,
+    }
+}
+
+/// 1010h/1011h semantics on a committed SDO download (CiA 301 §7.5.2.13/14): puts the
+/// capability value back, checks the signature (0x0800_0020 if wrong), runs the store or
+/// restore (0x0606_0000 if it fails). Downloads to other entries pass.
+impl<S: NvStorage, const CAP: usize> DownloadHook for ParamStore<S, CAP> {
+    fn downloaded(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        subindex: u8,
+    ) -> Result<(), AbortCode> {
+        let (signature, capabilities) = match index {
+            STORE_PARAMETERS => (SIGNATURE_SAVE, STORE_CAPABILITIES),
+            RESTORE_DEFAULTS => (SIGNATURE_LOAD, RESTORE_CAPABILITIES),
+            _ => return Ok(()),
+        };
+        let (Some(group), Some(entry)) =
+            (Group::from_subindex(subindex), od.entry(index, subindex))
+        else {
+            return Ok(());
+        };
+        let written = od
+            .value(entry)
+            .ok()
+            .and_then(|v| v.first_chunk::<4>().copied())
+            .map(u32::from_le_bytes);
+        let cap = capabilities.to_le_bytes();
+        let _ = od.set_value(
+            entry,
+            cap.get(..entry.byte_len().min(4)).unwrap_or_default(),
+        );
+        if written != Some(signature) {
+            return Err(AbortCode::DataNotStored);
+        }
+        let result = match index {
+            STORE_PARAMETERS => self.store(od, group),
+            _ => self.restore_defaults(od, group),
+        };
+        result.map(drop).map_err(|_| AbortCode::HardwareError)
+    }
+}

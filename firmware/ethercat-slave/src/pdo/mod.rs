@@ -1,0 +1,371 @@
+//! PDO mapping: from 1C12h/1C13h and the 16xxh/1Axxh mapping objects to a precomputed copy
+//! plan between the process-data image (SM2/SM3 buffers) and the OD RAM.
+//!
+//! The plan is built once at PREOP → SAFEOP; the cycle then runs [`PdoPlan::unpack`] and
+//! [`PdoPlan::pack`], which do no lookups: one `copy_from_slice` per byte-aligned entry, a bit
+//! copy only for entries that are not byte-aligned. [`rules`] holds what an SDO write to the
+//! PDO objects must satisfy; both read the object indices defined there.
+
+use hal::esc::AlStatusCode;
+use heapless::Vec;
+
+use crate::od::{Dictionary, Value};
+
+pub mod rules;
+
+pub use rules::{RX_ASSIGN, RX_MAPPING, TX_ASSIGN, TX_MAPPING};
+
+/// Most mapped entries per direction (all PDOs of one SM together).
+pub const MAX_MAPPED_ENTRIES: usize = 64;
+/// Largest process-data image per direction in bytes.
+pub const MAX_IMAGE: usize = 256;
+
+/// Highest index of a dummy (padding) data-type object usable in a mapping (CiA 301 §7.4.7.1).
+const DUMMY_INDEX_MAX: u16 = 0x0007;
+
+/// Direction of a plan.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Direction {
+    /// RxPDO: master → slave (outputs, SM2).
+    Rx,
+    /// TxPDO: slave → master (inputs, SM3).
+    Tx,
+}
+
+impl Direction {
+    fn assign_index(self) -> u16 {
+        match self {
+            Self::Rx => RX_ASSIGN,
+            Self::Tx => TX_ASSIGN,
+        }
+    }
+    fn mapping_range(self) -> core::ops::RangeInclusive<u16> {
+        match self {
+            Self::Rx => RX_MAPPING,
+            Self::Tx => TX_MAPPING,
+        }
+    }
+    /// AL status code for a mapping that cannot be built (ETG.1000.6 Table 11).
+    fn invalid_mapping(self) -> AlStatusCode {
+        match self {
+            Self::Rx => AlStatusCode::InvalidOutputMapping,
+            Self::Tx => AlStatusCode::InvalidInputMapping,
+        }
+    }
+}
+
+/// Where a mapped value comes from or goes to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Slot {
+    /// OD RAM byte offset.
+    Ram(u16),
+    /// A constant (TxPDO only).
+    Const(&'static [u8]),
+}
+
+/// One mapped entry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct CopyStep {
+    slot: Slot,
+    /// Bit offset in the process-data image.
+    image_bit: u16,
+    /// Size in bits.
+    bits: u16,
+}
+
+/// The copy plan of one direction.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PdoPlan {
+    steps: Vec<CopyStep, MAX_MAPPED_ENTRIES>,
+    bits: u16,
+}
+
+impl PdoPlan {
+    /// Builds the plan of `dir` from the assignment and mapping objects in `od`. An assigned
+    /// PDO that does not exist, a mapped entry that does not exist, is not mappable in this
+    /// direction or has another bit length, or a plan beyond the buffer limits gives
+    /// 0x0025 (outputs) / 0x0024 (inputs).
+    pub fn build(od: &Dictionary<'_>, dir: Direction) -> Result<Self, AlStatusCode> {
+        let bad = dir.invalid_mapping();
+        let mut plan = Self::default();
+        let assign = dir.assign_index();
+        let pdo_count = od.read_u32(assign, 0).ok_or(bad)?;
+        for n in 1..=pdo_count {
+            let sub = u8::try_from(n).map_err(|_| bad)?;
+            let pdo = od.read_u32(assign, sub).ok_or(bad)? as u16;
+            if !dir.mapping_range().contains(&pdo) {
+                return Err(bad);
+            }
+            plan.add_pdo(od, dir, pdo)?;
+        }
+        Ok(plan)
+    }
+
+    fn add_pdo(
+        &mut self,
+        od: &Dictionary<'_>,
+        dir: Direction,
+        pdo: u16,
+    ) -> Result<(), AlStatusCode> {
+        let bad = dir.invalid_mapping();
+        let entries = od.read_u32(pdo, 0).ok_or(bad)?;
+        for n in 1..=entries {
+            let sub = u8::try_from(n).map_err(|_| bad)?;
+            let mapping = od.read_u32(pdo, sub).ok_or(bad)?;
+            let index = (mapping >> 16) as u16;
+            let subindex = (mapping >> 8) as u8;
+            let bits = (mapping & 0xFF) as u16;
+            if bits == 0 {
+                return Err(bad);
+            }
+            if index <= DUMMY_INDEX_MAX {
+                // Padding: occupies image bits, copies nothing.
+                self.bits = self.bits.checked_add(bits).ok_or(bad)?;
+                continue;
+            }
+            let entry = od.entry(index, subindex).ok_or(bad)?;
+            let mappable = match dir {
+                Direction::Rx => entry.pdo.rx(),
+                Direction::Tx => entry.pdo.tx(),
+            };
+            if !mappable || entry.bit_len != bits {
+                return Err(bad);
+            }
+            let slot = match (entry.value, dir) {
+                (Value::Ram(offset), _) => Slot::Ram(offset),
+                (Value::Const(bytes), Direction::Tx) => Slot::Const(bytes),
+                (Value::Const(_), Direction::Rx) | (Value::Domain(_), _) => return Err(bad),
+            };
+            self.steps
+                .push(CopyStep {
+                    slot,
+                    image_bit: self.bits,
+                    bits,
+                })
+                .map_err(|_| bad)?;
+            self.bits = self.bits.checked_add(bits).ok_or(bad)?;
+        }
+        if self.byte_len() > MAX_IMAGE {
+            return Err(bad);
+        }
+        Ok(())
+    }
+
+    /// Size of the process-data image in bytes (the SM length the master must configure).
+    pub fn byte_len(&self) -> usize {
+        (self.bits as usize).div_ceil(8)
+    }
+
+    /// Copies an RxPDO image (SM2 content) into the OD RAM.
+    pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
+        for step in &self.steps {
+            if let Slot::Ram(offset) = step.slot {
+                copy_bits(
+                    image,
+                    step.image_bit as usize,
+                    ram,
+                    offset as usize * 8,
+                    step.bits as usize,
+                );
+            }
+        }
+    }
+
+    /// Copies the mapped TxPDO values from the OD RAM into an image (SM3 content).
+    pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
+        for step in &self.steps {
+            let (src, at) = match step.slot {
+                Slot::Ram(offset) => (ram, offset as usize * 8),
+                Slot::Const(bytes) => (bytes, 0),
+            };
+            copy_bits(src, at, image, step.image_bit as usize, step.bits as usize);
+        }
+    }
+}
+
+/// Copies `bits` bits, LSB first (EtherCAT bit order), from `src` at bit `src_bit` to `dst` at
+/// bit `dst_bit`. Out-of-range parts are skipped, never panicked on.
+fn copy_bits(src: &[u8], src_bit: usize, dst: &mut [u8], dst_bit: usize, bits: usize) {
+    if src_bit % 8 == 0 && dst_bit % 8 == 0 && bits % 8 == 0 {
+        let (s, d, n) = (src_bit / 8, dst_bit / 8, bits / 8);
+        if let (Some(from), Some(to)) = (src.get(s..s + n), dst.get_mut(d..d + n)) {
+            to.copy_from_slice(from);
+        }
+        return;
+    }
+    for i in 0..bits {
+        let (sb, db) = (src_bit + i, dst_bit + i);
+        let Some(&byte) = src.get(sb / 8) else { return };
+        let Some(out) = dst.get_mut(db / 8) else {
+            return;
+        };
+        let mask = 1u8 << (db % 8);
+        if byte & (1 << (sb % 8)) != 0 {
+            *out |= mask;
+        } else {
+            *out &= !mask;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::od::*;
+
+    const fn var(sub: u8, bits: u16, pdo: PdoMappable, value: Value) -> Entry {
+        Entry {
+            subindex: sub,
+            name: "",
+            data_type: DataType::Unsigned32,
+            bit_len: bits,
+            access: Access::RW,
+            pdo,
+            value,
+            default: &[],
+            min: &[],
+            max: &[],
+        }
+    }
+    // OD RAM layout: 0..2 cw, 2..6 target, 6 flag byte, 8.. 1C12 (sub0 + 2×u16), 14.. 1600 (sub0 + 4×u32)
+    static CW: [Entry; 1] = [var(0, 16, PdoMappable::Rx, Value::Ram(0))];
+    static TARGET: [Entry; 1] = [var(0, 32, PdoMappable::Rx, Value::Ram(2))];
+    static FLAG: [Entry; 1] = [var(0, 1, PdoMappable::Rx, Value::Ram(6))];
+    static STATUS: [Entry; 1] = [var(0, 16, PdoMappable::Tx, Value::Const(&[0x37, 0x02]))];
+    static RXMAP: [Entry; 5] = [
+        var(0, 8, PdoMappable::No, Value::Ram(14)),
+        var(1, 32, PdoMappable::No, Value::Ram(15)),
+        var(2, 32, PdoMappable::No, Value::Ram(19)),
+        var(3, 32, PdoMappable::No, Value::Ram(23)),
+        var(4, 32, PdoMappable::No, Value::Ram(27)),
+    ];
+    static RXASSIGN: [Entry; 3] = [
+        var(0, 8, PdoMappable::No, Value::Ram(8)),
+        var(1, 16, PdoMappable::No, Value::Ram(9)),
+        var(2, 16, PdoMappable::No, Value::Ram(11)),
+    ];
+    static OBJECTS: [Object; 6] = [
+        Object {
+            index: 0x1600,
+            code: ObjectCode::Record,
+            name: "",
+            entries: &RXMAP,
+        },
+        Object {
+            index: 0x1C12,
+            code: ObjectCode::Array,
+            name: "",
+            entries: &RXASSIGN,
+        },
+        Object {
+            index: 0x2000,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &FLAG,
+        },
+        Object {
+            index: 0x6040,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &CW,
+        },
+        Object {
+            index: 0x6041,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &STATUS,
+        },
+        Object {
+            index: 0x607A,
+            code: ObjectCode::Var,
+            name: "",
+            entries: &TARGET,
+        },
+    ];
+    static DEFAULTS: [u8; 31] = [0; 31];
+    static PROFILE: Profile = Profile {
+        device: crate::od::test_device(),
+        objects: &OBJECTS,
+        defaults: &DEFAULTS,
+    };
+
+    fn od_with(ram: &mut [u8; 31], mapping: &[u32]) {
+        ram[8] = 1;
+        ram[9..11].copy_from_slice(&0x1600u16.to_le_bytes());
+        ram[14] = mapping.len() as u8;
+        for (i, m) in mapping.iter().enumerate() {
+            ram[15 + 4 * i..19 + 4 * i].copy_from_slice(&m.to_le_bytes());
+        }
+    }
+
+    #[test]
+    fn byte_aligned_mapping_unpacks_in_mapping_order() {
+        let mut ram = [0u8; 31];
+        od_with(&mut ram, &[0x6040_0010, 0x607A_0020]);
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        assert_eq!(plan.byte_len(), 6);
+        plan.unpack(&[0x0F, 0x00, 0x78, 0x56, 0x34, 0x12], &mut ram);
+        assert_eq!(&ram[0..2], &[0x0F, 0x00]);
+        assert_eq!(&ram[2..6], &[0x78, 0x56, 0x34, 0x12]);
+    }
+
+    #[test]
+    fn bit_entry_and_padding_are_placed_bit_exact() {
+        let mut ram = [0u8; 31];
+        // 1 bit flag, 7 bit padding (dummy index 0x0000), then the controlword.
+        od_with(&mut ram, &[0x2000_0001, 0x0000_0007, 0x6040_0010]);
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        assert_eq!(plan.byte_len(), 3);
+        plan.unpack(&[0xFF, 0x34, 0x12], &mut ram);
+        assert_eq!(ram[6], 0x01, "only bit 0 is the flag");
+        assert_eq!(&ram[0..2], &[0x34, 0x12]);
+    }
+
+    #[test]
+    fn wrong_bit_length_or_direction_is_invalid_output_mapping() {
+        let mut ram = [0u8; 31];
+        od_with(&mut ram, &[0x6040_0020]);
+        let r = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx);
+        assert_eq!(r.map_err(|c| c.code()), Err(0x0025));
+        od_with(&mut ram, &[0x6041_0010]);
+        let r = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx);
+        assert_eq!(r.map_err(|c| c.code()), Err(0x0025));
+        od_with(&mut ram, &[0x7777_0010]);
+        let r = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx);
+        assert_eq!(r.map_err(|c| c.code()), Err(0x0025));
+    }
+
+    #[test]
+    fn pack_copies_constants_and_ram() {
+        let plan = PdoPlan {
+            steps: Vec::from_slice(&[
+                CopyStep {
+                    slot: Slot::Const(&[0x37, 0x02]),
+                    image_bit: 0,
+                    bits: 16,
+                },
+                CopyStep {
+                    slot: Slot::Ram(2),
+                    image_bit: 16,
+                    bits: 32,
+                },
+            ])
+            .unwrap(),
+            bits: 48,
+        };
+        let mut ram = [0u8; 31];
+        ram[2..6].copy_from_slice(&[1, 2, 3, 4]);
+        let mut image = [0u8; 6];
+        plan.pack(&ram, &mut image);
+        assert_eq!(image, [0x37, 0x02, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn copy_bits_never_panics_out_of_range() {
+        let mut dst = [0u8; 2];
+        copy_bits(&[0xFF; 2], 9, &mut dst, 12, 40);
+        copy_bits(&[0xFF; 2], 0, &mut dst, 0, 64);
+        assert_eq!(dst, [0x00, 0xF0]);
+    }
+}

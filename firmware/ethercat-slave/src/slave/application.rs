@@ -1,0 +1,52 @@
+//! The device application the slave runs in every process-data cycle: what makes the slave a
+//! drive, an I/O module or anything else. The stack knows nothing about it beyond this trait.
+
+/// What happened to the application's error state during a cycle: the slave turns it into the
+/// EMCY, 1001h and 10F3h bookkeeping of CiA 301 / ETG.1020.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum AppEvent {
+    /// Nothing to report.
+    None,
+    /// The application raised an error with this error code (EMCY error code; a drive's 603Fh).
+    ErrorRaised(u16),
+    /// The error with this code is gone (a drive's fault reset).
+    ErrorCleared(u16),
+}
+
+/// The per-cycle application behind the object dictionary.
+///
+/// The slave calls it with the OD RAM (`ram`, laid out by the profile's generated dictionary):
+/// outputs the master wrote are already unpacked into it, inputs are packed from it afterwards.
+pub trait Application {
+    /// One process-data cycle (SAFEOP and OP; also once on entering SAFEOP so that the first
+    /// inputs are valid). `cycle_ns` is the SYNC0 cycle (1C32h:02), 0 when not synchronised.
+    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvent;
+
+    /// The EtherCAT state leaves OP: put everything the master's outputs drive into its safe
+    /// state at once (no further cycle runs that would do it). Returns whether the application
+    /// was active (a drive: Operation Enabled), for the profile rule
+    /// `EsmRules::op_exit_while_enabled_error`.
+    fn outputs_safe(&mut self, ram: &mut [u8]) -> bool;
+
+    /// The slave raises application error `code` (a profile rule such as
+    /// `op_exit_while_enabled_error`); the slave reports the EMCY itself.
+    fn raise_error(&mut self, code: u16, ram: &mut [u8]);
+}
+
+/// A slave without an application: process data are copied to and from the OD and nothing else
+/// happens (enough for a device whose objects are plain variables).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NoApplication;
+
+impl Application for NoApplication {
+    fn cycle(&mut self, _: &mut [u8], _: u32) -> AppEvent {
+        AppEvent::None
+    }
+
+    fn outputs_safe(&mut self, _: &mut [u8]) -> bool {
+        false
+    }
+
+    fn raise_error(&mut self, _: u16, _: &mut [u8]) {}
+}

@@ -1,0 +1,138 @@
+//! Faults the slave detects by itself: SM reconfiguration, the process-data watchdog, SYNC0
+//! supervision; each drops the state with its AL status code (ETG.1000.6 Table 11).
+
+use super::*;
+
+impl<const RAM: usize, A: Application> Slave<RAM, A> {
+    /// SM activation changed: the master rewrote an SM. In PREOP and above the mailbox SMs must
+    /// still match (else INIT + 0x0016, as on INIT → PREOP); in SAFEOP and OP also SM2/SM3, with
+    /// the resulting states of ETG.1000.6 Table 11: 0x001D → SAFEOP + error, 0x001E → PREOP +
+    /// error.
+    pub(super) fn revalidate_sms<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        let state = self.status.state;
+        let device = self.profile.device;
+        if esm::state_rank(state) < 1 || state == AlState::Boot {
+            return Ok(());
+        }
+        let sm0 = read_sm(pdi, 0)?;
+        let sm1 = read_sm(pdi, 1)?;
+        if let Err(code) = sm_check::check_mailbox(sm0, sm1, &device) {
+            return self.raise_fault(
+                pdi,
+                AlState::Init,
+                code,
+                ErrorIndication::InvalidConfiguration,
+            );
+        }
+        if esm::state_rank(state) < 2 {
+            return Ok(());
+        }
+        let sm2 = read_sm(pdi, SM_OUTPUTS)?;
+        let sm3 = read_sm(pdi, SM_INPUTS)?;
+        let result = sm_check::check_process_data(
+            sm2,
+            &device.outputs,
+            SmDirection::EcatWrite,
+            self.rx_plan.byte_len() as u16,
+            AlStatusCode::InvalidOutputConfig,
+        )
+        .and(sm_check::check_process_data(
+            sm3,
+            &device.inputs,
+            SmDirection::EcatRead,
+            self.tx_plan.byte_len() as u16,
+            AlStatusCode::InvalidInputConfig,
+        ));
+        let Err(code) = result else {
+            return Ok(());
+        };
+        let fallback = if code == AlStatusCode::InvalidOutputConfig {
+            AlState::SafeOp
+        } else {
+            AlState::PreOp
+        };
+        self.raise_fault(pdi, fallback, code, ErrorIndication::InvalidConfiguration)
+    }
+
+    /// Process-data watchdog (0x0440 bit 0 cleared by the ESC when SM2 was not written within
+    /// the watchdog time): in OP the drive drops to SAFEOP with 0x001B (ETG.1000.6 Table 11).
+    /// Reading 0x0440 acknowledges the AL event.
+    pub(super) fn check_watchdog<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        let status = pdi.read_u16(regs::WATCHDOG_STATUS_PD.addr)?;
+        if status & WATCHDOG_PD_OK == 0 && self.status.state == AlState::Op {
+            self.raise_fault(
+                pdi,
+                AlState::SafeOp,
+                AlStatusCode::SmWatchdog,
+                ErrorIndication::WatchdogTimeout,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Counts missed SYNC0 events in DC modes (SAFEOP, OP) and leaves OP with 0x001A when the
+    /// counter passes 10F1h:02; mirrors 1C32h:0B (missed) and 1C32h:20 (sync error).
+    pub(super) fn supervise_sync<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        now_ns: u64,
+    ) -> Result<(), P::Error> {
+        let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
+        if !dc || !matches!(self.status.state, AlState::SafeOp | AlState::Op) {
+            return Ok(());
+        }
+        if self.sync_supervisor.pll_lost() && !self.status.error {
+            // The control loop phase-locks to SYNC0; a SYNC0 at another period than the one
+            // configured for SAFEOP cannot be followed (ETG.1000.6 Table 11: 0x0032 PLL error).
+            self.sync_supervisor.reset();
+            return self.raise_fault(
+                pdi,
+                AlState::SafeOp,
+                AlStatusCode::PllError,
+                ErrorIndication::LocalError,
+            );
+        }
+        if self.sync_supervisor.check(now_ns, self.sync.cycle_ns) == 0 {
+            return Ok(());
+        }
+        let missed = self.sync_supervisor.missed_total();
+        self.write_od(
+            SM_OUTPUT_PARAMETER,
+            SUB_SM_EVENT_MISSED,
+            &missed.to_le_bytes(),
+        );
+        let limit = self
+            .dictionary()
+            .read_u32(ERROR_SETTINGS, SUB_SYNC_ERROR_LIMIT)
+            .map_or(DEFAULT_COUNTER_LIMIT, |v| v as u16);
+        if self.sync_supervisor.tripped(limit) && !self.status.error {
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[1]);
+            self.sync_supervisor.reset();
+            // ETG.1000.6 Table 11 (OP → SAFEOP + error): pulses missed while the SYNC unit still
+            // runs are a synchronization error (0x001A); a SYNC unit the master switched off
+            // (0x0981) will not bring SYNC0 back: fatal sync error (0x002C).
+            let unit = DcActivation(pdi.read_u8(regs::DC_ACTIVATION.addr)?);
+            let code = if unit.sync0_active() {
+                AlStatusCode::SyncError
+            } else {
+                AlStatusCode::FatalSyncError
+            };
+            self.raise_fault(pdi, AlState::SafeOp, code, ErrorIndication::LocalError)?;
+        }
+        Ok(())
+    }
+
+    /// Leaves the current state for `fallback` (if lower) with the error flag and `code`.
+    pub(super) fn raise_fault<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        fallback: AlState,
+        code: AlStatusCode,
+        indication: ErrorIndication,
+    ) -> Result<(), P::Error> {
+        let from = self.status.state;
+        self.pending_op = None;
+        self.error_indication = indication;
+        self.apply(pdi, from, esm::fault(from, fallback, code))
+    }
+}

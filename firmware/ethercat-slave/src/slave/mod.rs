@@ -1,0 +1,447 @@
+//! The slave: owns the stack state and the OD RAM; boards call its entry points.
+//!
+//! | entry point | called from (target) | called from (sim) |
+//! |---|---|---|
+//! | [`Slave::on_esc_event`] | ESC IRQ (AL event) task, and periodically from thread mode | after every frame the ESC processed |
+//! | [`Slave::on_cycle`] | SYNC0 EXTI (DC), or a local timer (free-run) | at each simulated SYNC0 / free-run tick |
+//!
+//! In SM-synchronous mode the cycle runs from [`Slave::on_esc_event`] on the SM2 event.
+
+use hal::esc::{
+    regs, AlControl, AlEvent, AlState, AlStatus, AlStatusCode, DcActivation, SmConfig, SmDirection,
+};
+use hal::pdi::EscPdi;
+use hal::storage::NvStorage;
+
+use crate::diag::{diag_code_for_emcy, DiagError, DiagMessage, DiagParam, DiagType, Diagnosis};
+use crate::esm::sm_check;
+use crate::esm::supervision::{SyncSupervisor, DEFAULT_COUNTER_LIMIT};
+pub use crate::esm::sync::SyncMode;
+use crate::esm::{self, Checks, Outcome};
+use crate::leds::{self, ErrorIndication};
+use crate::mailbox::coe::{DomainStore, NoDomains, WithDomains};
+use crate::mailbox::emcy::{self, ActiveErrors, Emergency};
+use crate::mailbox::Mailbox;
+use crate::od::{Dictionary, Profile};
+use crate::params::{Loaded, NoStorage, ParamError, ParamStore};
+use crate::pdo::{Direction, PdoPlan, MAX_IMAGE};
+
+mod application;
+mod errors;
+mod faults;
+mod transitions;
+
+pub use application::{AppEvent, Application, NoApplication};
+use crate::esm::sync::{SyncConfig, SyncMode as Mode};
+use transitions::read_sm;
+
+/// SM channel of the process-data outputs.
+const SM_OUTPUTS: u8 = 2;
+/// SM channel of the process-data inputs.
+const SM_INPUTS: u8 = 3;
+/// Sync manager parameter objects (ETG.1020 §5.1): outputs (SM2) and inputs (SM3).
+const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
+const SM_INPUT_PARAMETER: u16 = 0x1C33;
+/// 1C32h/1C33h subindices the stack maintains.
+const SUB_SYNC_TYPE: u8 = 0x01;
+const SUB_CYCLE_TIME: u8 = 0x02;
+const SUB_SHIFT_TIME: u8 = 0x03;
+const SUB_MIN_CYCLE_TIME: u8 = 0x05;
+const SUB_CALC_AND_COPY_TIME: u8 = 0x06;
+const SUB_DELAY_TIME: u8 = 0x09;
+const SUB_SM_EVENT_MISSED: u8 = 0x0B;
+const SUB_CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
+const SUB_SYNC_ERROR: u8 = 0x20;
+/// Error settings object (ETG.1020 §5.1): :02 sync error counter limit.
+const ERROR_SETTINGS: u16 = 0x10F1;
+const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
+/// Process-data watchdog status 0x0440 bit 0: 1 = running or disabled, 0 = expired.
+const WATCHDOG_PD_OK: u16 = 1 << 0;
+
+/// The EtherCAT slave with its object dictionary and its application `A`. `RAM` is the OD RAM
+/// size (the generated `<profile>::RAM_SIZE`, or the largest of several profiles to choose one
+/// at run time).
+pub struct Slave<const RAM: usize, A: Application = NoApplication> {
+    profile: &'static Profile,
+    ram: [u8; RAM],
+    status: AlStatus,
+    code: AlStatusCode,
+    mailbox: Mailbox,
+    rx_plan: PdoPlan,
+    tx_plan: PdoPlan,
+    sync: SyncConfig,
+    rx_image: [u8; MAX_IMAGE],
+    tx_image: [u8; MAX_IMAGE],
+    app: A,
+    cycles: u32,
+    /// Device identification value shown in the AL status code while AL status bit 5 is set.
+    id_value: u16,
+    /// SYNC0 supervision (DC modes).
+    sync_supervisor: SyncSupervisor,
+    /// A SAFEOP → OP request waiting for the first SYNC0 / outputs, and since when.
+    pending_op: Option<(AlControl, u64)>,
+    /// The master has written SM2 since SAFEOP was entered.
+    outputs_received: bool,
+    /// What the ERR LED shows.
+    error_indication: ErrorIndication,
+    /// Start of the running process-data cycle (board clock, ns).
+    cycle_started_ns: u64,
+    /// Longest process-data cycle since SAFEOP was entered (1C32h/1C33h:06), ns.
+    calc_and_copy_max_ns: u32,
+    /// Cycles that did not fit into the SYNC0 cycle (1C32h:0C).
+    cycle_too_small: u16,
+    /// Active errors: the source of 1001h.
+    errors: ActiveErrors,
+    /// Diagnosis history 10F3h ring state.
+    diag: Diagnosis,
+    /// Board time of the event being handled (time stamps of diagnosis messages).
+    now_ns: u64,
+}
+
+/// Why the slave could not be created.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SlaveError {
+    /// The OD RAM is smaller than the profile needs.
+    RamTooSmall {
+        /// Bytes the profile needs.
+        needed: usize,
+        /// Bytes available.
+        available: usize,
+    },
+}
+
+impl<const RAM: usize, A: Application> Slave<RAM, A> {
+    /// A slave in INIT with every object at its default, running `app`.
+    pub fn new(profile: &'static Profile, app: A) -> Result<Self, SlaveError> {
+        if profile.ram_size() > RAM {
+            return Err(SlaveError::RamTooSmall {
+                needed: profile.ram_size(),
+                available: RAM,
+            });
+        }
+        let mut slave = Self {
+            profile,
+            ram: [0; RAM],
+            status: AlStatus {
+                state: AlState::Init,
+                error: false,
+                id_loaded: false,
+            },
+            code: AlStatusCode::NoError,
+            mailbox: Mailbox::new(),
+            rx_plan: PdoPlan::default(),
+            tx_plan: PdoPlan::default(),
+            sync: SyncConfig {
+                mode: Mode::FreeRun,
+                cycle_ns: 0,
+            },
+            rx_image: [0; MAX_IMAGE],
+            tx_image: [0; MAX_IMAGE],
+            app,
+            cycles: 0,
+            id_value: 0,
+            sync_supervisor: SyncSupervisor::default(),
+            pending_op: None,
+            outputs_received: false,
+            error_indication: ErrorIndication::None,
+            cycle_started_ns: 0,
+            calc_and_copy_max_ns: 0,
+            cycle_too_small: 0,
+            errors: ActiveErrors::new(),
+            diag: Diagnosis::new(),
+            now_ns: 0,
+        };
+        slave.dictionary().load_defaults();
+        Ok(slave)
+    }
+
+    /// Brings the ESC interface up after power-on: AL status INIT without error, and the AL
+    /// event mask that drives the IRQ line (AL control, SM activation, mailbox SM0/SM1, SM2 for
+    /// SM-synchronous cycles, process-data watchdog).
+    pub fn start<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        let mask = AlEvent::AL_CONTROL
+            | AlEvent::SM_ACTIVATION
+            | AlEvent::WATCHDOG_PD
+            | AlEvent::sm(0)
+            | AlEvent::sm(1)
+            | AlEvent::sm(SM_OUTPUTS);
+        pdi.write_u32(regs::AL_EVENT_MASK.addr, mask)?;
+        pdi.write_u16(regs::AL_STATUS_CODE.addr, AlStatusCode::NoError.code())?;
+        pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())
+    }
+
+    /// The object dictionary.
+    pub fn dictionary(&mut self) -> Dictionary<'_> {
+        Dictionary::new(self.profile, &mut self.ram)
+    }
+
+    /// Loads the stored parameters (1010h) over the defaults. Call once at power-on, after
+    /// [`Self::new`] and before [`Self::start`]: only in INIT, so a stored PDO mapping or
+    /// assignment is in place before the first PREOP → SAFEOP transition builds the copy plan.
+    /// `Ok(None)`: nothing valid stored, the defaults stay; `Err`: storage failure, the
+    /// defaults stay.
+    pub fn load_parameters<S: NvStorage, const CAP: usize>(
+        &mut self,
+        params: &mut ParamStore<S, CAP>,
+    ) -> Result<Option<Loaded>, ParamError> {
+        if self.status.state != AlState::Init {
+            return Err(ParamError::NotInInit);
+        }
+        params.load(&mut self.dictionary())
+    }
+
+    /// The application and the OD RAM it works on (for set-up the board does between cycles,
+    /// e.g. connecting a motor, and for tests).
+    pub fn application(&mut self) -> (&mut A, &mut [u8]) {
+        (&mut self.app, &mut self.ram)
+    }
+
+    /// The application.
+    pub fn app(&self) -> &A {
+        &self.app
+    }
+
+    /// The profile.
+    pub fn profile(&self) -> &'static Profile {
+        self.profile
+    }
+
+    /// The current EtherCAT state.
+    pub fn al_state(&self) -> AlState {
+        self.status.state
+    }
+
+    /// The current AL status and status code.
+    pub fn al_status(&self) -> (AlStatus, AlStatusCode) {
+        (self.status, self.code)
+    }
+
+    /// The synchronisation in use (valid from SAFEOP on).
+    pub fn sync_mode(&self) -> SyncMode {
+        self.sync.mode
+    }
+
+    /// The SYNC0 cycle in ns in DC mode, else 0.
+    pub fn cycle_ns(&self) -> u32 {
+        self.sync.cycle_ns
+    }
+
+    /// Process-data cycles run since power-on.
+    pub fn cycles(&self) -> u32 {
+        self.cycles
+    }
+
+    /// Handles pending AL events: state change requests, mailbox traffic, the SM2 event in
+    /// SM-synchronous mode. Safe to call at any time (it polls what it needs).
+    /// Without parameter storage: "save" to 1010h / "load" to 1011h are answered with SDO abort
+    /// 0x0606_0000 (see [`Self::on_esc_event_with`]).
+    pub fn on_esc_event<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {
+        self.on_esc_event_with(pdi, &mut ParamStore::<NoStorage, 0>::new(NoStorage), now_ns)
+    }
+
+    /// [`Self::on_esc_event`] with the board's parameter storage: an SDO download of "save" to
+    /// 1010h or "load" to 1011h runs the store/restore on `params` before the SDO response is
+    /// sent (CiA 301 §7.5.2.13/14, see [`crate::params`]).
+    pub fn on_esc_event_with<P: EscPdi, S: NvStorage, const CAP: usize>(
+        &mut self,
+        pdi: &mut P,
+        params: &mut ParamStore<S, CAP>,
+        now_ns: u64,
+    ) -> Result<(), P::Error> {
+        self.on_esc_event_full(pdi, params, &mut NoDomains, now_ns)
+    }
+
+    /// [`Self::on_esc_event_with`] with the board's store of DOMAIN objects kept outside the OD
+    /// RAM (`Value::Domain`, streamed by segmented SDO; see [`crate::od::domain`]).
+    pub fn on_esc_event_full<P: EscPdi, S: NvStorage, const CAP: usize>(
+        &mut self,
+        pdi: &mut P,
+        params: &mut ParamStore<S, CAP>,
+        domains: &mut dyn DomainStore,
+        now_ns: u64,
+    ) -> Result<(), P::Error> {
+        let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
+        self.now_ns = now_ns;
+        if events.any(AlEvent::sm(SM_OUTPUTS))
+            && matches!(self.status.state, AlState::SafeOp | AlState::Op)
+        {
+            self.outputs_received = true;
+        }
+        if events.any(AlEvent::AL_CONTROL) {
+            // Reading AL control clears the event; a new request replaces a waiting one.
+            let control = AlControl::from_bits(pdi.read_u16(regs::AL_CONTROL.addr)?);
+            self.pending_op = None;
+            self.handle_al_control(pdi, control, now_ns)?;
+        } else if let Some((control, _)) = self.pending_op {
+            self.handle_al_control(pdi, control, now_ns)?;
+        }
+        if events.any(AlEvent::SM_ACTIVATION) {
+            self.revalidate_sms(pdi)?;
+        }
+        if events.any(AlEvent::WATCHDOG_PD) {
+            self.check_watchdog(pdi)?;
+        }
+        self.supervise_sync(pdi, now_ns)?;
+        let state = self.status.state;
+        if state != AlState::Init && state != AlState::Boot {
+            let mut od = Dictionary::new(self.profile, &mut self.ram);
+            self.mailbox.service_with(
+                pdi,
+                &self.profile.device,
+                &mut od,
+                state,
+                events,
+                &mut WithDomains {
+                    hook: params,
+                    domains,
+                },
+            )?;
+            // The master acknowledges diagnosis messages by writing 10F3h:03.
+            let _ = self.diag.poll(&mut od);
+        }
+        if state == AlState::SafeOp {
+            // Masters may activate SYNC0 only after SAFEOP was reached (SOEM's dc_sync).
+            let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
+            if sync != self.sync {
+                self.sync_supervisor.reset();
+            }
+            self.sync = sync;
+            self.publish_sync_parameters();
+        }
+        if self.sync.mode == Mode::SmSynchronous && events.any(AlEvent::sm(SM_OUTPUTS)) {
+            self.on_cycle(pdi, now_ns)?;
+        }
+        Ok(())
+    }
+
+    /// Tells the slave when the process-data cycle started by the last [`Self::on_cycle`] ended
+    /// (board clock, ns; on target right after `on_cycle` returns). The duration is the
+    /// measured "calc and copy time" (ETG.1020 1C32h/1C33h:06, the longest since SAFEOP) and
+    /// the delay until outputs are valid for the control loop (:09, and :03 shift for SM2);
+    /// :05 (minimum cycle time) becomes the larger of the profile's limit and that duration; a
+    /// cycle longer than the SYNC0 cycle counts in :0C ("cycle time too small").
+    pub fn cycle_finished(&mut self, now_ns: u64) {
+        if !matches!(self.status.state, AlState::SafeOp | AlState::Op) {
+            return;
+        }
+        let elapsed = now_ns.saturating_sub(self.cycle_started_ns);
+        let elapsed = u32::try_from(elapsed).unwrap_or(u32::MAX);
+        if elapsed > self.calc_and_copy_max_ns {
+            self.calc_and_copy_max_ns = elapsed;
+            let bytes = elapsed.to_le_bytes();
+            // The cycle cannot be shorter than the longest processing seen, nor than the
+            // profile's limit (:05); outputs are valid for the control loop `elapsed` after
+            // SYNC0 (:03 shift for SM2).
+            let min_cycle = elapsed
+                .max(self.profile.device.sync.min_cycle_ns)
+                .to_le_bytes();
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_SHIFT_TIME, &bytes);
+            for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
+                self.write_od(index, SUB_CALC_AND_COPY_TIME, &bytes);
+                self.write_od(index, SUB_DELAY_TIME, &bytes);
+                self.write_od(index, SUB_MIN_CYCLE_TIME, &min_cycle);
+            }
+        }
+        if self.sync.cycle_ns != 0 && elapsed > self.sync.cycle_ns {
+            self.cycle_too_small = self.cycle_too_small.saturating_add(1);
+            let count = self.cycle_too_small.to_le_bytes();
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME_TOO_SMALL, &count);
+        }
+    }
+
+    /// The RUN and ERR LED states at `now_ns` (ETG.1300 patterns); boards switch their LEDs
+    /// with it every few ms.
+    pub fn leds(&self, now_ns: u64) -> (bool, bool) {
+        const NS_PER_MS: u64 = 1_000_000;
+        let t_ms = now_ns / NS_PER_MS;
+        let error = if self.status.error {
+            self.error_indication
+        } else {
+            ErrorIndication::None
+        };
+        (
+            leds::run_pattern(self.status.state).lit_at(t_ms),
+            leds::err_pattern(error).lit_at(t_ms),
+        )
+    }
+
+    /// Writes an entry of the OD if the profile has it (counters and flags the stack mirrors).
+    fn write_od(&mut self, index: u16, subindex: u8, bytes: &[u8]) {
+        let mut od = self.dictionary();
+        if let Some(e) = od.entry(index, subindex) {
+            let n = e.byte_len().min(bytes.len());
+            let _ = od.set_value(e, bytes.get(..n).unwrap_or(&[]));
+        }
+    }
+
+    /// Runs one process-data cycle: read outputs (SM2), run the application, write inputs (SM3).
+    /// Does nothing below SAFEOP. Outputs are applied only in OP.
+    pub fn on_cycle<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {
+        let state = self.status.state;
+        if state != AlState::SafeOp && state != AlState::Op {
+            return Ok(());
+        }
+        self.cycle_started_ns = now_ns;
+        if matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1) {
+            self.sync_supervisor.on_sync0(now_ns, self.sync.cycle_ns);
+        }
+        let device = &self.profile.device;
+        let rx_len = self.rx_plan.byte_len();
+        if rx_len > 0 {
+            if let Some(image) = self.rx_image.get_mut(..rx_len) {
+                pdi.read(device.outputs.start, image)?;
+            }
+            if state == AlState::Op {
+                self.rx_plan.unpack(&self.rx_image, &mut self.ram);
+            }
+        }
+        self.run_application(now_ns);
+        self.write_inputs(pdi)?;
+        self.cycles = self.cycles.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Runs the application's cycle and reports what it says about its errors.
+    fn run_application(&mut self, now_ns: u64) {
+        match self.app.cycle(&mut self.ram, self.sync.cycle_ns) {
+            AppEvent::ErrorCleared(code) => {
+                // The error leaves 1001h; the last one clears with an error-reset EMCY
+                // (CiA 301). A full queue only loses that notification.
+                let _ = self.clear_error(code);
+            }
+            AppEvent::ErrorRaised(code) => {
+                // An application error (a drive: protection, encoder, ...): 1001h and the EMCY.
+                // A full EMCY queue loses only the message; 1001h and the application hold it.
+                let _ =
+                    self.report_error(code, emcy::register::DEVICE_PROFILE, [0; 5], None, now_ns);
+            }
+            AppEvent::None => {}
+        }
+    }
+
+    fn write_inputs<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        let tx_len = self.tx_plan.byte_len();
+        if tx_len == 0 {
+            return Ok(());
+        }
+        self.tx_plan.pack(&self.ram, &mut self.tx_image);
+        if let Some(image) = self.tx_image.get(..tx_len) {
+            pdi.write(self.profile.device.inputs.start, image)?;
+        }
+        Ok(())
+    }
+
+    fn sm_sync_requested(&self) -> bool {
+        let ram = &self.ram;
+        let od = self.profile;
+        od.object(SM_OUTPUT_PARAMETER)
+            .and_then(|o| o.entry(SUB_SYNC_TYPE))
+            .and_then(|e| match e.value {
+                crate::od::Value::Ram(off) => ram.get(off as usize).copied(),
+                crate::od::Value::Const(b) => b.first().copied(),
+                crate::od::Value::Domain(_) => None,
+            })
+            == Some(Mode::SmSynchronous as u8)
+    }
+}

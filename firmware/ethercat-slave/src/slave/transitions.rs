@@ -1,0 +1,266 @@
+//! State change requests: the checks a transition needs, the delayed SAFEOP → OP gate, and
+//! applying an ESM outcome (AL status code before AL status, entry/exit work of the states).
+
+use super::*;
+
+impl<const RAM: usize, A: Application> Slave<RAM, A> {
+    pub(super) fn handle_al_control<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        control: AlControl,
+        now_ns: u64,
+    ) -> Result<(), P::Error> {
+        let from = self.status.state;
+        let checks = self.checks_for(pdi, from, control)?;
+        let mut outcome = esm::decide(self.status, self.code, control, &checks);
+        if from == AlState::SafeOp && outcome.status.state == AlState::Op {
+            match self.op_gate(now_ns) {
+                OpGate::Open => self.pending_op = None,
+                OpGate::Wait => {
+                    // Stay in SAFEOP without error; re-evaluated on every event.
+                    self.pending_op.get_or_insert((control, now_ns));
+                    return Ok(());
+                }
+                OpGate::Refuse(code) => {
+                    self.pending_op = None;
+                    outcome = esm::fault(from, from, code);
+                }
+            }
+        }
+        if outcome.status.error && (outcome.code != self.code || !self.status.error) {
+            self.error_indication = ErrorIndication::InvalidConfiguration;
+        }
+        if control.id_request && !outcome.status.error {
+            // Device identification (ETG.1000.6 §6.4.1.2): the station alias goes into the
+            // AL status code, flagged by AL status bit 5.
+            self.id_value = pdi.read_u16(regs::STATION_ALIAS.addr)?;
+            outcome.status.id_loaded = true;
+        }
+        self.apply(pdi, from, outcome)
+    }
+
+    /// Whether a SAFEOP → OP transition that passed its checks may complete now: in DC modes
+    /// only after the first SYNC0 (else 0x002D "no sync error" after the timeout), and only
+    /// after the master wrote outputs once (else 0x0019 "no valid outputs").
+    fn op_gate(&self, now_ns: u64) -> OpGate {
+        let waited = self
+            .pending_op
+            .map_or(0, |(_, since)| now_ns.saturating_sub(since));
+        // Profile rules (`[esm]`): the SAFEOP → OP timeout and whether outputs are required.
+        let rules = &self.profile.device.esm;
+        let timed_out = waited > rules.safeop_op_timeout_ns();
+        let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
+        if dc && !self.sync_supervisor.running() {
+            return if timed_out {
+                OpGate::Refuse(AlStatusCode::NoSyncError)
+            } else {
+                OpGate::Wait
+            };
+        }
+        if rules.op_requires_outputs && self.rx_plan.byte_len() > 0 && !self.outputs_received {
+            return if timed_out {
+                OpGate::Refuse(AlStatusCode::NoValidOutputs)
+            } else {
+                OpGate::Wait
+            };
+        }
+        OpGate::Open
+    }
+
+    /// Evaluates only the checks the requested transition needs.
+    pub(super) fn checks_for<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        control: AlControl,
+    ) -> Result<Checks, P::Error> {
+        let device = &self.profile.device;
+        let mut checks = Checks {
+            boot_supported: device.boot_mailbox_out.is_some() && device.boot_mailbox_in.is_some(),
+            ..Checks::ALL_OK
+        };
+        match (from, control.requested()) {
+            (AlState::Init, Some(AlState::PreOp)) => {
+                let sm0 = read_sm(pdi, 0)?;
+                let sm1 = read_sm(pdi, 1)?;
+                checks.mailbox = sm_check::check_mailbox(sm0, sm1, device);
+            }
+            (AlState::Init, Some(AlState::Boot)) if checks.boot_supported => {
+                let sm0 = read_sm(pdi, 0)?;
+                let sm1 = read_sm(pdi, 1)?;
+                checks.boot_mailbox = sm_check::check_boot_mailbox(sm0, sm1, device);
+            }
+            (AlState::PreOp, Some(AlState::SafeOp)) => {
+                checks.process_data = self.prepare_process_data(pdi)?;
+                let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
+                checks.sync = sync.check(&device.sync);
+                self.sync = sync;
+            }
+            (AlState::SafeOp, Some(AlState::Op)) => {
+                let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
+                checks.sync = sync.check(&device.sync);
+                self.sync = sync;
+            }
+            _ => {}
+        }
+        Ok(checks)
+    }
+
+    /// Builds both copy plans from the OD and checks SM2/SM3 against them.
+    pub(super) fn prepare_process_data<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<Result<(), AlStatusCode>, P::Error> {
+        let device = self.profile.device;
+        let od = Dictionary::new(self.profile, &mut self.ram);
+        let rx = PdoPlan::build(&od, Direction::Rx);
+        let tx = PdoPlan::build(&od, Direction::Tx);
+        let (rx, tx) = match (rx, tx) {
+            (Ok(rx), Ok(tx)) => (rx, tx),
+            (Err(code), _) | (_, Err(code)) => return Ok(Err(code)),
+        };
+        let sm2 = read_sm(pdi, SM_OUTPUTS)?;
+        let sm3 = read_sm(pdi, SM_INPUTS)?;
+        let result = sm_check::check_process_data(
+            sm2,
+            &device.outputs,
+            SmDirection::EcatWrite,
+            rx.byte_len() as u16,
+            AlStatusCode::InvalidOutputConfig,
+        )
+        .and(sm_check::check_process_data(
+            sm3,
+            &device.inputs,
+            SmDirection::EcatRead,
+            tx.byte_len() as u16,
+            AlStatusCode::InvalidInputConfig,
+        ));
+        if result.is_ok() {
+            self.rx_plan = rx;
+            self.tx_plan = tx;
+        }
+        Ok(result)
+    }
+
+    /// Writes the outcome (code first, then status, each only if changed) and runs the work of
+    /// the states left and entered.
+    pub(super) fn apply<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        outcome: Outcome,
+    ) -> Result<(), P::Error> {
+        let to = outcome.status.state;
+        if to != from {
+            self.leave_and_enter(pdi, from, to)?;
+        }
+        if outcome.code != self.code || outcome.status != self.status {
+            let code_register = if outcome.status.id_loaded {
+                self.id_value
+            } else {
+                outcome.code.code()
+            };
+            pdi.write_u16(regs::AL_STATUS_CODE.addr, code_register)?;
+            pdi.write_u16(regs::AL_STATUS.addr, outcome.status.bits())?;
+        }
+        let previous = (self.status, self.code);
+        self.status = outcome.status;
+        self.code = outcome.code;
+        // Every AL error (refused transition, watchdog, sync error, SM re-validation) passes
+        // here: EMCY + 10F3h message + 1001h; the acknowledged error clears (EMCY 0x0000).
+        self.track_al_error(from, previous, outcome);
+        Ok(())
+    }
+
+    pub(super) fn leave_and_enter<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        to: AlState,
+    ) -> Result<(), P::Error> {
+        let rank_from = esm::state_rank(from);
+        let rank_to = esm::state_rank(to);
+        if from == AlState::Op {
+            // Leaving OP: outputs go to their safe state (controlword 0 = disable voltage).
+            let was_enabled = self.app.outputs_safe(&mut self.ram);
+            // Profile rule (`[esm] op_exit_while_enabled_error`): leaving OP while the drive
+            // was in Operation Enabled is a fault: 603Fh, EMCY, PDS Fault.
+            if let Some(code) = self
+                .profile
+                .device
+                .esm
+                .op_exit_while_enabled_error
+                .filter(|_| was_enabled)
+            {
+                self.app.raise_error(code, &mut self.ram);
+                // A full EMCY queue or a stopped mailbox loses only the EMCY; 1001h/603Fh hold.
+                let _ = self.report_error(
+                    code,
+                    emcy::register::DEVICE_PROFILE,
+                    [0; 5],
+                    None,
+                    self.now_ns,
+                );
+            }
+        }
+        if rank_to < 2 && rank_from >= 2 {
+            self.rx_plan = PdoPlan::default();
+            self.tx_plan = PdoPlan::default();
+            self.sync = SyncConfig {
+                mode: Mode::FreeRun,
+                cycle_ns: 0,
+            };
+        }
+        if to == AlState::Init {
+            self.mailbox.reset();
+        }
+        if rank_to <= 2 && to != from {
+            // Entering or returning to SAFEOP or below: supervision and the OP gate restart.
+            self.sync_supervisor.reset();
+            self.outputs_received = false;
+            self.calc_and_copy_max_ns = 0;
+        }
+        if from == AlState::PreOp && to == AlState::SafeOp {
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[0]);
+            self.publish_sync_parameters();
+            // Inputs are valid from SAFEOP on: write them once before the master reads SM3.
+            self.run_application(self.now_ns);
+            self.write_inputs(pdi)?;
+        }
+        Ok(())
+    }
+
+    /// Mirrors the active synchronisation into 1C32h/1C33h (:01 sync type, :02 cycle time).
+    pub(super) fn publish_sync_parameters(&mut self) {
+        let mode = self.sync.mode as u16;
+        let cycle = self.sync.cycle_ns;
+        let mut od = Dictionary::new(self.profile, &mut self.ram);
+        for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
+            if let Some(e) = od.entry(index, SUB_SYNC_TYPE) {
+                let _ = od.set_value(e, &mode.to_le_bytes()[..e.byte_len().min(2)]);
+            }
+            if cycle != 0 {
+                if let Some(e) = od.entry(index, SUB_CYCLE_TIME) {
+                    let _ = od.set_value(e, &cycle.to_le_bytes()[..e.byte_len().min(4)]);
+                }
+            }
+        }
+    }
+}
+
+/// Decision on a SAFEOP → OP request whose checks passed.
+enum OpGate {
+    /// Go to OP.
+    Open,
+    /// Stay in SAFEOP for now.
+    Wait,
+    /// Refuse with this code.
+    Refuse(AlStatusCode),
+}
+
+/// Reads the 8 register bytes of SM `n`.
+pub(super) fn read_sm<P: EscPdi>(pdi: &mut P, n: u8) -> Result<SmConfig, P::Error> {
+    let mut b = [0u8; SmConfig::LEN];
+    pdi.read(regs::sm(n).addr, &mut b)?;
+    Ok(SmConfig::from_bytes(b))
+}

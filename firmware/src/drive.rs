@@ -1,0 +1,384 @@
+//! The drive application: what the slave stack runs in every process-data cycle. It binds the
+//! objects of the profile (OD RAM, laid out by od-gen) to the CiA402 device and to the axis.
+//!
+//! - with a motor attached ([`Drive::attach_axis`]): the set-point of the mode (CSP 607Ah, CSV
+//!   60FFh, CST 6071h, identification) goes to the control interrupt through its
+//!   [`AxisLink`], the actual values (6064h, 606Ch, 6077h) come back from it, and a motor fault
+//!   becomes a CiA402 fault with the profile's 603Fh code for it;
+//! - without one (a board with no power stage, the benchmarks): an ideal axis whose position
+//!   actual value follows the target position while operation is enabled.
+//!
+//! Units at this boundary come from [`cia402::units`]: positions in increments (the 32-bit
+//! objects wrap; the axis works on 64-bit positions), velocities in increments/s, torques in ‰
+//! of the motor rated torque 6076h (mN·m).
+
+use cia402::device::Device;
+use cia402::modes::{self, Mode, Targets};
+use cia402::pds::{controlword, PdsState};
+use cia402::units;
+use ethercat_slave::slave::{AppEvent, Application};
+
+use crate::motor::axis::{AxisCommand, AxisLink, AxisState, ControlMode, MotorModel};
+use crate::profile::{AppVars, DriveProfile, MOTOR_FAULT_COUNT};
+
+/// The connection to a motor's control interrupt.
+struct AxisPort {
+    link: &'static AxisLink,
+    /// The axis' trip counter at the last fault raised here.
+    trips_seen: u32,
+    /// The motor model last handed to the axis.
+    model_sent: Option<MotorModel>,
+    /// The results of the finished identification are in the OD.
+    results_written: bool,
+}
+
+/// The drive application of one axis.
+pub struct Drive {
+    vars: AppVars,
+    /// 603Fh code per motor fault (the profile's `[motor_faults]`).
+    fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
+    device: Device,
+    axis: Option<AxisPort>,
+    /// The process-data cycle, ns (0 = unknown), for the axis' set-point interpolation.
+    cycle_ns: u32,
+}
+
+impl Drive {
+    /// The application of `profile` at power-on, without a motor.
+    pub const fn new(profile: &'static DriveProfile) -> Self {
+        Self {
+            vars: profile.vars,
+            fault_codes: profile.motor_faults,
+            device: Device::new(),
+            axis: None,
+            cycle_ns: 0,
+        }
+    }
+
+    /// Connects the motor's control interrupt: from now on the set-points go to it and the
+    /// actual values come from it; the commissioned motor data in `ram` go to it at once (the
+    /// parameters were loaded at power-on). The board calls
+    /// [`crate::motor::axis::Axis::control_step`] with the same `link`.
+    pub fn attach_axis(&mut self, link: &'static AxisLink, ram: &[u8]) {
+        let mut port = AxisPort {
+            link,
+            trips_seen: link.feedback().trips,
+            model_sent: None,
+            results_written: false,
+        };
+        sync_motor_model(&mut port, &self.vars, ram);
+        self.axis = Some(port);
+    }
+
+    /// The PDS state.
+    pub fn pds_state(&self) -> PdsState {
+        self.device.state()
+    }
+
+    /// The CiA402 error code of the active fault (603Fh), `None` when there is none.
+    pub fn fault_code(&self) -> Option<u16> {
+        self.device.fault_code()
+    }
+
+    /// Raises CiA402 error `code`: the drive goes through Fault Reaction Active to Fault
+    /// (statusword bit 3), controlword reads 0 (the reaction disables the drive), and 603Fh
+    /// holds `code` until a fault reset (controlword bit 7 rising edge) leaves Fault. The caller
+    /// reports the EMCY.
+    pub fn fault(&mut self, code: u16, ram: &mut [u8]) {
+        write_u16(ram, self.vars.controlword, 0);
+        let statusword = self.device.fault(code);
+        write_u16(ram, self.vars.error_code, code);
+        write_u16(ram, self.vars.statusword, statusword);
+    }
+
+    /// One cycle: the CiA402 device on the controlword, the mode display, the axis exchange.
+    pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
+        self.cycle_ns = cycle_ns;
+        let vars = self.vars;
+        let cw = read_u16(ram, vars.controlword).unwrap_or(0);
+        let step = self.device.step(cw);
+        if step.fault_cleared.is_some() {
+            write_u16(ram, vars.error_code, 0);
+        }
+        write_u16(ram, vars.statusword, step.statusword);
+        let mode = read_bytes::<1>(ram, vars.modes_of_operation);
+        if let Some(mode) = mode {
+            write_bytes(ram, vars.modes_of_operation_display, mode);
+        }
+        let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
+        if self.axis.is_some() {
+            self.exchange_with_axis(ram, cw, mode, cycle_ns);
+        } else if self.device.operation_enabled() {
+            if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
+                write_bytes(ram, vars.position_actual_value, target);
+            }
+        }
+    }
+
+    /// Hands the commissioned motor data (stored parameters, identification results, SDO
+    /// writes) to the axis when they changed since the last call; the axis applies them when it
+    /// is not running.
+    pub fn publish_motor_model(&mut self, ram: &[u8]) {
+        if let Some(port) = self.axis.as_mut() {
+            sync_motor_model(port, &self.vars, ram);
+        }
+    }
+
+    /// Raises a new motor fault, hands the set-points of this cycle to the axis, and writes its
+    /// actual values.
+    fn exchange_with_axis(&mut self, ram: &mut [u8], cw: u16, mode: Mode, cycle_ns: u32) {
+        // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
+        let Some(mut port) = self.axis.take() else {
+            return;
+        };
+        let vars = self.vars;
+        let link = port.link;
+        let feedback = link.feedback();
+        let new_fault = if feedback.trips != port.trips_seen {
+            port.trips_seen = feedback.trips;
+            feedback
+                .fault
+                .map(|f| cia402::faults::error_code(self.fault_codes, f.code()))
+        } else {
+            None
+        };
+        if let Some(code) = new_fault {
+            if !matches!(
+                self.device.state(),
+                PdsState::Fault | PdsState::FaultReactionActive
+            ) {
+                self.fault(code, ram);
+            }
+        }
+        let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
+        sync_motor_model(&mut port, &vars, ram);
+        let identifying = mode == Mode::Identification;
+        match (feedback.state, feedback.identified) {
+            (AxisState::Identified, Some(result)) if identifying => {
+                if !port.results_written {
+                    port.results_written = true;
+                    let object = |x: f32, unit: f32| units::to_object_units(x, unit).to_le_bytes();
+                    write_bytes(
+                        ram,
+                        vars.motor_resistance,
+                        object(result.resistance_ohm, units::MICRO),
+                    );
+                    write_bytes(ram, vars.motor_ld, object(result.ld_h, units::NANO));
+                    write_bytes(ram, vars.motor_lq, object(result.lq_h, units::NANO));
+                    write_bytes(
+                        ram,
+                        vars.motor_inertia,
+                        object(result.inertia_kgm2, units::NANO),
+                    );
+                }
+                if let Some(sw) = read_u16(ram, vars.statusword) {
+                    write_u16(ram, vars.statusword, sw | modes::STATUSWORD_IDENTIFIED);
+                }
+            }
+            (AxisState::Identified, _) => {}
+            _ => port.results_written = false,
+        }
+        let targets = Targets {
+            position: read_i32(ram, vars.target_position)
+                .map(|t| units::extend_position(t, feedback.position)),
+            velocity: read_i32(ram, vars.target_velocity).map_or(0.0, |v| v as f32),
+            torque: units::torque_from_permille(
+                read_bytes::<2>(ram, vars.target_torque).map_or(0, i16::from_le_bytes),
+                rated_nm,
+            ),
+        };
+        let set_point = modes::set_point(mode, targets, feedback.position);
+        link.publish(AxisCommand {
+            enable: self.device.operation_enabled(),
+            fault_reset: cw & controlword::FAULT_RESET != 0,
+            identify: identifying,
+            mode: match set_point.control {
+                modes::Loop::Position => ControlMode::Position,
+                modes::Loop::Velocity => ControlMode::Velocity,
+                modes::Loop::Torque => ControlMode::Torque,
+            },
+            position: set_point.position,
+            velocity: set_point.velocity,
+            torque: set_point.torque,
+            bus_cycle_ns: cycle_ns,
+        });
+        write_bytes(
+            ram,
+            vars.position_actual_value,
+            units::position_object(feedback.position).to_le_bytes(),
+        );
+        write_bytes(
+            ram,
+            vars.velocity_actual_value,
+            units::velocity_object(feedback.velocity).to_le_bytes(),
+        );
+        write_bytes(
+            ram,
+            vars.torque_actual_value,
+            units::torque_to_permille(feedback.torque, rated_nm).to_le_bytes(),
+        );
+        self.axis = Some(port);
+    }
+
+    /// Puts the outputs the master drives into their safe state (on leaving OP, on a watchdog).
+    /// With a motor, the axis is disabled at once (gates off): below SAFEOP no cycle runs that
+    /// would tell it. (The slave's entry points never run concurrently with each other, so this
+    /// and the cycle never publish at the same time: the link keeps a single writer.)
+    pub fn safe_outputs(&mut self, ram: &mut [u8]) {
+        write_u16(ram, self.vars.controlword, 0);
+        let statusword = self.device.outputs_lost();
+        write_u16(ram, self.vars.statusword, statusword);
+        if let Some(port) = &self.axis {
+            port.link.publish(AxisCommand {
+                enable: false,
+                bus_cycle_ns: self.cycle_ns,
+                ..AxisCommand::default()
+            });
+        }
+    }
+}
+
+/// The slave stack's view of the drive.
+impl Application for Drive {
+    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvent {
+        let before = self.fault_code();
+        self.step(ram, cycle_ns);
+        match (before, self.fault_code()) {
+            (Some(code), None) => AppEvent::ErrorCleared(code),
+            (None, Some(code)) => AppEvent::ErrorRaised(code),
+            _ => AppEvent::None,
+        }
+    }
+
+    fn outputs_safe(&mut self, ram: &mut [u8]) -> bool {
+        let was_enabled = self.device.operation_enabled();
+        self.safe_outputs(ram);
+        was_enabled
+    }
+
+    fn raise_error(&mut self, code: u16, ram: &mut [u8]) {
+        self.fault(code, ram);
+    }
+}
+
+fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
+    let object = |at: Option<u16>, unit: f32| read_u32(ram, at).unwrap_or(0) as f32 * unit;
+    let model = MotorModel {
+        resistance_ohm: object(vars.motor_resistance, units::MICRO),
+        ld_h: object(vars.motor_ld, units::NANO),
+        lq_h: object(vars.motor_lq, units::NANO),
+        inertia_kgm2: object(vars.motor_inertia, units::NANO),
+    };
+    if port.model_sent != Some(model) {
+        port.link.set_motor_model(model);
+        port.model_sent = Some(model);
+    }
+}
+
+fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
+    let at = usize::from(at?);
+    ram.get(at..at.checked_add(N)?)?.try_into().ok()
+}
+
+fn write_bytes<const N: usize>(ram: &mut [u8], at: Option<u16>, v: [u8; N]) {
+    if let Some(at) = at.map(usize::from) {
+        if let Some(dst) = at.checked_add(N).and_then(|end| ram.get_mut(at..end)) {
+            dst.copy_from_slice(&v);
+        }
+    }
+}
+
+fn read_i32(ram: &[u8], at: Option<u16>) -> Option<i32> {
+    read_bytes::<4>(ram, at).map(i32::from_le_bytes)
+}
+
+fn read_u32(ram: &[u8], at: Option<u16>) -> Option<u32> {
+    read_bytes::<4>(ram, at).map(u32::from_le_bytes)
+}
+
+fn read_u16(ram: &[u8], at: Option<u16>) -> Option<u16> {
+    read_bytes::<2>(ram, at).map(u16::from_le_bytes)
+}
+
+fn write_u16(ram: &mut [u8], at: Option<u16>, v: u16) {
+    write_bytes(ram, at, v.to_le_bytes());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::profiles::standard;
+
+    const VARS: AppVars = AppVars {
+        controlword: Some(0),
+        statusword: Some(2),
+        modes_of_operation: Some(4),
+        modes_of_operation_display: Some(5),
+        target_position: Some(6),
+        position_actual_value: Some(10),
+        error_code: Some(14),
+        ..AppVars::NONE
+    };
+    /// The standard profile with the variables of this test's small RAM.
+    static PROFILE: DriveProfile = DriveProfile {
+        vars: VARS,
+        ..standard::PROFILE
+    };
+
+    #[test]
+    fn actual_position_follows_target_only_when_operation_enabled() {
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        ram[6..10].copy_from_slice(&1234i32.to_le_bytes());
+        for cw in [0x00u16, 0x06, 0x07] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&mut ram, 0);
+        }
+        assert_eq!(&ram[10..14], &[0; 4], "not enabled yet");
+        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
+        app.step(&mut ram, 0);
+        assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x6F, 0x27);
+        assert_eq!(i32::from_le_bytes(ram[10..14].try_into().unwrap()), 1234);
+    }
+
+    #[test]
+    fn safe_outputs_disable_the_drive() {
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&mut ram, 0);
+        }
+        app.safe_outputs(&mut ram);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(&ram[0..2], &[0, 0]);
+    }
+
+    #[test]
+    fn fault_sets_error_code_and_statusword_until_fault_reset() {
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&mut ram, 0);
+        }
+        app.fault(0x8700, &mut ram);
+        assert_eq!(app.pds_state(), PdsState::Fault);
+        assert_eq!(app.fault_code(), Some(0x8700));
+        assert_eq!(u16::from_le_bytes([ram[14], ram[15]]), 0x8700);
+        assert_ne!(
+            u16::from_le_bytes([ram[2], ram[3]]) & 0x08,
+            0,
+            "statusword bit 3"
+        );
+        // Controlword ignored while in Fault; a rising edge of bit 7 resets.
+        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
+        app.step(&mut ram, 0);
+        assert_eq!(app.pds_state(), PdsState::Fault);
+        ram[0..2].copy_from_slice(&0x80u16.to_le_bytes());
+        app.step(&mut ram, 0);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(app.fault_code(), None);
+        assert_eq!(&ram[14..16], &[0, 0]);
+    }
+}

@@ -1,0 +1,148 @@
+//! What the drive knows about a profile beyond its object dictionary: where the CiA402
+//! variables live in the OD RAM, and the profile's error code for every motor fault. od-gen
+//! generates one [`DriveProfile`] per profile file (`crate::profiles`).
+
+use ethercat_slave::od::Profile;
+
+use crate::motor::MotorFault;
+
+/// OD RAM offsets of the variables the generic application reads and writes, by role. A role the
+/// profile does not have is `None`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AppVars {
+    /// 6040h controlword (u16).
+    pub controlword: Option<u16>,
+    /// 6041h statusword (u16).
+    pub statusword: Option<u16>,
+    /// 6060h modes of operation (i8).
+    pub modes_of_operation: Option<u16>,
+    /// 6061h modes of operation display (i8).
+    pub modes_of_operation_display: Option<u16>,
+    /// 607Ah target position (i32).
+    pub target_position: Option<u16>,
+    /// 6064h position actual value (i32).
+    pub position_actual_value: Option<u16>,
+    /// 603Fh error code (u16).
+    pub error_code: Option<u16>,
+    /// 60FFh target velocity (i32).
+    pub target_velocity: Option<u16>,
+    /// 6071h target torque (i16, ‰ of the rated torque).
+    pub target_torque: Option<u16>,
+    /// 606Ch velocity actual value (i32).
+    pub velocity_actual_value: Option<u16>,
+    /// 6077h torque actual value (i16, ‰ of the rated torque).
+    pub torque_actual_value: Option<u16>,
+    /// 6076h motor rated torque (u32, mN·m).
+    pub motor_rated_torque: Option<u16>,
+    /// Commissioned phase resistance (u32, µΩ; 0 = not commissioned).
+    pub motor_resistance: Option<u16>,
+    /// Commissioned d-axis inductance (u32, nH; 0 = not commissioned).
+    pub motor_ld: Option<u16>,
+    /// Commissioned q-axis inductance (u32, nH; 0 = not commissioned).
+    pub motor_lq: Option<u16>,
+    /// Commissioned rotor + load inertia (u32, g·mm²; 0 = not commissioned).
+    pub motor_inertia: Option<u16>,
+}
+
+impl AppVars {
+    /// No variables (od-gen fills in what the profile has: `AppVars { .., ..AppVars::NONE }`).
+    pub const NONE: Self = Self {
+        controlword: None,
+        statusword: None,
+        modes_of_operation: None,
+        modes_of_operation_display: None,
+        target_position: None,
+        position_actual_value: None,
+        error_code: None,
+        target_velocity: None,
+        target_torque: None,
+        velocity_actual_value: None,
+        torque_actual_value: None,
+        motor_rated_torque: None,
+        motor_resistance: None,
+        motor_ld: None,
+        motor_lq: None,
+        motor_inertia: None,
+    };
+}
+
+/// A drive profile: the object dictionary the slave stack serves, plus the drive's bindings.
+#[derive(Clone, Copy, Debug)]
+pub struct DriveProfile {
+    /// The object dictionary (identity, SM layout, objects, OD RAM defaults).
+    pub od: Profile,
+    /// Application variables by role.
+    pub vars: AppVars,
+    /// The CiA402 error code (603Fh, also the EMCY error code) of each internal motor fault,
+    /// indexed by `MotorFault::code() - 1` (profile table `[motor_faults]`); read it with
+    /// [`Self::motor_fault_code`].
+    pub motor_faults: &'static [u16; MOTOR_FAULT_COUNT],
+}
+
+/// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].
+pub const MOTOR_FAULT_COUNT: usize = MotorFault::ALL.len();
+
+impl DriveProfile {
+    /// The CiA402 error code (603Fh, EMCY) this profile maps `fault` to
+    /// ([`cia402::faults::GENERIC_ERROR`] outside the table, which cannot happen while the
+    /// table and [`MotorFault`] agree, as the generated code checks at compile time).
+    pub fn motor_fault_code(&self, fault: MotorFault) -> u16 {
+        cia402::faults::error_code(self.motor_faults, fault.code())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::motor::MotorFault;
+    use crate::profiles::{self, standard};
+
+    /// od-gen keeps its own copy of the fault names (it cannot depend on the firmware; the generated
+    /// code also checks this at compile time): the
+    /// generated list must be the firmware's, in code order, so that a profile's table is indexed
+    /// by the fault it names.
+    #[test]
+    fn od_gen_fault_names_are_the_firmware_faults() {
+        assert_eq!(profiles::MOTOR_FAULT_NAMES.len(), MotorFault::ALL.len());
+        for (i, (fault, name)) in MotorFault::ALL
+            .iter()
+            .zip(profiles::MOTOR_FAULT_NAMES)
+            .enumerate()
+        {
+            assert_eq!(usize::from(fault.code()), i + 1, "ALL is in code order");
+            assert_eq!(fault.name(), name);
+        }
+    }
+
+    /// The standard profile's codes, read through the profile: each fault gets the CiA402 code
+    /// `od-gen/profiles/standard.toml` gives its name.
+    #[test]
+    fn standard_profile_maps_every_fault_to_its_cia402_code() {
+        let expected = [
+            (MotorFault::OverCurrent, 0x2320),
+            (MotorFault::MotorOverload, 0x2350),
+            (MotorFault::DriveOverload, 0x2310),
+            (MotorFault::BusOverVoltage, 0x3210),
+            (MotorFault::BusUnderVoltage, 0x3220),
+            (MotorFault::OverSpeed, 0x8400),
+            (MotorFault::EncoderSignalLoss, 0x7305),
+            (MotorFault::EncoderJump, 0x7320),
+            (MotorFault::EncoderCrc, 0x7300),
+            (MotorFault::DriveOverTemperature, 0x4210),
+            (MotorFault::MotorOverTemperature, 0x4310),
+            (MotorFault::FollowingError, 0x8611),
+            (MotorFault::CurrentOffset, 0x5210),
+            (MotorFault::Alignment, 0x7122),
+            (MotorFault::Identification, 0x6320),
+        ];
+        assert_eq!(expected.len(), MotorFault::ALL.len());
+        let p = &standard::PROFILE;
+        for (fault, code) in expected {
+            assert_eq!(p.motor_fault_code(fault), code, "{}", fault.name());
+        }
+        for p in profiles::ALL {
+            for fault in MotorFault::ALL {
+                assert_ne!(p.motor_fault_code(fault), 0, "{}", fault.name());
+            }
+        }
+    }
+}
