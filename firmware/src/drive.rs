@@ -19,7 +19,7 @@ use cia402::units;
 use ethercat_slave::slave::{AppEvent, Application};
 
 use crate::motor::axis::{AxisCommand, AxisLink, AxisState, ControlMode, MotorModel};
-use crate::profile::{AppVars, DriveProfile, MOTOR_FAULT_COUNT};
+use crate::profile::{self, AppVars, DriveProfile, MOTOR_FAULT_COUNT};
 
 /// The connection to a motor's control interrupt.
 struct AxisPort {
@@ -138,7 +138,7 @@ impl Drive {
             port.trips_seen = feedback.trips;
             feedback
                 .fault
-                .map(|f| cia402::faults::error_code(self.fault_codes, f.code()))
+                .map(|f| profile::motor_fault_code(self.fault_codes, f))
         } else {
             None
         };

@@ -2,6 +2,7 @@
 //! variables live in the OD RAM, and the profile's error code for every motor fault. od-gen
 //! generates one [`DriveProfile`] per profile file (`crate::profiles`).
 
+use ethercat_slave::mailbox::emcy;
 use ethercat_slave::od::Profile;
 
 use crate::motor::MotorFault;
@@ -83,12 +84,18 @@ pub struct DriveProfile {
 pub const MOTOR_FAULT_COUNT: usize = MotorFault::ALL.len();
 
 impl DriveProfile {
-    /// The CiA402 error code (603Fh, EMCY) this profile maps `fault` to
-    /// ([`cia402::faults::GENERIC_ERROR`] outside the table, which cannot happen while the
-    /// table and [`MotorFault`] agree, as the generated code checks at compile time).
+    /// The CiA402 error code (603Fh, EMCY) this profile maps `fault` to (CiA 301 generic error
+    /// outside the table, which cannot happen while the table and [`MotorFault`] agree, as the
+    /// generated code checks at compile time).
     pub fn motor_fault_code(&self, fault: MotorFault) -> u16 {
-        cia402::faults::error_code(self.motor_faults, fault.code())
+        motor_fault_code(self.motor_faults, fault)
     }
+}
+
+/// The error code `table` (a profile's `[motor_faults]`) gives `fault`; CiA 301 generic error
+/// ([`emcy::code::GENERIC`]) for a fault outside it.
+pub(crate) fn motor_fault_code(table: &[u16], fault: MotorFault) -> u16 {
+    cia402::faults::error_code(table, fault.code()).unwrap_or(emcy::code::GENERIC)
 }
 
 #[cfg(test)]

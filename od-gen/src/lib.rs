@@ -47,6 +47,19 @@ pub use model::Profile;
 
 include!(concat!(env!("OUT_DIR"), "/builtin.rs"));
 
+/// The generated outputs of a profile. They live here, not in [`model`], so that the model does
+/// not depend on the generators ([`sii`] and [`esi`] depend on [`model`]).
+impl Profile {
+    /// The SII EEPROM image ([`sii::image`]).
+    pub fn sii_image(&self) -> Vec<u8> {
+        sii::image(self)
+    }
+    /// The ESI XML ([`esi::xml`]).
+    pub fn esi_xml(&self) -> String {
+        esi::xml(self)
+    }
+}
+
 /// The names of the built-in profiles (`od-gen/profiles/*.toml`), sorted.
 pub fn builtin_names() -> Vec<&'static str> {
     BUILTIN.iter().map(|(n, _)| *n).collect()

@@ -919,12 +919,4 @@ impl Profile {
             .map(Pdo::bits)
             .sum()
     }
-    /// The SII EEPROM image ([`crate::sii`]).
-    pub fn sii_image(&self) -> Vec<u8> {
-        crate::sii::image(self)
-    }
-    /// The ESI XML ([`crate::esi`]).
-    pub fn esi_xml(&self) -> String {
-        crate::esi::xml(self)
-    }
 }

@@ -3,12 +3,9 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::error::{Error, Invalid};
+use crate::error::{fault, Error, Fault, Invalid};
 use crate::file::{EntryAttrs, ObjectFile, PdoFile, ProfileFile, SmFileEntry};
 use crate::model::*;
-
-/// A key and what is wrong with it (the file name is added by [`resolve`]).
-pub(crate) type Fault = (String, Invalid);
 
 /// Parses TOML text into a checked profile. `source` names the file in error messages.
 pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
@@ -275,10 +272,6 @@ fn motor_faults(map: &BTreeMap<String, u16>) -> Result<[u16; MOTOR_FAULT_COUNT],
         *code = map.get(name).copied().unwrap_or(0);
     }
     Ok(codes)
-}
-
-pub(crate) fn fault(key: &str, error: Invalid) -> Fault {
-    (key.to_string(), error)
 }
 
 /// The section an object index is derived from, if od-gen generates it.

@@ -152,7 +152,10 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         target.slave
     );
     if let Some(drive) = target.drive {
-        let _ = writeln!(out, "    use {drive}::profile::{{AppVars, DriveProfile}};\n");
+        let _ = writeln!(
+            out,
+            "    use {drive}::profile::{{AppVars, DriveProfile}};\n"
+        );
     }
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
     let _ = writeln!(

@@ -31,22 +31,9 @@ pub mod category {
     pub const END: u16 = 0xFFFF;
 }
 
-/// CRC-8 of the SII configuration area: polynomial 0x07 (x⁸+x²+x+1), initial value 0xFF, no
-/// reflection, no final XOR (ESC datasheet Sec. I, SII word 7).
-pub fn crc8(bytes: &[u8]) -> u8 {
-    let mut crc = 0xFFu8;
-    for &b in bytes {
-        crc ^= b;
-        for _ in 0..8 {
-            crc = if crc & 0x80 != 0 {
-                (crc << 1) ^ 0x07
-            } else {
-                crc << 1
-            };
-        }
-    }
-    crc
-}
+/// CRC-8 of the SII configuration area (polynomial 0x07, initial value 0xFF; ESC datasheet
+/// Sec. I, SII word 7): the one implementation in `hal`, re-exported.
+pub use hal::esc::sii::crc8;
 
 /// Bytes 0..13 of the image (words 0..6), as ESI `Eeprom/ConfigData` carries them.
 pub fn config_data(p: &Profile) -> [u8; 14] {
@@ -254,7 +241,7 @@ fn dc(p: &Profile, s: &mut Strings) -> Vec<u8> {
 pub fn content(p: &Profile) -> Vec<u8> {
     let mut v = vec![0u8; 128];
     v[..14].copy_from_slice(&config_data(p));
-    v[14] = crc8(&v[..14]);
+    v[hal::esc::sii::CRC_OFFSET] = crc8(&v[..hal::esc::sii::CRC_COVERED]);
     let words: [(usize, u16); 7] = [
         (0x18, p.sm.mailbox_out.start),
         (0x19, p.sm.mailbox_out.length),

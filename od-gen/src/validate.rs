@@ -4,9 +4,8 @@
 
 use std::collections::BTreeSet;
 
-use crate::error::Invalid;
+use crate::error::{fault, Fault, Invalid};
 use crate::model::*;
-use crate::resolve::{fault, Fault};
 
 /// Runs every check; the first failure is returned with its key.
 pub(crate) fn check(p: &Profile) -> Result<(), Fault> {

@@ -1,29 +1,9 @@
 //! The SII image checked by an independent decoder written from `reference/esi-sii.md` §2 and
-//! `reference/ethercat-slave.md` §3 (it shares no code with `od_gen::sii`).
+//! `reference/ethercat-slave.md` §3 (it shares no code with `od_gen::sii`; the CRC-8 is the one
+//! of `hal`, checked here against known real images and against IgH's augmented form).
 
+use hal::esc::sii::crc8;
 use od_gen::model::Profile;
-
-/// CRC-8, polynomial 0x07, initial 0xFF, MSB first, written table-driven (the writer is bitwise).
-fn crc8_table() -> [u8; 256] {
-    let mut t = [0u8; 256];
-    for (i, slot) in t.iter_mut().enumerate() {
-        let mut c = i as u8;
-        for _ in 0..8 {
-            c = if c & 0x80 != 0 {
-                (c << 1) ^ 0x07
-            } else {
-                c << 1
-            };
-        }
-        *slot = c;
-    }
-    t
-}
-
-fn crc8(data: &[u8]) -> u8 {
-    let t = crc8_table();
-    data.iter().fold(0xFF, |c, &b| t[usize::from(c ^ b)])
-}
 
 /// IgH `sii_crc.cpp` form: augmented, init 0x48 (esi-sii.md §2.1) — must agree with the direct one.
 fn crc8_igh(data: &[u8]) -> u8 {

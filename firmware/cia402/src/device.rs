@@ -111,7 +111,11 @@ mod tests {
         assert_eq!(d.state(), PdsState::Fault);
         assert_ne!(status & sw::FAULT, 0);
         assert_eq!(d.fault_code(), Some(0x8700));
-        assert_eq!(d.step(0x0F).fault_cleared, None, "enable is ignored in Fault");
+        assert_eq!(
+            d.step(0x0F).fault_cleared,
+            None,
+            "enable is ignored in Fault"
+        );
         let step = d.step(cw::FAULT_RESET);
         assert_eq!(step.fault_cleared, Some(0x8700));
         assert_eq!(d.state(), PdsState::SwitchOnDisabled);

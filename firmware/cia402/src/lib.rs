@@ -9,7 +9,7 @@
 //! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
 //! | [`units`] | conversions between object units (‰ of rated torque, 32-bit positions, µΩ, nH, g·mm²) and SI |
-//! | [`faults`] | the profile's error code for each internal fault; CiA 301 generic error |
+//! | [`faults`] | the profile's error code for each internal fault |
 //!
 //! The drive application (crate `firmware`) binds these to the object dictionary and to the axis.
 #![no_std]

@@ -87,10 +87,7 @@ pub struct SetPoint {
 /// The set-point of `mode` from the master's `targets`, the axis being at `actual_position`.
 pub fn set_point(mode: Mode, targets: Targets, actual_position: i64) -> SetPoint {
     let (control, position) = match mode {
-        Mode::CyclicPosition => (
-            Loop::Position,
-            targets.position.unwrap_or(actual_position),
-        ),
+        Mode::CyclicPosition => (Loop::Position, targets.position.unwrap_or(actual_position)),
         Mode::CyclicVelocity => (Loop::Velocity, actual_position),
         Mode::CyclicTorque => (Loop::Torque, actual_position),
         Mode::Identification | Mode::Other(_) => (Loop::Position, actual_position),
@@ -131,15 +128,24 @@ mod tests {
             position: None,
             ..TARGETS
         };
-        assert_eq!(set_point(Mode::CyclicPosition, no_target, 100).position, 100);
+        assert_eq!(
+            set_point(Mode::CyclicPosition, no_target, 100).position,
+            100
+        );
     }
 
     #[test]
     fn csv_and_cst_close_their_loop_and_hold_the_position_reference() {
         let sp = set_point(Mode::CyclicVelocity, TARGETS, 100);
-        assert_eq!((sp.control, sp.position, sp.velocity), (Loop::Velocity, 100, 1_000.0));
+        assert_eq!(
+            (sp.control, sp.position, sp.velocity),
+            (Loop::Velocity, 100, 1_000.0)
+        );
         let sp = set_point(Mode::CyclicTorque, TARGETS, 100);
-        assert_eq!((sp.control, sp.position, sp.torque), (Loop::Torque, 100, 0.5));
+        assert_eq!(
+            (sp.control, sp.position, sp.torque),
+            (Loop::Torque, 100, 0.5)
+        );
     }
 
     #[test]

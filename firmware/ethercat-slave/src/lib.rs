@@ -9,7 +9,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`slave`] | [`Slave`](slave::Slave): owns the state and the OD RAM; the entry points and the glue between the modules below; the [`Application`](slave::Application) trait |
-//! | [`esm`] | EtherCAT state machine: the decision function, SM checks, sync modes, SYNC0 supervision |
+//! | [`slave::esm`] (also [`esm`]) | the EtherCAT state machine in one folder: decision function, SM checks, sync modes, SYNC0 supervision, state change requests, the faults that drop the state |
 //! | [`mailbox`] | mailbox data-link layer, CoE (SDO, SDO information, complete access) and emergencies |
 //! | [`pdo`] | PDO mapping → copy plan, pack/unpack, and the rules for writing the PDO objects |
 //! | [`od`] | object dictionary: generated model, run-time store, abort codes, value checks, domains |
@@ -17,19 +17,21 @@
 //! | [`params`] | 1010h/1011h store/restore on power-loss-safe parameter storage |
 //! | [`leds`] | ETG.1300 RUN/ERR indicator patterns |
 //!
-//! Dependencies inside the crate point one way: `slave` → `esm`, `mailbox`, `pdo`, `diag`,
-//! `params`, `leds` → `od`.
+//! Dependencies between the modules point one way: `slave` (with its `esm`) → `mailbox`, `pdo`,
+//! `diag`, `params`, `leds` → `od`.
 #![no_std]
 #![deny(missing_docs)]
 
 pub mod diag;
-pub mod esm;
 pub mod leds;
 pub mod mailbox;
 pub mod od;
 pub mod params;
 pub mod pdo;
 pub mod slave;
+
+/// The EtherCAT state machine (it lives with the slave whose state it drives).
+pub use slave::esm;
 
 #[cfg(test)]
 pub(crate) mod test_profiles;

@@ -1,5 +1,5 @@
-//! Application-layer registers: AL control/status/status code, AL event request, DL status,
-//! feature flags.
+//! Application-layer registers: AL control/status/status code, AL event request, ECAT event
+//! request, DL control and status, feature flags.
 
 /// EtherCAT state machine state (ETG.1000.6 §6.4.1), as coded in AL control/status bits 0..3.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -244,6 +244,8 @@ impl AlEvent {
     pub const EEPROM_EMULATION: u32 = 1 << 5;
     /// Process-data watchdog expired (cleared by reading 0x0440).
     pub const WATCHDOG_PD: u32 = 1 << 6;
+    /// Reset value of the AL event mask 0x0204 (Section II 0x0204).
+    pub const MASK_RESET: u32 = 0x00FF_FF0F;
     /// SyncManager `n` event (buffer written/read by the master).
     pub const fn sm(n: u8) -> u32 {
         1 << (8 + n as u32)
@@ -251,6 +253,44 @@ impl AlEvent {
     /// Whether any of `bits` is set.
     pub const fn any(self, bits: u32) -> bool {
         self.0 & bits != 0
+    }
+}
+
+/// ECAT event request register 0x0210 (u16) and ECAT event mask 0x0200: bit assignments
+/// (Section II 0x0210). The ESC ORs request & mask into the IRQ field of every datagram.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EcatEvent(pub u16);
+
+impl EcatEvent {
+    /// Bit 0: DC latch event.
+    pub const DC_LATCH: u16 = 1 << 0;
+    /// Bit 2: DL status changed (cleared by an ECAT read of 0x0110).
+    pub const DL_STATUS: u16 = 1 << 2;
+    /// Bit 3: AL status changed (cleared by an ECAT read of 0x0130).
+    pub const AL_STATUS: u16 = 1 << 3;
+    /// Mirror of SyncManager `n`'s status (n = 0..7): bit 4 + n.
+    pub const fn sm(n: u8) -> u16 {
+        1 << (4 + n as u16)
+    }
+}
+
+/// DL control register 0x0100 (u32, Section II 0x0100).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DlControl(pub u32);
+
+impl DlControl {
+    /// Bit 0: forwarding rule (1 = non-EtherCAT frames are destroyed).
+    pub const FORWARDING_RULE: u32 = 1 << 0;
+    /// Bits 16..18: RX FIFO size.
+    pub const RX_FIFO_SIZE_MASK: u32 = 0x0007_0000;
+    /// Bit 24 (0x0103 bit 0): the station alias 0x0012 is used for FPxx addressing.
+    pub const STATION_ALIAS: u32 = 1 << 24;
+    /// Reset value: forwarding rule set, RX FIFO size 7.
+    pub const RESET: u32 = Self::FORWARDING_RULE | Self::RX_FIFO_SIZE_MASK;
+
+    /// Whether FPxx datagrams may address the station alias.
+    pub const fn station_alias(self) -> bool {
+        self.0 & Self::STATION_ALIAS != 0
     }
 }
 
@@ -337,6 +377,18 @@ mod tests {
         assert_eq!(AlState::from_bits(0x05), None);
         assert_eq!(AlState::from_bits(0x00), None);
         assert_eq!(AlState::from_bits(0x03), Some(AlState::Boot));
+    }
+
+    #[test]
+    fn ecat_event_sm_bits_start_at_bit_4() {
+        assert_eq!(EcatEvent::sm(0), 0x0010);
+        assert_eq!(EcatEvent::sm(7), 0x0800);
+    }
+
+    #[test]
+    fn dl_control_reset_is_forwarding_rule_and_fifo_7() {
+        assert_eq!(DlControl::RESET.to_le_bytes(), [0x01, 0x00, 0x07, 0x00]);
+        assert!(DlControl(0x0100_0000).station_alias());
     }
 
     #[test]

@@ -1,4 +1,63 @@
-//! Distributed-clock registers.
+//! Distributed-clock registers (0x0900..0x09FF, Beckhoff ESC datasheet Section II 0x0900 ff.):
+//! typed contents and the reset values and limits of the drift-control registers.
+
+/// Reset value of the speed counter start 0x0930.
+pub const SPEED_COUNTER_START_RESET: u16 = 0x1000;
+/// Smallest legal speed counter start 0x0930 (Section II 0x0930: 0x0080..0x3FFF).
+pub const SPEED_COUNTER_START_MIN: u16 = 0x0080;
+/// One speed-counter step of the DC unit, in ns (the ET1100 DC unit runs on a 100 MHz clock).
+pub const SPEED_COUNTER_TICK_NS: u32 = 10;
+/// Reset value of the system time difference filter depth 0x0934.
+pub const TIME_FILTER_DEPTH_RESET: u8 = 4;
+/// Reset value of the speed counter filter depth 0x0935.
+pub const SPEED_FILTER_DEPTH_RESET: u8 = 12;
+/// The filter depths 0x0934 / 0x0935 use bits 0..3.
+pub const FILTER_DEPTH_MASK: u8 = 0x0F;
+
+/// System time difference register 0x092C: sign-magnitude, bits 0..30 the mean difference
+/// between the local copy of the system time and the received system time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DcSystemTimeDiff(pub u32);
+
+impl DcSystemTimeDiff {
+    /// Bit 31: set when the local copy of the system time is ≥ the received system time.
+    pub const LOCAL_GE_RECEIVED: u32 = 1 << 31;
+    /// Bits 0..30: magnitude in ns.
+    pub const MAGNITUDE_MASK: u32 = 0x7FFF_FFFF;
+
+    /// Encodes `local - received` in ns, saturating the magnitude at [`Self::MAGNITUDE_MASK`].
+    pub const fn encode(diff: i64) -> Self {
+        let abs = diff.unsigned_abs();
+        let mag = if abs > Self::MAGNITUDE_MASK as u64 {
+            Self::MAGNITUDE_MASK
+        } else {
+            abs as u32
+        };
+        if diff >= 0 {
+            Self(mag | Self::LOCAL_GE_RECEIVED)
+        } else {
+            Self(mag)
+        }
+    }
+}
+
+/// Cyclic unit control register 0x0980: which side owns the SYNC and latch units.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DcCyclicUnitControl(pub u8);
+
+impl DcCyclicUnitControl {
+    /// Bit 0: SYNC out unit assigned to the PDI (0 = ECAT writes 0x0981, 0x0990, 0x09A0 ff.).
+    pub const SYNC_UNIT_PDI: u8 = 1 << 0;
+    /// Bit 4: latch in unit 0 assigned to the PDI.
+    pub const LATCH0_PDI: u8 = 1 << 4;
+    /// Bit 5: latch in unit 1 assigned to the PDI.
+    pub const LATCH1_PDI: u8 = 1 << 5;
+
+    /// Whether the PDI owns the SYNC out unit.
+    pub const fn sync_unit_pdi(self) -> bool {
+        self.0 & Self::SYNC_UNIT_PDI != 0
+    }
+}
 
 /// DC activation register 0x0981.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -29,5 +88,41 @@ impl DcActivation {
     /// Cyclic operation and SYNC1 both active.
     pub const fn sync1_active(self) -> bool {
         self.0 & (Self::CYCLIC | Self::SYNC1) == Self::CYCLIC | Self::SYNC1
+    }
+}
+
+/// DC activation status register 0x0984.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DcActivationStatus(pub u8);
+
+impl DcActivationStatus {
+    /// Bit 0: first SYNC0 pulse pending (not yet generated).
+    pub const SYNC0_PENDING: u8 = 1 << 0;
+    /// Bit 1: first SYNC1 pulse pending (not yet generated).
+    pub const SYNC1_PENDING: u8 = 1 << 1;
+    /// Bit 2: the start time 0x0990 failed the plausibility check at activation (not in the
+    /// near future).
+    pub const START_TIME_IMPLAUSIBLE: u8 = 1 << 2;
+}
+
+/// SYNC0 / SYNC1 status registers 0x098E / 0x098F.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DcSyncStatus(pub u8);
+
+impl DcSyncStatus {
+    /// Bit 0: a SYNC pulse happened (acknowledge mode: cleared by a PDI read of the register).
+    pub const ACTIVE: u8 = 1 << 0;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn system_time_diff_is_sign_magnitude_and_saturates() {
+        assert_eq!(DcSystemTimeDiff::encode(5).0, 0x8000_0005);
+        assert_eq!(DcSystemTimeDiff::encode(0).0, 0x8000_0000);
+        assert_eq!(DcSystemTimeDiff::encode(-5).0, 0x0000_0005);
+        assert_eq!(DcSystemTimeDiff::encode(i64::MIN).0, 0x7FFF_FFFF);
     }
 }

@@ -1,4 +1,24 @@
-//! SII EEPROM interface registers (0x0500..0x050F).
+//! SII EEPROM interface registers (0x0500..0x050F, Section II 0x0500 ff.).
+
+/// EEPROM configuration register 0x0500 (written by ECAT).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EepromConfig(pub u8);
+
+impl EepromConfig {
+    /// Bit 0: EEPROM control is offered to the PDI.
+    pub const OFFER_PDI: u8 = 1 << 0;
+    /// Bit 1: force ECAT access (clears [`EepromPdiAccess::PDI_OWNS`]).
+    pub const FORCE_ECAT: u8 = 1 << 1;
+}
+
+/// EEPROM PDI access state register 0x0501 (written by the PDI).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EepromPdiAccess(pub u8);
+
+impl EepromPdiAccess {
+    /// Bit 0: the PDI holds the EEPROM interface (only while offered by 0x0500).
+    pub const PDI_OWNS: u8 = 1 << 0;
+}
 
 /// EEPROM command, control bits 8..10.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,6 +67,14 @@ impl EepromControl {
     pub const WRITE_ENABLE_ERROR: u16 = 1 << 14;
     /// Bit 15: busy.
     pub const BUSY: u16 = 1 << 15;
+    /// Bits the register's owner may write: write enable and command (the rest is status).
+    pub const WRITABLE: u16 = Self::WRITE_ENABLE | Self::COMMAND_MASK;
+    /// Bytes one read command delivers into 0x0508 with [`Self::READ_8_BYTES`] set.
+    pub const READ_LEN_8: usize = 8;
+    /// Bytes one read command delivers into 0x0508 with [`Self::READ_8_BYTES`] clear.
+    pub const READ_LEN_4: usize = 4;
+    /// Bytes one write command stores (0x0508..0x0509).
+    pub const WRITE_LEN: usize = 2;
 
     /// The command bits.
     pub const fn command(self) -> EepromCommand {

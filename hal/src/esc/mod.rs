@@ -8,17 +8,26 @@
 //! A simulated ESC uses the same types to give registers their semantics, so the stack and the
 //! simulation cannot disagree about a bit position.
 
+pub mod dc;
 pub mod regs;
+pub mod sii;
+pub mod watchdog;
 
 mod al;
-mod dc;
+mod config;
 mod eeprom;
 mod fmmu;
 mod sm;
 
-pub use al::{AlControl, AlEvent, AlState, AlStatus, AlStatusCode, DlStatus, EscFeatures};
-pub use dc::DcActivation;
-pub use eeprom::{EepromCommand, EepromControl};
+pub use al::{
+    AlControl, AlEvent, AlState, AlStatus, AlStatusCode, DlControl, DlStatus, EcatEvent,
+    EscFeatures,
+};
+pub use config::{EscConfig, PortDescriptor, SyncLatchConfig};
+pub use dc::{
+    DcActivation, DcActivationStatus, DcCyclicUnitControl, DcSyncStatus, DcSystemTimeDiff,
+};
+pub use eeprom::{EepromCommand, EepromConfig, EepromControl, EepromPdiAccess};
 pub use fmmu::{FmmuConfig, FmmuType};
 pub use sm::{SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus};
 

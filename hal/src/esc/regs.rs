@@ -30,8 +30,10 @@ impl Reg {
 }
 
 // ----- 0x0000..0x000F: information -----
-/// ESC type (ET1100 = 0x11).
+/// ESC type (ET1100 = [`ET1100_TYPE`]).
 pub const TYPE: Reg = Reg::new(0x0000, 1);
+/// Value of [`TYPE`] on an ET1100 (Section II 0x0000).
+pub const ET1100_TYPE: u8 = 0x11;
 /// ESC revision.
 pub const REVISION: Reg = Reg::new(0x0001, 1);
 /// ESC build, u16.
@@ -42,8 +44,10 @@ pub const FMMU_COUNT: Reg = Reg::new(0x0004, 1);
 pub const SM_COUNT: Reg = Reg::new(0x0005, 1);
 /// Process RAM size in KiB.
 pub const RAM_SIZE: Reg = Reg::new(0x0006, 1);
-/// Port descriptor, 2 bits per port (00 n/a, 01 not configured, 10 EBUS, 11 MII).
+/// Port descriptor, 2 bits per port (see [`super::PortDescriptor`]).
 pub const PORT_DESCRIPTOR: Reg = Reg::new(0x0007, 1);
+/// Number of physical ports an ET1100 has (0..3).
+pub const ET1100_PORTS: u8 = 4;
 /// ESC features supported, u16 (see [`super::EscFeatures`]).
 pub const FEATURES: Reg = Reg::new(0x0008, 2);
 
@@ -68,7 +72,7 @@ pub const RESET_ECAT: Reg = Reg::new(0x0040, 1);
 pub const RESET_PDI: Reg = Reg::new(0x0041, 1);
 
 // ----- 0x0100..: data link layer -----
-/// DL control, u32 (byte 3 bit 0 = station alias enable).
+/// DL control, u32 (see [`super::DlControl`]).
 pub const DL_CONTROL: Reg = Reg::new(0x0100, 4);
 /// DL control byte 3 (0x0103), bit 0: use the station alias for FPxx addressing.
 pub const DL_CONTROL_ALIAS: Reg = Reg::new(0x0103, 1);
@@ -92,19 +96,24 @@ pub const ERR_LED_OVERRIDE: Reg = Reg::new(0x0139, 1);
 // ----- 0x0140..: PDI -----
 /// PDI control (PDI type), loaded from SII word 0 low byte.
 pub const PDI_CONTROL: Reg = Reg::new(0x0140, 1);
-/// ESC configuration, loaded from SII word 0 high byte (bit 0 = device emulation).
+/// ESC configuration, loaded from SII word 0 high byte (see [`super::EscConfig`]).
 pub const ESC_CONFIG: Reg = Reg::new(0x0141, 1);
-/// PDI configuration, loaded from SII word 1.
+/// PDI configuration, loaded from SII word 1 (low byte: PDI specific, high byte:
+/// [`SYNC_LATCH_CONFIG`]).
 pub const PDI_CONFIG: Reg = Reg::new(0x0150, 2);
+/// SYNC/LATCH PDI configuration, the high byte of [`PDI_CONFIG`] (see
+/// [`super::SyncLatchConfig`]).
+pub const SYNC_LATCH_CONFIG: Reg = Reg::new(0x0151, 1);
 /// Extended PDI configuration, loaded from SII word 3.
 pub const PDI_CONFIG_EXT: Reg = Reg::new(0x0152, 2);
 
 // ----- 0x0200..: interrupts -----
 /// ECAT event mask, u16.
 pub const ECAT_EVENT_MASK: Reg = Reg::new(0x0200, 2);
-/// AL event mask, u32: AL event request bits that drive the PDI IRQ line.
+/// AL event mask, u32: AL event request bits that drive the PDI IRQ line (reset value
+/// [`super::AlEvent::MASK_RESET`]).
 pub const AL_EVENT_MASK: Reg = Reg::new(0x0204, 4);
-/// ECAT event request, u16 (mirrored into every datagram's IRQ field).
+/// ECAT event request, u16 (see [`super::EcatEvent`]; mirrored into every datagram's IRQ field).
 pub const ECAT_EVENT_REQUEST: Reg = Reg::new(0x0210, 2);
 /// AL event request, u32 (see [`super::AlEvent`]).
 pub const AL_EVENT_REQUEST: Reg = Reg::new(0x0220, 4);
@@ -124,13 +133,14 @@ pub const PDI_ERROR_CODE: Reg = Reg::new(0x030E, 1);
 pub const LOST_LINK_COUNTERS: Reg = Reg::new(0x0310, 4);
 
 // ----- 0x0400..: watchdogs -----
-/// Watchdog divider, u16: one watchdog tick = (divider + 2) × 40 ns.
+/// Watchdog divider, u16: one watchdog tick = (divider + 2) × 40 ns (see [`super::watchdog`]).
 pub const WATCHDOG_DIVIDER: Reg = Reg::new(0x0400, 2);
 /// PDI watchdog time, u16 in ticks (0 = disabled).
 pub const WATCHDOG_TIME_PDI: Reg = Reg::new(0x0410, 2);
 /// Process-data (SM) watchdog time, u16 in ticks (0 = disabled).
 pub const WATCHDOG_TIME_PD: Reg = Reg::new(0x0420, 2);
-/// Process-data watchdog status: bit 0 = 1 active or disabled, 0 = expired (cleared on read).
+/// Process-data watchdog status: bit 0 ([`super::watchdog::PD_STATUS_OK`]) = 1 active or
+/// disabled, 0 = expired.
 pub const WATCHDOG_STATUS_PD: Reg = Reg::new(0x0440, 2);
 /// Process-data watchdog expiry counter (saturating).
 pub const WATCHDOG_COUNTER_PD: Reg = Reg::new(0x0442, 1);
@@ -138,9 +148,9 @@ pub const WATCHDOG_COUNTER_PD: Reg = Reg::new(0x0442, 1);
 pub const WATCHDOG_COUNTER_PDI: Reg = Reg::new(0x0443, 1);
 
 // ----- 0x0500..: SII EEPROM interface -----
-/// EEPROM configuration: bit 0 = offer EEPROM control to the PDI, bit 1 = force ECAT access.
+/// EEPROM configuration (see [`super::EepromConfig`]).
 pub const EEPROM_CONFIG: Reg = Reg::new(0x0500, 1);
-/// EEPROM PDI access state: bit 0 = PDI owns the EEPROM interface.
+/// EEPROM PDI access state (see [`super::EepromPdiAccess`]).
 pub const EEPROM_PDI_ACCESS: Reg = Reg::new(0x0501, 1);
 /// EEPROM control/status, u16 (see [`super::EepromControl`]).
 pub const EEPROM_CONTROL: Reg = Reg::new(0x0502, 2);
@@ -230,9 +240,9 @@ pub const DC_RECEIVE_TIME_PU: Reg = Reg::new(0x0918, 8);
 pub const DC_SYSTEM_TIME_OFFSET: Reg = Reg::new(0x0920, 8);
 /// System time delay (propagation delay from the reference clock), u32.
 pub const DC_SYSTEM_TIME_DELAY: Reg = Reg::new(0x0928, 4);
-/// System time difference, u32 sign-magnitude (bit 31 set: local copy ≥ received time).
+/// System time difference, u32 sign-magnitude (see [`super::dc::DcSystemTimeDiff`]).
 pub const DC_SYSTEM_TIME_DIFF: Reg = Reg::new(0x092C, 4);
-/// Speed counter start, u16 (a write resets the drift filter).
+/// Speed counter start, u16 (a write resets the drift filter; see [`super::dc`]).
 pub const DC_SPEED_COUNTER_START: Reg = Reg::new(0x0930, 2);
 /// Speed counter difference, i16.
 pub const DC_SPEED_COUNTER_DIFF: Reg = Reg::new(0x0932, 2);
@@ -240,15 +250,16 @@ pub const DC_SPEED_COUNTER_DIFF: Reg = Reg::new(0x0932, 2);
 pub const DC_TIME_FILTER_DEPTH: Reg = Reg::new(0x0934, 1);
 /// Speed counter filter depth.
 pub const DC_SPEED_FILTER_DEPTH: Reg = Reg::new(0x0935, 1);
-/// Cyclic unit control (bit 0: SYNC unit assigned to PDI).
+/// Cyclic unit control (see [`super::dc::DcCyclicUnitControl`]).
 pub const DC_CYCLIC_UNIT_CONTROL: Reg = Reg::new(0x0980, 1);
 /// Activation register (see [`super::DcActivation`]).
 pub const DC_ACTIVATION: Reg = Reg::new(0x0981, 1);
 /// SYNC signal pulse length, u16 in 10 ns (0 = acknowledge mode).
 pub const DC_PULSE_LENGTH: Reg = Reg::new(0x0982, 2);
-/// Activation status.
+/// Activation status (see [`super::dc::DcActivationStatus`]).
 pub const DC_ACTIVATION_STATUS: Reg = Reg::new(0x0984, 1);
-/// SYNC0 status (bit 0; a PDI read clears it and AL event bit 2 in acknowledge mode).
+/// SYNC0 status (see [`super::dc::DcSyncStatus`]; a PDI read clears it and AL event bit 2 in
+/// acknowledge mode).
 pub const DC_SYNC0_STATUS: Reg = Reg::new(0x098E, 1);
 /// SYNC1 status.
 pub const DC_SYNC1_STATUS: Reg = Reg::new(0x098F, 1);
@@ -260,6 +271,9 @@ pub const DC_NEXT_SYNC1: Reg = Reg::new(0x0998, 8);
 pub const DC_SYNC0_CYCLE: Reg = Reg::new(0x09A0, 4);
 /// SYNC1 cycle time, u32 in ns (delay after SYNC0).
 pub const DC_SYNC1_CYCLE: Reg = Reg::new(0x09A4, 4);
+/// Latch0 control (0x09A8) and latch1 control (0x09A9): bit 0 positive edge single event, bit 1
+/// negative edge single event.
+pub const DC_LATCH_CONTROL: Reg = Reg::new(0x09A8, 2);
 /// Time of the last SM buffer change on the ECAT side, u64.
 pub const DC_ECAT_BUFFER_CHANGE_TIME: Reg = Reg::new(0x09F0, 8);
 /// Time of the last SM buffer change on the PDI side, u64.
@@ -272,3 +286,5 @@ pub const USER_RAM: Reg = Reg::new(0x0F80, 0x80);
 pub const PROCESS_RAM_START: u16 = 0x1000;
 /// Process RAM of an ET1100: 8 KiB.
 pub const ET1100_PROCESS_RAM: Reg = Reg::new(PROCESS_RAM_START, 0x2000);
+/// Value of [`RAM_SIZE`] on an ET1100: the process RAM in KiB.
+pub const ET1100_RAM_SIZE_KIB: u8 = (ET1100_PROCESS_RAM.len / 1024) as u8;

@@ -71,6 +71,8 @@ impl SmStatus {
     pub const MAILBOX_FULL: u8 = 1 << 3;
     /// Bits 4..5: 3-buffer state (last written buffer: 0, 1, 2; 3 = none written).
     pub const BUFFER_STATE_SHIFT: u8 = 4;
+    /// 3-buffer state value: no buffer written yet.
+    pub const BUFFER_STATE_NONE: u8 = 3;
     /// Bit 6: read buffer open.
     pub const READ_OPEN: u8 = 1 << 6;
     /// Bit 7: write buffer open.

@@ -10,10 +10,10 @@
 //! ARMW/FRMW: the addressed slave reads (+1), every other slave writes (+1). Each ESC ORs its
 //! ECAT event request & mask (0x0210 & 0x0200) into every datagram's IRQ field.
 
-use hal::esc::regs;
+use hal::esc::{regs, DlControl};
 
 use super::access::{Effects, FrameTiming, Side};
-use super::consts::*;
+use super::frame::{DG_HEADER_LEN, DG_LEN_MASK};
 use super::Et1100;
 
 /// EtherCAT commands.
@@ -96,7 +96,7 @@ fn put16(d: &mut [u8], at: usize, v: u16) {
 impl Et1100 {
     fn fp_addressed(&self, adp: u16) -> bool {
         adp == self.u16_at(regs::STATION_ADDRESS.addr)
-            || (self.u8_at(regs::DL_CONTROL_ALIAS.addr) & DL_CONTROL_ALIAS_ENABLE != 0
+            || (DlControl(self.u32_at(regs::DL_CONTROL.addr)).station_alias()
                 && adp == self.u16_at(regs::STATION_ALIAS.addr))
     }
 

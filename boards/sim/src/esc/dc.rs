@@ -20,10 +20,14 @@
 //!   status clears both. The SYNC pin edge ([`hal::pdi::EscSignals`]) needs the SYNC output
 //!   configured in 0x0151.
 
-use hal::esc::{regs, AlEvent, DcActivation};
+use hal::esc::dc::{FILTER_DEPTH_MASK, SPEED_COUNTER_START_MIN, SPEED_COUNTER_TICK_NS};
+use hal::esc::{
+    regs, AlEvent, DcActivation, DcActivationStatus, DcSyncStatus, DcSystemTimeDiff,
+    SyncLatchConfig,
+};
 
 use super::access::Effects;
-use super::consts::*;
+use super::consts::TIME_LOOP_TAU_MIN_NS;
 use super::Et1100;
 
 /// ppb per ppm.
@@ -126,16 +130,6 @@ impl DcUnit {
     }
 }
 
-/// Sign-magnitude encoding of 0x092C: bit 31 set when the local copy is ≥ the received time.
-fn encode_diff(diff: i64) -> u32 {
-    let mag = diff.unsigned_abs().min(u64::from(DIFF_MAGNITUDE_MAX)) as u32;
-    if diff >= 0 {
-        mag | DIFF_SIGN
-    } else {
-        mag
-    }
-}
-
 impl Et1100 {
     /// Latches the receive times of the current frame (ECAT write to 0x0900).
     pub(crate) fn dc_latch(&mut self, fx: &Effects) {
@@ -170,13 +164,16 @@ impl Et1100 {
         } else {
             i64::from((mine as u32).wrapping_sub(received as u32) as i32)
         };
-        self.set_u32(regs::DC_SYSTEM_TIME_DIFF.addr, encode_diff(diff));
+        self.set_u32(
+            regs::DC_SYSTEM_TIME_DIFF.addr,
+            DcSystemTimeDiff::encode(diff).0,
+        );
 
         let depth = u32::from(self.u8_at(regs::DC_TIME_FILTER_DEPTH.addr) & FILTER_DEPTH_MASK);
         let speed_start = self
             .u16_at(regs::DC_SPEED_COUNTER_START.addr)
             .max(SPEED_COUNTER_START_MIN);
-        let max_slew_ppb = NS_PER_S / (f64::from(speed_start) * DC_CLOCK_NS);
+        let max_slew_ppb = NS_PER_S / (f64::from(speed_start) * f64::from(SPEED_COUNTER_TICK_NS));
         let tl = &mut self.dc.time_loop;
         tl.filtered_ns += (diff as f64 - tl.filtered_ns) / f64::from(1u32 << depth);
         let dt_ns = tl
@@ -218,11 +215,11 @@ impl Et1100 {
         let cycle0 = u64::from(self.u32_at(regs::DC_SYNC0_CYCLE.addr));
         let cycle1 = u64::from(self.u32_at(regs::DC_SYNC1_CYCLE.addr));
         let now = self.system_time_now();
-        let mut status = ACT_STATUS_SYNC0_PENDING | ACT_STATUS_SYNC1_PENDING;
+        let mut status = DcActivationStatus::SYNC0_PENDING | DcActivationStatus::SYNC1_PENDING;
         let first = if (start.wrapping_sub(now) as i64) > 0 {
             start
         } else {
-            status |= ACT_STATUS_START_IN_PAST;
+            status |= DcActivationStatus::START_TIME_IMPLAUSIBLE;
             match cycle0 {
                 0 => now,
                 c => start.wrapping_add((now.wrapping_sub(start) / c + 1) * c),
@@ -254,21 +251,19 @@ impl Et1100 {
         } else {
             act.0 & DcActivation::SYNC0
         } != 0;
-        let (status_reg, event, output, to_event, pending) = if sync1 {
+        let (n, status_reg, event, pending) = if sync1 {
             (
+                1,
                 regs::DC_SYNC1_STATUS,
                 AlEvent::SYNC1,
-                SYNC1_OUTPUT,
-                SYNC1_TO_AL_EVENT,
-                ACT_STATUS_SYNC1_PENDING,
+                DcActivationStatus::SYNC1_PENDING,
             )
         } else {
             (
+                0,
                 regs::DC_SYNC0_STATUS,
                 AlEvent::SYNC0,
-                SYNC0_OUTPUT,
-                SYNC0_TO_AL_EVENT,
-                ACT_STATUS_SYNC0_PENDING,
+                DcActivationStatus::SYNC0_PENDING,
             )
         };
         if !enabled {
@@ -276,12 +271,12 @@ impl Et1100 {
         }
         let st = self.u8_at(regs::DC_ACTIVATION_STATUS.addr) & !pending;
         self.set_u8(regs::DC_ACTIVATION_STATUS.addr, st);
-        self.set_u8(status_reg.addr, SYNC_STATUS_ACTIVE);
-        let cfg = self.u8_at(SYNC_LATCH_CONFIG);
-        if cfg & to_event != 0 {
+        self.set_u8(status_reg.addr, DcSyncStatus::ACTIVE);
+        let cfg = SyncLatchConfig(self.u8_at(regs::SYNC_LATCH_CONFIG.addr));
+        if cfg.sync_to_al_event(n) {
             self.set_al_event_bits(event, true);
         }
-        if cfg & output != 0 {
+        if cfg.sync_output(n) {
             if sync1 {
                 self.sync1_edge = true;
             } else {

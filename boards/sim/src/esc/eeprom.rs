@@ -11,28 +11,17 @@
 //!   simulated time or [`EEPROM_BUSY_FRAMES`] further frames, whichever ends first; writes to
 //!   0x0502..0x050F while busy are ignored.
 
-use hal::esc::{regs, EepromCommand, EepromControl};
+use hal::esc::sii::{self, word};
+use hal::esc::{regs, EepromCommand, EepromConfig, EepromControl, EepromPdiAccess};
 
 use super::access::Side;
-use super::consts::*;
+use super::consts::{EEPROM_BUSY_FRAMES, EEPROM_BUSY_NS, EEPROM_ERASED, EEPROM_MAX_BYTES};
 use super::Et1100;
 
-/// CRC-8 of the SII configuration area: polynomial 0x07, initial value 0xFF, no reflection, over
-/// `data` (bytes 0..13 of the image; the result belongs in byte 14).
-pub fn sii_crc8(data: &[u8]) -> u8 {
-    let mut crc = SII_CRC_INIT;
-    for &b in data {
-        crc ^= b;
-        for _ in 0..8 {
-            crc = if crc & 0x80 != 0 {
-                (crc << 1) ^ SII_CRC_POLY
-            } else {
-                crc << 1
-            };
-        }
-    }
-    crc
-}
+/// Bytes returned by one read command: the ET1100 always reads 8 bytes (0x0502 bit 6 reads 1).
+const EEPROM_READ_BYTES: usize = EepromControl::READ_LEN_8;
+/// Bytes written by one write command.
+const EEPROM_WRITE_BYTES: usize = EepromControl::WRITE_LEN;
 
 /// A command in progress.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -65,28 +54,25 @@ impl Et1100 {
 
     /// Loads the configuration area (words 0..3, and the alias at power-on) if its CRC is good.
     pub(crate) fn load_sii_config(&mut self, power_on: bool) {
-        let mut head = [EEPROM_ERASED; SII_CRC_COVERED];
+        let mut head = [EEPROM_ERASED; sii::CRC_COVERED];
         for (i, b) in head.iter_mut().enumerate() {
             if let Some(v) = self.sii.get(i) {
                 *b = *v;
             }
         }
-        let stored = self.sii.get(SII_CRC_OFFSET).copied();
-        let good = stored == Some(sii_crc8(&head));
+        let stored = self.sii.get(sii::CRC_OFFSET).copied();
+        let good = stored == Some(sii::crc8(&head));
         let mut ctl = self.u16_at(regs::EEPROM_CONTROL.addr);
         if good {
-            self.set_u16(regs::PDI_CONTROL.addr, self.sii_word(SII_WORD_PDI_CONTROL));
-            self.set_u16(regs::PDI_CONFIG.addr, self.sii_word(SII_WORD_PDI_CONFIG));
-            self.set_u16(
-                regs::DC_PULSE_LENGTH.addr,
-                self.sii_word(SII_WORD_SYNC_PULSE),
-            );
+            self.set_u16(regs::PDI_CONTROL.addr, self.sii_word(word::PDI_CONTROL));
+            self.set_u16(regs::PDI_CONFIG.addr, self.sii_word(word::PDI_CONFIG));
+            self.set_u16(regs::DC_PULSE_LENGTH.addr, self.sii_word(word::SYNC_PULSE));
             self.set_u16(
                 regs::PDI_CONFIG_EXT.addr,
-                self.sii_word(SII_WORD_PDI_CONFIG_EXT),
+                self.sii_word(word::PDI_CONFIG_EXT),
             );
             if power_on {
-                self.set_u16(regs::STATION_ALIAS.addr, self.sii_word(SII_WORD_ALIAS));
+                self.set_u16(regs::STATION_ALIAS.addr, self.sii_word(word::ALIAS));
             }
             ctl &= !(EepromControl::CHECKSUM_ERROR | EepromControl::NOT_LOADED);
         } else {
@@ -98,8 +84,8 @@ impl Et1100 {
     }
 
     fn pdi_owns_eeprom(&self) -> bool {
-        self.u8_at(regs::EEPROM_CONFIG.addr) & EEPROM_OFFER_PDI != 0
-            && self.u8_at(regs::EEPROM_PDI_ACCESS.addr) & EEPROM_PDI_OWNS != 0
+        self.u8_at(regs::EEPROM_CONFIG.addr) & EepromConfig::OFFER_PDI != 0
+            && self.u8_at(regs::EEPROM_PDI_ACCESS.addr) & EepromPdiAccess::PDI_OWNS != 0
     }
 
     /// Whether `addr` is one of the interface registers 0x0502..0x050F.
@@ -109,9 +95,9 @@ impl Et1100 {
 
     /// ECAT write of 0x0500.
     pub(crate) fn eeprom_config_ecat_write(&mut self, v: u8) {
-        let v = v & (EEPROM_OFFER_PDI | EEPROM_FORCE_ECAT);
+        let v = v & (EepromConfig::OFFER_PDI | EepromConfig::FORCE_ECAT);
         self.set_u8(regs::EEPROM_CONFIG.addr, v);
-        if v & EEPROM_FORCE_ECAT != 0 || v & EEPROM_OFFER_PDI == 0 {
+        if v & EepromConfig::FORCE_ECAT != 0 || v & EepromConfig::OFFER_PDI == 0 {
             self.set_u8(regs::EEPROM_PDI_ACCESS.addr, 0);
         }
     }
@@ -119,9 +105,9 @@ impl Et1100 {
     /// PDI write of 0x0501: the PDI takes or releases the interface (only when offered).
     pub(crate) fn eeprom_pdi_access_write(&mut self, v: u8) {
         let cfg = self.u8_at(regs::EEPROM_CONFIG.addr);
-        let take = v & EEPROM_PDI_OWNS != 0;
-        if !take || (cfg & EEPROM_OFFER_PDI != 0 && cfg & EEPROM_FORCE_ECAT == 0) {
-            self.set_u8(regs::EEPROM_PDI_ACCESS.addr, v & EEPROM_PDI_OWNS);
+        let take = v & EepromPdiAccess::PDI_OWNS != 0;
+        if !take || (cfg & EepromConfig::OFFER_PDI != 0 && cfg & EepromConfig::FORCE_ECAT == 0) {
+            self.set_u8(regs::EEPROM_PDI_ACCESS.addr, v & EepromPdiAccess::PDI_OWNS);
         }
     }
 
@@ -144,7 +130,7 @@ impl Et1100 {
         let ctl = regs::EEPROM_CONTROL.addr;
         if addr == ctl || addr == ctl + 1 {
             let shift = 8 * (addr - ctl);
-            let writable = (EEPROM_CONTROL_WRITABLE >> shift) as u8;
+            let writable = (EepromControl::WRITABLE >> shift) as u8;
             let old = self.u8_at(addr);
             self.set_u8(addr, (old & !writable) | (v & writable));
             if addr == ctl {

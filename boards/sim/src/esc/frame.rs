@@ -11,9 +11,39 @@
 //! cable)`. Forward and return delays are equal, so a master's propagation-delay estimate is
 //! exact.
 
+use hal::esc::regs;
+
 use super::access::FrameTiming;
-use super::consts::*;
+use super::consts::{CABLE_DELAY_NS, PORT_FORWARD_DELAY_NS};
 use super::Et1100;
+
+// ----- frame format (ETG.1000.4 §5: Ethernet II + EtherCAT header + datagrams) -----
+/// EtherType of EtherCAT.
+const ETHERTYPE_ETHERCAT: u16 = 0x88A4;
+/// Ethernet II header: destination, source, EtherType.
+const ETH_HEADER_LEN: usize = 14;
+/// Offset of the EtherType.
+const ETHERTYPE_OFFSET: usize = 12;
+/// Offset of the first source MAC byte.
+const SRC_MAC_OFFSET: usize = 6;
+/// Locally administered (U/L) bit of a MAC's first byte; the first ESC sets it on the way back.
+const MAC_LOCALLY_ADMINISTERED: u8 = 0x02;
+/// EtherCAT header length.
+const ECAT_HEADER_LEN: usize = 2;
+/// EtherCAT header: length bits.
+const ECAT_LEN_MASK: u16 = 0x07FF;
+/// EtherCAT header: type shift.
+const ECAT_TYPE_SHIFT: u16 = 12;
+/// EtherCAT header type of DLPDUs (datagrams).
+const ECAT_TYPE_DLPDU: u16 = 1;
+/// Datagram header length.
+pub(crate) const DG_HEADER_LEN: usize = 10;
+/// Working counter length.
+const DG_WKC_LEN: usize = 2;
+/// Datagram length field: length bits.
+pub(crate) const DG_LEN_MASK: u16 = 0x07FF;
+/// Datagram length field: more datagrams follow.
+const DG_MORE_FOLLOWS: u16 = 0x8000;
 
 /// Why a frame was not processed. The caller drops such frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -201,7 +231,7 @@ pub fn process_frame<'a>(
 impl Et1100 {
     /// Counts a frame with a broken EtherCAT structure (0x030C, saturating).
     fn count_pu_error(&mut self) {
-        let addr = hal::esc::regs::ECAT_PU_ERROR_COUNTER.addr;
+        let addr = regs::ECAT_PU_ERROR_COUNTER.addr;
         let c = self.u8_at(addr).saturating_add(1);
         self.set_u8(addr, c);
     }

@@ -46,11 +46,14 @@ mod watchdog;
 #[cfg(test)]
 mod tests;
 
-pub use eeprom::sii_crc8;
 pub use frame::{datagrams, process_frame, DatagramSummary, FrameError, Segment};
+pub use hal::esc::sii::crc8 as sii_crc8;
 pub use pdi::SimPdiError;
 
-use hal::esc::{regs, AlEvent, DlStatus, EscFeatures};
+use hal::esc::{
+    regs, AlControl, AlEvent, AlState, AlStatus, DlControl, DlStatus, EcatEvent, EscConfig,
+    EscFeatures,
+};
 use hal::pdi::EscSignals;
 
 use consts::*;
@@ -123,13 +126,13 @@ impl Et1100 {
 
     /// Writes the reset values of the identity and configuration registers.
     fn power_on_registers(&mut self) {
-        self.set_u8(regs::TYPE.addr, ET1100_TYPE);
+        self.set_u8(regs::TYPE.addr, regs::ET1100_TYPE);
         self.set_u8(regs::REVISION.addr, ET1100_REVISION);
         self.set_u16(regs::BUILD.addr, ET1100_BUILD);
         self.set_u8(regs::FMMU_COUNT.addr, regs::ET1100_FMMUS);
         self.set_u8(regs::SM_COUNT.addr, regs::ET1100_SMS);
-        self.set_u8(regs::RAM_SIZE.addr, RAM_SIZE_KIB);
-        self.set_u8(regs::PORT_DESCRIPTOR.addr, PORT_DESCRIPTOR);
+        self.set_u8(regs::RAM_SIZE.addr, regs::ET1100_RAM_SIZE_KIB);
+        self.set_u8(regs::PORT_DESCRIPTOR.addr, PORT_DESCRIPTOR.0);
         let features = EscFeatures::FMMU_BIT_OPERATION
             | EscFeatures::DC
             | EscFeatures::DC_64BIT
@@ -138,18 +141,42 @@ impl Et1100 {
             | EscFeatures::ENHANCED_LINK_MII
             | EscFeatures::SEPARATE_FCS;
         self.set_u16(regs::FEATURES.addr, features);
-        self.set_u8(regs::DL_CONTROL.addr, DL_CONTROL_FORWARDING_RULE);
-        self.set_u8(regs::DL_CONTROL.addr + 2, DL_CONTROL_FIFO_RESET);
-        self.set_u16(regs::AL_CONTROL.addr, u16::from(AL_STATE_INIT));
-        self.set_u16(regs::AL_STATUS.addr, u16::from(AL_STATE_INIT));
-        self.set_u32(regs::AL_EVENT_MASK.addr, AL_EVENT_MASK_RESET);
-        self.set_u16(regs::WATCHDOG_DIVIDER.addr, WATCHDOG_DIVIDER_RESET);
-        self.set_u16(regs::WATCHDOG_TIME_PDI.addr, WATCHDOG_TIME_RESET);
-        self.set_u16(regs::WATCHDOG_TIME_PD.addr, WATCHDOG_TIME_RESET);
-        self.set_u16(regs::WATCHDOG_STATUS_PD.addr, u16::from(WATCHDOG_PD_OK));
-        self.set_u16(regs::DC_SPEED_COUNTER_START.addr, SPEED_COUNTER_START_RESET);
-        self.set_u8(regs::DC_TIME_FILTER_DEPTH.addr, TIME_FILTER_DEPTH_RESET);
-        self.set_u8(regs::DC_SPEED_FILTER_DEPTH.addr, SPEED_FILTER_DEPTH_RESET);
+        self.set_u32(regs::DL_CONTROL.addr, DlControl::RESET);
+        let init = AlControl {
+            state_bits: AlState::Init.bits(),
+            ack: false,
+            id_request: false,
+        };
+        self.set_u16(regs::AL_CONTROL.addr, init.bits());
+        let init = AlStatus {
+            state: AlState::Init,
+            error: false,
+            id_loaded: false,
+        };
+        self.set_u16(regs::AL_STATUS.addr, init.bits());
+        self.set_u32(regs::AL_EVENT_MASK.addr, AlEvent::MASK_RESET);
+        self.set_u16(
+            regs::WATCHDOG_DIVIDER.addr,
+            hal::esc::watchdog::DIVIDER_RESET,
+        );
+        self.set_u16(regs::WATCHDOG_TIME_PDI.addr, hal::esc::watchdog::TIME_RESET);
+        self.set_u16(regs::WATCHDOG_TIME_PD.addr, hal::esc::watchdog::TIME_RESET);
+        self.set_u16(
+            regs::WATCHDOG_STATUS_PD.addr,
+            hal::esc::watchdog::PD_STATUS_OK,
+        );
+        self.set_u16(
+            regs::DC_SPEED_COUNTER_START.addr,
+            hal::esc::dc::SPEED_COUNTER_START_RESET,
+        );
+        self.set_u8(
+            regs::DC_TIME_FILTER_DEPTH.addr,
+            hal::esc::dc::TIME_FILTER_DEPTH_RESET,
+        );
+        self.set_u8(
+            regs::DC_SPEED_FILTER_DEPTH.addr,
+            hal::esc::dc::SPEED_FILTER_DEPTH_RESET,
+        );
         self.eeprom_power_on();
     }
 
@@ -339,10 +366,10 @@ impl Et1100 {
         if !self.wd.pdi_expired {
             v |= DlStatus::PDI_WATCHDOG_OK;
         }
-        if self.u8_at(regs::ESC_CONFIG.addr) & ESC_CONFIG_ENHANCED_LINK != 0 {
+        if EscConfig(self.u8_at(regs::ESC_CONFIG.addr)).enhanced_link() {
             v |= DlStatus::ENHANCED_LINK;
         }
-        for port in 0..PORTS {
+        for port in 0..regs::ET1100_PORTS {
             let connected = match port {
                 0 => true,
                 1 => self.port1_connected,
@@ -357,7 +384,7 @@ impl Et1100 {
         let old = self.u16_at(regs::DL_STATUS.addr);
         if old != v {
             self.set_u16(regs::DL_STATUS.addr, v);
-            self.set_ecat_event_bits(ecat_event::DL_STATUS, true);
+            self.set_ecat_event_bits(EcatEvent::DL_STATUS, true);
         }
     }
 }

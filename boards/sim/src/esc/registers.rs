@@ -6,10 +6,9 @@
 //! time written as 4 or 8 bytes, DC latch, SYNC activation) are collected in [`Effects`] and run
 //! by [`Et1100::finish_write`].
 
-use hal::esc::{regs, AlEvent};
+use hal::esc::{regs, AlControl, AlEvent, DcCyclicUnitControl, DcSyncStatus, EcatEvent, EscConfig};
 
 use super::access::{Effects, Side};
-use super::consts::*;
 use super::sm;
 use super::Et1100;
 
@@ -60,7 +59,7 @@ const ECAT_PLAIN_DC: [regs::Reg; 4] = [
     regs::DC_TIME_FILTER_DEPTH,
     regs::DC_SPEED_FILTER_DEPTH,
     regs::DC_CYCLIC_UNIT_CONTROL,
-    DC_LATCH_CONTROL,
+    regs::DC_LATCH_CONTROL,
 ];
 
 /// Registers the PDI side may write as plain storage.
@@ -85,7 +84,7 @@ fn in_any(set: &[regs::Reg], addr: u16) -> bool {
 impl Et1100 {
     /// The side that owns the SYNC unit registers (0x0980 bit 0).
     fn sync_unit_owner(&self) -> Side {
-        if self.u8_at(regs::DC_CYCLIC_UNIT_CONTROL.addr) & CYCLIC_UNIT_PDI != 0 {
+        if DcCyclicUnitControl(self.u8_at(regs::DC_CYCLIC_UNIT_CONTROL.addr)).sync_unit_pdi() {
             Side::Pdi
         } else {
             Side::Ecat
@@ -113,11 +112,11 @@ impl Et1100 {
                     self.set_al_event_bits(AlEvent::AL_CONTROL, false);
                 } else if let Some((n, off)) = sm::sm_register(addr) {
                     self.sm_register_pdi_read(n, off);
-                } else if addr == regs::DC_SYNC0_STATUS.addr {
-                    self.set_u8(addr, 0);
+                } else if regs::DC_SYNC0_STATUS.contains(addr) {
+                    self.set_u8(addr, v & !DcSyncStatus::ACTIVE);
                     self.set_al_event_bits(AlEvent::SYNC0, false);
-                } else if addr == regs::DC_SYNC1_STATUS.addr {
-                    self.set_u8(addr, 0);
+                } else if regs::DC_SYNC1_STATUS.contains(addr) {
+                    self.set_u8(addr, v & !DcSyncStatus::ACTIVE);
                     self.set_al_event_bits(AlEvent::SYNC1, false);
                 } else if regs::WATCHDOG_STATUS_PD.contains(addr) {
                     self.set_al_event_bits(AlEvent::WATCHDOG_PD, false);
@@ -125,9 +124,9 @@ impl Et1100 {
             }
             Side::Ecat => {
                 if regs::AL_STATUS.contains(addr) {
-                    self.set_ecat_event_bits(ecat_event::AL_STATUS, false);
+                    self.set_ecat_event_bits(EcatEvent::AL_STATUS, false);
                 } else if regs::DL_STATUS.contains(addr) {
-                    self.set_ecat_event_bits(ecat_event::DL_STATUS, false);
+                    self.set_ecat_event_bits(EcatEvent::DL_STATUS, false);
                 }
             }
         }
@@ -193,7 +192,7 @@ impl Et1100 {
             self.set_u8(addr, v);
         } else if regs::AL_STATUS.contains(addr) {
             if self.u8_at(addr) != v {
-                self.set_ecat_event_bits(ecat_event::AL_STATUS, true);
+                self.set_ecat_event_bits(EcatEvent::AL_STATUS, true);
             }
             self.set_u8(addr, v);
         } else if regs::EEPROM_PDI_ACCESS.contains(addr) {
@@ -229,10 +228,10 @@ impl Et1100 {
     pub(crate) fn finish_write(&mut self, side: Side, fx: &mut Effects) {
         if fx.al_control_written {
             self.set_al_event_bits(AlEvent::AL_CONTROL, true);
-            if self.u8_at(regs::ESC_CONFIG.addr) & ESC_CONFIG_DEVICE_EMULATION != 0 {
-                let state = self.u8_at(regs::AL_CONTROL.addr) & AL_STATE_MASK;
-                self.set_u16(regs::AL_STATUS.addr, u16::from(state));
-                self.set_ecat_event_bits(ecat_event::AL_STATUS, true);
+            if EscConfig(self.u8_at(regs::ESC_CONFIG.addr)).device_emulation() {
+                let control = AlControl::from_bits(self.u16_at(regs::AL_CONTROL.addr));
+                self.set_u16(regs::AL_STATUS.addr, u16::from(control.state_bits));
+                self.set_ecat_event_bits(EcatEvent::AL_STATUS, true);
             }
         }
         if fx.speed_counter_written {

@@ -12,17 +12,15 @@
 //!   (the PDI side's event) and ECAT event bit 4+n (the master's event) when enabled in control.
 
 use hal::esc::{
-    regs, AlEvent, SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus,
+    regs, AlEvent, EcatEvent, SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl,
+    SmStatus,
 };
 
 use super::access::Side;
-use super::consts::ecat_event;
 use super::Et1100;
 
 /// SyncManagers an ET1100 implements.
 pub(crate) const SM_COUNT: usize = regs::ET1100_SMS as usize;
-/// Buffer state value "no buffer written yet" (status bits 4..5).
-const NO_BUFFER_WRITTEN: u8 = 3;
 /// Activate bits ECAT may write (enable, repeat request, latch events).
 const ACTIVATE_WRITABLE: u8 = SmActivate::ENABLE
     | SmActivate::REPEAT_REQUEST
@@ -95,7 +93,7 @@ impl SmState {
                 }
             }
             _ => {
-                let state = self.last_written.unwrap_or(NO_BUFFER_WRITTEN);
+                let state = self.last_written.unwrap_or(SmStatus::BUFFER_STATE_NONE);
                 s |= state << SmStatus::BUFFER_STATE_SHIFT;
             }
         }
@@ -150,7 +148,7 @@ impl Et1100 {
         let al_on = pdi_event && c.control.0 & SmControl::PDI_IRQ != 0;
         self.set_al_event_bits(AlEvent::sm(n as u8), al_on);
         let ecat_on = ecat_ev && c.control.0 & SmControl::ECAT_IRQ != 0;
-        self.set_ecat_event_bits(ecat_event::sm(n), ecat_on);
+        self.set_ecat_event_bits(EcatEvent::sm(n as u8), ecat_on);
     }
 
     fn sm_is_writer(c: SmConfig, side: Side) -> bool {

@@ -7,9 +7,9 @@
 //! watchdog); on expiry 0x0440 bit 0 clears, 0x0442 counts up (both counters saturate) and AL
 //! event bit 6 is set. A time of 0 disables a watchdog.
 
+use hal::esc::watchdog::{tick_ns, PD_STATUS_OK};
 use hal::esc::{regs, AlEvent};
 
-use super::consts::*;
 use super::Et1100;
 
 /// Watchdog timer state.
@@ -27,8 +27,7 @@ pub(crate) struct Watchdogs {
 
 impl Et1100 {
     fn watchdog_tick_ns(&self) -> u64 {
-        (u64::from(self.u16_at(regs::WATCHDOG_DIVIDER.addr)) + WATCHDOG_DIVIDER_EXTRA)
-            * WATCHDOG_CLOCK_NS
+        tick_ns(self.u16_at(regs::WATCHDOG_DIVIDER.addr))
     }
 
     fn watchdog_deadline(&self, time_reg: regs::Reg, last: u64) -> Option<u64> {
@@ -65,8 +64,8 @@ impl Et1100 {
         if self.wd.pd_expired {
             self.wd.pd_expired = false;
         }
-        let status = self.u8_at(regs::WATCHDOG_STATUS_PD.addr) | WATCHDOG_PD_OK;
-        self.set_u8(regs::WATCHDOG_STATUS_PD.addr, status);
+        let status = self.u16_at(regs::WATCHDOG_STATUS_PD.addr) | PD_STATUS_OK;
+        self.set_u16(regs::WATCHDOG_STATUS_PD.addr, status);
     }
 
     /// Expires the watchdogs whose deadline has passed.
@@ -81,8 +80,8 @@ impl Et1100 {
         }
         if self.pd_deadline().is_some_and(|d| self.now >= d) {
             self.wd.pd_expired = true;
-            let status = self.u8_at(regs::WATCHDOG_STATUS_PD.addr) & !WATCHDOG_PD_OK;
-            self.set_u8(regs::WATCHDOG_STATUS_PD.addr, status);
+            let status = self.u16_at(regs::WATCHDOG_STATUS_PD.addr) & !PD_STATUS_OK;
+            self.set_u16(regs::WATCHDOG_STATUS_PD.addr, status);
             let c = self.u8_at(regs::WATCHDOG_COUNTER_PD.addr).saturating_add(1);
             self.set_u8(regs::WATCHDOG_COUNTER_PD.addr, c);
             self.set_al_event_bits(AlEvent::WATCHDOG_PD, true);

@@ -31,8 +31,8 @@ use super::emcy::{EmcyQueue, Emergency, EMCY_PAYLOAD_LEN};
 use super::header::{
     next_counter, MailboxErrorCode, MailboxHeader, MailboxType, HEADER_LEN, MAILBOX_ERROR_COMMAND,
 };
+use super::MAX_MAILBOX;
 use crate::od::{DeviceInfo, Dictionary, SmLayout};
-use crate::esm::sm_check::MAX_MAILBOX;
 
 /// SyncManager channel of the master → slave mailbox.
 const SM_MAILBOX_OUT: u8 = 0;

@@ -7,3 +7,7 @@ pub mod emcy;
 pub mod header;
 
 pub use dll::Mailbox;
+
+/// Largest mailbox the stack buffers (bytes). A profile with a larger mailbox is refused at
+/// INIT → PREOP with 0x0016 (`slave::esm::sm_check`) rather than overflowing a buffer.
+pub const MAX_MAILBOX: usize = 512;

@@ -383,4 +383,3 @@ impl Profile {
         self.defaults.len()
     }
 }
-

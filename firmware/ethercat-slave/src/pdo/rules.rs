@@ -23,8 +23,8 @@ use core::ops::RangeInclusive;
 
 use hal::esc::AlState;
 
-use crate::od::AbortCode;
 use crate::od::value::as_u32;
+use crate::od::AbortCode;
 use crate::od::{Dictionary, RxMappedWrite};
 
 /// RxPDO mapping objects (outputs, master → slave), ETG.1000.6 Table 67.

@@ -14,10 +14,6 @@ use hal::pdi::EscPdi;
 use hal::storage::NvStorage;
 
 use crate::diag::{diag_code_for_emcy, DiagError, DiagMessage, DiagParam, DiagType, Diagnosis};
-use crate::esm::sm_check;
-use crate::esm::supervision::{SyncSupervisor, DEFAULT_COUNTER_LIMIT};
-pub use crate::esm::sync::SyncMode;
-use crate::esm::{self, Checks, Outcome};
 use crate::leds::{self, ErrorIndication};
 use crate::mailbox::coe::{DomainStore, NoDomains, WithDomains};
 use crate::mailbox::emcy::{self, ActiveErrors, Emergency};
@@ -25,15 +21,18 @@ use crate::mailbox::Mailbox;
 use crate::od::{Dictionary, Profile};
 use crate::params::{Loaded, NoStorage, ParamError, ParamStore};
 use crate::pdo::{Direction, PdoPlan, MAX_IMAGE};
+use crate::slave::esm::sm_check;
+use crate::slave::esm::supervision::{SyncSupervisor, DEFAULT_COUNTER_LIMIT};
+pub use crate::slave::esm::sync::SyncMode;
+use esm::Outcome;
 
 mod application;
 mod errors;
-mod faults;
-mod transitions;
+pub mod esm;
 
+use crate::slave::esm::sync::{SyncConfig, SyncMode as Mode};
 pub use application::{AppEvent, Application, NoApplication};
-use crate::esm::sync::{SyncConfig, SyncMode as Mode};
-use transitions::read_sm;
+use esm::transitions::read_sm;
 
 /// SM channel of the process-data outputs.
 const SM_OUTPUTS: u8 = 2;
@@ -55,8 +54,6 @@ const SUB_SYNC_ERROR: u8 = 0x20;
 /// Error settings object (ETG.1020 §5.1): :02 sync error counter limit.
 const ERROR_SETTINGS: u16 = 0x10F1;
 const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
-/// Process-data watchdog status 0x0440 bit 0: 1 = running or disabled, 0 = expired.
-const WATCHDOG_PD_OK: u16 = 1 << 0;
 
 /// The EtherCAT slave with its object dictionary and its application `A`. `RAM` is the OD RAM
 /// size (the generated `<profile>::RAM_SIZE`, or the largest of several profiles to choose one

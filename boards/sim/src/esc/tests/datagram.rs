@@ -8,7 +8,11 @@ use hal::pdi::EscPdi;
 fn aprd_addresses_slave_whose_adp_reaches_zero() {
     // Every ESC increments ADP; the one that sees 0 is addressed (ETG.1000.4 auto-increment).
     let mut escs = ring(3);
-    let r = send(&mut escs, &[dg(APRD, 0xFFFE, 0x0010, &[0, 0])]).remove(0);
+    let r = send(
+        &mut escs,
+        &[dg(APRD, 0xFFFE, regs::STATION_ADDRESS.addr, &[0, 0])],
+    )
+    .remove(0);
     assert_eq!(u16le(&r.data), station(2));
     assert_eq!(r.wkc, 1);
     assert_eq!(r.adp, 0xFFFE_u16.wrapping_add(3));
@@ -18,10 +22,22 @@ fn aprd_addresses_slave_whose_adp_reaches_zero() {
 fn fprd_addresses_by_station_address_and_alias_only_when_enabled() {
     let mut escs = ring(2);
     // Alias 0x0A11 comes from SII word 4 (both ESCs); not used until 0x0103 bit 0 is set.
-    let (_, wkc) = send1(&mut escs, FPRD, W4_ALIAS, 0x0010, &[0, 0]);
+    let (_, wkc) = send1(
+        &mut escs,
+        FPRD,
+        W4_ALIAS,
+        regs::STATION_ADDRESS.addr,
+        &[0, 0],
+    );
     assert_eq!(wkc, 0);
     fpwr(&mut escs, 1, regs::DL_CONTROL_ALIAS.addr, &[1]);
-    let (data, wkc) = send1(&mut escs, FPRD, W4_ALIAS, 0x0010, &[0, 0]);
+    let (data, wkc) = send1(
+        &mut escs,
+        FPRD,
+        W4_ALIAS,
+        regs::STATION_ADDRESS.addr,
+        &[0, 0],
+    );
     assert_eq!((u16le(&data), wkc), (station(1), 1));
 }
 
@@ -38,12 +54,12 @@ fn brd_ors_data_across_slaves() {
 #[test]
 fn multi_slave_ring_wkc_counts_every_slave() {
     let mut escs = ring(3);
-    assert_eq!(send1(&mut escs, BRD, 0, 0x0000, &[0]).1, 3);
+    assert_eq!(send1(&mut escs, BRD, 0, regs::TYPE.addr, &[0]).1, 3);
     assert_eq!(send1(&mut escs, BWR, 0, regs::USER_RAM.addr, &[5]).1, 3);
     for k in 0..3 {
         assert_eq!(fprd(&mut escs, k, regs::USER_RAM.addr, 1).0, vec![5]);
     }
-    assert_eq!(send1(&mut escs, FPRD, 0x7777, 0x0000, &[0]).1, 0);
+    assert_eq!(send1(&mut escs, FPRD, 0x7777, regs::TYPE.addr, &[0]).1, 0);
 }
 
 #[test]
@@ -273,7 +289,7 @@ fn dl_status_shows_open_ports_for_topology() {
 #[test]
 fn identity_registers_describe_an_et1100_with_64_bit_dc() {
     let mut escs = ring(1);
-    let (r, _) = fprd(&mut escs, 0, 0x0000, 10);
+    let (r, _) = fprd(&mut escs, 0, regs::TYPE.addr, 10);
     assert_eq!((r[0], r[4], r[5], r[6]), (0x11, 8, 8, 8));
     let features = u16le(&r[8..]);
     assert_eq!(features & 0x000D, 0x000D, "FMMU bit op, DC, 64-bit DC");
@@ -282,8 +298,14 @@ fn identity_registers_describe_an_et1100_with_64_bit_dc() {
 #[test]
 fn error_counter_write_clears_its_group() {
     let mut escs = ring(1);
-    assert_eq!(send1(&mut escs, BWR, 0, 0x0300, &[0; 8]).1, 1);
-    assert_eq!(fprd(&mut escs, 0, 0x0300, 20).0, vec![0; 20]);
+    assert_eq!(
+        send1(&mut escs, BWR, 0, regs::RX_ERROR_COUNTERS.addr, &[0; 8]).1,
+        1
+    );
+    assert_eq!(
+        fprd(&mut escs, 0, regs::RX_ERROR_COUNTERS.addr, 20).0,
+        vec![0; 20]
+    );
 }
 
 #[test]

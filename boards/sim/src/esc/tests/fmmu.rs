@@ -68,7 +68,15 @@ fn logical_datagram_outside_every_fmmu_gets_no_wkc() {
         &mut escs,
         0,
         regs::fmmu(0).addr,
-        &fmmu(0x100, 4, 0, 7, 0x0F80, 0, FmmuType::READ | FmmuType::WRITE),
+        &fmmu(
+            0x100,
+            4,
+            0,
+            7,
+            regs::USER_RAM.addr,
+            0,
+            FmmuType::READ | FmmuType::WRITE,
+        ),
     );
     assert_eq!(send(&mut escs, &[ldg(LRW, 0x200, &[0; 4])])[0].wkc, 0);
     assert_eq!(send(&mut escs, &[ldg(LRW, 0x102, &[0; 4])])[0].wkc, 3);
@@ -81,7 +89,7 @@ fn soem_48_byte_write_configures_three_fmmus() {
     let w = [
         fmmu(0, 4, 0, 7, 0x1200, 0, 2),
         fmmu(4, 4, 0, 7, 0x1300, 0, 1),
-        fmmu(8, 1, 0, 7, 0x080D, 0, 1),
+        fmmu(8, 1, 0, 7, regs::sm(1).addr + regs::sm_offset::STATUS, 0, 1),
     ]
     .concat();
     assert_eq!(fpwr(&mut escs, 0, regs::fmmu(0).addr, &w), 1);
@@ -135,7 +143,15 @@ fn fmmu_can_map_sm_status_register_for_mailbox_polling() {
         &mut escs,
         0,
         regs::fmmu(2).addr,
-        &fmmu(0x40, 1, 0, 7, 0x080D, 0, FmmuType::READ),
+        &fmmu(
+            0x40,
+            1,
+            0,
+            7,
+            regs::sm(1).addr + regs::sm_offset::STATUS,
+            0,
+            FmmuType::READ,
+        ),
     );
     assert_eq!(
         send(&mut escs, &[ldg(LRD, 0x40, &[0])])[0].data[0] & 0x08,

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::esc::{FrameError, Segment};
+use hal::esc::regs;
 
 #[test]
 fn returned_frame_has_locally_administered_source_mac() {
@@ -31,7 +32,10 @@ fn non_ethercat_frame_is_rejected_and_left_untouched() {
 fn overrunning_datagram_rejects_the_whole_frame_without_side_effects() {
     // A frame whose structure is broken would fail the FCS: no datagram of it takes effect.
     let mut escs = ring(1);
-    let mut f = build_frame(&[dg(FPWR, station(0), 0x0F80, &[0xAA]), dg(BRD, 0, 0, &[0])]);
+    let mut f = build_frame(&[
+        dg(FPWR, station(0), regs::USER_RAM.addr, &[0xAA]),
+        dg(BRD, 0, 0, &[0]),
+    ]);
     let n = f.len();
     f.truncate(n - 1);
     let len = u16::from_le_bytes([f[14], f[15]]) & 0x7FF;
@@ -40,7 +44,7 @@ fn overrunning_datagram_rejects_the_whole_frame_without_side_effects() {
         process_frame(&mut f, escs.iter_mut()),
         Err(FrameError::DatagramOverrun { index: 1 })
     );
-    assert_eq!(fprd(&mut escs, 0, 0x0F80, 1).0, vec![0]);
+    assert_eq!(fprd(&mut escs, 0, regs::USER_RAM.addr, 1).0, vec![0]);
 }
 
 #[test]
@@ -105,7 +109,7 @@ fn structurally_valid_random_datagrams_never_panic() {
         let adp = rng(&mut s) as u16;
         let ado = match i % 3 {
             0 => (rng(&mut s) % 0x3100) as u16,
-            1 => 0x0500 + (rng(&mut s) % 0x500) as u16,
+            1 => regs::EEPROM_CONFIG.addr + (rng(&mut s) % 0x500) as u16,
             _ => rng(&mut s) as u16,
         };
         let len = (rng(&mut s) % 80) as usize;

@@ -162,7 +162,7 @@ pub(super) fn ring(n: usize) -> Vec<Et1100> {
             &mut escs,
             APWR,
             adp,
-            0x0010,
+            hal::esc::regs::STATION_ADDRESS.addr,
             &(0x1000 + k as u16).to_le_bytes(),
         );
         assert_eq!(wkc, 1);

@@ -5,7 +5,7 @@
 use hal::esc::AlState;
 
 use crate::od::value::{as_u32, check_length, check_range};
-use crate::od::{Access, AbortCode, DataType, Dictionary, Entry, ObjectCode, StoreError, Value};
+use crate::od::{AbortCode, Access, DataType, Dictionary, Entry, ObjectCode, StoreError, Value};
 use crate::pdo::rules as pdo_rules;
 
 /// Kind of access.
@@ -28,7 +28,11 @@ pub(crate) fn check_complete_access(od: &Dictionary<'_>) -> Result<(), AbortCode
 }
 
 /// The entry `index:subindex`: 0x06020000 if the object is missing, 0x06090011 if the subindex.
-pub(crate) fn find_entry(od: &Dictionary<'_>, index: u16, subindex: u8) -> Result<&'static Entry, AbortCode> {
+pub(crate) fn find_entry(
+    od: &Dictionary<'_>,
+    index: u16,
+    subindex: u8,
+) -> Result<&'static Entry, AbortCode> {
     let object = od.object(index).ok_or(AbortCode::ObjectNotFound)?;
     object.entry(subindex).ok_or(AbortCode::SubindexNotFound)
 }
@@ -129,7 +133,10 @@ pub(crate) fn store_abort(e: StoreError) -> AbortCode {
 }
 
 /// The bytes an upload sends: a RAM VISIBLE_STRING up to its first NUL, anything else whole.
-pub(crate) fn upload_value<'a>(od: &'a Dictionary<'_>, entry: &Entry) -> Result<&'a [u8], AbortCode> {
+pub(crate) fn upload_value<'a>(
+    od: &'a Dictionary<'_>,
+    entry: &Entry,
+) -> Result<&'a [u8], AbortCode> {
     let bytes = od.value(entry).map_err(store_abort)?;
     let is_ram_string =
         entry.data_type == DataType::VisibleString && matches!(entry.value, Value::Ram(_));
@@ -139,4 +146,3 @@ pub(crate) fn upload_value<'a>(od: &'a Dictionary<'_>, entry: &Entry) -> Result<
     let len = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
     Ok(bytes.get(..len).unwrap_or_default())
 }
-

@@ -30,10 +30,10 @@
 
 use hal::esc::AlState;
 
-use crate::od::AbortCode;
-use crate::pdo::rules as pdo_rules;
 use super::access::{check_access, write_entry, AccessKind};
+use crate::od::AbortCode;
 use crate::od::{Dictionary, Entry, Object, ObjectCode, Value};
+use crate::pdo::rules as pdo_rules;
 
 /// Bits subindex 0 occupies in a complete-access stream (ETG.1000.6; SOEM `uint8 n; uint8 nu1`).
 pub const SI0_STREAM_BITS: usize = 16;

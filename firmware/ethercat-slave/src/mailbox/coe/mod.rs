@@ -32,6 +32,7 @@ use hal::esc::AlState;
 pub use crate::od::{AbortCode, DomainStore, DownloadHook, NoDomains, RamDomain, WithDomains};
 pub use sdo::SEGMENT_BUFFER_CAPACITY;
 
+use crate::mailbox::header::MailboxErrorCode;
 use crate::od::Dictionary;
 
 /// Length of the CoE header in bytes.
@@ -84,18 +85,6 @@ impl CoeService {
     }
 }
 
-/// Mailbox error reply codes (ETG.1000.4 §5.6, mailbox "Error Reply Service" detail codes).
-mod mbx_error {
-    /// The mailbox service is not supported.
-    pub const SERVICE_NOT_SUPPORTED: u16 = 0x0004;
-    /// The mailbox protocol header is invalid.
-    pub const INVALID_HEADER: u16 = 0x0005;
-    /// The mailbox data is too short.
-    pub const SIZE_TOO_SHORT: u16 = 0x0006;
-    /// Not enough memory to process the request.
-    pub const NO_MORE_MEMORY: u16 = 0x0007;
-}
-
 /// A CoE request that is invalid at the mailbox level; the mailbox layer answers it with a
 /// mailbox error reply carrying [`CoeError::mailbox_error_code`]. (Invalid SDO *content* is not an
 /// error here: it is answered with an SDO abort frame.)
@@ -118,10 +107,10 @@ impl CoeError {
     /// The mailbox error reply code (ETG.1000.4) for this error.
     pub const fn mailbox_error_code(&self) -> u16 {
         match self {
-            Self::ServiceNotSupported => mbx_error::SERVICE_NOT_SUPPORTED,
-            Self::InvalidHeader => mbx_error::INVALID_HEADER,
-            Self::SizeTooShort => mbx_error::SIZE_TOO_SHORT,
-            Self::NoMoreMemory => mbx_error::NO_MORE_MEMORY,
+            Self::ServiceNotSupported => MailboxErrorCode::ServiceNotSupported as u16,
+            Self::InvalidHeader => MailboxErrorCode::InvalidHeader as u16,
+            Self::SizeTooShort => MailboxErrorCode::SizeTooShort as u16,
+            Self::NoMoreMemory => MailboxErrorCode::NoMoreMemory as u16,
         }
     }
 }

@@ -26,15 +26,15 @@
 
 use hal::esc::AlState;
 
-use crate::od::AbortCode;
 use super::access::{
     check_access, check_complete_access, find_entry, find_writable, upload_value, write_entry,
     AccessKind,
 };
 use super::complete_access;
-use crate::od::DomainStore;
-use crate::od::value::check_length;
 use super::CoeError;
+use crate::od::value::check_length;
+use crate::od::AbortCode;
+use crate::od::DomainStore;
 use crate::od::{Dictionary, Entry, Value};
 
 /// Capacity in bytes of the buffer that holds a segmented download until its last segment (and

@@ -30,11 +30,11 @@
 //! the CiA 301 complex type where one applies (0x0023 IDENTITY for 1018h, 0x0021 PDO_MAPPING for
 //! 16xxh/1Axxh), else the type of subindex 1.
 
-use crate::od::AbortCode;
-use crate::pdo::rules::{RX_MAPPING, TX_MAPPING};
 use super::CoeError;
+use crate::od::AbortCode;
 use crate::od::{Entry, Object, ObjectCode, PdoMappable, Profile};
 use crate::params::is_storable;
+use crate::pdo::rules::{RX_MAPPING, TX_MAPPING};
 
 /// Length of the SDO information header.
 pub const INFO_HEADER_LEN: usize = 4;

@@ -10,8 +10,8 @@ use hal::esc::AlState;
 
 use super::{CoeError, CoeServer};
 use crate::od::{
-    Access, CoeDetails, DataType, DeviceInfo, Dictionary, Entry, Object, ObjectCode,
-    PdoMappable, Profile, SmLayout, SyncSupport, Value,
+    Access, CoeDetails, DataType, DeviceInfo, Dictionary, Entry, Object, ObjectCode, PdoMappable,
+    Profile, SmLayout, SyncSupport, Value,
 };
 
 // ---------------------------------------------------------------------------------------------

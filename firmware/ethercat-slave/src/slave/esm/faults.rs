@@ -1,14 +1,17 @@
 //! Faults the slave detects by itself: SM reconfiguration, the process-data watchdog, SYNC0
 //! supervision; each drops the state with its AL status code (ETG.1000.6 Table 11).
 
-use super::*;
+use super::super::*;
 
 impl<const RAM: usize, A: Application> Slave<RAM, A> {
     /// SM activation changed: the master rewrote an SM. In PREOP and above the mailbox SMs must
     /// still match (else INIT + 0x0016, as on INIT → PREOP); in SAFEOP and OP also SM2/SM3, with
     /// the resulting states of ETG.1000.6 Table 11: 0x001D → SAFEOP + error, 0x001E → PREOP +
     /// error.
-    pub(super) fn revalidate_sms<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+    pub(in crate::slave) fn revalidate_sms<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<(), P::Error> {
         let state = self.status.state;
         let device = self.profile.device;
         if esm::state_rank(state) < 1 || state == AlState::Boot {
@@ -57,9 +60,12 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     /// Process-data watchdog (0x0440 bit 0 cleared by the ESC when SM2 was not written within
     /// the watchdog time): in OP the drive drops to SAFEOP with 0x001B (ETG.1000.6 Table 11).
     /// Reading 0x0440 acknowledges the AL event.
-    pub(super) fn check_watchdog<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+    pub(in crate::slave) fn check_watchdog<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<(), P::Error> {
         let status = pdi.read_u16(regs::WATCHDOG_STATUS_PD.addr)?;
-        if status & WATCHDOG_PD_OK == 0 && self.status.state == AlState::Op {
+        if status & hal::esc::watchdog::PD_STATUS_OK == 0 && self.status.state == AlState::Op {
             self.raise_fault(
                 pdi,
                 AlState::SafeOp,
@@ -72,7 +78,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
 
     /// Counts missed SYNC0 events in DC modes (SAFEOP, OP) and leaves OP with 0x001A when the
     /// counter passes 10F1h:02; mirrors 1C32h:0B (missed) and 1C32h:20 (sync error).
-    pub(super) fn supervise_sync<P: EscPdi>(
+    pub(in crate::slave) fn supervise_sync<P: EscPdi>(
         &mut self,
         pdi: &mut P,
         now_ns: u64,
@@ -123,7 +129,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     }
 
     /// Leaves the current state for `fallback` (if lower) with the error flag and `code`.
-    pub(super) fn raise_fault<P: EscPdi>(
+    pub(in crate::slave) fn raise_fault<P: EscPdi>(
         &mut self,
         pdi: &mut P,
         fallback: AlState,

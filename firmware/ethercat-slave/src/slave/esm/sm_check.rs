@@ -3,11 +3,8 @@
 
 use hal::esc::{AlStatusCode, SmConfig, SmDirection, SmMode};
 
+use crate::mailbox::MAX_MAILBOX;
 use crate::od::{DeviceInfo, SmLayout};
-
-/// Largest mailbox the stack buffers (bytes). A profile with a larger mailbox is refused at
-/// INIT → PREOP with 0x0016 rather than overflowing a buffer.
-pub const MAX_MAILBOX: usize = 512;
 
 /// Checks one mailbox SM against its layout: enabled, same start and length, mailbox mode,
 /// the right direction.

@@ -1,5 +1,6 @@
-//! EtherCAT state machine (ETG.1000.6 §6.4): a pure decision function, and the checks and
-//! supervision its transitions rest on.
+//! EtherCAT state machine (ETG.1000.6 §6.4), all of it: the pure decision function, the checks
+//! and supervision its transitions rest on, and the slave's side of it (requests, the entry and
+//! exit work of the states, the faults that drop the state).
 //!
 //! | module | what |
 //! |---|---|
@@ -7,6 +8,8 @@
 //! | [`sm_check`] | SM0/SM1 against the mailbox layout (0x0016), SM2/SM3 against the mapped sizes (0x001D/0x001E) |
 //! | [`sync`] | free-run / SM-synchronous / DC SYNC0 from 0x0981, 0x09A0 and 1C32h:01; accepted per profile |
 //! | [`supervision`] | ETG.1020 sync error counter, SYNC0 period check |
+//! | `transitions` | the slave's state change requests: checks a transition needs, the delayed SAFEOP → OP gate, applying an outcome |
+//! | `faults` | faults the slave detects by itself (SM re-validation, PD watchdog, SYNC0 supervision) and the state they drop to |
 //!
 //! The caller reads AL control once, evaluates the [`Checks`] of the configuration the master
 //! wrote, calls [`decide`], and then applies the [`Outcome`]: it writes the AL status code first
@@ -15,9 +18,11 @@
 
 use hal::esc::{AlControl, AlState, AlStatus, AlStatusCode};
 
+pub(super) mod faults;
 pub mod sm_check;
 pub mod supervision;
 pub mod sync;
+pub(super) mod transitions;
 
 /// Results of the configuration checks a transition may need. Each is `Ok` or carries the AL
 /// status code the transition must be refused with.

@@ -1,10 +1,11 @@
 //! State change requests: the checks a transition needs, the delayed SAFEOP → OP gate, and
 //! applying an ESM outcome (AL status code before AL status, entry/exit work of the states).
 
+use super::super::*;
 use super::*;
 
 impl<const RAM: usize, A: Application> Slave<RAM, A> {
-    pub(super) fn handle_al_control<P: EscPdi>(
+    pub(in crate::slave) fn handle_al_control<P: EscPdi>(
         &mut self,
         pdi: &mut P,
         control: AlControl,
@@ -68,7 +69,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     }
 
     /// Evaluates only the checks the requested transition needs.
-    pub(super) fn checks_for<P: EscPdi>(
+    pub(in crate::slave) fn checks_for<P: EscPdi>(
         &mut self,
         pdi: &mut P,
         from: AlState,
@@ -107,7 +108,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     }
 
     /// Builds both copy plans from the OD and checks SM2/SM3 against them.
-    pub(super) fn prepare_process_data<P: EscPdi>(
+    pub(in crate::slave) fn prepare_process_data<P: EscPdi>(
         &mut self,
         pdi: &mut P,
     ) -> Result<Result<(), AlStatusCode>, P::Error> {
@@ -144,7 +145,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
 
     /// Writes the outcome (code first, then status, each only if changed) and runs the work of
     /// the states left and entered.
-    pub(super) fn apply<P: EscPdi>(
+    pub(in crate::slave) fn apply<P: EscPdi>(
         &mut self,
         pdi: &mut P,
         from: AlState,
@@ -172,7 +173,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
         Ok(())
     }
 
-    pub(super) fn leave_and_enter<P: EscPdi>(
+    pub(in crate::slave) fn leave_and_enter<P: EscPdi>(
         &mut self,
         pdi: &mut P,
         from: AlState,
@@ -231,7 +232,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     }
 
     /// Mirrors the active synchronisation into 1C32h/1C33h (:01 sync type, :02 cycle time).
-    pub(super) fn publish_sync_parameters(&mut self) {
+    pub(in crate::slave) fn publish_sync_parameters(&mut self) {
         let mode = self.sync.mode as u16;
         let cycle = self.sync.cycle_ns;
         let mut od = Dictionary::new(self.profile, &mut self.ram);
@@ -259,7 +260,7 @@ enum OpGate {
 }
 
 /// Reads the 8 register bytes of SM `n`.
-pub(super) fn read_sm<P: EscPdi>(pdi: &mut P, n: u8) -> Result<SmConfig, P::Error> {
+pub(in crate::slave) fn read_sm<P: EscPdi>(pdi: &mut P, n: u8) -> Result<SmConfig, P::Error> {
     let mut b = [0u8; SmConfig::LEN];
     pdi.read(regs::sm(n).addr, &mut b)?;
     Ok(SmConfig::from_bytes(b))
