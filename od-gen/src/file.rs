@@ -15,6 +15,10 @@ pub struct ProfileFile {
     /// Free text describing the profile (ESI device comment is not emitted; for humans).
     #[serde(default)]
     pub description: String,
+    /// `"drive"` (default: a CiA402 servo drive, the firmware's profiles) or `"device"` (any
+    /// other EtherCAT device built on the slave stack: no `[motor_faults]`).
+    #[serde(default)]
+    pub kind: Option<String>,
     /// The vendor.
     pub vendor: VendorFile,
     /// Device identity.
@@ -36,8 +40,8 @@ pub struct ProfileFile {
     #[serde(default)]
     pub esm: EsmFile,
     /// `[motor_faults]`: the CiA402 error code (603Fh, EMCY) of each internal motor fault, by
-    /// fault name ([`crate::model::MOTOR_FAULT_NAMES`]). Every fault must be mapped; an absent
-    /// table is reported as every name missing.
+    /// fault name ([`crate::model::MOTOR_FAULT_NAMES`]). In a drive profile every fault must be
+    /// mapped (an absent table is reported as every name missing); a device profile has none.
     #[serde(default)]
     pub motor_faults: BTreeMap<String, u16>,
     /// RxPDOs (master → slave, SM2).

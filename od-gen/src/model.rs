@@ -883,8 +883,10 @@ pub struct Profile {
     pub sdo_write_to_rx_mapped: RxMappedWrite,
     /// ESM rules.
     pub esm: EsmRules,
+    /// A drive (the firmware's profiles) or another device on the slave stack.
+    pub kind: ProfileKind,
     /// CiA402 error code (603Fh, EMCY) of each internal motor fault, in the order of
-    /// [`MOTOR_FAULT_NAMES`] (`[motor_faults]`).
+    /// [`MOTOR_FAULT_NAMES`] (`[motor_faults]`); all 0 in a device profile.
     pub motor_faults: [u16; MOTOR_FAULT_COUNT],
     /// RxPDOs, sorted by index.
     pub rx_pdos: Vec<Pdo>,
@@ -892,6 +894,27 @@ pub struct Profile {
     pub tx_pdos: Vec<Pdo>,
     /// All objects (declared and derived), sorted by index.
     pub objects: Vec<Object>,
+}
+
+/// What a profile describes (profile key `kind`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProfileKind {
+    /// A CiA402 servo drive: the firmware's profiles, with `[motor_faults]`.
+    Drive,
+    /// Any other EtherCAT device built on the slave stack (an I/O module, ...): the object
+    /// dictionary, SII and ESI only.
+    Device,
+}
+
+impl ProfileKind {
+    /// Parses the profile-file spelling (`"drive"`, `"device"`).
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "drive" => Some(Self::Drive),
+            "device" => Some(Self::Device),
+            _ => None,
+        }
+    }
 }
 
 impl Profile {

@@ -81,7 +81,25 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         safeop_op_timeout_ms: f.esm.safeop_op_timeout_ms,
         op_exit_while_enabled_error: f.esm.op_exit_while_enabled_error,
     };
-    let motor_faults = motor_faults(&f.motor_faults)?;
+    let kind = match f.kind.as_deref() {
+        None => ProfileKind::Drive,
+        Some(s) => ProfileKind::parse(s).ok_or_else(|| {
+            fault(
+                "kind",
+                Invalid::Value(format!("`{s}` is not drive or device")),
+            )
+        })?,
+    };
+    let motor_faults = match kind {
+        ProfileKind::Drive => motor_faults(&f.motor_faults)?,
+        ProfileKind::Device if f.motor_faults.is_empty() => [0; MOTOR_FAULT_COUNT],
+        ProfileKind::Device => {
+            return Err(fault(
+                "motor_faults",
+                Invalid::Value("a device profile (kind = \"device\") has no motor faults".into()),
+            ))
+        }
+    };
     let sdo_write_to_rx_mapped = match f.pdo.sdo_write_to_rx_mapped.as_deref() {
         None => RxMappedWrite::Allowed,
         Some(s) => RxMappedWrite::parse(s).ok_or_else(|| {
@@ -234,6 +252,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         max_pdo_entries: max_entries,
         sdo_write_to_rx_mapped,
         esm,
+        kind,
         motor_faults,
         rx_pdos,
         tx_pdos,

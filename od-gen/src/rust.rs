@@ -29,7 +29,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::model::{
-    Access, DataType, Entry, Object, Profile, Role, Sm, Storage, MOTOR_FAULT_NAMES,
+    Access, DataType, Entry, Object, Profile, ProfileKind, Role, Sm, Storage, MOTOR_FAULT_NAMES,
 };
 
 /// Where each RAM variable of a profile lives.
@@ -146,6 +146,13 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         p.name, p.device.name
     );
     let _ = writeln!(out, "pub mod {} {{", p.name);
+    if target.drive.is_some() && p.kind == ProfileKind::Device {
+        let _ = writeln!(
+            out,
+            "    compile_error!(\"profile `{}` is a device profile (kind = \\\"device\\\"): it has no drive bindings\");",
+            p.name
+        );
+    }
     let _ = writeln!(
         out,
         "    use {}::od::{{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value}};\n",

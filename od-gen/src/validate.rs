@@ -445,6 +445,9 @@ fn esm(p: &Profile) -> Result<(), Fault> {
 /// `[motor_faults]`: error code 0 is "no error" in 603Fh (CiA402) and in an EMCY it means "error
 /// reset", so a fault mapped to it would be invisible to the master.
 fn motor_faults(p: &Profile) -> Result<(), Fault> {
+    if p.kind == ProfileKind::Device {
+        return Ok(());
+    }
     match MOTOR_FAULT_NAMES
         .iter()
         .zip(p.motor_faults)

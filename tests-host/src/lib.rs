@@ -1,13 +1,14 @@
 //! Shared helpers of the end-to-end tests: a single-threaded runtime for the in-process
 //! ethercrab master, the expected identity from the profile, and the SOEM (pysoem) harness.
 
+pub mod io_module;
 pub mod soem;
 
 use std::future::Future;
 use std::time::Duration;
 
 use board_sim::inproc::{InMemoryTxRx, InProcess};
-use board_sim::Segment;
+use board_sim::{Segment, SimDevice};
 use ethercrab::{Command, MainDevice, MainDeviceConfig, Timeouts};
 use hal::esc::regs;
 
@@ -20,9 +21,10 @@ pub fn master() -> (InProcess, InMemoryTxRx) {
     master_for(Segment::new("standard", 1).expect("standard profile"))
 }
 
-/// An ethercrab master connected in process to `segment`. The wall-clock timeouts are generous
+/// An ethercrab master connected in process to `segment` (drives, or any other simulated
+/// device). The wall-clock timeouts are generous
 /// so that a loaded CI machine does not time out; the simulated drives answer at once.
-pub fn master_for(segment: Segment) -> (InProcess, InMemoryTxRx) {
+pub fn master_for<D: SimDevice>(segment: Segment<D>) -> (InProcess<D>, InMemoryTxRx<D>) {
     const GENEROUS: Duration = Duration::from_secs(2);
     InProcess::connect(
         segment,

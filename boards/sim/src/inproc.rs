@@ -13,7 +13,8 @@ use std::task::{Context, Poll};
 use ethercrab::error::Error;
 use ethercrab::{MainDevice, MainDeviceConfig, PduRx, PduStorage, PduTx, Timeouts};
 
-use crate::segment::Segment;
+use crate::drive::SimDrive;
+use crate::segment::{Segment, SimDevice};
 
 /// Frames in flight in the master's PDU loop.
 const MAX_FRAMES: usize = 16;
@@ -49,17 +50,17 @@ pub struct Faults {
 }
 
 /// Shared between the transport and the test: the segment, the clock and fault switches.
-pub struct Shared {
-    segment: Mutex<Segment>,
+pub struct Shared<D: SimDevice = SimDrive> {
+    segment: Mutex<Segment<D>>,
     clock: SimClock,
     faults: Mutex<Faults>,
     frames: AtomicU64,
 }
 
-impl Shared {
+impl<D: SimDevice> Shared<D> {
     /// Locks the segment (to advance time or inspect drives). A poisoned lock (a panicking test
     /// thread) is recovered: the segment has no invariant a panic elsewhere could break.
-    pub fn segment(&self) -> MutexGuard<'_, Segment> {
+    pub fn segment(&self) -> MutexGuard<'_, Segment<D>> {
         self.segment.lock().unwrap_or_else(|p| p.into_inner())
     }
     /// Advances simulated time by `dt_ns` (SYNC0s and timers fire on the way).
@@ -99,13 +100,13 @@ impl Shared {
 }
 
 /// The transport future: spawn it on the runtime that runs the master.
-pub struct InMemoryTxRx {
+pub struct InMemoryTxRx<D: SimDevice = SimDrive> {
     tx: PduTx<'static>,
     rx: PduRx<'static>,
-    shared: Arc<Shared>,
+    shared: Arc<Shared<D>>,
 }
 
-impl Future for InMemoryTxRx {
+impl<D: SimDevice> Future for InMemoryTxRx<D> {
     type Output = Result<(), Error>;
 
     fn poll(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
@@ -131,21 +132,21 @@ impl Future for InMemoryTxRx {
 }
 
 /// An ethercrab master connected to `segment` in process.
-pub struct InProcess {
+pub struct InProcess<D: SimDevice = SimDrive> {
     /// The master.
     pub maindevice: Arc<MainDevice<'static>>,
     /// Segment, clock and fault switches.
-    pub shared: Arc<Shared>,
+    pub shared: Arc<Shared<D>>,
 }
 
-impl InProcess {
+impl<D: SimDevice> InProcess<D> {
     /// Connects a new master (with its own PDU storage) to `segment`; spawn the returned
     /// transport before using the master.
     pub fn connect(
-        segment: Segment,
+        segment: Segment<D>,
         timeouts: Timeouts,
         config: MainDeviceConfig,
-    ) -> (Self, InMemoryTxRx) {
+    ) -> (Self, InMemoryTxRx<D>) {
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
             Box::leak(Box::new(PduStorage::new()));
         // A freshly leaked storage has never been split.

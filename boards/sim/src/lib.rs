@@ -17,4 +17,4 @@ pub mod segment;
 pub mod servo;
 pub mod storage;
 
-pub use segment::{Segment, SegmentError};
+pub use segment::{Segment, SegmentError, SimDevice};

@@ -5,7 +5,7 @@
 //! as the host allows and still see every SYNC0 at its exact time.
 
 use crate::drive::SimDrive;
-use crate::esc;
+use crate::esc::{self, Et1100};
 
 /// Time a frame of `len` bytes spends on a 100 Mbit/s wire, plus the fixed forwarding latency
 /// of the master's NIC (a few µs on a PC); both only need to be plausible, not exact.
@@ -40,9 +40,43 @@ impl std::fmt::Display for SegmentError {
 
 impl std::error::Error for SegmentError {}
 
-/// Drives in ring order and the simulated time.
-pub struct Segment {
-    drives: Vec<SimDrive>,
+/// A device on the simulated segment: an ESC and the firmware behind it, advanced in simulated
+/// time. [`SimDrive`] is the servo drive; any other slave built on `ethercat-slave` (e.g. the
+/// digital I/O module of the tests) plugs in the same way.
+pub trait SimDevice {
+    /// The device's ESC.
+    fn esc(&self) -> &Et1100;
+    /// The device's ESC, mutable (frames pass through it).
+    fn esc_mut(&mut self) -> &mut Et1100;
+    /// Earliest simulated time at which the device has something to do.
+    fn next_event_ns(&self) -> Option<u64>;
+    /// Moves the device to simulated time `now_ns`, running the firmware handlers that are due.
+    fn run_until(&mut self, now_ns: u64);
+    /// Runs the ESC event handler while the IRQ line is asserted.
+    fn service_irq(&mut self, now_ns: u64);
+}
+
+impl SimDevice for SimDrive {
+    fn esc(&self) -> &Et1100 {
+        &self.esc
+    }
+    fn esc_mut(&mut self) -> &mut Et1100 {
+        &mut self.esc
+    }
+    fn next_event_ns(&self) -> Option<u64> {
+        SimDrive::next_event_ns(self)
+    }
+    fn run_until(&mut self, now_ns: u64) {
+        SimDrive::run_until(self, now_ns);
+    }
+    fn service_irq(&mut self, now_ns: u64) {
+        SimDrive::service_irq(self, now_ns);
+    }
+}
+
+/// Devices in ring order and the simulated time.
+pub struct Segment<D: SimDevice = SimDrive> {
+    drives: Vec<D>,
     now_ns: u64,
 }
 
@@ -57,16 +91,26 @@ impl Segment {
         let drives = (0..count)
             .map(|_| SimDrive::new(fw_profile, &sii).map_err(SegmentError::Slave))
             .collect::<Result<Vec<_>, _>>()?;
-        let mut segment = Self { drives, now_ns: 0 };
+        Ok(Self::from_devices(drives))
+    }
+}
+
+impl<D: SimDevice> Segment<D> {
+    /// A segment of `devices` in ring order, at simulated time 0.
+    pub fn from_devices(devices: Vec<D>) -> Self {
+        let mut segment = Self {
+            drives: devices,
+            now_ns: 0,
+        };
         segment.wire_ports();
-        Ok(segment)
+        segment
     }
 
     /// Tells each ESC whether a next drive hangs on its port 1 (the last one closes the ring).
     fn wire_ports(&mut self) {
         let n = self.drives.len();
         for (i, d) in self.drives.iter_mut().enumerate() {
-            d.esc.set_port_connected(1, i + 1 < n);
+            d.esc_mut().set_port_connected(1, i + 1 < n);
         }
     }
 
@@ -76,12 +120,12 @@ impl Segment {
     }
 
     /// The drives in ring order.
-    pub fn drives(&self) -> &[SimDrive] {
+    pub fn drives(&self) -> &[D] {
         &self.drives
     }
 
     /// The drives in ring order, mutable (for fault injection in tests).
-    pub fn drives_mut(&mut self) -> &mut [SimDrive] {
+    pub fn drives_mut(&mut self) -> &mut [D] {
         &mut self.drives
     }
 
@@ -93,7 +137,7 @@ impl Segment {
         let t = self.now_ns + wire_time_ns(frame.len());
         self.advance_to(t);
         let mut reply = frame.to_vec();
-        esc::process_frame(&mut reply, self.drives.iter_mut().map(|d| &mut d.esc)).ok()?;
+        esc::process_frame(&mut reply, self.drives.iter_mut().map(|d| d.esc_mut())).ok()?;
         for d in &mut self.drives {
             d.service_irq(t);
         }

@@ -41,8 +41,7 @@ use heapless::Vec;
 use crate::mailbox::emcy::Emergency;
 use crate::od::{DataType, Dictionary, StoreError};
 
-/// Index of the diagnosis history object.
-pub const DIAG_HISTORY: u16 = 0x10F3;
+pub use crate::od::index::DIAG_HISTORY;
 
 /// Subindices of 10F3h.
 pub mod sub {

@@ -1,12 +1,16 @@
 //! Object dictionary (CiA 301 / ETG.1000.6): the data model od-gen generates ([`model`]), the
 //! run-time store over the OD RAM ([`store`]), the access rules every path into it shares (SDO
 //! abort codes [`abort`], value checks [`value`]), DOMAIN data outside the RAM ([`domain`]) and
-//! the hook run after a committed download ([`hook`]).
+//! the hook run after a committed download ([`hook`]), the object indices of the communication
+//! area the stack serves ([`index`]) and the rule which entries are stored parameters
+//! ([`storable`]).
 
 pub mod abort;
 pub mod domain;
 pub mod hook;
+pub mod index;
 pub mod model;
+pub mod storable;
 pub mod store;
 pub mod value;
 

@@ -64,15 +64,13 @@ mod tests;
 
 use hal::storage::{NvStorage, StorageError};
 
+pub use crate::od::index::{RESTORE_DEFAULTS, STORE_PARAMETERS};
+pub use crate::od::storable::{is_storable, NOT_STORED};
 use crate::od::{AbortCode, DownloadHook};
-use crate::od::{Dictionary, Entry, Object, PdoMappable, Profile, StoreError, Value};
+use crate::od::{Dictionary, Profile, StoreError};
 
 use record::{Identity, Record, RecordError, Writer};
 
-/// Store parameters (CiA 301 §7.5.2.13).
-pub const STORE_PARAMETERS: u16 = 0x1010;
-/// Restore default parameters (CiA 301 §7.5.2.14).
-pub const RESTORE_DEFAULTS: u16 = 0x1011;
 /// Signature that triggers a store: ASCII `"save"` as a little-endian u32 (CiA 301: MSB 'e'
 /// 65h, 'v' 76h, 'a' 61h, LSB 's' 73h).
 pub const SIGNATURE_SAVE: u32 = u32::from_le_bytes(*b"save");
@@ -87,9 +85,6 @@ pub const SAVES_AUTONOMOUSLY: u32 = 1 << 1;
 pub const STORE_CAPABILITIES: u32 = SAVES_ON_COMMAND;
 /// What 1011h:n reads: bit 0 = the device restores default parameters (CiA 301 §7.5.2.14).
 pub const RESTORE_CAPABILITIES: u32 = 1 << 0;
-/// Objects never stored: the store/restore commands themselves and the SM parameters the stack
-/// maintains from the active synchronisation (ETG.1020 §5.1).
-pub const NOT_STORED: [u16; 4] = [STORE_PARAMETERS, RESTORE_DEFAULTS, 0x1C32, 0x1C33];
 /// The two storage slots the records alternate between.
 pub const SLOTS: [usize; 2] = [0, 1];
 /// Default capacity of one record buffer; [`ParamStore`] holds two. Enough for the standard
@@ -134,28 +129,6 @@ impl Group {
             Self::Manufacturer => matches!(index, 0x2000..=0x5FFF),
         }
     }
-}
-
-/// Whether `entry` of `object` is a stored parameter (see the module documentation). The one
-/// rule for "backup" entries too: SDO information list type 4 and ObjAccess bit 8 use it, and
-/// the generated dictionary asserts at compile time that od-gen's ESI `Flags/Backup` agree.
-pub const fn is_storable(object: &Object, entry: &Entry) -> bool {
-    matches!(entry.value, Value::Ram(_))
-        && entry.access.writable()
-        && matches!(entry.pdo, PdoMappable::No)
-        && !is_not_stored(object.index)
-}
-
-/// Whether `index` is one of [`NOT_STORED`].
-const fn is_not_stored(index: u16) -> bool {
-    let mut i = 0;
-    while i < NOT_STORED.len() {
-        if NOT_STORED[i] == index {
-            return true;
-        }
-        i += 1;
-    }
-    false
 }
 
 /// Why parameters could not be loaded, stored or restored.

@@ -14,7 +14,9 @@ use hal::storage::{NvStorage, StorageError};
 use super::record::{self, crc32, Identity, Record, RecordError, Writer};
 use super::*;
 use crate::mailbox::coe::CoeServer;
-use crate::od::{Access, DataType, Dictionary, Entry, Object, ObjectCode, Profile, Value};
+use crate::od::{
+    Access, DataType, Dictionary, Entry, Object, ObjectCode, PdoMappable, Profile, Value,
+};
 use crate::test_profiles as profiles;
 
 // ---------------------------------------------------------------------------------------------

@@ -19,22 +19,13 @@
 //! RxPDO, SDO download blocked" when the profile says so
 //! ([`RxMappedWrite::Blocked`](crate::od::RxMappedWrite::Blocked)).
 
-use core::ops::RangeInclusive;
-
 use hal::esc::AlState;
 
 use crate::od::value::as_u32;
 use crate::od::AbortCode;
 use crate::od::{Dictionary, RxMappedWrite};
 
-/// RxPDO mapping objects (outputs, master → slave), ETG.1000.6 Table 67.
-pub const RX_MAPPING: RangeInclusive<u16> = 0x1600..=0x17FF;
-/// TxPDO mapping objects (inputs, slave → master), ETG.1000.6 Table 67.
-pub const TX_MAPPING: RangeInclusive<u16> = 0x1A00..=0x1BFF;
-/// Sync manager 2 (outputs) PDO assignment, ETG.1000.6 Table 67.
-pub const RX_ASSIGN: u16 = 0x1C12;
-/// Sync manager 3 (inputs) PDO assignment, ETG.1000.6 Table 67.
-pub const TX_ASSIGN: u16 = 0x1C13;
+pub use crate::od::index::{RX_ASSIGN, RX_MAPPING, TX_ASSIGN, TX_MAPPING};
 /// Largest byte length one PDO may have; a mapping whose entries add up to more is refused with
 /// 0x06040042.
 pub const MAX_PDO_BYTES: usize = 256;

@@ -78,9 +78,8 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
 
     /// Mirrors the active errors into 1001h.
     pub(super) fn publish_error_register(&mut self) {
-        const ERROR_REGISTER: u16 = 0x1001;
         let register = self.errors.register();
-        self.write_od(ERROR_REGISTER, 0, &[register]);
+        self.write_od(crate::od::index::ERROR_REGISTER, 0, &[register]);
     }
 
     /// Called by [`Self::apply`] with the status before and the outcome: a new AL error (error

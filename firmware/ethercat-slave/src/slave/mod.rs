@@ -38,9 +38,7 @@ use esm::transitions::read_sm;
 const SM_OUTPUTS: u8 = 2;
 /// SM channel of the process-data inputs.
 const SM_INPUTS: u8 = 3;
-/// Sync manager parameter objects (ETG.1020 §5.1): outputs (SM2) and inputs (SM3).
-const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
-const SM_INPUT_PARAMETER: u16 = 0x1C33;
+use crate::od::index::{ERROR_SETTINGS, SM_INPUT_PARAMETER, SM_OUTPUT_PARAMETER};
 /// 1C32h/1C33h subindices the stack maintains.
 const SUB_SYNC_TYPE: u8 = 0x01;
 const SUB_CYCLE_TIME: u8 = 0x02;
@@ -51,8 +49,6 @@ const SUB_DELAY_TIME: u8 = 0x09;
 const SUB_SM_EVENT_MISSED: u8 = 0x0B;
 const SUB_CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
 const SUB_SYNC_ERROR: u8 = 0x20;
-/// Error settings object (ETG.1020 §5.1): :02 sync error counter limit.
-const ERROR_SETTINGS: u16 = 0x10F1;
 const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
 
 /// The EtherCAT slave with its object dictionary and its application `A`. `RAM` is the OD RAM

@@ -21,7 +21,7 @@
 //! response is regenerated from the static dictionary for each fragment, so no buffer holds it.
 //!
 //! List 4 (stored for device replacement, "backup") holds the objects with an entry the
-//! parameter storage stores ([`crate::params::is_storable`], the one rule for 1010h and for
+//! parameter storage stores ([`crate::od::storable::is_storable`], the one rule for 1010h and for
 //! this list); list 5 (startup parameters, "settings") the objects with an entry the profile
 //! marks `setting = true` ([`crate::od::DeviceInfo::settings`]). The same entries carry
 //! ObjAccess bit 8 (backup) and bit 9 (setting) in their entry description.
@@ -31,9 +31,10 @@
 //! 16xxh/1Axxh), else the type of subindex 1.
 
 use super::CoeError;
+use crate::od::index::IDENTITY;
+use crate::od::storable::is_storable;
 use crate::od::AbortCode;
 use crate::od::{Entry, Object, ObjectCode, PdoMappable, Profile};
-use crate::params::is_storable;
 use crate::pdo::rules::{RX_MAPPING, TX_MAPPING};
 
 /// Length of the SDO information header.
@@ -110,8 +111,6 @@ mod complex_type {
     pub const IDENTITY: u16 = 0x0023;
 }
 
-/// The identity object (CiA 301).
-const IDENTITY_INDEX: u16 = 0x1018;
 /// Unit type reported when requested (no units in the model).
 const NO_UNIT: u16 = 0;
 
@@ -406,7 +405,7 @@ fn object_data_type(o: &Object) -> u16 {
     match o.code {
         ObjectCode::Var => first(0),
         ObjectCode::Array => first(1),
-        ObjectCode::Record if o.index == IDENTITY_INDEX => complex_type::IDENTITY,
+        ObjectCode::Record if o.index == IDENTITY => complex_type::IDENTITY,
         ObjectCode::Record if RX_MAPPING.contains(&o.index) || TX_MAPPING.contains(&o.index) => {
             complex_type::PDO_MAPPING
         }

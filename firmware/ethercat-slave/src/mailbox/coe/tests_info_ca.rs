@@ -11,8 +11,8 @@ use std::vec::Vec;
 use hal::esc::AlState;
 
 use super::{CoeServer, RamDomain};
+use crate::od::storable::is_storable;
 use crate::od::{Dictionary, Profile};
-use crate::params::is_storable;
 use crate::test_profiles::standard;
 
 const MAILBOX: usize = 256;
