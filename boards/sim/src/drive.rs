@@ -179,7 +179,7 @@ impl SimDrive {
     /// the firmware runs.
     fn cycle(&mut self, now_ns: u64) {
         let bus_before = self.esc.pdi_bus_ns();
-        let _ = self.slave.on_cycle(&mut self.esc, now_ns);
+        let _ = firmware::sync0::on_sync0(&mut self.slave, &mut self.esc, now_ns);
         let bus_time = self.esc.pdi_bus_ns() - bus_before;
         self.slave.cycle_finished(now_ns + bus_time);
     }

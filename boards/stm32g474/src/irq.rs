@@ -3,7 +3,7 @@
 //! | priority | vector | context | work |
 //! |---|---|---|---|
 //! | P0 | (TIM1_UP_TIM16 / ADC1_2, later) | FOC | **reserved** for the PWM/ADC control interrupt; nothing else uses P0 and the Slave/PDI lock does not mask it |
-//! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`Slave::on_cycle`](firmware::slave::Slave::on_cycle) in DC modes, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
+//! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`on_sync0`](firmware::sync0::on_sync0) in DC modes, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
 //! | P2 | EXTI2 (SPI_IRQ, PD2) | ESC event | raw handler [`EscIrqHandler`]: clears the line and signals the ESC-event task |
 //! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`Slave::on_esc_event`](firmware::slave::Slave::on_esc_event) (which also runs SM-synchronous cycles on the SM2 event), and `tasks::free_run` |
 //! | P3 | TIM4 | embassy-time | alarm of the time driver (`time-driver-tim4`) |
@@ -195,12 +195,12 @@ pub struct CycleHandler;
 impl Handler<typelevel::EXTI4> for CycleHandler {
     /// ISR: ESC SYNC0, EXTI4 at P1.
     /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free-run 1 kHz.
-    /// - Budget: `on_cycle` ≤ 2,000 instructions (DESIGN.md §6) ≈ 12 µs at 170 MHz, plus the
+    /// - Budget: `on_sync0` ≤ 2,000 instructions (DESIGN.md §6) ≈ 12 µs at 170 MHz, plus the
     ///   PDI bus time: (3 + n_out) + (2 + n_in) bytes × 376 ns, e.g. 2 × 32 B of PDO ≈ 26 µs.
     ///   Everything (lock wait included) must end before the next SYNC0, less the FOC load.
     /// - Measured: not yet on hardware. Each run's cycles (DWT, lock wait included) go to
     ///   `CYCLE_STATS.max_cycles`, logged every second by `tasks::report`; instruction counts of
-    ///   `on_cycle` come from the QEMU benchmark (DESIGN.md §5).
+    ///   `on_sync0` come from the QEMU benchmark (DESIGN.md §5).
     unsafe fn on_interrupt() {
         let started = DWT::cycle_count();
         // EXTI_PR1 is write-1-to-clear: this write touches line 4 only.
@@ -217,7 +217,7 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
                 SyncMode::SmSynchronous => false,
             };
             if run {
-                let result = d.slave.on_cycle(&mut d.pdi, now_ns());
+                let result = firmware::sync0::on_sync0(&mut d.slave, &mut d.pdi, now_ns());
                 // The measured duration becomes 1C32h/1C33h:06 (calc and copy time).
                 d.slave.cycle_finished(now_ns());
                 Some(result)

@@ -1,0 +1,135 @@
+//! The process-data cycle: what the SYNC0 (or free-run timer, or SM2 event) context runs.
+//!
+//! [`Slave::on_cycle`] is the whole cycle for any device; a board that wants the stages apart
+//! (the drive's `firmware::sync0`) calls [`Slave::cycle_begin`], its application and
+//! [`Slave::cycle_end`], then [`Slave::cycle_finished`] with the time the cycle ended.
+
+use super::*;
+
+impl<const RAM: usize, A: Application> Slave<RAM, A> {
+    /// Runs one process-data cycle: [`Self::cycle_begin`], the application, [`Self::cycle_end`].
+    /// Does nothing below SAFEOP. Outputs are applied only in OP.
+    pub fn on_cycle<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {
+        let Some(cycle_ns) = self.cycle_begin(pdi, now_ns)? else {
+            return Ok(());
+        };
+        let event = self.app.cycle(&mut self.ram, cycle_ns);
+        self.cycle_end(pdi, event, now_ns)
+    }
+
+    /// First part of a process-data cycle (SAFEOP and OP; `None` below, when no cycle runs):
+    /// SYNC0 supervision, the outputs read from SM2 and, in OP, unpacked into the OD RAM.
+    /// Returns the cycle time (1C32h:02, ns; 0 when not synchronised) for the application.
+    pub fn cycle_begin<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        now_ns: u64,
+    ) -> Result<Option<u32>, P::Error> {
+        let state = self.status.state;
+        if state != AlState::SafeOp && state != AlState::Op {
+            return Ok(None);
+        }
+        self.cycle_started_ns = now_ns;
+        if matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1) {
+            self.sync_supervisor.on_sync0(now_ns, self.sync.cycle_ns);
+        }
+        let device = &self.profile.device;
+        let rx_len = self.rx_plan.byte_len();
+        if rx_len > 0 {
+            if let Some(image) = self.rx_image.get_mut(..rx_len) {
+                pdi.read(device.outputs.start, image)?;
+            }
+            if state == AlState::Op {
+                self.rx_plan.unpack(&self.rx_image, &mut self.ram);
+            }
+        }
+        Ok(Some(self.sync.cycle_ns))
+    }
+
+    /// Last part of a process-data cycle, after the application ran on the OD RAM: what it
+    /// reported about its errors becomes EMCY/1001h/10F3h, the inputs are packed and written to
+    /// SM3.
+    pub fn cycle_end<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        event: AppEvent,
+        now_ns: u64,
+    ) -> Result<(), P::Error> {
+        self.report_app_event(event, now_ns);
+        self.write_inputs(pdi)?;
+        self.cycles = self.cycles.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Runs the application's cycle outside the process-data cycle (entering SAFEOP, so that the
+    /// first inputs are valid) and reports its errors.
+    pub(super) fn run_application(&mut self, now_ns: u64) {
+        let event = self.app.cycle(&mut self.ram, self.sync.cycle_ns);
+        self.report_app_event(event, now_ns);
+    }
+
+    /// What the application said about its errors → EMCY, 1001h, 10F3h.
+    fn report_app_event(&mut self, event: AppEvent, now_ns: u64) {
+        match event {
+            AppEvent::ErrorCleared(code) => {
+                // The error leaves 1001h; the last one clears with an error-reset EMCY
+                // (CiA 301). A full queue only loses that notification.
+                let _ = self.clear_error(code);
+            }
+            AppEvent::ErrorRaised(code) => {
+                // An application error (a drive: protection, encoder, ...): 1001h and the EMCY.
+                // A full EMCY queue loses only the message; 1001h and the application hold it.
+                let _ =
+                    self.report_error(code, emcy::register::DEVICE_PROFILE, [0; 5], None, now_ns);
+            }
+            AppEvent::None => {}
+        }
+    }
+
+    pub(super) fn write_inputs<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        let tx_len = self.tx_plan.byte_len();
+        if tx_len == 0 {
+            return Ok(());
+        }
+        self.tx_plan.pack(&self.ram, &mut self.tx_image);
+        if let Some(image) = self.tx_image.get(..tx_len) {
+            pdi.write(self.profile.device.inputs.start, image)?;
+        }
+        Ok(())
+    }
+
+    /// Tells the slave when the process-data cycle started by the last [`Self::on_cycle`] ended
+    /// (board clock, ns; on target right after `on_cycle` returns). The duration is the
+    /// measured "calc and copy time" (ETG.1020 1C32h/1C33h:06, the longest since SAFEOP) and
+    /// the delay until outputs are valid for the control loop (:09, and :03 shift for SM2);
+    /// :05 (minimum cycle time) becomes the larger of the profile's limit and that duration; a
+    /// cycle longer than the SYNC0 cycle counts in :0C ("cycle time too small").
+    pub fn cycle_finished(&mut self, now_ns: u64) {
+        if !matches!(self.status.state, AlState::SafeOp | AlState::Op) {
+            return;
+        }
+        let elapsed = now_ns.saturating_sub(self.cycle_started_ns);
+        let elapsed = u32::try_from(elapsed).unwrap_or(u32::MAX);
+        if elapsed > self.calc_and_copy_max_ns {
+            self.calc_and_copy_max_ns = elapsed;
+            let bytes = elapsed.to_le_bytes();
+            // The cycle cannot be shorter than the longest processing seen, nor than the
+            // profile's limit (:05); outputs are valid for the control loop `elapsed` after
+            // SYNC0 (:03 shift for SM2).
+            let min_cycle = elapsed
+                .max(self.profile.device.sync.min_cycle_ns)
+                .to_le_bytes();
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_SHIFT_TIME, &bytes);
+            for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
+                self.write_od(index, SUB_CALC_AND_COPY_TIME, &bytes);
+                self.write_od(index, SUB_DELAY_TIME, &bytes);
+                self.write_od(index, SUB_MIN_CYCLE_TIME, &min_cycle);
+            }
+        }
+        if self.sync.cycle_ns != 0 && elapsed > self.sync.cycle_ns {
+            self.cycle_too_small = self.cycle_too_small.saturating_add(1);
+            let count = self.cycle_too_small.to_le_bytes();
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME_TOO_SMALL, &count);
+        }
+    }
+}
