@@ -1,6 +1,7 @@
-//! The Rust object dictionary compiled into the firmware (`OUT_DIR/profiles.rs`).
+//! The Rust object dictionary compiled into the firmware (`OUT_DIR/profiles.rs`) or into any
+//! other crate built on the slave stack ([`Target`]).
 //!
-//! For every profile, `generate` emits a module
+//! For every profile, [`generate_with`] emits a module
 //!
 //! ```text
 //! pub mod <name> {
@@ -11,19 +12,22 @@
 //!     pub const OBJECTS: &[Object];      // sorted by index, entries by subindex
 //!     pub const SETTINGS: &[(u16, u8)];  // startup parameters (`setting = true`)
 //!     pub const BACKUP: &[(u16, u8)];    // entries the parameter storage stores
-//!     pub const MOTOR_FAULTS: [u16; N];  // 603Fh/EMCY code per motor fault (`[motor_faults]`)
-//!     pub static PROFILE: Profile;
+//!     pub const MOTOR_FAULTS: [u16; N];  // drive targets: 603Fh/EMCY code per motor fault
+//!     pub static PROFILE: DriveProfile;  // drive targets: { od: Profile, vars, motor_faults }
+//!     pub static PROFILE: Profile;       // device targets: the object dictionary alone
 //! }
 //! ```
 //!
-//! plus `MAX_RAM_SIZE`, `ALL`, `by_name` and `MOTOR_FAULT_NAMES` (od-gen's list of the internal
-//! motor faults, the order of every `MOTOR_FAULTS`) at the top level, and `const` assertions that
-//! `MOTOR_FAULT_NAMES` equals `firmware::motor::MotorFault::ALL` (names, in code order), that the
-//! objects and entries are sorted, every RAM variable lies inside `RAM_SIZE`, and the default
-//! PDO assignment read back from the generated 1C12h/1C13h and 16xxh/1Axxh adds up to the SM2/SM3
-//! sizes that the SII and the ESI carry, and that `BACKUP` (od-gen's ESI `Flags/Backup`) is
-//! exactly what `firmware::params::is_storable` stores. The code uses only `core`, the types of
-//! `firmware::od::model` and, in the checks, `firmware::params` and `firmware::motor::MotorFault`.
+//! plus `MAX_RAM_SIZE`, `ALL`, `by_name` (and, for drives, `MOTOR_FAULT_NAMES`: od-gen's list
+//! of the internal motor faults, the order of every `MOTOR_FAULTS`) at the top level, and `const`
+//! assertions: od-gen's CoE data-type codes and access bits equal the stack's
+//! (`ethercat_slave::od`), `MOTOR_FAULT_NAMES` equals the drive's `motor::MotorFault::ALL`
+//! (names, in code order), the objects and entries are sorted, every RAM variable lies inside
+//! `RAM_SIZE`, the default PDO assignment read back from the generated 1C12h/1C13h and
+//! 16xxh/1Axxh adds up to the SM2/SM3 sizes that the SII and the ESI carry, and `BACKUP`
+//! (od-gen's ESI `Flags/Backup`) is exactly what `ethercat_slave::params::is_storable` stores.
+//! The code uses only `core` and the types of `ethercat_slave::od` (and of the drive crate's
+//! `profile` module for drive targets).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -708,4 +712,29 @@ pub fn generate_with(profiles: &[Profile], target: &Target) -> String {
     }
     out.push_str("}\n");
     out
+}
+
+/// For a crate's build script: loads the profiles at `source` (a directory of profile files,
+/// or one file), tells cargo to rerun when they change, and writes their generated Rust for
+/// `target` to `OUT_DIR/<out_file>`. Any error ends the build script with the message on
+/// stderr and exit status 1.
+pub fn build_script(source: &std::path::Path, out_file: &str, target: &Target) {
+    println!("cargo:rerun-if-changed={}", source.display());
+    let profiles = if source.is_dir() {
+        crate::load_dir(source)
+    } else {
+        crate::load(source).map(|p| vec![p])
+    };
+    let profiles = match profiles {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("od-gen: {e}");
+            std::process::exit(1);
+        }
+    };
+    let out = std::path::PathBuf::from(std::env::var("OUT_DIR").unwrap_or_default()).join(out_file);
+    if let Err(e) = std::fs::write(&out, generate_with(&profiles, target)) {
+        eprintln!("od-gen: cannot write {}: {e}", out.display());
+        std::process::exit(1);
+    }
 }
