@@ -3,9 +3,17 @@
 //! | entry point | called from (target) | called from (sim) |
 //! |---|---|---|
 //! | [`Slave::on_esc_event`] | ESC IRQ (AL event) task, and periodically from thread mode | after every frame the ESC processed |
-//! | [`Slave::on_cycle`] | SYNC0 EXTI (DC), or a local timer (free-run) | at each simulated SYNC0 / free-run tick |
+//! | [`Slave::on_cycle`] (or its stages [`Slave::cycle_begin`], the application, [`Slave::cycle_end`]), then [`Slave::cycle_finished`] | SYNC0 EXTI (DC), or a local timer (free-run) | at each simulated SYNC0 / free-run tick |
 //!
 //! In SM-synchronous mode the cycle runs from [`Slave::on_esc_event`] on the SM2 event.
+//!
+//! | module | what |
+//! |---|---|
+//! | this module | [`Slave`], construction, the ESC-event entry points |
+//! | `cycle` | the process-data cycle (cycle context) |
+//! | [`esm`] | the EtherCAT state machine |
+//! | `errors` | EMCY, 1001h and 10F3h bookkeeping of AL and application errors |
+//! | `application` | the [`Application`] trait, [`NoApplication`] |
 
 use hal::esc::{
     regs, AlControl, AlEvent, AlState, AlStatus, AlStatusCode, DcActivation, SmConfig, SmDirection,
