@@ -5,18 +5,23 @@
 //! [`Axis::control_step`] is the body of the highest-priority interrupt (PWM/ADC, every PWM
 //! period). The EtherCAT SYNC0 handler talks to it only through an [`AxisLink`]: it publishes an
 //! [`AxisCommand`] per bus cycle ([`AxisLink::publish`]) and reads the latest [`AxisFeedback`]
-//! ([`AxisLink::feedback`]); neither side ever waits for the other (see [`handoff`]).
+//! ([`AxisLink::feedback`]); neither side ever waits for the other (see [`handoff`](crate::handoff)).
 //!
 //! # Sequence at enable
 //! Disabled (gates off) → phase-current offset calibration (gates off, N samples) → commutation
 //! alignment (incremental encoders without a known offset) → running. Any protection trip turns
 //! the gates off in the same period and latches the fault until a rising `fault_reset`.
 //!
+//! # Board side
+//! Around each [`Axis::control_step`] the board's interrupt reads a [`Sample`] through its `hal`
+//! drivers ([`Sample::read`]) and hands the [`Output`] to its inverter ([`Output::apply`]).
+//!
 //! Timing budget (whole interrupt, Cortex-M4F, measured under QEMU): ≤ 1,500 instructions in the
 //! worst period (the one running the position and speed loops); the current loop alone ≤ 250.
 
-use hal::encoder::EncoderFault;
-use hal::power::PhaseCurrents;
+use hal::encoder::{Encoder, EncoderFault};
+use hal::io::DigitalInputs;
+use hal::power::{BusSense, CurrentSense, Inverter, PhaseCurrents};
 
 use super::calibration::{AlignStep, Alignment, AlignmentConfig, Commutation, OffsetCalibration};
 use super::commissioning::{
@@ -252,11 +257,43 @@ pub struct Output {
     pub duties: Duties,
 }
 
+impl Sample {
+    /// The measurements of the present PWM period through the board's drivers: phase
+    /// currents, bus voltage and power-stage temperature, the motor's thermal switch, the
+    /// encoder position (each as latched at the PWM-synchronous sample).
+    pub fn read(
+        currents: &mut impl CurrentSense,
+        bus: &mut impl BusSense,
+        encoder: &mut impl Encoder,
+        inputs: &mut impl DigitalInputs,
+    ) -> Self {
+        Self {
+            currents: currents.phase_currents(),
+            bus_voltage: bus.bus_voltage(),
+            temperature: bus.temperature(),
+            motor_overtemp: inputs.motor_over_temperature(),
+            position: encoder.position(),
+        }
+    }
+}
+
 impl Output {
     const OFF: Self = Self {
         gates: false,
         duties: Duties::CENTRED,
     };
+
+    /// Hands the output to the board's inverter: gates off at once; otherwise the duties for
+    /// the next period, with the gates enabled from that period on if they were off.
+    pub fn apply(&self, inverter: &mut impl Inverter) {
+        if !self.gates {
+            inverter.disable();
+        }
+        inverter.set_duties(self.duties.a, self.duties.b, self.duties.c);
+        if self.gates && !inverter.is_enabled() {
+            inverter.enable();
+        }
+    }
 }
 
 /// The mailboxes between the SYNC0 handler and the control interrupt.
@@ -996,5 +1033,145 @@ impl Axis {
         }
         let angle = self.commutation.angle(self.position);
         self.current_step(currents, angle, self.omega_e, self.id_ref, self.iq_ref)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A board whose drivers return fixed values and record the inverter calls.
+    #[derive(Default)]
+    struct Board {
+        calls: [Option<&'static str>; 4],
+        n: usize,
+        enabled: bool,
+        duties: Option<(f32, f32, f32)>,
+    }
+
+    impl Board {
+        fn record(&mut self, call: &'static str) {
+            self.calls[self.n] = Some(call);
+            self.n += 1;
+        }
+    }
+
+    impl CurrentSense for Board {
+        fn phase_currents(&mut self) -> PhaseCurrents {
+            PhaseCurrents {
+                a: 1.0,
+                b: -0.5,
+                c: -0.25,
+            }
+        }
+    }
+
+    impl BusSense for Board {
+        fn bus_voltage(&mut self) -> f32 {
+            47.5
+        }
+        fn temperature(&mut self) -> f32 {
+            31.0
+        }
+    }
+
+    impl Encoder for Board {
+        fn resolution(&self) -> u32 {
+            4_096
+        }
+        fn position(&mut self) -> Result<i64, EncoderFault> {
+            Err(EncoderFault::Crc)
+        }
+        fn take_index(&mut self) -> bool {
+            false
+        }
+    }
+
+    impl DigitalInputs for Board {
+        fn positive_limit(&mut self) -> bool {
+            false
+        }
+        fn negative_limit(&mut self) -> bool {
+            false
+        }
+        fn home_switch(&mut self) -> bool {
+            false
+        }
+        fn motor_over_temperature(&mut self) -> bool {
+            true
+        }
+    }
+
+    impl Inverter for Board {
+        fn pwm_frequency_hz(&self) -> u32 {
+            20_000
+        }
+        fn set_duties(&mut self, a: f32, b: f32, c: f32) {
+            self.record("set_duties");
+            self.duties = Some((a, b, c));
+        }
+        fn enable(&mut self) {
+            self.record("enable");
+            self.enabled = true;
+        }
+        fn disable(&mut self) {
+            self.record("disable");
+            self.enabled = false;
+        }
+        fn is_enabled(&self) -> bool {
+            self.enabled
+        }
+    }
+
+    #[test]
+    fn a_sample_is_read_through_the_board_drivers() {
+        let (mut c, mut b, mut e, mut i) = (
+            Board::default(),
+            Board::default(),
+            Board::default(),
+            Board::default(),
+        );
+        let s = Sample::read(&mut c, &mut b, &mut e, &mut i);
+        assert_eq!(
+            s,
+            Sample {
+                currents: PhaseCurrents {
+                    a: 1.0,
+                    b: -0.5,
+                    c: -0.25,
+                },
+                bus_voltage: 47.5,
+                temperature: 31.0,
+                motor_overtemp: true,
+                position: Err(EncoderFault::Crc),
+            }
+        );
+    }
+
+    #[test]
+    fn an_output_disables_first_and_enables_only_once() {
+        let on = Output {
+            gates: true,
+            duties: Duties {
+                a: 0.4,
+                b: 0.5,
+                c: 0.6,
+            },
+        };
+        let mut inv = Board::default();
+        on.apply(&mut inv);
+        on.apply(&mut inv);
+        assert_eq!(
+            inv.calls,
+            [Some("set_duties"), Some("enable"), Some("set_duties"), None]
+        );
+        assert_eq!(inv.duties, Some((0.4, 0.5, 0.6)));
+        let mut inv = Board {
+            enabled: true,
+            ..Board::default()
+        };
+        Output::OFF.apply(&mut inv);
+        assert_eq!(inv.calls, [Some("disable"), Some("set_duties"), None, None]);
+        assert!(!inv.enabled);
     }
 }

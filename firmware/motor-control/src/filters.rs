@@ -57,7 +57,7 @@ fn digital_angle(freq_hz: f32, sample_hz: f32) -> Result<f32, FilterError> {
 }
 
 /// First-order low-pass, bilinear transform prewarped at the cut-off:
-/// y[k] = b·(x[k] + x[k−1]) + a·y[k−1] with K = tan(π·fc/fs), b = K/(1+K), a = (1−K)/(1+K).
+/// `y[k] = b·(x[k] + x[k−1]) + a·y[k−1]` with K = tan(π·fc/fs), b = K/(1+K), a = (1−K)/(1+K).
 ///
 /// Compared with the exact pole mapping a = exp(−2π·fc/fs) the pole is the same to first order
 /// in fc/fs; the bilinear form adds a zero at Nyquist (more attenuation of the highest

@@ -27,7 +27,7 @@
 //! is the end velocity of the previous segment (the velocity is continuous at the cycle
 //! boundaries); the end velocity is the velocity offset 60B1h when the master sends one, else
 //! the second-order backward difference of the last three targets,
-//! (3·p[k] − 4·p[k−1] + p[k−2]) / 2T, exact for a constant acceleration; so a parabolic stream
+//! `(3·p[k] − 4·p[k−1] + p[k−2]) / 2T`, exact for a constant acceleration; so a parabolic stream
 //! is reproduced exactly. (While only two targets of a stream are known, the secant.)
 //!
 //! The first set-point after [`reset`](Interpolator::reset) (and one after a hold) starts a

@@ -37,6 +37,7 @@
 //! | [`calibration`] | phase-current offsets, commutation-angle alignment |
 //! | [`commissioning`] | identification of R, L and inertia; gains from bandwidths |
 //! | [`axis`] | the whole control interrupt of one axis |
+//! | [`servo`] | a servo (motor, encoder, power stage) as data, its tuning, and the [`axis::AxisConfig`] derived from them; the 400 W reference servo |
 #![no_std]
 #![deny(missing_docs)]
 
@@ -51,6 +52,7 @@ pub mod math;
 pub mod pi;
 pub mod position;
 pub mod protection;
+pub mod servo;
 pub mod speed;
 pub mod svpwm;
 pub mod velocity;

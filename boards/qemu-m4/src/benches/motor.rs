@@ -2,11 +2,11 @@
 //! control interrupt of an axis in its worst period, and the SYNC0 side of the set-point and
 //! feedback handoff.
 //!
-//! The axis is the 48 V / 400 W servo of the simulation (`boards/sim`: `PlantConfig::servo_400w`
-//! with `servo::axis_config` and the default `Tuning`), written out here as an [`AxisConfig`]
-//! literal because the simulation needs `std`: 40 kHz PWM, 2 kHz current-loop bandwidth with
-//! decoupling and dead-time compensation, 150 Hz speed loop, 20-bit absolute encoder with a known
-//! commutation offset (no alignment at enable).
+//! The axis is the 48 V / 400 W reference servo of the simulation, configured by the same code:
+//! [`servo::axis_config`] of [`SERVO_400W`] with the default [`Tuning`] (the loop divider and
+//! bus cycle set per measurement): 40 kHz PWM, 2 kHz current-loop bandwidth with decoupling and
+//! dead-time compensation, 150 Hz speed loop, 20-bit absolute encoder with a known commutation
+//! offset (no alignment at enable).
 //!
 //! Every measured operation runs the same code on every call (the harness fails otherwise): the
 //! inputs are constant and the state is a steady state in which the errors are zero, so that no
@@ -14,15 +14,10 @@
 
 use core::hint::black_box;
 
-use firmware::motor::axis::{
-    Axis, AxisCommand, AxisConfig, AxisLink, AxisState, ControlMode, MotorData, Output, Sample,
-};
-use firmware::motor::calibration::AlignmentConfig;
-use firmware::motor::filters::TorqueFilterConfig;
+use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode, Output, Sample};
 use firmware::motor::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
 use firmware::motor::math::{sin_cos, TAU};
-use firmware::motor::protection::{I2tConfig, ProtectionConfig};
-use firmware::motor::speed::{gains_for_bandwidth, SpeedLoopConfig};
+use firmware::motor::servo::{self, Tuning, SERVO_400W};
 use firmware::motor::{Duties, ElectricalAngle};
 use hal::power::PhaseCurrents;
 
@@ -35,15 +30,9 @@ const FOC_STEP_BUDGET: u32 = 250;
 const CONTROL_INTERRUPT_BUDGET: u32 = 1_500;
 
 /// PWM frequency of the servo, Hz.
-const PWM_HZ: f32 = 40_000.0;
+const PWM_HZ: f32 = SERVO_400W.inverter.pwm_hz as f32;
 /// The loop divider of the servo's default tuning (20 kHz position and speed loops).
-const LOOP_DIVIDER: u32 = 2;
-/// Pole pairs of the servo.
-const POLE_PAIRS: u32 = 4;
-/// 20-bit single-turn absolute encoder.
-const COUNTS_PER_REV: u32 = 1 << 20;
-/// Peak current (current limit), A.
-const PEAK_A: f32 = 30.0;
+const LOOP_DIVIDER: u32 = Tuning::DEFAULT.loop_divider;
 /// DC-bus voltage of the measurement, V.
 const BUS_VOLTAGE: f32 = 48.0;
 /// Power-stage temperature of the measurement, °C.
@@ -53,94 +42,19 @@ const POSITION: i64 = 0x0012_3456;
 /// Margin of the duty checks (the duties of a steady state are 0.5 up to rounding).
 const DUTY_TOLERANCE: f32 = 1e-3;
 
-/// The current-loop configuration of the servo (motor fields as `AxisConfig::motor`).
-fn current_loop_config() -> CurrentLoopConfig {
-    CurrentLoopConfig {
-        resistance_ohm: 0.12,
-        ld_h: 0.40e-3,
-        lq_h: 0.46e-3,
-        flux_wb: 0.0135,
-        pwm_hz: PWM_HZ,
-        bandwidth_hz: 2_000.0,
-        max_modulation: 0.95,
-        dead_time_s: 200e-9,
-        dead_time_band_a: 0.3,
-        decoupling: true,
+/// The default tuning with the position and speed loops every `loop_divider`-th PWM period and
+/// set-points every `bus_cycle_s`.
+fn tuning(loop_divider: u32, bus_cycle_s: f32) -> Tuning {
+    Tuning {
+        loop_divider,
+        bus_cycle_s,
+        ..Tuning::DEFAULT
     }
 }
 
-/// The servo's axis configuration (as `boards/sim`'s `servo::axis_config` of the 400 W servo),
-/// with the position and speed loops every `loop_divider`-th PWM period and set-points every
-/// `bus_cycle_s`.
-fn axis_config(loop_divider: u32, bus_cycle_s: f32) -> AxisConfig {
-    let cl = current_loop_config();
-    let cpr = COUNTS_PER_REV as f32;
-    let counts_per_s_at_rpm = |rpm: f32| rpm / 60.0 * cpr;
-    // Rotor + load (1:1), N·m per (increment/s²).
-    let inertia = (2.6e-5 + 2.6e-5) * TAU / cpr;
-    let speed_hz = 150.0;
-    let (kp, ki) = gains_for_bandwidth(speed_hz, inertia);
-    let kt = 1.5 * POLE_PAIRS as f32 * cl.flux_wb;
-    AxisConfig {
-        motor: MotorData {
-            resistance_ohm: cl.resistance_ohm,
-            ld_h: cl.ld_h,
-            lq_h: cl.lq_h,
-            flux_wb: cl.flux_wb,
-            pole_pairs: POLE_PAIRS,
-            counts_per_rev: COUNTS_PER_REV,
-            // Absolute encoder, commissioned: no alignment at enable.
-            commutation_offset: Some(0),
-        },
-        pwm_hz: PWM_HZ,
-        loop_divider,
-        current_loop: cl,
-        speed_loop: SpeedLoopConfig {
-            kp,
-            ki,
-            inertia_nm_per_inc_s2: inertia,
-            torque_limit_nm: kt * PEAK_A,
-            sample_hz: PWM_HZ / loop_divider as f32,
-            filters: TorqueFilterConfig::OFF,
-        },
-        position_kp: TAU * speed_hz / 4.0,
-        velocity_limit: counts_per_s_at_rpm(4_500.0),
-        velocity_bandwidth_hz: 1_000.0,
-        protection: ProtectionConfig {
-            over_current_a: 40.0,
-            motor_i2t: I2tConfig {
-                continuous_a: 15.7,
-                peak_a: PEAK_A,
-                peak_time_s: 3.0,
-                foldback_start: 0.8,
-            },
-            drive_i2t: I2tConfig {
-                continuous_a: 18.0,
-                peak_a: PEAK_A,
-                peak_time_s: 5.0,
-                foldback_start: 0.8,
-            },
-            bus_over_voltage_v: 60.0,
-            bus_under_voltage_v: 36.0,
-            bus_confirm_s: 1e-3,
-            over_speed: counts_per_s_at_rpm(5_400.0),
-            over_speed_confirm_s: 1e-3,
-            following_error_window: COUNTS_PER_REV / 4,
-            following_error_timeout_ms: 20,
-            ..ProtectionConfig::default()
-        },
-        current_limit_a: PEAK_A,
-        offset_samples: 256,
-        max_offset_a: 1.0,
-        alignment: AlignmentConfig {
-            current_a: 10.0,
-            ramp_s: 0.05,
-            settle_s: 0.15,
-            rotate_s: 0.1,
-            tolerance: 0.25,
-        },
-        bus_cycle_s,
-    }
+/// The current-loop configuration of the servo (that of its default tuning).
+fn current_loop_config() -> CurrentLoopConfig {
+    servo::axis_config(&SERVO_400W, &Tuning::DEFAULT).current_loop
 }
 
 /// Whether `d` are valid duties (0..=1) centred on 0.5 (the min-max centring of SVPWM).
@@ -294,16 +208,13 @@ const SAMPLE: Sample = Sample {
     position: Ok(POSITION),
 };
 
-/// An axis of the servo, brought to Running in CSP through its link, at rest on [`POSITION`]:
-/// offset calibration, then the cascade with the target equal to the actual position. Runs
-/// whole loop cycles (`loop_divider` periods, a command published before each), so that the
-/// next period is a loop period. The reason if it did not get there.
-fn running_axis(
-    loop_divider: u32,
-    bus_cycle_s: f32,
-    link: &AxisLink,
-) -> Result<Axis, &'static str> {
-    let cfg = axis_config(loop_divider, bus_cycle_s);
+/// An axis of the servo at `tuning`, brought to Running in CSP through its link, at rest on
+/// [`POSITION`]: offset calibration, then the cascade with the target equal to the actual
+/// position. Runs whole loop cycles (`loop_divider` periods, a command published before each),
+/// so that the next period is a loop period. The reason if it did not get there.
+fn running_axis(tuning: &Tuning, link: &AxisLink) -> Result<Axis, &'static str> {
+    let cfg = servo::axis_config(&SERVO_400W, tuning);
+    let loop_divider = tuning.loop_divider;
     let mut axis = Axis::new(cfg).map_err(|_| "the axis configuration was refused")?;
     let mut output = Output {
         gates: false,
@@ -363,7 +274,7 @@ fn control_interrupt(h: &mut Harness) {
     // SAFETY: everything here runs in one context (the benchmark's main), so the publishing and
     // the reading side never preempt each other: the single-writer/priority contract holds.
     let link = unsafe { AxisLink::new() };
-    let mut axis = match running_axis(1, 1.0 / PWM_HZ, &link) {
+    let mut axis = match running_axis(&tuning(1, 1.0 / PWM_HZ), &link) {
         Ok(axis) => axis,
         Err(reason) => {
             h.fail(NAME, format_args!("{reason}"));
@@ -423,7 +334,7 @@ fn control_cycle_average(h: &mut Harness) {
     // SAFETY: as in `control_interrupt`: one context only.
     let link = unsafe { AxisLink::new() };
     let loop_hz = PWM_HZ / LOOP_DIVIDER as f32;
-    let mut axis = match running_axis(LOOP_DIVIDER, 1.0 / loop_hz, &link) {
+    let mut axis = match running_axis(&tuning(LOOP_DIVIDER, 1.0 / loop_hz), &link) {
         Ok(axis) => axis,
         Err(reason) => {
             h.fail(NAME, format_args!("{reason}"));

@@ -70,6 +70,7 @@ pub use pmsm::MotorParams;
 pub use sensing::SensingParams;
 
 use encoder::EncoderModel;
+use firmware::motor::servo::{EncoderSpec, SERVO_400W};
 use inverter::LegTiming;
 use mechanics::MechState;
 use pmsm::{clarke, inverse_clarke, inverse_park, park, CurrentLoop};
@@ -121,20 +122,40 @@ impl PlantConfig {
     /// Current ADC ±51 A (12 bit, 25 mA/count) covers a 3× peak torque; 40 kHz PWM with 200 ns
     /// dead time (0.8 % of the period, i.e. 0.38 V of leg-voltage error); 20-bit single-turn
     /// plus 16-bit multi-turn absolute encoder.
+    ///
+    /// The motor, inverter, encoder and load-inertia numbers are those of the firmware's
+    /// reference servo [`SERVO_400W`] (defined once there); the device drop, sensing, encoder
+    /// latch delay, friction and noise are the plant's own.
     pub fn servo_400w() -> Self {
+        let spec = &SERVO_400W;
+        let encoder = match spec.encoder {
+            EncoderSpec::Absolute {
+                single_turn_bits,
+                multi_turn_bits,
+                ..
+            } => EncoderParams::Absolute {
+                single_turn_bits,
+                multi_turn_bits,
+                sample_delay_s: 1e-6,
+            },
+            EncoderSpec::Incremental { counts_per_rev } => EncoderParams::Incremental {
+                counts_per_rev,
+                index_at_rad: 0.0,
+            },
+        };
         PlantConfig {
             motor: MotorParams {
-                r_ohm: 0.12,
-                ld_h: 0.40e-3,
-                lq_h: 0.46e-3,
-                flux_wb: 0.0135,
-                pole_pairs: 4,
-                rotor_inertia_kgm2: 2.6e-5,
+                r_ohm: spec.motor.resistance_ohm,
+                ld_h: spec.motor.ld_h,
+                lq_h: spec.motor.lq_h,
+                flux_wb: spec.motor.flux_wb,
+                pole_pairs: spec.motor.pole_pairs,
+                rotor_inertia_kgm2: spec.motor.rotor_inertia_kgm2,
             },
             inverter: InverterParams {
-                bus_voltage_v: 48.0,
-                pwm_hz: 40_000.0,
-                dead_time_s: 200e-9,
+                bus_voltage_v: spec.inverter.bus_voltage_v,
+                pwm_hz: spec.inverter.pwm_hz,
+                dead_time_s: spec.inverter.dead_time_s,
                 device_drop_v: 0.05,
             },
             sensing: SensingParams {
@@ -145,14 +166,10 @@ impl PlantConfig {
                 noise_a_rms: 0.03,
                 bus_volts_per_count: 0.025,
             },
-            encoder: EncoderParams::Absolute {
-                single_turn_bits: 20,
-                multi_turn_bits: 16,
-                sample_delay_s: 1e-6,
-            },
+            encoder,
             mechanics: MechParams {
                 // 1:1 load-to-rotor inertia ratio.
-                load_inertia_kgm2: 2.6e-5,
+                load_inertia_kgm2: spec.load_inertia_kgm2,
                 viscous_nm_per_rad_s: 2e-5,
                 coulomb_nm: 0.02,
                 end_stops_rad: None,

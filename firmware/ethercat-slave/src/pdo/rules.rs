@@ -14,10 +14,10 @@
 //!
 //! The generic checks (access rights per state, length, SI0 ≤ highest subindex) run before these.
 //!
-//! One more rule guards the process data ([`check_rx_mapped`]): in SAFEOP and OP, a download to
+//! One more rule guards the process data (`check_rx_mapped`): in SAFEOP and OP, a download to
 //! an entry that a PDO assigned in 1C12h maps is refused with 0x06010006 "object mapped to
 //! RxPDO, SDO download blocked" when the profile says so
-//! ([`RxMappedWrite::Blocked`](crate::od::RxMappedWrite::Blocked)).
+//! ([`RxMappedWrite::Blocked`]).
 
 use hal::esc::AlState;
 

@@ -21,7 +21,7 @@
 //! from a [`DomainStore`] segment by segment (no buffer of their size): a download is begun with
 //! the announced size, written per segment and committed only after the last one; any error or
 //! abort in between calls [`DomainStore::abort`], leaving the old content. A domain download
-//! dropped by [`SdoServer::reset`] is never committed (the store's next `begin_write` discards
+//! dropped by `SdoServer::reset` is never committed (the store's next `begin_write` discards
 //! its staging).
 
 use hal::esc::AlState;

@@ -10,14 +10,14 @@
 //! |---|---|---|
 //! | 1/2 Get OD List | list type u16 | list type u16, then u16 indices (type 0: five u16 counts) |
 //! | 3/4 Get Object Description | index u16 | index u16, data type u16, max subindex u8, object code u8, name |
-//! | 5/6 Get Entry Description | index u16, subindex u8, value info u8 | index u16, subindex u8, value info u8, data type u16, bit length u16, ObjAccess u16, [unit type u16], [default], [minimum], [maximum], name |
+//! | 5/6 Get Entry Description | index u16, subindex u8, value info u8 | index u16, subindex u8, value info u8, data type u16, bit length u16, ObjAccess u16, (unit type u16), (default), (minimum), (maximum), name |
 //! | 7 SDO Info Error | — | abort code u32 |
 //!
 //! A response longer than the mailbox is sent in fragments: each but the last has the
 //! incomplete bit set, and "fragments left" counts the frames still to come. The list type of an
 //! OD List response is sent once, at the start of the first fragment. The server produces one
-//! fragment per call: the first from [`InfoServer::handle`], the next ones from
-//! [`InfoServer::next_fragment`] (the mailbox layer calls it each time SM1 is free again). The
+//! fragment per call: the first from `InfoServer::handle`, the next ones from
+//! `InfoServer::next_fragment` (the mailbox layer calls it each time SM1 is free again). The
 //! response is regenerated from the static dictionary for each fragment, so no buffer holds it.
 //!
 //! List 4 (stored for device replacement, "backup") holds the objects with an entry the
