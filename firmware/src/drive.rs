@@ -34,7 +34,9 @@ struct AxisPort {
 
 /// The drive application of one axis.
 pub struct Drive {
-    vars: AppVars,
+    /// Where the CiA402 variables live (the profile's; a reference, so that reading it in the
+    /// cycle copies a pointer, not the table).
+    vars: &'static AppVars,
     /// 603Fh code per motor fault (the profile's `[motor_faults]`).
     fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
     device: Device,
@@ -47,7 +49,7 @@ impl Drive {
     /// The application of `profile` at power-on, without a motor.
     pub const fn new(profile: &'static DriveProfile) -> Self {
         Self {
-            vars: profile.vars,
+            vars: &profile.vars,
             fault_codes: profile.motor_faults,
             device: Device::new(),
             axis: None,
@@ -66,7 +68,7 @@ impl Drive {
             model_sent: None,
             results_written: false,
         };
-        sync_motor_model(&mut port, &self.vars, ram);
+        sync_motor_model(&mut port, self.vars, ram);
         self.axis = Some(port);
     }
 
@@ -105,8 +107,8 @@ impl Drive {
         if let Some(mode) = mode {
             write_bytes(ram, vars.modes_of_operation_display, mode);
         }
-        let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
         if self.axis.is_some() {
+            let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
             self.exchange_with_axis(ram, cw, mode, cycle_ns);
         } else if self.device.operation_enabled() {
             if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
@@ -120,7 +122,7 @@ impl Drive {
     /// is not running.
     pub fn publish_motor_model(&mut self, ram: &[u8]) {
         if let Some(port) = self.axis.as_mut() {
-            sync_motor_model(port, &self.vars, ram);
+            sync_motor_model(port, self.vars, ram);
         }
     }
 
@@ -151,7 +153,7 @@ impl Drive {
             }
         }
         let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
-        sync_motor_model(&mut port, &vars, ram);
+        sync_motor_model(&mut port, vars, ram);
         let identifying = mode == Mode::Identification;
         match (feedback.state, feedback.identified) {
             (AxisState::Identified, Some(result)) if identifying => {
@@ -275,14 +277,15 @@ fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
     }
 }
 
+// Offsets are u16 (from the generated profile) and N ≤ 4: `at + N` cannot overflow a usize.
 fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
     let at = usize::from(at?);
-    ram.get(at..at.checked_add(N)?)?.try_into().ok()
+    ram.get(at..at + N)?.try_into().ok()
 }
 
 fn write_bytes<const N: usize>(ram: &mut [u8], at: Option<u16>, v: [u8; N]) {
     if let Some(at) = at.map(usize::from) {
-        if let Some(dst) = at.checked_add(N).and_then(|end| ram.get_mut(at..end)) {
+        if let Some(dst) = ram.get_mut(at..at + N) {
             dst.copy_from_slice(&v);
         }
     }
