@@ -266,8 +266,9 @@ pub struct EsmRules {
     /// How long a SAFEOP → OP request may wait for the first SYNC0 / the first outputs before
     /// it is refused, in ms (ESI `Info/StateMachine/Timeout/SafeopOpTimeout`).
     pub safeop_op_timeout_ms: u32,
-    /// CiA402 error code (603Fh) the drive raises when the EtherCAT state leaves OP while the
-    /// drive is in Operation Enabled (EMCY, PDS Fault); `None`: the drive is only disabled.
+    /// Error code the application raises (EMCY; a drive: 603Fh, PDS Fault) when the EtherCAT
+    /// state leaves OP while the application was active (a drive: Operation Enabled); `None`:
+    /// the application only puts its outputs into their safe state.
     pub op_exit_while_enabled_error: Option<u16>,
 }
 

@@ -1,4 +1,4 @@
-//! Errors the drive reports to the master: EMCY messages, the error register 1001h and the
+//! Errors the slave reports to the master: EMCY messages, the error register 1001h and the
 //! diagnosis history 10F3h (CiA 301, ETG.1020).
 
 use super::*;

@@ -26,6 +26,7 @@ use crate::leds::{self, ErrorIndication};
 use crate::mailbox::coe::{DomainStore, NoDomains, WithDomains};
 use crate::mailbox::emcy::{self, ActiveErrors, Emergency};
 use crate::mailbox::Mailbox;
+use crate::od::index::{ERROR_SETTINGS, SM_INPUT_PARAMETER, SM_OUTPUT_PARAMETER};
 use crate::od::{Dictionary, Profile};
 use crate::params::{Loaded, NoStorage, ParamError, ParamStore};
 use crate::pdo::{Direction, PdoPlan, MAX_IMAGE};
@@ -47,7 +48,6 @@ use esm::transitions::read_sm;
 const SM_OUTPUTS: u8 = 2;
 /// SM channel of the process-data inputs.
 const SM_INPUTS: u8 = 3;
-use crate::od::index::{ERROR_SETTINGS, SM_INPUT_PARAMETER, SM_OUTPUT_PARAMETER};
 /// 1C32h/1C33h subindices the stack maintains.
 const SUB_SYNC_TYPE: u8 = 0x01;
 const SUB_CYCLE_TIME: u8 = 0x02;
@@ -58,6 +58,7 @@ const SUB_DELAY_TIME: u8 = 0x09;
 const SUB_SM_EVENT_MISSED: u8 = 0x0B;
 const SUB_CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
 const SUB_SYNC_ERROR: u8 = 0x20;
+/// 10F1h (error settings, ETG.1020 §5.1) :02 sync error counter limit.
 const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
 
 /// The EtherCAT slave with its object dictionary and its application `A`. `RAM` is the OD RAM

@@ -58,7 +58,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     }
 
     /// Process-data watchdog (0x0440 bit 0 cleared by the ESC when SM2 was not written within
-    /// the watchdog time): in OP the drive drops to SAFEOP with 0x001B (ETG.1000.6 Table 11).
+    /// the watchdog time): in OP the slave drops to SAFEOP with 0x001B (ETG.1000.6 Table 11).
     /// Reading 0x0440 acknowledges the AL event.
     pub(in crate::slave) fn check_watchdog<P: EscPdi>(
         &mut self,

@@ -3,7 +3,7 @@
 //!
 //! Missed SYNC0 events are detected from time: every entry point passes the board's clock, and
 //! a SYNC0 that has not come half a cycle after it was due counts as missed. Each missed event
-//! adds [`MISSED_WEIGHT`] to the counter, each SYNC0 subtracts 1; above the limit the drive
+//! adds [`MISSED_WEIGHT`] to the counter, each SYNC0 subtracts 1; above the limit the slave
 //! leaves OP/SAFEOP with AL status code 0x001A (ETG.1020 "Sync Error Counter Limit").
 
 /// Counter increment per missed sync event (ETG.1020: "+3 for every missed event").

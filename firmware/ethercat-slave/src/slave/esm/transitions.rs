@@ -182,10 +182,12 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
         let rank_from = esm::state_rank(from);
         let rank_to = esm::state_rank(to);
         if from == AlState::Op {
-            // Leaving OP: outputs go to their safe state (controlword 0 = disable voltage).
+            // Leaving OP: the application puts its outputs into their safe state (a drive:
+            // controlword 0 = disable voltage).
             let was_enabled = self.app.outputs_safe(&mut self.ram);
-            // Profile rule (`[esm] op_exit_while_enabled_error`): leaving OP while the drive
-            // was in Operation Enabled is a fault: 603Fh, EMCY, PDS Fault.
+            // Profile rule (`[esm] op_exit_while_enabled_error`): leaving OP while the
+            // application was active is an application error (a drive: Operation Enabled →
+            // 603Fh, EMCY, PDS Fault).
             if let Some(code) = self
                 .profile
                 .device
