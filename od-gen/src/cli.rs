@@ -138,7 +138,24 @@ pub fn run(args: &[String]) -> Result<(), CliError> {
                 .map(|i| crate::load_any(i))
                 .collect::<Result<Vec<_>, _>>()?;
             if cmd == "rust" {
-                write_out(out.as_ref(), crate::rust::generate(&profiles).as_bytes())
+                // Drive profiles generate for the firmware, device profiles for any other crate
+                // on the slave stack; one file cannot hold both.
+                use crate::model::ProfileKind;
+                let devices = profiles.iter().filter(|p| p.kind == ProfileKind::Device);
+                let target =
+                    match (devices.count(), profiles.len()) {
+                        (0, _) => crate::rust::Target::DRIVE_CRATE,
+                        (d, n) if d == n => crate::rust::Target::DEVICE_CRATE,
+                        _ => return Err(CliError::Usage(
+                            "`rust` takes drive profiles or device profiles (kind = \"device\"), \
+                             not both"
+                                .into(),
+                        )),
+                    };
+                write_out(
+                    out.as_ref(),
+                    crate::rust::generate_with(&profiles, &target).as_bytes(),
+                )
             } else {
                 let names: Vec<&str> = profiles.iter().map(|p| p.name.as_str()).collect();
                 write_out(None, format!("ok: {}\n", names.join(", ")).as_bytes())

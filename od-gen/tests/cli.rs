@@ -56,3 +56,28 @@ fn errors_are_messages_with_non_zero_exit() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// `rust` generates drive profiles for the firmware and device profiles for other crates on the
+/// slave stack, and refuses to mix them in one file.
+#[test]
+fn rust_target_follows_the_profile_kind() {
+    let device = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests-host/io-module/io16.toml"
+    );
+    let out = od_gen(&["rust", "standard"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("pub static PROFILE: DriveProfile"));
+    let out = od_gen(&["rust", device]);
+    assert!(out.status.success());
+    let code = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(code.contains("pub static PROFILE: Profile = Profile {"));
+    assert!(!code.contains("DriveProfile"));
+    let out = od_gen(&["rust", "standard", device]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with("od-gen: `rust` takes drive profiles or device profiles"),
+        "{err}"
+    );
+}

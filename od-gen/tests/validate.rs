@@ -623,3 +623,39 @@ fn motor_faults_are_ordered_by_fault_not_by_file_order() {
     let expected: Vec<u16> = (0x1001..=0x100F).collect();
     assert_eq!(p.motor_faults.to_vec(), expected);
 }
+
+/// `kind`: a drive needs every motor fault mapped; a device has none, and says so.
+#[test]
+fn profile_kind_decides_whether_motor_faults_belong() {
+    use od_gen::model::ProfileKind;
+    let drive = od_gen::parse(STANDARD, "standard.toml").unwrap();
+    assert_eq!(drive.kind, ProfileKind::Drive, "drive is the default");
+
+    // A device without [motor_faults] loads, with no codes.
+    let device = with_motor_faults("").replacen(
+        "name = \"standard\"",
+        "name = \"standard\"\nkind = \"device\"",
+        1,
+    );
+    let p = od_gen::parse(&device, "standard.toml").unwrap();
+    assert_eq!(p.kind, ProfileKind::Device);
+    assert!(p.motor_faults.iter().all(|&c| c == 0));
+
+    // The same file as a drive lacks every fault.
+    let drive_without = with_motor_faults("");
+    let (key, e) = invalid(&drive_without);
+    assert_eq!(key, "motor_faults");
+    assert!(matches!(e, Invalid::MissingMotorFaults(_)), "{e:?}");
+
+    // A device with motor faults is refused, as is an unknown kind.
+    let (key, _) = invalid(&with(
+        "name = \"standard\"",
+        "name = \"standard\"\nkind = \"device\"",
+    ));
+    assert_eq!(key, "motor_faults");
+    let (key, _) = invalid(&with(
+        "name = \"standard\"",
+        "name = \"standard\"\nkind = \"servo\"",
+    ));
+    assert_eq!(key, "kind");
+}
