@@ -18,7 +18,7 @@
 //!
 //! A board creates a [`DriveSlave`] with [`new_slave`], attaches its axis
 //! ([`Drive::attach_axis`](drive::Drive::attach_axis) through
-//! [`Slave::application`](ethercat_slave::slave::Slave::application)) and calls the slave's entry
+//! [`SlaveCore::application`](ethercat_slave::slave::SlaveCore::application)) and calls the slave's entry
 //! points from its interrupts; the SYNC0 interrupt calls [`sync0::on_sync0`].
 #![no_std]
 #![deny(missing_docs)]
@@ -35,14 +35,29 @@ pub mod profile;
 pub mod profiles;
 pub mod sync0;
 
-use ethercat_slave::slave::{Slave, SlaveError};
+use ethercat_slave::slave::{MailboxSide, Slave, SlaveCore, SlaveError};
 
 /// The EtherCAT slave of a drive: the stack running the [`drive::Drive`] application.
 pub type DriveSlave<const RAM: usize> = Slave<RAM, drive::Drive>;
+
+/// The core of a drive slave: what the SYNC0 context needs ([`sync0::on_sync0`]).
+pub type DriveCore<const RAM: usize> = SlaveCore<RAM, drive::Drive>;
 
 /// The drive slave of `profile` in INIT, every object at its default, no motor attached yet.
 pub fn new_slave<const RAM: usize>(
     profile: &'static profile::DriveProfile,
 ) -> Result<DriveSlave<RAM>, SlaveError> {
     Slave::new(&profile.od, drive::Drive::new(profile))
+}
+
+/// The two parts of a drive slave of `profile`, for a board that keeps them in different
+/// contexts: the core (SYNC0 and the short ESC-event steps, behind the board's lock) and the
+/// mailbox side (the ESC-event context alone).
+pub fn new_slave_parts<const RAM: usize>(
+    profile: &'static profile::DriveProfile,
+) -> Result<(DriveCore<RAM>, MailboxSide<RAM>), SlaveError> {
+    Ok((
+        SlaveCore::new(&profile.od, drive::Drive::new(profile))?,
+        MailboxSide::new(&profile.od),
+    ))
 }

@@ -21,13 +21,14 @@
 use ethercat_slave::slave::Application;
 use hal::pdi::EscPdi;
 
-use crate::DriveSlave;
+use crate::DriveCore;
 
 /// One SYNC0 cycle of the drive (steps 1–8 above). Call it from the SYNC0 interrupt (DC
 /// modes) or the free-run timer, then `slave.cycle_finished(now)` with the time it ended.
-/// Below SAFEOP it does nothing.
+/// Below SAFEOP it does nothing. It needs only the slave's core (a `DriveSlave` passes as one):
+/// the mailbox side, and whatever mailbox transfer it is in, is not touched.
 pub fn on_sync0<P: EscPdi, const RAM: usize>(
-    slave: &mut DriveSlave<RAM>,
+    slave: &mut DriveCore<RAM>,
     pdi: &mut P,
     now_ns: u64,
 ) -> Result<(), P::Error> {

@@ -13,6 +13,7 @@ use crate::leds::SimLeds;
 use crate::plant::PlantConfig;
 use crate::servo::{axis_config, SimServo, Tuning};
 use crate::storage::SimStorage;
+use firmware::od::WithDomains;
 use firmware::params::{Loaded, ParamError, ParamStore};
 
 /// OD RAM size of the simulated firmware: large enough for every built-in profile, so the
@@ -50,6 +51,12 @@ pub struct SimDrive {
     /// The motor, inverter and encoder with the firmware's control interrupt, attached to the
     /// slave's application; it runs PWM period by PWM period as simulated time passes.
     pub servo: SimServo,
+    /// Fault injection for the context split: run a process-data cycle inside every mailbox
+    /// round that leaves an SDO transfer half done, as a SYNC0 preempting the event context would
+    /// (meaningful in free run: in DC modes SYNC0 comes only from the ESC).
+    pub cycle_during_mailbox_transfer: bool,
+    /// Cycles run that way.
+    pub cycles_during_mailbox_transfer: u32,
 }
 
 /// The simulated drive's motor: the 400 W servo with the default tuning.
@@ -98,6 +105,8 @@ impl SimDrive {
             leds: SimLeds::default(),
             next_led_ns: 0,
             servo,
+            cycle_during_mailbox_transfer: false,
+            cycles_during_mailbox_transfer: 0,
         })
     }
 
@@ -197,12 +206,32 @@ impl SimDrive {
     }
 
     /// One call of the firmware's ESC event handler.
+    /// One call of the firmware's ESC event handler, in its three steps (see
+    /// `ethercat_slave::slave::MailboxSide`): the core's short part, the mailbox round on the
+    /// mailbox side's own copy of the OD, the core's short part again.
     fn esc_event(&mut self, now_ns: u64) {
-        let _ = self.slave.on_esc_event_full(
+        let (core, mailbox) = self.slave.split();
+        let Ok(job) = core.event_begin(&mut self.esc, now_ns) else {
+            return;
+        };
+        mailbox.load(core);
+        let _ = mailbox.serve(
             &mut self.esc,
-            &mut self.params,
-            &mut self.domains,
-            now_ns,
+            job,
+            &mut WithDomains {
+                hook: &mut self.params,
+                domains: &mut self.domains,
+            },
         );
+        if self.cycle_during_mailbox_transfer && mailbox.transfer_in_progress() {
+            // What a board's SYNC0 (or free-run timer) interrupt does when it preempts the
+            // event context in the middle of a mailbox transfer: the cycle runs on the core
+            // while the mailbox side holds the half-done transfer.
+            self.cycle(now_ns);
+            self.cycles_during_mailbox_transfer += 1;
+        }
+        let (core, mailbox) = self.slave.split();
+        mailbox.store(core);
+        let _ = core.event_end(&mut self.esc, job, now_ns);
     }
 }

@@ -2,10 +2,10 @@
 //!
 //! | priority | vector | context | work |
 //! |---|---|---|---|
-//! | P0 | (TIM1_UP_TIM16 / ADC1_2, later) | FOC | **reserved** for the PWM/ADC control interrupt; nothing else uses P0 and the Slave/PDI lock does not mask it |
+//! | P0 | (TIM1_UP_TIM16 / ADC1_2, later) | FOC | **reserved** for the PWM/ADC control interrupt; nothing else uses P0 and the drive lock does not mask it |
 //! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`on_sync0`](firmware::sync0::on_sync0) in DC modes, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
 //! | P2 | EXTI2 (SPI_IRQ, PD2) | ESC event | raw handler [`EscIrqHandler`]: clears the line and signals the ESC-event task |
-//! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`Slave::on_esc_event`](firmware::slave::Slave::on_esc_event) (which also runs SM-synchronous cycles on the SM2 event), and `tasks::free_run` |
+//! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`service_esc_events`] (one ESC-event round; the core also runs SM-synchronous cycles on the SM2 event), and `tasks::free_run` |
 //! | P3 | TIM4 | embassy-time | alarm of the time driver (`time-driver-tim4`) |
 //! | P4 | DMA1/2 channels | — | not used yet, kept out of P0 (`clocks::config`) |
 //! | thread | — | background | embassy thread executor: fallback event poll, LEDs, statistics |
@@ -22,22 +22,19 @@
 //! its own line. The ESC-event work itself runs in an `InterruptExecutor` (style.md E4) because
 //! it will grow async parts (mailbox services waiting on timers).
 //!
-//! # Sharing the Slave and the PDI
-//! Both contexts and thread mode call entry points of the one [`Slave`] with the one
-//! [`Et1100Spi`]. They live in [`DRIVE`], a `Mutex<BasepriRawMutex<P1>, RefCell<..>>` (see
-//! [`crate::lock`]): the lock raises BASEPRI to P1 for the whole entry-point call, so the FOC
-//! interrupt (P0) is never delayed by it.
+//! # Sharing the slave and the PDI
+//! The slave is in two parts (`ethercat_slave::slave`): the [`Drive`] (the slave's core and the
+//! ET1100) lives in [`DRIVE`], a `Mutex<BasepriRawMutex<P1>, RefCell<..>>` (see
+//! [`crate::lock`]) that the SYNC0 context locks for its cycle; the [`EventSide`] (mailbox side
+//! with its own copy of the OD RAM, parameter storage) is used by the ESC-event context alone.
+//! An ESC-event round ([`service_esc_events`]) takes the drive lock only for the core's short
+//! steps (AL control and SM checks, copying the OD RAM to and from the mailbox side) and, through
+//! [`SharedPdi`], for one SPI frame of at most [`PDI_CHUNK`] bytes at a time. The FOC interrupt
+//! (P0) is never masked.
 //!
-//! Latency impact: SYNC0 (and the ESC event context) wait for the lock while a lower context
-//! holds it, i.e. SYNC0 jitter can reach the longest `on_esc_event` call, dominated by its SPI
-//! traffic: a 128-byte mailbox read is ≈ 49 µs at 21.25 MHz. That is acceptable for DC cycles
-//! of 250 µs and more, not for 31.25 µs.
-//!
-//! Planned improvement (needs a firmware change, see the board README): split the Slave into a
-//! cycle part (SM2/SM3 buffers, CiA402) owned by the SYNC0 context and an event part (ESM,
-//! mailbox) owned by the ESC-event context, exchanging data through lock-free double buffers;
-//! then only single PDI frames (≤ a few µs) need the lock, or the ESC-event context hands its
-//! SPI frames to the cycle context's gaps.
+//! Latency impact: SYNC0 waits at most for one of those steps (bounded by the OD RAM size or one
+//! 32-byte frame, ≈ 13 µs of SPI), never for a whole mailbox transfer (≈ 49 µs for 128 bytes) or
+//! an SDO service.
 
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
@@ -53,8 +50,12 @@ use embassy_stm32::{bind_interrupts, pac, Peri};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
+use firmware::od::{NoDomains, WithDomains};
+use firmware::slave::MailboxSide;
 use firmware::slave::SyncMode;
-use firmware::DriveSlave;
+use firmware::DriveCore;
+use hal::esc::AlEvent;
+use hal::pdi::EscPdi;
 use static_cell::StaticCell;
 
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
@@ -94,31 +95,61 @@ bind_interrupts!(
     }
 );
 
-/// What the cycle and the ESC-event contexts share.
+/// What the cycle and the ESC-event contexts share: the slave's core and the ET1100. The
+/// ESC-event context holds the lock only for the core's short steps and for single PDI
+/// transfers of at most [`PDI_CHUNK`] bytes ([`SharedPdi`]), never for a whole mailbox round.
 pub struct Drive {
-    /// The EtherCAT slave with its object dictionary.
-    pub slave: DriveSlave<RAM_SIZE>,
+    /// The EtherCAT slave's core (ESM, process data, CiA402 application, OD RAM).
+    pub core: DriveCore<RAM_SIZE>,
     /// The ET1100.
     pub pdi: Et1100Spi<'static>,
+}
+
+/// What only the ESC-event context (its executor and the thread-mode fallback poll) uses: the
+/// slave's mailbox side with its own copy of the OD RAM, and the parameter storage its SDO
+/// services write.
+pub struct EventSide {
+    /// Mailbox, CoE server, OD RAM copy.
+    pub mailbox: MailboxSide<RAM_SIZE>,
     /// 1010h/1011h parameter storage in flash bank 2.
     pub params: ParamStore<FlashStorage>,
 }
 
+/// Longest single PDI transfer the ESC-event context makes while SYNC0 may wait for the lock:
+/// (3 + 32) bytes × 376 ns ≈ 13 µs at 21.25 MHz, against ≈ 49 µs for a whole 128-byte mailbox.
+pub const PDI_CHUNK: usize = 32;
+
 /// Storage of the [`Drive`] (in .bss: `StaticCell` is uninitialised memory, where a
 /// `RefCell<Option<Drive>>` initialised to `None` would be copied from flash into .data).
 static DRIVE_STORAGE: StaticCell<Drive> = StaticCell::new();
+/// Storage of the [`EventSide`] (same reason).
+static EVENT_SIDE_STORAGE: StaticCell<EventSide> = StaticCell::new();
+
+/// The [`EventSide`], locked against the other user of the ESC-event work (executor at P2 and
+/// thread mode) with the ESC-event priority as ceiling: SYNC0 (P1) is never masked by it.
+static EVENT_SIDE: Mutex<
+    BasepriRawMutex<{ prio::ESC_EVENT as u8 }>,
+    RefCell<Option<&'static mut EventSide>>,
+> = Mutex::new(RefCell::new(None));
 
 /// The shared [`Drive`], locked with the SYNC0 priority as ceiling. `None` until [`install`].
 static DRIVE: Mutex<BasepriRawMutex<{ prio::CYCLE as u8 }>, RefCell<Option<&'static mut Drive>>> =
     Mutex::new(RefCell::new(None));
 
-/// Moves the drive into its static storage and the shared cell; the contexts start using it
-/// from now on. Builds the drive in place (`make` runs once; a second call panics).
-pub fn install(make: impl FnOnce() -> Drive) {
-    let drive = DRIVE_STORAGE.init_with(make);
+/// Moves the drive and the event side into their static storage and shared cells; the
+/// contexts start using them from now on (`make` runs once; a second call panics).
+pub fn install(make: impl FnOnce() -> (Drive, EventSide)) {
+    let (drive, event_side) = make();
+    let drive = DRIVE_STORAGE.init(drive);
+    let event_side = EVENT_SIDE_STORAGE.init(event_side);
     DRIVE.lock(|cell| {
         if let Ok(mut slot) = cell.try_borrow_mut() {
             *slot = Some(drive);
+        }
+    });
+    EVENT_SIDE.lock(|cell| {
+        if let Ok(mut slot) = cell.try_borrow_mut() {
+            *slot = Some(event_side);
         }
     });
 }
@@ -130,6 +161,70 @@ pub fn with_drive<R>(f: impl FnOnce(&mut Drive) -> R) -> Option<R> {
         let mut slot = cell.try_borrow_mut().ok()?;
         slot.as_deref_mut().map(f)
     })
+}
+
+/// Runs `f` on the event side with its lock held (SYNC0 stays unmasked). `None` before
+/// [`install`].
+fn with_event_side<R>(f: impl FnOnce(&mut EventSide) -> R) -> Option<R> {
+    EVENT_SIDE.lock(|cell| {
+        let mut slot = cell.try_borrow_mut().ok()?;
+        slot.as_deref_mut().map(f)
+    })
+}
+
+/// The ET1100 as the ESC-event context reaches it outside the drive lock: every access takes the
+/// lock for one SPI frame of at most [`PDI_CHUNK`] bytes, so a SYNC0 that arrives meanwhile
+/// waits for at most one such frame. (The ESC treats a mailbox buffer as read or written when
+/// its last byte is, whatever the frames.)
+pub struct SharedPdi;
+
+impl SharedPdi {
+    fn chunked(
+        addr: u16,
+        len: usize,
+        mut access: impl FnMut(
+            &mut Et1100Spi<'static>,
+            u16,
+            core::ops::Range<usize>,
+        ) -> Result<AlEvent, PdiError>,
+    ) -> Result<AlEvent, PdiError> {
+        let mut start = 0;
+        loop {
+            let end = len.min(start + PDI_CHUNK);
+            let at = u16::try_from(start)
+                .ok()
+                .and_then(|o| addr.checked_add(o))
+                .ok_or(PdiError::OutOfRange { addr, len })?;
+            let events = with_drive(|d| access(&mut d.pdi, at, start..end))
+                .ok_or(PdiError::Unavailable { addr })??;
+            if end >= len {
+                return Ok(events);
+            }
+            start = end;
+        }
+    }
+}
+
+impl EscPdi for SharedPdi {
+    type Error = PdiError;
+
+    fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<AlEvent, PdiError> {
+        let len = buf.len();
+        Self::chunked(addr, len, |pdi, at, range| match buf.get_mut(range) {
+            Some(part) => pdi.read(at, part),
+            None => Err(PdiError::OutOfRange { addr, len }),
+        })
+    }
+
+    fn write(&mut self, addr: u16, data: &[u8]) -> Result<AlEvent, PdiError> {
+        Self::chunked(addr, data.len(), |pdi, at, range| match data.get(range) {
+            Some(part) => pdi.write(at, part),
+            None => Err(PdiError::OutOfRange {
+                addr,
+                len: data.len(),
+            }),
+        })
+    }
 }
 
 /// Counters of one context, read by `tasks::report`.
@@ -210,16 +305,16 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
         }
         let requests = CYCLE_REQUESTS.swap(0, Ordering::Acquire);
         let result = with_drive(|d| {
-            let run = match d.slave.sync_mode() {
+            let run = match d.core.sync_mode() {
                 SyncMode::DcSync0 | SyncMode::DcSync1 => edge,
                 SyncMode::FreeRun => requests & REQUEST_FREE_RUN != 0,
                 // `on_esc_event` runs the cycle itself when it sees the SM2 event.
                 SyncMode::SmSynchronous => false,
             };
             if run {
-                let result = firmware::sync0::on_sync0(&mut d.slave, &mut d.pdi, now_ns());
+                let result = firmware::sync0::on_sync0(&mut d.core, &mut d.pdi, now_ns());
                 // The measured duration becomes 1C32h/1C33h:06 (calc and copy time).
-                d.slave.cycle_finished(now_ns());
+                d.core.cycle_finished(now_ns());
                 Some(result)
             } else {
                 None
@@ -263,8 +358,8 @@ impl Handler<typelevel::UART4> for EscEventExecutor {
     /// ISR: ESC-event executor, UART4 (pended by software only) at P2.
     /// - Rate: once per ESC IRQ edge, per 10 ms retry while events stay pending, and per
     ///   free-run tick (1 kHz).
-    /// - Budget: `on_esc_event` ≤ 60 µs per call (one 128-byte mailbox read ≈ 49 µs of SPI);
-    ///   longer ESM checks must be split across polls.
+    /// - Budget: one ESC-event round ≤ 60 µs (one 128-byte mailbox read ≈ 49 µs of SPI, taken in
+    ///   32-byte frames); longer ESM checks must be split across polls. SYNC0 preempts it.
     /// - Measured: not yet on hardware; `EVENT_STATS.max_cycles` (DWT) is logged every second.
     unsafe fn on_interrupt() {
         // SAFETY: called from the UART4 handler only, and UART4 is unmasked only by
@@ -320,14 +415,34 @@ where
     ExtiInput::new_blocking(pin, channel, Pull::Up, exti::TriggerEdge::Falling)
 }
 
-/// Serves pending AL events once ([`Slave::on_esc_event`], which polls the AL event register
-/// itself and also runs the SM-synchronous cycle on an SM2 event). Called from the ESC-event
+/// Serves pending AL events once: one ESC-event round of the slave (see
+/// `ethercat_slave::slave::MailboxSide`): the core's short steps under the drive lock, the
+/// mailbox round on the event side with the PDI taken frame by frame ([`SharedPdi`]), so
+/// SYNC0 never waits for a mailbox transfer or an SDO service. Called from the ESC-event
 /// context and from the thread-mode fallback poll.
 pub fn service_esc_events() {
     let started = DWT::cycle_count();
-    let result = with_drive(|d| {
-        d.slave
-            .on_esc_event_with(&mut d.pdi, &mut d.params, now_ns())
-    });
+    let result = with_event_side(|ev| {
+        let now = now_ns();
+        let job = match with_drive(|d| d.core.event_begin(&mut d.pdi, now))? {
+            Ok(job) => job,
+            Err(e) => return Some(Err(e)),
+        };
+        with_drive(|d| ev.mailbox.load(&mut d.core));
+        let served = ev.mailbox.serve(
+            &mut SharedPdi,
+            job,
+            &mut WithDomains {
+                hook: &mut ev.params,
+                domains: &mut NoDomains,
+            },
+        );
+        with_drive(|d| ev.mailbox.store(&mut d.core));
+        if let Err(e) = served {
+            return Some(Err(e));
+        }
+        with_drive(|d| d.core.event_end(&mut d.pdi, job, now))
+    })
+    .flatten();
     EVENT_STATS.record(started, result);
 }

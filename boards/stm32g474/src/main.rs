@@ -33,7 +33,7 @@ use embassy_executor::Spawner;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_time::{Duration, Timer};
 use firmware::params::ParamStore;
-use firmware::DriveSlave;
+use firmware::DriveCore;
 use hal::esc::regs;
 use hal::pdi::EscPdi;
 use {defmt_rtt as _, panic_probe as _};
@@ -86,20 +86,20 @@ fn install_drive(
     let mut started = false;
     irq::install(|| {
         // A profile whose OD RAM does not fit RAM_SIZE is a build error of od-gen: stop here.
-        let mut slave: DriveSlave<{ profile::RAM_SIZE }> =
-            unwrap!(firmware::new_slave(&profile::PROFILE));
+        let (mut core, mailbox): (DriveCore<{ profile::RAM_SIZE }>, _) =
+            unwrap!(firmware::new_slave_parts(&profile::PROFILE));
         // Parameters saved with 1010h, before the ESM starts (CiA 301: effective at power-on).
         let mut params = ParamStore::new(FlashStorage::new(flash));
-        if slave.load_parameters(&mut params).is_err() {
+        if core.load_parameters(&mut params).is_err() {
             warn!("stored parameters not loaded: defaults in use");
         }
         // AL status INIT and the AL event mask (drives SPI_IRQ). If the ESC is not ready yet,
         // the fallback poll task keeps probing and calls `start` once it is.
-        started = ready && slave.start(&mut pdi).is_ok();
+        started = ready && core.start(&mut pdi).is_ok();
         if ready && !started {
-            error!("Slave::start failed; the fallback poll retries");
+            error!("SlaveCore::start failed; the fallback poll retries");
         }
-        irq::Drive { slave, pdi, params }
+        (irq::Drive { core, pdi }, irq::EventSide { mailbox, params })
     });
     started
 }

@@ -82,7 +82,7 @@ pub async fn esc_poll(mut started: bool) {
             continue;
         }
         let result = irq::with_drive(|d| match esc_ready(&mut d.pdi) {
-            Ok(true) => d.slave.start(&mut d.pdi).map(|()| true),
+            Ok(true) => d.core.start(&mut d.pdi).map(|()| true),
             Ok(false) => Ok(false),
             Err(e) => Err(e),
         });
@@ -104,7 +104,7 @@ pub async fn leds(mut leds: Leds) {
     loop {
         ticker.next().await;
         let (run, err) =
-            irq::with_drive(|d| d.slave.leds(crate::time::now_ns())).unwrap_or((false, false));
+            irq::with_drive(|d| d.core.leds(crate::time::now_ns())).unwrap_or((false, false));
         let errors =
             CYCLE_STATS.errors.load(Ordering::Relaxed) + EVENT_STATS.errors.load(Ordering::Relaxed);
         leds.set_run(run);

@@ -8,7 +8,7 @@
 //!
 //! | module | what |
 //! |---|---|
-//! | [`slave`] | [`Slave`](slave::Slave): owns the state and the OD RAM; the entry points and the glue between the modules below; the [`Application`](slave::Application) trait |
+//! | [`slave`] | [`SlaveCore`](slave::SlaveCore) (state, OD RAM, process data: what the SYNC0 context needs) and [`MailboxSide`](slave::MailboxSide) (mailbox and CoE on their own copy of the OD RAM), together [`Slave`](slave::Slave); the entry points and the glue between the modules below; the [`Application`](slave::Application) trait |
 //! | [`slave::esm`] (also [`esm`]) | the EtherCAT state machine in one folder: decision function, SM checks, sync modes, SYNC0 supervision, state change requests, the faults that drop the state |
 //! | [`mailbox`] | mailbox data-link layer, CoE (SDO, SDO information, complete access) and emergencies |
 //! | [`pdo`] | PDO mapping → copy plan, pack/unpack, and the rules for writing the PDO objects |

@@ -98,6 +98,12 @@ impl Mailbox {
         self.emcy.post(emcy)
     }
 
+    /// Whether an SDO transfer spans mailbox rounds right now (segmented up/download, SDO
+    /// information fragments).
+    pub fn transfer_in_progress(&self) -> bool {
+        self.coe.transfer_in_progress()
+    }
+
     /// Emergencies waiting to be posted.
     pub fn pending_emcys(&self) -> usize {
         self.emcy.len()

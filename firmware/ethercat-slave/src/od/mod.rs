@@ -6,6 +6,7 @@
 //! ([`storable`]).
 
 pub mod abort;
+pub mod dirty;
 pub mod domain;
 pub mod hook;
 pub mod index;
@@ -15,6 +16,7 @@ pub mod store;
 pub mod value;
 
 pub use abort::AbortCode;
+pub use dirty::DirtyMap;
 pub use domain::{DomainStore, NoDomains, RamDomain};
 pub use hook::{DownloadHook, WithDomains};
 pub use model::*;

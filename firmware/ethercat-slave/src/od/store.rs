@@ -1,5 +1,6 @@
 //! Run-time access to a profile's object dictionary: the static description plus the OD RAM.
 
+use super::dirty::DirtyMap;
 use super::model::{Entry, Object, Profile, Value};
 
 /// Why a value could not be read or written at the storage level.
@@ -23,13 +24,29 @@ pub enum StoreError {
 pub struct Dictionary<'r> {
     profile: &'static Profile,
     ram: &'r mut [u8],
+    /// Where writes are recorded, for a view over a working copy of the OD RAM.
+    dirty: Option<&'r mut DirtyMap>,
 }
 
 impl<'r> Dictionary<'r> {
     /// A view of `profile` over `ram`. `ram` must be at least [`Profile::ram_size`] bytes; accesses
     /// outside it fail with [`StoreError::Layout`].
     pub fn new(profile: &'static Profile, ram: &'r mut [u8]) -> Self {
-        Self { profile, ram }
+        Self {
+            profile,
+            ram,
+            dirty: None,
+        }
+    }
+
+    /// A view over a working copy of the OD RAM that records in `dirty` every byte
+    /// [`Self::set_value`] writes, so that exactly those can be copied back.
+    pub fn tracked(profile: &'static Profile, ram: &'r mut [u8], dirty: &'r mut DirtyMap) -> Self {
+        Self {
+            profile,
+            ram,
+            dirty: Some(dirty),
+        }
     }
 
     /// Resets every variable to its default.
@@ -88,6 +105,10 @@ impl<'r> Dictionary<'r> {
         let (head, tail) = dst.split_at_mut(data.len());
         head.copy_from_slice(data);
         tail.fill(0);
+        if let Some(dirty) = self.dirty.as_deref_mut() {
+            // The whole entry: it goes back as one value.
+            dirty.mark(start..start + entry.byte_len());
+        }
         Ok(())
     }
 

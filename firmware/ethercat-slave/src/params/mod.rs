@@ -201,7 +201,7 @@ impl NvStorage for NoStorage {
 
 /// The parameter store: the board's storage plus two record buffers of `CAP` bytes (the newest
 /// record and the one being built). The board owns it (a `static` on target) and hands it to
-/// [`crate::slave::Slave::load_parameters`] at start-up and to
+/// [`crate::slave::SlaveCore::load_parameters`] at start-up and to
 /// [`crate::slave::Slave::on_esc_event_with`] for the 1010h/1011h commands.
 pub struct ParamStore<S, const CAP: usize = DEFAULT_RECORD_CAPACITY> {
     storage: S,

@@ -6,7 +6,7 @@
 
 use super::*;
 
-impl<const RAM: usize, A: Application> Slave<RAM, A> {
+impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// Runs one process-data cycle: [`Self::cycle_begin`], the application, [`Self::cycle_end`].
     /// Does nothing below SAFEOP. Outputs are applied only in OP.
     pub fn on_cycle<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {

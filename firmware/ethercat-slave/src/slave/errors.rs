@@ -5,7 +5,7 @@ use super::*;
 
 /// Emergencies, the error register 1001h and the diagnosis history 10F3h
 /// ([`crate::mailbox::emcy`], [`crate::diag`]).
-impl<const RAM: usize, A: Application> Slave<RAM, A> {
+impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// Reports an error that is now active: marks `code` active in 1001h (bits from its
     /// CiA 301 class, plus `extra_register_bits`, e.g. [`emcy::register::DEVICE_PROFILE`]),
     /// stores `diag` in 10F3h if given (time stamp `now_ns`), and queues the emergency
@@ -61,7 +61,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     /// running (INIT, BOOT).
     pub fn post_emcy(&mut self, emcy: Emergency) -> Result<(), Emergency> {
         match self.status.state {
-            AlState::PreOp | AlState::SafeOp | AlState::Op => self.mailbox.post_emcy(emcy),
+            AlState::PreOp | AlState::SafeOp | AlState::Op => self.emcy_out.push_back(emcy),
             AlState::Init | AlState::Boot => Err(emcy),
         }
     }
@@ -73,7 +73,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
 
     /// Emergencies waiting for the mailbox.
     pub fn pending_emcys(&self) -> usize {
-        self.mailbox.pending_emcys()
+        self.emcy_out.len()
     }
 
     /// Mirrors the active errors into 1001h.

@@ -1,15 +1,19 @@
-//! The slave: owns the stack state and the OD RAM; boards call its entry points.
+//! The slave: owns the stack state and the OD RAM; boards call its entry points. The SYNC0
+//! context needs only the [`SlaveCore`]; mailbox traffic runs on the [`MailboxSide`] with its own
+//! copy of the OD RAM and touches the core only in short steps (see `mailbox_side`).
 //!
 //! | entry point | called from (target) | called from (sim) |
 //! |---|---|---|
 //! | [`Slave::on_esc_event`] | ESC IRQ (AL event) task, and periodically from thread mode | after every frame the ESC processed |
-//! | [`Slave::on_cycle`] (or its stages [`Slave::cycle_begin`], the application, [`Slave::cycle_end`]), then [`Slave::cycle_finished`] | SYNC0 EXTI (DC), or a local timer (free-run) | at each simulated SYNC0 / free-run tick |
+//! | [`SlaveCore::on_cycle`] (or its stages [`SlaveCore::cycle_begin`], the application, [`SlaveCore::cycle_end`]), then [`SlaveCore::cycle_finished`] | SYNC0 EXTI (DC), or a local timer (free-run) | at each simulated SYNC0 / free-run tick |
 //!
 //! In SM-synchronous mode the cycle runs from [`Slave::on_esc_event`] on the SM2 event.
 //!
 //! | module | what |
 //! |---|---|
-//! | this module | [`Slave`], construction, the ESC-event entry points |
+//! | this module | [`SlaveCore`], construction, the ESC-event steps of the core |
+//! | `composite` | [`Slave`]: core and mailbox side together, a whole ESC-event round |
+//! | `mailbox_side` | [`MailboxSide`]: the mailbox and CoE on a copy of the OD RAM (load / serve / store) |
 //! | `cycle` | the process-data cycle (cycle context) |
 //! | [`esm`] | the EtherCAT state machine |
 //! | `errors` | EMCY, 1001h and 10F3h bookkeeping of AL and application errors |
@@ -23,26 +27,31 @@ use hal::storage::NvStorage;
 
 use crate::diag::{diag_code_for_emcy, DiagError, DiagMessage, DiagParam, DiagType, Diagnosis};
 use crate::leds::{self, ErrorIndication};
-use crate::mailbox::coe::{DomainStore, NoDomains, WithDomains};
+use crate::mailbox::emcy::EMCY_QUEUE_LEN;
 use crate::mailbox::emcy::{self, ActiveErrors, Emergency};
-use crate::mailbox::Mailbox;
+use crate::od::dirty::MAX_TRACKED_RAM;
 use crate::od::index::{ERROR_SETTINGS, SM_INPUT_PARAMETER, SM_OUTPUT_PARAMETER};
 use crate::od::{Dictionary, Profile};
-use crate::params::{Loaded, NoStorage, ParamError, ParamStore};
+use crate::params::{Loaded, ParamError, ParamStore};
 use crate::pdo::{Direction, PdoPlan, MAX_IMAGE};
 use crate::slave::esm::sm_check;
 use crate::slave::esm::supervision::{SyncSupervisor, DEFAULT_COUNTER_LIMIT};
 pub use crate::slave::esm::sync::SyncMode;
 use esm::Outcome;
+use heapless::Deque;
 
 mod application;
+mod composite;
 mod cycle;
 mod errors;
 pub mod esm;
+mod mailbox_side;
 
 use crate::slave::esm::sync::{SyncConfig, SyncMode as Mode};
 pub use application::{AppEvent, Application, NoApplication};
+pub use composite::Slave;
 use esm::transitions::read_sm;
+pub use mailbox_side::MailboxSide;
 
 /// SM channel of the process-data outputs.
 const SM_OUTPUTS: u8 = 2;
@@ -61,15 +70,21 @@ const SUB_SYNC_ERROR: u8 = 0x20;
 /// 10F1h (error settings, ETG.1020 §5.1) :02 sync error counter limit.
 const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
 
-/// The EtherCAT slave with its object dictionary and its application `A`. `RAM` is the OD RAM
-/// size (the generated `<profile>::RAM_SIZE`, or the largest of several profiles to choose one
-/// at run time).
-pub struct Slave<const RAM: usize, A: Application = NoApplication> {
+/// What the slave's process-data side owns: the ESM, the process data, the application and the
+/// OD RAM; the ESC-event context touches it only in short, bounded calls (the mailbox and its
+/// SDO services work on their own copy, [`MailboxSide`]). `RAM` is the OD RAM size (the
+/// generated `<profile>::RAM_SIZE`, or the largest of several profiles to choose one at run
+/// time).
+pub struct SlaveCore<const RAM: usize, A: Application = NoApplication> {
     profile: &'static Profile,
     ram: [u8; RAM],
     status: AlStatus,
     code: AlStatusCode,
-    mailbox: Mailbox,
+    /// Emergencies waiting for the mailbox side to take them (raised by the ESM, the cycle or
+    /// the board).
+    emcy_out: Deque<Emergency, EMCY_QUEUE_LEN>,
+    /// The mailbox must start afresh (INIT was entered); the mailbox side takes it.
+    mailbox_reset: bool,
     rx_plan: PdoPlan,
     tx_plan: PdoPlan,
     sync: SyncConfig,
@@ -101,6 +116,15 @@ pub struct Slave<const RAM: usize, A: Application = NoApplication> {
     now_ns: u64,
 }
 
+/// What [`SlaveCore::event_begin`] found, for the mailbox side and [`SlaveCore::event_end`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EventJob {
+    /// The AL event register as read.
+    pub events: AlEvent,
+    /// The EtherCAT state after the requests were handled.
+    pub state: AlState,
+}
+
 /// Why the slave could not be created.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -112,15 +136,28 @@ pub enum SlaveError {
         /// Bytes available.
         available: usize,
     },
+    /// The OD RAM is larger than the mailbox side can track writes to.
+    RamTooLarge {
+        /// Bytes of OD RAM.
+        size: usize,
+        /// The largest trackable OD RAM ([`MAX_TRACKED_RAM`]).
+        max: usize,
+    },
 }
 
-impl<const RAM: usize, A: Application> Slave<RAM, A> {
-    /// A slave in INIT with every object at its default, running `app`.
+impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
+    /// A slave core in INIT with every object at its default, running `app`.
     pub fn new(profile: &'static Profile, app: A) -> Result<Self, SlaveError> {
         if profile.ram_size() > RAM {
             return Err(SlaveError::RamTooSmall {
                 needed: profile.ram_size(),
                 available: RAM,
+            });
+        }
+        if RAM > MAX_TRACKED_RAM {
+            return Err(SlaveError::RamTooLarge {
+                size: RAM,
+                max: MAX_TRACKED_RAM,
             });
         }
         let mut slave = Self {
@@ -132,7 +169,8 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
                 id_loaded: false,
             },
             code: AlStatusCode::NoError,
-            mailbox: Mailbox::new(),
+            emcy_out: Deque::new(),
+            mailbox_reset: false,
             rx_plan: PdoPlan::default(),
             tx_plan: PdoPlan::default(),
             sync: SyncConfig {
@@ -235,35 +273,14 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
         self.cycles
     }
 
-    /// Handles pending AL events: state change requests, mailbox traffic, the SM2 event in
-    /// SM-synchronous mode. Safe to call at any time (it polls what it needs).
-    /// Without parameter storage: "save" to 1010h / "load" to 1011h are answered with SDO abort
-    /// 0x0606_0000 (see [`Self::on_esc_event_with`]).
-    pub fn on_esc_event<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {
-        self.on_esc_event_with(pdi, &mut ParamStore::<NoStorage, 0>::new(NoStorage), now_ns)
-    }
-
-    /// [`Self::on_esc_event`] with the board's parameter storage: an SDO download of "save" to
-    /// 1010h or "load" to 1011h runs the store/restore on `params` before the SDO response is
-    /// sent (CiA 301 §7.5.2.13/14, see [`crate::params`]).
-    pub fn on_esc_event_with<P: EscPdi, S: NvStorage, const CAP: usize>(
+    /// First part of the ESC-event handler (bounded, no mailbox traffic): reads the AL event
+    /// register; handles state change requests, SM (re)activation, the process-data watchdog and
+    /// SYNC0 supervision. Returns the events and the state the mailbox side works with.
+    pub fn event_begin<P: EscPdi>(
         &mut self,
         pdi: &mut P,
-        params: &mut ParamStore<S, CAP>,
         now_ns: u64,
-    ) -> Result<(), P::Error> {
-        self.on_esc_event_full(pdi, params, &mut NoDomains, now_ns)
-    }
-
-    /// [`Self::on_esc_event_with`] with the board's store of DOMAIN objects kept outside the OD
-    /// RAM (`Value::Domain`, streamed by segmented SDO; see [`crate::od::domain`]).
-    pub fn on_esc_event_full<P: EscPdi, S: NvStorage, const CAP: usize>(
-        &mut self,
-        pdi: &mut P,
-        params: &mut ParamStore<S, CAP>,
-        domains: &mut dyn DomainStore,
-        now_ns: u64,
-    ) -> Result<(), P::Error> {
+    ) -> Result<EventJob, P::Error> {
         let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
         self.now_ns = now_ns;
         if events.any(AlEvent::sm(SM_OUTPUTS))
@@ -286,24 +303,28 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
             self.check_watchdog(pdi)?;
         }
         self.supervise_sync(pdi, now_ns)?;
-        let state = self.status.state;
-        if state != AlState::Init && state != AlState::Boot {
-            let mut od = Dictionary::new(self.profile, &mut self.ram);
-            self.mailbox.service_with(
-                pdi,
-                &self.profile.device,
-                &mut od,
-                state,
-                events,
-                &mut WithDomains {
-                    hook: params,
-                    domains,
-                },
-            )?;
+        Ok(EventJob {
+            events,
+            state: self.status.state,
+        })
+    }
+
+    /// Last part of the ESC-event handler (bounded), after the mailbox side handed its writes
+    /// back: diagnosis acknowledgements, the synchronisation the master set up in SAFEOP, and
+    /// the SM-synchronous cycle on the SM2 event.
+    pub fn event_end<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        job: EventJob,
+        now_ns: u64,
+    ) -> Result<(), P::Error> {
+        if job.state != AlState::Init && job.state != AlState::Boot {
             // The master acknowledges diagnosis messages by writing 10F3h:03.
-            let _ = self.diag.poll(&mut od);
+            let _ = self
+                .diag
+                .poll(&mut Dictionary::new(self.profile, &mut self.ram));
         }
-        if state == AlState::SafeOp {
+        if job.state == AlState::SafeOp {
             // Masters may activate SYNC0 only after SAFEOP was reached (SOEM's dc_sync).
             let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
             if sync != self.sync {
@@ -312,7 +333,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
             self.sync = sync;
             self.publish_sync_parameters();
         }
-        if self.sync.mode == Mode::SmSynchronous && events.any(AlEvent::sm(SM_OUTPUTS)) {
+        if self.sync.mode == Mode::SmSynchronous && job.events.any(AlEvent::sm(SM_OUTPUTS)) {
             self.on_cycle(pdi, now_ns)?;
         }
         Ok(())

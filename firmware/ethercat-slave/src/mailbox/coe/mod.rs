@@ -265,6 +265,12 @@ impl CoeServer {
         Ok(COE_HEADER_LEN + n)
     }
 
+    /// Whether an SDO transfer spans mailbox rounds right now: a segmented up- or download, or
+    /// SDO information fragments still to send.
+    pub fn transfer_in_progress(&self) -> bool {
+        self.sdo.in_progress() || self.fragment_pending()
+    }
+
     /// Whether an SDO information response has fragments left to send.
     pub fn fragment_pending(&self) -> bool {
         self.info.fragment_pending()

@@ -218,6 +218,11 @@ pub(super) struct SdoServer {
 }
 
 impl SdoServer {
+    /// Whether a segmented transfer is half done (more segments to come).
+    pub(super) fn in_progress(&self) -> bool {
+        self.transfer != Transfer::Idle
+    }
+
     /// Idle.
     pub(super) const fn new() -> Self {
         Self {

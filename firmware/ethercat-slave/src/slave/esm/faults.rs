@@ -3,7 +3,7 @@
 
 use super::super::*;
 
-impl<const RAM: usize, A: Application> Slave<RAM, A> {
+impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// SM activation changed: the master rewrote an SM. In PREOP and above the mailbox SMs must
     /// still match (else INIT + 0x0016, as on INIT → PREOP); in SAFEOP and OP also SM2/SM3, with
     /// the resulting states of ETG.1000.6 Table 11: 0x001D → SAFEOP + error, 0x001E → PREOP +

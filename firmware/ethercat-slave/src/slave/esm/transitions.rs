@@ -4,7 +4,7 @@
 use super::super::*;
 use super::*;
 
-impl<const RAM: usize, A: Application> Slave<RAM, A> {
+impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     pub(in crate::slave) fn handle_al_control<P: EscPdi>(
         &mut self,
         pdi: &mut P,
@@ -215,7 +215,9 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
             };
         }
         if to == AlState::Init {
-            self.mailbox.reset();
+            // The mailbox side starts afresh; emergencies not yet sent are dropped with it.
+            self.mailbox_reset = true;
+            self.emcy_out.clear();
         }
         if rank_to <= 2 && to != from {
             // Entering or returning to SAFEOP or below: supervision and the OP gate restart.

@@ -1,0 +1,115 @@
+//! The mailbox side of the slave: what the ESC-event context owns alone, so that mailbox traffic
+//! never holds what the SYNC0 context needs.
+//!
+//! The mailbox data-link layer and its CoE server work on a *copy* of the OD RAM. One event
+//! round is three steps; only the first and the last touch the [`SlaveCore`], each for a bounded
+//! time that does not depend on the mailbox traffic (on a board: under the lock the SYNC0
+//! interrupt shares, as its priority ceiling):
+//!
+//! 1. [`MailboxSide::load`]: copy the OD RAM (RAM size bytes), take the emergencies the core
+//!    raised and a pending mailbox reset;
+//! 2. [`MailboxSide::serve`]: the mailbox transfers over the PDI and the SDO services, on the
+//!    copy — as long as they take, with no lock: the cycle runs meanwhile;
+//! 3. [`MailboxSide::store`]: copy back exactly the entries the SDO services wrote (a
+//!    [`DirtyMap`] records them), whole entries at a time.
+//!
+//! An entry that both an SDO download and the cycle write in the same round ends with the SDO
+//! value, as if the download came last. Values the cycle writes (statusword, actual values) are
+//! uploaded as they were at step 1.
+
+use hal::esc::{AlEvent, AlState};
+use hal::pdi::EscPdi;
+
+use super::{EventJob, SlaveCore};
+use crate::mailbox::Mailbox;
+use crate::od::{Dictionary, DirtyMap, DownloadHook, Profile};
+use crate::slave::Application;
+
+/// The mailbox with its CoE server and the working copy of the OD RAM.
+pub struct MailboxSide<const RAM: usize> {
+    profile: &'static Profile,
+    mailbox: Mailbox,
+    ram: [u8; RAM],
+    dirty: DirtyMap,
+}
+
+impl<const RAM: usize> MailboxSide<RAM> {
+    /// The mailbox side of a slave of `profile` (its RAM is checked by [`SlaveCore::new`]).
+    pub fn new(profile: &'static Profile) -> Self {
+        Self {
+            profile,
+            mailbox: Mailbox::new(),
+            ram: [0; RAM],
+            dirty: DirtyMap::new(),
+        }
+    }
+
+    /// Step 1 (bounded, with the core): the OD RAM as it is now, the emergencies to send, a
+    /// mailbox reset after INIT.
+    pub fn load<A: Application>(&mut self, core: &mut SlaveCore<RAM, A>) {
+        if core.mailbox_reset {
+            core.mailbox_reset = false;
+            self.mailbox.reset();
+        }
+        while let Some(emcy) = core.emcy_out.front().copied() {
+            if self.mailbox.post_emcy(emcy).is_err() {
+                break; // the mailbox queue is full: the rest waits in the core
+            }
+            core.emcy_out.pop_front();
+        }
+        self.ram = core.ram;
+        self.dirty.clear();
+    }
+
+    /// Step 2 (no lock): serves the mailbox in `job.state` (nothing in INIT and BOOT): repeat
+    /// requests, pending responses, a new request in SM0, emergencies when idle. SDO downloads
+    /// go to the working copy; `hook` runs on each committed download (parameter storage,
+    /// domains).
+    pub fn serve<P: EscPdi, H: DownloadHook + ?Sized>(
+        &mut self,
+        pdi: &mut P,
+        job: EventJob,
+        hook: &mut H,
+    ) -> Result<(), P::Error> {
+        if matches!(job.state, AlState::Init | AlState::Boot) {
+            return Ok(());
+        }
+        let mut od = Dictionary::tracked(self.profile, &mut self.ram, &mut self.dirty);
+        self.mailbox.service_with(
+            pdi,
+            &self.profile.device,
+            &mut od,
+            job.state,
+            job.events,
+            hook,
+        )
+    }
+
+    /// Step 3 (bounded, with the core): the entries the SDO services wrote go back to the core's
+    /// OD RAM.
+    pub fn store<A: Application>(&mut self, core: &mut SlaveCore<RAM, A>) {
+        self.dirty.copy_marked(&self.ram, &mut core.ram);
+    }
+
+    /// Emergencies queued in the mailbox, waiting for SM1.
+    pub fn pending_emcys(&self) -> usize {
+        self.mailbox.pending_emcys()
+    }
+
+    /// Whether an SDO transfer (segmented download or upload, fragmented SDO information)
+    /// spans mailbox rounds right now.
+    pub fn transfer_in_progress(&self) -> bool {
+        self.mailbox.transfer_in_progress()
+    }
+}
+
+/// The events a round was started for, when the caller has none (tests).
+impl EventJob {
+    /// No event, in `state`.
+    pub const fn idle(state: AlState) -> Self {
+        Self {
+            events: AlEvent(0),
+            state,
+        }
+    }
+}
