@@ -9,11 +9,12 @@
 mod motor;
 mod process_data;
 mod sdo;
+mod sync0_handler;
 
 use crate::harness::Harness;
 
 /// Every benchmark, in report order.
-pub const ALL: &[fn(&mut Harness)] = &[process_data::run, sdo::run, motor::run];
+pub const ALL: &[fn(&mut Harness)] = &[process_data::run, sync0_handler::run, sdo::run, motor::run];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.
 fn read<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {

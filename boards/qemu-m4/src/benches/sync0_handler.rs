@@ -1,0 +1,277 @@
+//! The whole SYNC0 handler as the board runs it: `firmware::sync0::on_sync0` on the slave's
+//! core in OP (supervision, SM2 read and RxPDO unpack, CiA402 and the drive, TxPDO pack and SM3
+//! write), with the real generated `standard` profile and its default mapping. The PDI is a RAM
+//! image of the ESC ([`RamEsc`]), so the PDI bus time is excluded, as the budget says.
+//!
+//! Measured twice: with the mailbox idle, and while the slave's mailbox side holds a half-done
+//! segmented SDO download (a download init of 2F00h announcing 4 bytes and carrying none). The
+//! handler reaches only the core, so both must cost the same: mailbox traffic cannot delay or
+//! lengthen the SYNC0 path.
+
+use core::hint::black_box;
+
+use firmware::cia402::pds::{controlword, PdsState};
+use firmware::od::{Dictionary, SmLayout};
+use firmware::pdo::{Direction, PdoPlan, MAX_IMAGE};
+use firmware::profiles::standard::{INPUTS_SIZE, OUTPUTS_SIZE, PROFILE, RAM_SIZE};
+use firmware::slave::{EventJob, MailboxSide};
+use firmware::sync0::on_sync0;
+use firmware::DriveCore;
+use hal::esc::{regs, AlEvent, AlState, SmActivate, SmConfig, SmControl, SmPdiControl, SmStatus};
+use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
+
+use super::write;
+use crate::harness::Harness;
+
+/// DESIGN.md §6: SYNC0 handler (PDO unpack, CiA402, PDO pack; PDI bus time excluded).
+const SYNC0_HANDLER_BUDGET: u32 = 2_000;
+/// ESC address space the image covers: registers and the process RAM the profile uses.
+const ESC_IMAGE: usize = 0x2000;
+/// CiA402 device-control commands from power-on to operation enabled (IEC 61800-7-201 Table 5).
+const SHUTDOWN: u16 = controlword::ENABLE_VOLTAGE | controlword::QUICK_STOP;
+const SWITCH_ON: u16 = SHUTDOWN | controlword::SWITCH_ON;
+const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
+const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
+/// Modes of operation 6060h: cyclic synchronous position.
+const MODE_CSP: i8 = 8;
+/// Target position the master sends.
+const TARGET_POSITION: i32 = 0x0012_3456;
+/// Mailbox header (ETG.1000.4): length, address, channel/priority, type (CoE = 3) / counter.
+const MBX_TYPE_COE: u8 = 0x03;
+/// CoE header with service 2 (SDO request), ETG.1000.6.
+const COE_SDO_REQUEST: [u8; 2] = [0x00, 0x20];
+/// SDO download init, normal (not expedited), size indicated (ccs 1, s = 1).
+const SDO_DOWNLOAD_INIT_SIZED: u8 = (1 << 5) | 1;
+/// A manufacturer parameter of the standard profile (UDINT, rw, not PDO-mapped), as the SDO
+/// download benchmark uses.
+const PARAMETER: u16 = 0x2F00;
+
+/// A PDI access outside the image.
+#[derive(Debug)]
+struct OutOfImage;
+
+impl PdiError for OutOfImage {
+    fn kind(&self) -> PdiErrorKind {
+        PdiErrorKind::OutOfRange
+    }
+}
+
+/// The ESC as a RAM image: reads and writes are copies; every access returns the AL event
+/// register, as the ET1100's SPI PDI does.
+struct RamEsc {
+    mem: [u8; ESC_IMAGE],
+}
+
+impl RamEsc {
+    fn events(&self) -> AlEvent {
+        let at = usize::from(regs::AL_EVENT_REQUEST.addr);
+        let b = &self.mem[at..at + 4];
+        AlEvent(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    fn set(&mut self, addr: u16, bytes: &[u8]) {
+        let at = usize::from(addr);
+        self.mem[at..at + bytes.len()].copy_from_slice(bytes);
+    }
+
+    fn set_sm(&mut self, n: u8, layout: &SmLayout, length: u16) {
+        let sm = SmConfig {
+            start: layout.start,
+            length,
+            control: SmControl(layout.control),
+            status: SmStatus(0),
+            activate: SmActivate(SmActivate::ENABLE),
+            pdi_control: SmPdiControl(0),
+        };
+        self.set(regs::sm(n).addr, &sm.to_bytes());
+    }
+}
+
+impl EscPdi for RamEsc {
+    type Error = OutOfImage;
+
+    fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<AlEvent, OutOfImage> {
+        let at = usize::from(addr);
+        let src = self.mem.get(at..at + buf.len()).ok_or(OutOfImage)?;
+        buf.copy_from_slice(src);
+        Ok(self.events())
+    }
+
+    fn write(&mut self, addr: u16, data: &[u8]) -> Result<AlEvent, OutOfImage> {
+        let at = usize::from(addr);
+        let dst = self.mem.get_mut(at..at + data.len()).ok_or(OutOfImage)?;
+        dst.copy_from_slice(data);
+        Ok(self.events())
+    }
+}
+
+/// The drive's core, its mailbox side and the ESC image.
+struct Setup {
+    core: DriveCore<RAM_SIZE>,
+    mailbox: MailboxSide<RAM_SIZE>,
+    esc: RamEsc,
+    rx: PdoPlan,
+}
+
+impl Setup {
+    /// A master's state request, handled as the ESC-event context does.
+    fn request(&mut self, state: AlState, events: u32) -> Option<()> {
+        self.esc.set(
+            regs::AL_CONTROL.addr,
+            &u16::from(state.bits()).to_le_bytes(),
+        );
+        self.esc.set(
+            regs::AL_EVENT_REQUEST.addr,
+            &(AlEvent::AL_CONTROL | events).to_le_bytes(),
+        );
+        let job = self.core.event_begin(&mut self.esc, 0).ok()?;
+        self.core.event_end(&mut self.esc, job, 0).ok()?;
+        self.esc.set(regs::AL_EVENT_REQUEST.addr, &[0; 4]);
+        (self.core.al_state() == state).then_some(())
+    }
+
+    /// INIT → PREOP → SAFEOP → OP in free run with the profile's mailbox and default mapping.
+    fn new() -> Option<Self> {
+        let mut ram = [0; RAM_SIZE];
+        let mut od = Dictionary::new(&PROFILE.od, &mut ram);
+        od.load_defaults();
+        let rx = PdoPlan::build(&od, Direction::Rx).ok()?;
+        let (core, mailbox) = firmware::new_slave_parts(&PROFILE).ok()?;
+        let mut s = Self {
+            core,
+            mailbox,
+            esc: RamEsc {
+                mem: [0; ESC_IMAGE],
+            },
+            rx,
+        };
+        let device = &PROFILE.od.device;
+        s.core.start(&mut s.esc).ok()?;
+        s.esc
+            .set_sm(0, &device.mailbox_out, device.mailbox_out.length);
+        s.esc
+            .set_sm(1, &device.mailbox_in, device.mailbox_in.length);
+        s.request(AlState::PreOp, 0)?;
+        s.esc.set_sm(2, &device.outputs, OUTPUTS_SIZE as u16);
+        s.esc.set_sm(3, &device.inputs, INPUTS_SIZE as u16);
+        s.request(AlState::SafeOp, 0)?;
+        // The master has written the outputs once (the profile's SAFEOP → OP rule).
+        s.request(AlState::Op, AlEvent::sm(2))?;
+        Some(s)
+    }
+
+    /// Puts the master's outputs into SM2: packed by the Rx plan from an OD RAM holding them.
+    fn set_outputs(&mut self, cw: u16) -> Option<()> {
+        let vars = &PROFILE.vars;
+        let mut master = [0; RAM_SIZE];
+        let ok = write(&mut master, vars.controlword, &cw.to_le_bytes())
+            && write(
+                &mut master,
+                vars.target_position,
+                &TARGET_POSITION.to_le_bytes(),
+            )
+            && write(
+                &mut master,
+                vars.modes_of_operation,
+                &MODE_CSP.to_le_bytes(),
+            );
+        let mut image = [0; MAX_IMAGE];
+        self.rx.pack(&master, &mut image);
+        self.esc
+            .set(PROFILE.od.device.outputs.start, &image[..OUTPUTS_SIZE]);
+        ok.then_some(())
+    }
+
+    /// A segmented SDO download left half done: the init announces 4 bytes and carries none, so
+    /// the mailbox side waits for a segment.
+    fn start_segmented_download(&mut self) -> Option<()> {
+        let device = &PROFILE.od.device;
+        let [i0, i1] = PARAMETER.to_le_bytes();
+        let mut frame = [0u8; 16];
+        frame[0] = 10; // CoE header + 8 SDO bytes
+        frame[5] = MBX_TYPE_COE;
+        frame[6..8].copy_from_slice(&COE_SDO_REQUEST);
+        frame[8..16].copy_from_slice(&[SDO_DOWNLOAD_INIT_SIZED, i0, i1, 0, 4, 0, 0, 0]);
+        self.esc.set(device.mailbox_out.start, &frame);
+        let sm0_status = regs::sm(0).addr + regs::sm_offset::STATUS;
+        self.esc.set(sm0_status, &[SmStatus::MAILBOX_FULL]);
+        let job = EventJob {
+            events: AlEvent(AlEvent::sm(0)),
+            state: AlState::Op,
+        };
+        self.mailbox.load(&mut self.core);
+        self.mailbox.serve(&mut self.esc, job, &mut ()).ok()?;
+        self.mailbox.store(&mut self.core);
+        self.esc.set(sm0_status, &[0]);
+        self.mailbox.transfer_in_progress().then_some(())
+    }
+}
+
+/// Measures the SYNC0 handler with the mailbox idle and with a transfer pending.
+pub fn run(h: &mut Harness) {
+    let Some(mut s) = Setup::new() else {
+        h.fail(
+            "sync0-handler",
+            format_args!("the slave did not reach OP on the ESC image"),
+        );
+        return;
+    };
+    for cw in POWER_UP {
+        if s.set_outputs(cw).is_none() || on_sync0(&mut s.core, &mut s.esc, 0).is_err() {
+            h.fail("sync0-handler", format_args!("a power-up cycle failed"));
+            return;
+        }
+    }
+    if s.core.app().pds_state() != PdsState::OperationEnabled {
+        h.fail(
+            "sync0-handler",
+            format_args!("the drive did not reach operation enabled"),
+        );
+        return;
+    }
+    let Setup { core, esc, .. } = &mut s;
+    let idle = h.bench(
+        "sync0-handler",
+        Some(SYNC0_HANDLER_BUDGET),
+        format_args!(
+            "firmware::sync0::on_sync0 on the slave's core in OP: supervision, SM2 read + unpack, \
+             Drive::step, pack + SM3 write (default mapping, ESC as a RAM image: PDI bus time \
+             excluded), mailbox idle"
+        ),
+        &mut || {
+            let _ = on_sync0(core, esc, black_box(0));
+        },
+    );
+    if s.start_segmented_download().is_none() {
+        h.fail(
+            "sync0-handler-mailbox-pending",
+            format_args!("the segmented download did not stay open"),
+        );
+        return;
+    }
+    let Setup { core, esc, .. } = &mut s;
+    let pending = h.bench(
+        "sync0-handler-mailbox-pending",
+        Some(SYNC0_HANDLER_BUDGET),
+        format_args!(
+            "the same while the mailbox side holds a half-done segmented SDO download (2F00h)"
+        ),
+        &mut || {
+            let _ = on_sync0(core, esc, black_box(0));
+        },
+    );
+    if idle != pending {
+        h.fail(
+            "sync0-handler-mailbox-pending",
+            format_args!(
+                "a pending mailbox transfer changed the SYNC0 handler: {idle:?} → {pending:?}"
+            ),
+        );
+    }
+    if !s.mailbox.transfer_in_progress() || s.core.app().pds_state() != PdsState::OperationEnabled {
+        h.fail(
+            "sync0-handler-mailbox-pending",
+            format_args!("the measured cycles changed the drive or the transfer"),
+        );
+    }
+}
