@@ -41,8 +41,6 @@ pub struct Drive {
     fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
     device: Device,
     axis: Option<AxisPort>,
-    /// The process-data cycle, ns (0 = unknown), for the axis' set-point interpolation.
-    cycle_ns: u32,
 }
 
 impl Drive {
@@ -53,7 +51,6 @@ impl Drive {
             fault_codes: profile.motor_faults,
             device: Device::new(),
             axis: None,
-            cycle_ns: 0,
         }
     }
 
@@ -95,7 +92,6 @@ impl Drive {
 
     /// One cycle: the CiA402 device on the controlword, the mode display, the axis exchange.
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
-        self.cycle_ns = cycle_ns;
         let vars = self.vars;
         let cw = read_u16(ram, vars.controlword).unwrap_or(0);
         let step = self.device.step(cw);
@@ -226,14 +222,15 @@ impl Drive {
     /// With a motor, the axis is disabled at once (gates off): below SAFEOP no cycle runs that
     /// would tell it. (The slave's entry points never run concurrently with each other, so this
     /// and the cycle never publish at the same time: the link keeps a single writer.)
-    pub fn safe_outputs(&mut self, ram: &mut [u8]) {
+    /// `cycle_ns` is the bus cycle that was running (the axis keeps its interpolation timing).
+    pub fn safe_outputs(&mut self, ram: &mut [u8], cycle_ns: u32) {
         write_u16(ram, self.vars.controlword, 0);
         let statusword = self.device.outputs_lost();
         write_u16(ram, self.vars.statusword, statusword);
         if let Some(port) = &self.axis {
             port.link.publish(AxisCommand {
                 enable: false,
-                bus_cycle_ns: self.cycle_ns,
+                bus_cycle_ns: cycle_ns,
                 ..AxisCommand::default()
             });
         }
@@ -252,9 +249,9 @@ impl Application for Drive {
         }
     }
 
-    fn outputs_safe(&mut self, ram: &mut [u8]) -> bool {
+    fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool {
         let was_enabled = self.device.operation_enabled();
-        self.safe_outputs(ram);
+        self.safe_outputs(ram, cycle_ns);
         was_enabled
     }
 
@@ -352,7 +349,7 @@ mod tests {
             ram[0..2].copy_from_slice(&cw.to_le_bytes());
             app.step(&mut ram, 0);
         }
-        app.safe_outputs(&mut ram);
+        app.safe_outputs(&mut ram, 0);
         assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
         assert_eq!(&ram[0..2], &[0, 0]);
     }

@@ -85,7 +85,7 @@ impl Application for IoModule {
         AppEvent::None
     }
 
-    fn outputs_safe(&mut self, ram: &mut [u8]) -> bool {
+    fn outputs_safe(&mut self, ram: &mut [u8], _cycle_ns: u32) -> bool {
         let safe = read_u16(ram, self.safe_state_at);
         if let Some(dst) = ram.get_mut(self.outputs_at..self.outputs_at + 2) {
             dst.copy_from_slice(&safe.to_le_bytes());

@@ -26,8 +26,8 @@ pub trait Application {
     /// The EtherCAT state leaves OP: put everything the master's outputs drive into its safe
     /// state at once (no further cycle runs that would do it). Returns whether the application
     /// was active (a drive: Operation Enabled), for the profile rule
-    /// `EsmRules::op_exit_while_enabled_error`.
-    fn outputs_safe(&mut self, ram: &mut [u8]) -> bool;
+    /// `EsmRules::op_exit_while_enabled_error`. `cycle_ns` is the cycle that was running.
+    fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool;
 
     /// The slave raises application error `code` (a profile rule such as
     /// `op_exit_while_enabled_error`); the slave reports the EMCY itself.
@@ -44,7 +44,7 @@ impl Application for NoApplication {
         AppEvent::None
     }
 
-    fn outputs_safe(&mut self, _: &mut [u8]) -> bool {
+    fn outputs_safe(&mut self, _: &mut [u8], _: u32) -> bool {
         false
     }
 

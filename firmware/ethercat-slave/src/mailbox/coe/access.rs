@@ -28,6 +28,7 @@ pub(crate) fn check_complete_access(od: &Dictionary<'_>) -> Result<(), AbortCode
 }
 
 /// The entry `index:subindex`: 0x06020000 if the object is missing, 0x06090011 if the subindex.
+#[inline]
 pub(crate) fn find_entry(
     od: &Dictionary<'_>,
     index: u16,
@@ -92,9 +93,20 @@ pub(crate) fn write_entry(
     subindex: u8,
     data: &[u8],
 ) -> Result<(), AbortCode> {
-    let entry = find_entry(od, index, subindex)?;
-    check_access(entry.access, state, AccessKind::Write)?;
-    pdo_rules::check_rx_mapped(od, state, index, subindex)?;
+    let entry = find_writable(od, state, index, subindex)?;
+    write_found(od, entry, index, subindex, data)
+}
+
+/// The checks of [`write_entry`] that follow [`find_writable`], and the store: for a request
+/// whose entry `find_writable` has just returned in the same state (an expedited or
+/// single-frame download), so that access and RxPDO mapping are not checked twice.
+pub(crate) fn write_found(
+    od: &mut Dictionary<'_>,
+    entry: &Entry,
+    index: u16,
+    subindex: u8,
+    data: &[u8],
+) -> Result<(), AbortCode> {
     check_length(entry, data.len())?;
     check_subindex0(od, index, subindex, data)?;
     pdo_rules::check_write(od, index, subindex, data)?;

@@ -28,7 +28,7 @@ use hal::esc::AlState;
 
 use super::access::{
     check_access, check_complete_access, find_entry, find_writable, upload_value, write_entry,
-    AccessKind,
+    write_found, AccessKind,
 };
 use super::complete_access;
 use super::CoeError;
@@ -336,7 +336,7 @@ impl SdoServer {
             let data = req
                 .get(INIT_DATA_OFFSET..INIT_DATA_OFFSET + len)
                 .unwrap_or_default();
-            self.commit(od, state, index, subindex, data)
+            self.commit_found(od, entry, index, subindex, data)
                 .map_err(abort)?;
         } else {
             let size = read_size(req);
@@ -344,7 +344,7 @@ impl SdoServer {
             let data = req.get(NORMAL_DATA_OFFSET..).unwrap_or_default();
             match data.get(..size) {
                 Some(data) => self
-                    .commit(od, state, index, subindex, data)
+                    .commit_found(od, entry, index, subindex, data)
                     .map_err(abort)?,
                 None => self
                     .start_download(index, subindex, size, data, false)
@@ -584,16 +584,17 @@ impl SdoServer {
         Ok(())
     }
 
-    /// Writes `data` to `index:subindex` after every check and records the write.
-    fn commit(
+    /// Writes `data` to `entry` (`index:subindex`, just returned by `find_writable` in this
+    /// request) after the remaining checks, and records the write.
+    fn commit_found(
         &mut self,
         od: &mut Dictionary<'_>,
-        state: AlState,
+        entry: &Entry,
         index: u16,
         subindex: u8,
         data: &[u8],
     ) -> Result<(), AbortCode> {
-        write_entry(od, state, index, subindex, data)?;
+        write_found(od, entry, index, subindex, data)?;
         self.last_write = Some((index, subindex));
         Ok(())
     }

@@ -184,7 +184,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if from == AlState::Op {
             // Leaving OP: the application puts its outputs into their safe state (a drive:
             // controlword 0 = disable voltage).
-            let was_enabled = self.app.outputs_safe(&mut self.ram);
+            let was_enabled = self.app.outputs_safe(&mut self.ram, self.sync.cycle_ns);
             // Profile rule (`[esm] op_exit_while_enabled_error`): leaving OP while the
             // application was active is an application error (a drive: Operation Enabled →
             // 603Fh, EMCY, PDS Fault).
