@@ -11,7 +11,14 @@ mod process_data;
 mod sdo;
 mod sync0_handler;
 
+use firmware::profiles::standard::{PROFILE, RAM_SIZE};
+
 use crate::harness::Harness;
+
+/// Modes of operation 6060h: cyclic synchronous position mode (IEC 61800-7-201).
+const MODE_CYCLIC_SYNC_POSITION: i8 = 8;
+/// Target position 607Ah the master sends; any non-zero value, so that its echo is visible.
+const TARGET_POSITION: i32 = 0x0012_3456;
 
 /// Every benchmark, in report order.
 pub const ALL: &[fn(&mut Harness)] = &[process_data::run, sync0_handler::run, sdo::run, motor::run];
@@ -35,4 +42,24 @@ fn write(ram: &mut [u8], at: Option<u16>, bytes: &[u8]) -> bool {
         }
         None => false,
     }
+}
+
+/// The master's side of the default RxPDO objects of the standard profile as an OD RAM image:
+/// `controlword`, the target position and CSP. Packing it with an Rx copy plan gives the SM2
+/// image, so no image layout is assumed. `None` if the profile lacks one of the variables.
+fn master_outputs(controlword: u16) -> Option<[u8; RAM_SIZE]> {
+    let vars = &PROFILE.vars;
+    let mut master = [0; RAM_SIZE];
+    let ok = write(&mut master, vars.controlword, &controlword.to_le_bytes())
+        && write(
+            &mut master,
+            vars.target_position,
+            &TARGET_POSITION.to_le_bytes(),
+        )
+        && write(
+            &mut master,
+            vars.modes_of_operation,
+            &MODE_CYCLIC_SYNC_POSITION.to_le_bytes(),
+        );
+    ok.then_some(master)
 }

@@ -15,7 +15,7 @@ use firmware::od::Dictionary;
 use firmware::pdo::{Direction, PdoPlan, MAX_IMAGE};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 
-use super::{read, write};
+use super::{master_outputs, read, TARGET_POSITION};
 use crate::harness::Harness;
 
 /// DESIGN.md §6: SYNC0 handler (PDO unpack, CiA402, PDO pack; PDI bus time excluded).
@@ -27,11 +27,6 @@ const SWITCH_ON: u16 = SHUTDOWN | controlword::SWITCH_ON;
 const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
 /// The controlwords of the power-up sequence; the last one stays during the measurement.
 const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
-
-/// Modes of operation 6060h: cyclic synchronous position mode (IEC 61800-7-201).
-const MODE_CYCLIC_SYNC_POSITION: i8 = 8;
-/// Target position 607Ah the master sends; any non-zero value, so that its echo is visible.
-const TARGET_POSITION: i32 = 0x0012_3456;
 
 /// The slave's cycle state: OD RAM, the two copy plans, the application and the images.
 struct Cycle {
@@ -61,24 +56,16 @@ impl Cycle {
         })
     }
 
-    /// Puts the master's outputs into the RxPDO image: the image is what the Rx plan packs from
-    /// an OD RAM holding those values, so no image layout is assumed here.
+    /// Puts the master's outputs into the RxPDO image ([`master_outputs`] packed by the Rx
+    /// plan).
     fn set_outputs(&mut self, controlword: u16) -> bool {
-        let vars = &PROFILE.vars;
-        let mut master = [0; RAM_SIZE];
-        let ok = write(&mut master, vars.controlword, &controlword.to_le_bytes())
-            && write(
-                &mut master,
-                vars.target_position,
-                &TARGET_POSITION.to_le_bytes(),
-            )
-            && write(
-                &mut master,
-                vars.modes_of_operation,
-                &MODE_CYCLIC_SYNC_POSITION.to_le_bytes(),
-            );
-        self.rx.pack(&master, &mut self.rx_image);
-        ok
+        match master_outputs(controlword) {
+            Some(master) => {
+                self.rx.pack(&master, &mut self.rx_image);
+                true
+            }
+            None => false,
+        }
     }
 
     /// The measured cycle.

@@ -20,7 +20,7 @@ use firmware::DriveCore;
 use hal::esc::{regs, AlEvent, AlState, SmActivate, SmConfig, SmControl, SmPdiControl, SmStatus};
 use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
 
-use super::write;
+use super::master_outputs;
 use crate::harness::Harness;
 
 /// DESIGN.md §6: SYNC0 handler (PDO unpack, CiA402, PDO pack; PDI bus time excluded).
@@ -32,10 +32,6 @@ const SHUTDOWN: u16 = controlword::ENABLE_VOLTAGE | controlword::QUICK_STOP;
 const SWITCH_ON: u16 = SHUTDOWN | controlword::SWITCH_ON;
 const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
 const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
-/// Modes of operation 6060h: cyclic synchronous position.
-const MODE_CSP: i8 = 8;
-/// Target position the master sends.
-const TARGET_POSITION: i32 = 0x0012_3456;
 /// Mailbox header (ETG.1000.4): length, address, channel/priority, type (CoE = 3) / counter.
 const MBX_TYPE_COE: u8 = 0x03;
 /// CoE header with service 2 (SDO request), ETG.1000.6.
@@ -160,26 +156,14 @@ impl Setup {
         Some(s)
     }
 
-    /// Puts the master's outputs into SM2: packed by the Rx plan from an OD RAM holding them.
+    /// Puts the master's outputs into SM2 ([`master_outputs`] packed by the Rx plan).
     fn set_outputs(&mut self, cw: u16) -> Option<()> {
-        let vars = &PROFILE.vars;
-        let mut master = [0; RAM_SIZE];
-        let ok = write(&mut master, vars.controlword, &cw.to_le_bytes())
-            && write(
-                &mut master,
-                vars.target_position,
-                &TARGET_POSITION.to_le_bytes(),
-            )
-            && write(
-                &mut master,
-                vars.modes_of_operation,
-                &MODE_CSP.to_le_bytes(),
-            );
+        let master = master_outputs(cw)?;
         let mut image = [0; MAX_IMAGE];
         self.rx.pack(&master, &mut image);
         self.esc
             .set(PROFILE.od.device.outputs.start, &image[..OUTPUTS_SIZE]);
-        ok.then_some(())
+        Some(())
     }
 
     /// A segmented SDO download left half done: the init announces 4 bytes and carries none, so
