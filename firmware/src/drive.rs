@@ -113,15 +113,6 @@ impl Drive {
         }
     }
 
-    /// Hands the commissioned motor data (stored parameters, identification results, SDO
-    /// writes) to the axis when they changed since the last call; the axis applies them when it
-    /// is not running.
-    pub fn publish_motor_model(&mut self, ram: &[u8]) {
-        if let Some(port) = self.axis.as_mut() {
-            sync_motor_model(port, self.vars, ram);
-        }
-    }
-
     /// Raises a new motor fault, hands the set-points of this cycle to the axis, and writes its
     /// actual values.
     fn exchange_with_axis(&mut self, ram: &mut [u8], cw: u16, mode: Mode, cycle_ns: u32) {
@@ -260,6 +251,9 @@ impl Application for Drive {
     }
 }
 
+/// Hands the commissioned motor data (stored parameters, identification results, SDO writes)
+/// to the axis when they changed since the last call; the axis applies them when it is not
+/// running.
 fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
     let object = |at: Option<u16>, unit: f32| read_u32(ram, at).unwrap_or(0) as f32 * unit;
     let model = MotorModel {

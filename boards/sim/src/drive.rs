@@ -3,7 +3,7 @@
 use firmware::profile::DriveProfile;
 use firmware::profiles;
 use firmware::slave::{SlaveError, SyncMode};
-use firmware::DriveSlave;
+use firmware::{DriveCore, DriveSlave};
 use hal::io::StatusLeds;
 use hal::pdi::EscSignals;
 
@@ -13,7 +13,6 @@ use crate::leds::SimLeds;
 use crate::plant::PlantConfig;
 use crate::servo::{axis_config, SimServo, Tuning};
 use crate::storage::SimStorage;
-use firmware::od::WithDomains;
 use firmware::params::{Loaded, ParamError, ParamStore};
 
 /// OD RAM size of the simulated firmware: large enough for every built-in profile, so the
@@ -183,14 +182,9 @@ impl SimDrive {
         self.service_irq(now_ns);
     }
 
-    /// One process-data cycle. Its duration, reported to the firmware (1C32h:06), is the
-    /// modelled SPI bus time of the cycle's PDI accesses: simulated time does not pass while
-    /// the firmware runs.
+    /// One process-data cycle (see [`run_cycle`]).
     fn cycle(&mut self, now_ns: u64) {
-        let bus_before = self.esc.pdi_bus_ns();
-        let _ = firmware::sync0::on_sync0(&mut self.slave, &mut self.esc, now_ns);
-        let bus_time = self.esc.pdi_bus_ns() - bus_before;
-        self.slave.cycle_finished(now_ns + bus_time);
+        run_cycle(&mut self.slave, &mut self.esc, now_ns);
     }
 
     /// Runs the ESC event handler while the IRQ line is asserted (bounded: the handler clears
@@ -206,32 +200,36 @@ impl SimDrive {
     }
 
     /// One call of the firmware's ESC event handler.
-    /// One call of the firmware's ESC event handler, in its three steps (see
-    /// `ethercat_slave::slave::MailboxSide`): the core's short part, the mailbox round on the
-    /// mailbox side's own copy of the OD, the core's short part again.
+    /// One call of the firmware's ESC event handler (one round, see
+    /// `ethercat_slave::slave::MailboxSide`).
     fn esc_event(&mut self, now_ns: u64) {
-        let (core, mailbox) = self.slave.split();
-        let Ok(job) = core.event_begin(&mut self.esc, now_ns) else {
-            return;
-        };
-        mailbox.load(core);
-        let _ = mailbox.serve(
+        let inject = self.cycle_during_mailbox_transfer;
+        let mut injected = 0;
+        let _ = self.slave.event_round(
             &mut self.esc,
-            job,
-            &mut WithDomains {
-                hook: &mut self.params,
-                domains: &mut self.domains,
+            &mut self.params,
+            &mut self.domains,
+            now_ns,
+            |core, mailbox, esc| {
+                if inject && mailbox.transfer_in_progress() {
+                    // What a board's SYNC0 (or free-run timer) interrupt does when it preempts
+                    // the event context in the middle of a mailbox transfer: the cycle runs on
+                    // the core while the mailbox side holds the half-done transfer.
+                    run_cycle(core, esc, now_ns);
+                    injected += 1;
+                }
             },
         );
-        if self.cycle_during_mailbox_transfer && mailbox.transfer_in_progress() {
-            // What a board's SYNC0 (or free-run timer) interrupt does when it preempts the
-            // event context in the middle of a mailbox transfer: the cycle runs on the core
-            // while the mailbox side holds the half-done transfer.
-            self.cycle(now_ns);
-            self.cycles_during_mailbox_transfer += 1;
-        }
-        let (core, mailbox) = self.slave.split();
-        mailbox.store(core);
-        let _ = core.event_end(&mut self.esc, job, now_ns);
+        self.cycles_during_mailbox_transfer += injected;
     }
+}
+
+/// One process-data cycle of `core` on `esc`. Its duration, reported to the firmware
+/// (1C32h:06), is the modelled SPI bus time of the cycle's PDI accesses: simulated time does not
+/// pass while the firmware runs.
+fn run_cycle(core: &mut DriveCore<SIM_RAM>, esc: &mut Et1100, now_ns: u64) {
+    let bus_before = esc.pdi_bus_ns();
+    let _ = firmware::sync0::on_sync0(core, esc, now_ns);
+    let bus_time = esc.pdi_bus_ns() - bus_before;
+    core.cycle_finished(now_ns + bus_time);
 }

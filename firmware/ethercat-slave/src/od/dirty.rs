@@ -46,10 +46,13 @@ impl DirtyMap {
         self.words = [0; WORDS];
     }
 
-    /// Copies every marked byte of `from` to `to` (same layout), then clears the marks. Bytes
-    /// outside either slice are skipped.
+    /// Copies every marked byte of `from` to `to` (same layout), then clears the marks. Only the
+    /// words that cover `from` are visited, so the work is bounded by the OD RAM, not by
+    /// [`MAX_TRACKED_RAM`] (writes never mark bytes beyond the RAM they went to); marked bytes
+    /// outside `to` are skipped.
     pub fn copy_marked(&mut self, from: &[u8], to: &mut [u8]) {
-        for (i, word) in self.words.iter_mut().enumerate() {
+        let used = from.len().div_ceil(BITS);
+        for (i, word) in self.words.iter_mut().take(used).enumerate() {
             let mut w = *word;
             while w != 0 {
                 let bit = w.trailing_zeros() as usize;

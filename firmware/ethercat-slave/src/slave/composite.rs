@@ -62,6 +62,21 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
         domains: &mut dyn DomainStore,
         now_ns: u64,
     ) -> Result<(), P::Error> {
+        self.event_round(pdi, params, domains, now_ns, |_, _, _| {})
+    }
+
+    /// One ESC-event round (see [`MailboxSide`]): `core.event_begin`, `mailbox.load`,
+    /// `mailbox.serve`, then `between`, then `mailbox.store` and `core.event_end`. `between`
+    /// runs where a board's SYNC0 may preempt the round: after the mailbox was served on its
+    /// copy, before its writes go back (the simulation injects a cycle there).
+    pub fn event_round<P: EscPdi, S: NvStorage, const CAP: usize>(
+        &mut self,
+        pdi: &mut P,
+        params: &mut ParamStore<S, CAP>,
+        domains: &mut dyn DomainStore,
+        now_ns: u64,
+        between: impl FnOnce(&mut SlaveCore<RAM, A>, &MailboxSide<RAM>, &mut P),
+    ) -> Result<(), P::Error> {
         let job = self.core.event_begin(pdi, now_ns)?;
         self.mailbox.load(&mut self.core);
         let served = self.mailbox.serve(
@@ -72,6 +87,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
                 domains,
             },
         );
+        between(&mut self.core, &self.mailbox, pdi);
         self.mailbox.store(&mut self.core);
         served?;
         self.core.event_end(pdi, job, now_ns)
@@ -80,11 +96,6 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     /// Emergencies waiting to be sent: raised but not yet taken by the mailbox, and queued in it.
     pub fn pending_emcys(&self) -> usize {
         self.core.pending_emcys() + self.mailbox.pending_emcys()
-    }
-
-    /// The mailbox side.
-    pub fn mailbox(&self) -> &MailboxSide<RAM> {
-        &self.mailbox
     }
 }
 

@@ -1,8 +1,8 @@
 //! The process-data cycle: what the SYNC0 (or free-run timer, or SM2 event) context runs.
 //!
-//! [`Slave::on_cycle`] is the whole cycle for any device; a board that wants the stages apart
-//! (the drive's `firmware::sync0`) calls [`Slave::cycle_begin`], its application and
-//! [`Slave::cycle_end`], then [`Slave::cycle_finished`] with the time the cycle ended.
+//! [`SlaveCore::on_cycle`] is the whole cycle for any device; a board that wants the stages apart
+//! (the drive's `firmware::sync0`) calls [`SlaveCore::cycle_begin`], its application and
+//! [`SlaveCore::cycle_end`], then [`SlaveCore::cycle_finished`] with the time the cycle ended.
 
 use super::*;
 

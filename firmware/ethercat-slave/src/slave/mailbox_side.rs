@@ -17,7 +17,7 @@
 //! value, as if the download came last. Values the cycle writes (statusword, actual values) are
 //! uploaded as they were at step 1.
 
-use hal::esc::{AlEvent, AlState};
+use hal::esc::AlState;
 use hal::pdi::EscPdi;
 
 use super::{EventJob, SlaveCore};
@@ -100,16 +100,5 @@ impl<const RAM: usize> MailboxSide<RAM> {
     /// spans mailbox rounds right now.
     pub fn transfer_in_progress(&self) -> bool {
         self.mailbox.transfer_in_progress()
-    }
-}
-
-/// The events a round was started for, when the caller has none (tests).
-impl EventJob {
-    /// No event, in `state`.
-    pub const fn idle(state: AlState) -> Self {
-        Self {
-            events: AlEvent(0),
-            state,
-        }
     }
 }
