@@ -1,4 +1,5 @@
-//! Embeds the built-in profiles (`profiles/*.toml`) into the library.
+//! Embeds the built-in profiles (`profiles/*.toml`) and the libraries of shared object
+//! definitions (`profiles/common/*.toml`) into the library.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -21,6 +22,29 @@ fn main() {
     files.sort();
     let mut out = String::from("/// Built-in profiles: (file stem, TOML text), sorted by name.\npub(crate) static BUILTIN: &[(&str, &str)] = &[\n");
     for f in &files {
+        println!("cargo:rerun-if-changed={}", f.display());
+        let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+        let _ = writeln!(
+            out,
+            "    ({stem:?}, include_str!({:?})),",
+            f.display().to_string()
+        );
+    }
+    out.push_str("];\n");
+    // Libraries of shared object definitions (profiles/common/*.toml).
+    let common = dir.join("common");
+    println!("cargo:rerun-if-changed={}", common.display());
+    let mut libs: Vec<PathBuf> = std::fs::read_dir(&common)
+        .map(|rd| {
+            rd.filter_map(Result::ok)
+                .map(|e| e.path())
+                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .collect()
+        })
+        .unwrap_or_default();
+    libs.sort();
+    out.push_str("/// Libraries of shared object definitions: (file stem, TOML text), sorted.\npub(crate) static BUILTIN_LIBRARIES: &[(&str, &str)] = &[\n");
+    for f in &libs {
         println!("cargo:rerun-if-changed={}", f.display());
         let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
         let _ = writeln!(

@@ -28,6 +28,8 @@ pub enum Error {
         file: String,
         /// The key at fault, e.g. `object[0x6040].default` or `rxpdo[0x1600].entries[1]`.
         key: String,
+        /// The line of `file` that wrote the key (or the object it belongs to), when known.
+        line: Option<usize>,
         /// What is wrong.
         error: Invalid,
     },
@@ -49,6 +51,11 @@ pub enum Invalid {
     Missing(&'static str),
     /// A key that is not allowed here (e.g. `type` on a RECORD).
     NotAllowed(&'static str),
+    /// The key does not fit the format (unknown key, wrong value type, missing required key),
+    /// found after the profile's layers were merged.
+    Format(String),
+    /// `extends` names no profile in the file's folder nor a built-in one.
+    UnknownBase(String),
     /// Unknown data type name.
     UnknownType(String),
     /// Two objects with the same index.
@@ -173,6 +180,11 @@ impl fmt::Display for Invalid {
             Self::Value(s) => write!(f, "{s}"),
             Self::Missing(k) => write!(f, "missing key `{k}`"),
             Self::NotAllowed(k) => write!(f, "key `{k}` is not allowed here"),
+            Self::Format(m) => write!(f, "{m}"),
+            Self::UnknownBase(b) => write!(
+                f,
+                "no profile `{b}` in this folder and no built-in one (`od-gen list`)"
+            ),
             Self::UnknownType(t) => write!(f, "unknown data type `{t}`"),
             Self::DuplicateIndex(i) => write!(f, "duplicate object index {i:#06x}"),
             Self::DuplicateSubindex(s) => write!(f, "duplicate subindex {s:#04x}"),
@@ -239,7 +251,18 @@ impl fmt::Display for Error {
         match self {
             Self::Io { path, source } => write!(f, "{}: {source}", path.display()),
             Self::Parse { file, message } => write!(f, "{file}: {message}"),
-            Self::Invalid { file, key, error } => write!(f, "{file}: `{key}`: {error}"),
+            Self::Invalid {
+                file,
+                key,
+                line: Some(line),
+                error,
+            } => write!(f, "{file}:{line}: `{key}`: {error}"),
+            Self::Invalid {
+                file,
+                key,
+                line: None,
+                error,
+            } => write!(f, "{file}: `{key}`: {error}"),
             Self::UnknownProfile { name, available } => write!(
                 f,
                 "no built-in profile `{name}` (available: {}); pass a path to a .toml file instead",

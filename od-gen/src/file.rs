@@ -10,7 +10,8 @@ use serde::Deserialize;
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProfileFile {
-    /// Profile name: the Rust module name in the generated code (`[a-z][a-z0-9_]*`).
+    /// Profile name (`[a-z][a-z0-9_-]*`, the file stem); the Rust module name in the generated
+    /// code is the name with `-` replaced by `_`.
     pub name: String,
     /// Free text describing the profile (ESI device comment is not emitted; for humans).
     #[serde(default)]
@@ -43,7 +44,17 @@ pub struct ProfileFile {
     /// fault name ([`crate::model::MOTOR_FAULT_NAMES`]). In a drive profile every fault must be
     /// mapped (an absent table is reported as every name missing); a device profile has none.
     #[serde(default)]
-    pub motor_faults: BTreeMap<String, u16>,
+    pub motor_faults: BTreeMap<String, MotorFaultFile>,
+    /// `[[alarm]]`: the drive's alarm / error table (one per row of the manual).
+    #[serde(default, rename = "alarm")]
+    pub alarms: Vec<AlarmFile>,
+    /// `[[decision]]`: deviations from the manual, gaps filled and contradictions resolved.
+    #[serde(default, rename = "decision")]
+    pub decisions: Vec<DecisionFile>,
+    /// `[[replicate]]`: object ranges copied to further axes (applied by [`crate::compose`];
+    /// kept for the documentation).
+    #[serde(default)]
+    pub replicate: Vec<ReplicateFile>,
     /// RxPDOs (master → slave, SM2).
     #[serde(default, rename = "rxpdo")]
     pub rx_pdos: Vec<PdoFile>,
@@ -53,6 +64,100 @@ pub struct ProfileFile {
     /// The declared objects.
     #[serde(default, rename = "object")]
     pub objects: Vec<ObjectFile>,
+}
+
+/// A `[motor_faults]` value: a CiA402 error code, or the `display` name of an `[[alarm]]`
+/// (whose 603Fh code and EMCY bytes are then used).
+#[derive(Debug, Clone)]
+pub enum MotorFaultFile {
+    /// The error code (603Fh and EMCY bytes 0–1; the manufacturer field is zero).
+    Code(u16),
+    /// An alarm's `display`.
+    Alarm(String),
+}
+
+impl<'de> Deserialize<'de> for MotorFaultFile {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = MotorFaultFile;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a UINT error code (0x0000..=0xFFFF) or the display of an [[alarm]]")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                u16::try_from(v).map(MotorFaultFile::Code).map_err(|_| {
+                    E::custom(format!("{v:#x} is not a UINT error code (0x0000..=0xFFFF)"))
+                })
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                self.visit_i64(i64::try_from(v).unwrap_or(i64::MAX))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+                Ok(MotorFaultFile::Alarm(v.to_string()))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// `[[alarm]]`: one row of the drive's alarm table.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlarmFile {
+    /// The code the drive displays / the manual names the alarm by (unique).
+    pub display: String,
+    /// Name.
+    pub name: String,
+    /// 603Fh value while the alarm is active.
+    pub error_code: u16,
+    /// EMCY bytes 0–1 (default: `error_code`).
+    #[serde(default)]
+    pub emcy_code: Option<u16>,
+    /// EMCY bytes 3–7: the manufacturer-specific error field (default zeros).
+    #[serde(default)]
+    pub emcy_data: Option<[u8; 5]>,
+    /// Whether a fault reset (controlword bit 7) clears it.
+    #[serde(default = "alarm_resettable")]
+    pub resettable: bool,
+    /// Whether it is a warning (statusword bit 7) rather than a fault.
+    #[serde(default)]
+    pub warning: bool,
+    /// What causes it / what the manual says.
+    #[serde(default)]
+    pub description: String,
+}
+
+fn alarm_resettable() -> bool {
+    true
+}
+
+/// `[[decision]]`: a choice the profile makes where the manual is silent, wrong or
+/// self-contradictory.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DecisionFile {
+    /// What it is about (an object, a rule, a value).
+    pub subject: String,
+    /// What the manual says (with the section).
+    #[serde(default)]
+    pub manual: String,
+    /// What the profile does.
+    pub choice: String,
+    /// Why.
+    #[serde(default)]
+    pub reason: String,
+}
+
+/// `[[replicate]]`: copies of the objects in `first..=last` at `index + offset`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReplicateFile {
+    /// First index of the range.
+    pub first: u16,
+    /// Last index of the range (inclusive).
+    pub last: u16,
+    /// Added to each index.
+    pub offset: u16,
 }
 
 /// `[vendor]`
@@ -400,6 +505,12 @@ pub struct ObjectFile {
     /// RECORD/ARRAY it marks every entry.
     #[serde(default)]
     pub setting: bool,
+    /// Unit of the value (documentation: ESI comment, SDO information has none).
+    #[serde(default)]
+    pub unit: Option<String>,
+    /// What the value means (documentation).
+    #[serde(default)]
+    pub description: Option<String>,
 }
 
 /// `[[object.entry]]`
@@ -444,6 +555,12 @@ pub struct EntryFile {
     /// Startup parameter (see [`ObjectFile::setting`]).
     #[serde(default)]
     pub setting: bool,
+    /// Unit of the value (documentation: ESI comment, SDO information has none).
+    #[serde(default)]
+    pub unit: Option<String>,
+    /// What the value means (documentation).
+    #[serde(default)]
+    pub description: Option<String>,
 }
 
 /// The attributes of one value (a VAR object or a RECORD/ARRAY entry), as written.
@@ -469,6 +586,10 @@ pub struct EntryAttrs {
     pub role: Option<String>,
     /// Startup parameter.
     pub setting: bool,
+    /// Unit (documentation).
+    pub unit: Option<String>,
+    /// Meaning (documentation).
+    pub description: Option<String>,
 }
 
 macro_rules! attrs_of {
@@ -487,6 +608,8 @@ macro_rules! attrs_of {
                     storage: self.storage.clone(),
                     role: self.role.clone(),
                     setting: self.setting,
+                    unit: self.unit.clone(),
+                    description: self.description.clone(),
                 }
             }
         }

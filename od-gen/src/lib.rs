@@ -11,6 +11,8 @@
 //!
 //! | module | does |
 //! |---|---|
+//! | [`compose`] | a file's layers merged: `extends` base, `from` library objects, `omit`, `[[replicate]]` |
+//! | `locate` | key path → the file and line that wrote it (error messages) |
 //! | [`file`] | the TOML format (serde types; every key is documented there and in `README.md`) |
 //! | [`resolve`] | file → checked [`Profile`] with the derived objects |
 //! | `validate` | profile-wide checks (SM layout, mailbox, sync, roles, motor-fault codes, EEPROM size) |
@@ -31,9 +33,11 @@
 //! ```
 
 pub mod cli;
+pub mod compose;
 pub mod error;
 pub mod esi;
 pub mod file;
+mod locate;
 pub mod model;
 pub mod resolve;
 pub mod rust;
@@ -65,18 +69,29 @@ pub fn builtin_names() -> Vec<&'static str> {
     BUILTIN.iter().map(|(n, _)| *n).collect()
 }
 
-/// Loads a built-in profile by name.
+/// Whether two profile names are the same profile: `sigma-v-sd` and `sigma_v_sd` are (CLI
+/// names use hyphens, Rust module names underscores).
+pub fn same_name(a: &str, b: &str) -> bool {
+    a.len() == b.len()
+        && a.bytes()
+            .zip(b.bytes())
+            .all(|(x, y)| x == y || (matches!(x, b'-' | b'_') && matches!(y, b'-' | b'_')))
+}
+
+/// The file stem and text of a built-in profile, by either spelling of its name.
+pub(crate) fn builtin_text(name: &str) -> Option<(&'static str, &'static str)> {
+    BUILTIN.iter().copied().find(|(n, _)| same_name(n, name))
+}
+
+/// Loads a built-in profile by name (`sdv3-e` or `sdv3_e`).
 pub fn builtin(name: &str) -> Result<Profile, Error> {
-    let (_, text) =
-        BUILTIN
-            .iter()
-            .find(|(n, _)| *n == name)
-            .ok_or_else(|| Error::UnknownProfile {
-                name: name.to_string(),
-                available: builtin_names(),
-            })?;
-    let p = resolve::parse(text, &format!("builtin:{name}"))?;
-    check_stem(&p, name, &format!("builtin:{name}"))?;
+    let (stem, text) = builtin_text(name).ok_or_else(|| Error::UnknownProfile {
+        name: name.to_string(),
+        available: builtin_names(),
+    })?;
+    let source = format!("builtin:{stem}");
+    let p = resolve::parse(text, &source, None)?;
+    check_stem(&p, stem, &source)?;
     Ok(p)
 }
 
@@ -86,8 +101,9 @@ pub fn builtin_profiles() -> Result<Vec<Profile>, Error> {
 }
 
 /// Parses profile text; `source` names it in error messages.
+/// `extends` finds built-in bases only.
 pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
-    resolve::parse(text, source)
+    resolve::parse(text, source, None)
 }
 
 /// Loads a profile file.
@@ -96,7 +112,7 @@ pub fn load(path: &Path) -> Result<Profile, Error> {
         path: path.to_path_buf(),
         source,
     })?;
-    let p = resolve::parse(&text, &path.display().to_string())?;
+    let p = resolve::parse(&text, &path.display().to_string(), path.parent())?;
     if let Some(stem) = path.file_stem().and_then(|s| s.to_str()) {
         check_stem(&p, stem, &path.display().to_string())?;
     }
@@ -139,6 +155,7 @@ fn check_stem(p: &Profile, stem: &str, source: &str) -> Result<(), Error> {
         Err(Error::Invalid {
             file: source.to_string(),
             key: "name".into(),
+            line: None,
             error: Invalid::Value(format!("`{}` differs from the file name `{stem}`", p.name)),
         })
     }

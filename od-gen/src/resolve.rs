@@ -2,18 +2,38 @@
 //! objects from the PDO, SM and sync sections, then runs [`crate::validate`].
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
 
+use crate::compose;
 use crate::error::{fault, Error, Fault, Invalid};
-use crate::file::{EntryAttrs, ObjectFile, PdoFile, ProfileFile, SmFileEntry};
+use crate::file::{EntryAttrs, MotorFaultFile, ObjectFile, PdoFile, ProfileFile, SmFileEntry};
 use crate::model::*;
 
 /// Parses TOML text into a checked profile. `source` names the file in error messages.
-pub fn parse(text: &str, source: &str) -> Result<Profile, Error> {
-    let file: ProfileFile = toml::from_str(text).map_err(|e| Error::Parse {
-        file: source.to_string(),
-        message: e.to_string().trim_end().to_string(),
+/// `dir` is the file's folder (where `extends` looks first), `None` for a built-in profile.
+pub fn parse(text: &str, source: &str, dir: Option<&Path>) -> Result<Profile, Error> {
+    let composed = compose::compose(text, source, dir).map_err(|e| {
+        let own = compose::Source {
+            name: source.to_string(),
+            text: text.to_string(),
+        };
+        with_line(e, &[own])
     })?;
-    resolve(&file, source)
+    let sources = &composed.sources;
+    let value = toml::Value::Table(composed.table);
+    let file: ProfileFile = serde_path_to_error::deserialize(value.clone()).map_err(|e| {
+        let key = key_path(e.path(), &value);
+        with_line(
+            Error::Invalid {
+                file: source.to_string(),
+                key,
+                line: None,
+                error: Invalid::Format(e.into_inner().to_string().trim_end().to_string()),
+            },
+            sources,
+        )
+    })?;
+    resolve(&file, source).map_err(|e| with_line(e, sources))
 }
 
 /// Checks a parsed profile file and derives the full dictionary.
@@ -21,8 +41,82 @@ pub fn resolve(file: &ProfileFile, source: &str) -> Result<Profile, Error> {
     build(file, source).map_err(|(key, error)| Error::Invalid {
         file: source.to_string(),
         key,
+        line: None,
         error,
     })
+}
+
+/// Points an [`Error::Invalid`] at the file and line that wrote its key (the profile, one of
+/// its bases or a library).
+fn with_line(e: Error, sources: &[compose::Source]) -> Error {
+    match e {
+        Error::Invalid {
+            file,
+            key,
+            line: None,
+            error,
+        } => match crate::locate::locate(sources, &key) {
+            Some((file, line)) => Error::Invalid {
+                file,
+                key,
+                line: Some(line),
+                error,
+            },
+            None => Error::Invalid {
+                file,
+                key,
+                line: None,
+                error,
+            },
+        },
+        other => other,
+    }
+}
+
+/// serde's path (`object[12].entry[0].type`) in od-gen's key spelling: elements of the
+/// arrays that merge by id are named by it (`object[0x6040].entry[0x01].type`).
+fn key_path(path: &serde_path_to_error::Path, root: &toml::Value) -> String {
+    use serde_path_to_error::Segment;
+    let mut out = String::new();
+    let mut here = Some(root);
+    let mut last_key = String::new();
+    for seg in path.iter() {
+        match seg {
+            Segment::Map { key } => {
+                if !out.is_empty() {
+                    out.push('.');
+                }
+                out.push_str(key);
+                here = here.and_then(|v| v.get(key));
+                last_key = key.clone();
+            }
+            Segment::Seq { index } => {
+                here = here.and_then(|v| v.get(*index));
+                let id = match last_key.as_str() {
+                    "object" | "rxpdo" | "txpdo" => here
+                        .and_then(|v| v.get("index"))
+                        .and_then(toml::Value::as_integer)
+                        .map(|i| format!("{i:#06x}")),
+                    "entry" => here
+                        .and_then(|v| v.get("sub"))
+                        .and_then(toml::Value::as_integer)
+                        .map(|i| format!("{i:#04x}")),
+                    "alarm" => here
+                        .and_then(|v| v.get("display"))
+                        .and_then(toml::Value::as_str)
+                        .map(str::to_string),
+                    _ => None,
+                };
+                out.push_str(&format!("[{}]", id.unwrap_or_else(|| index.to_string())));
+            }
+            Segment::Enum { variant } => {
+                out.push('.');
+                out.push_str(variant);
+            }
+            Segment::Unknown => {}
+        }
+    }
+    out
 }
 
 fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
@@ -90,9 +184,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             )
         })?,
     };
+    let alarms = alarms(f)?;
     let motor_faults = match kind {
-        ProfileKind::Drive => motor_faults(&f.motor_faults)?,
-        ProfileKind::Device if f.motor_faults.is_empty() => [0; MOTOR_FAULT_COUNT],
+        ProfileKind::Drive => motor_faults(&f.motor_faults, &alarms)?,
+        ProfileKind::Device if f.motor_faults.is_empty() => {
+            [MotorFaultCode::default(); MOTOR_FAULT_COUNT]
+        }
         ProfileKind::Device => {
             return Err(fault(
                 "motor_faults",
@@ -254,6 +351,22 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         esm,
         kind,
         motor_faults,
+        alarms,
+        decisions: f
+            .decisions
+            .iter()
+            .map(|d| Decision {
+                subject: d.subject.clone(),
+                manual: d.manual.clone(),
+                choice: d.choice.clone(),
+                reason: d.reason.clone(),
+            })
+            .collect(),
+        replicate: f
+            .replicate
+            .iter()
+            .map(|r| (r.first, r.last, r.offset))
+            .collect(),
         rx_pdos,
         tx_pdos,
         objects: Vec::new(),
@@ -266,10 +379,42 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     Ok(profile)
 }
 
-/// `[motor_faults]` → the codes in the order of [`MOTOR_FAULT_NAMES`]. Unknown names are reported
+/// `[[alarm]]` → [`Alarm`]s; `display` must be unique and non-empty.
+fn alarms(f: &ProfileFile) -> Result<Vec<Alarm>, Fault> {
+    let mut seen = BTreeSet::new();
+    f.alarms
+        .iter()
+        .map(|a| {
+            if a.display.is_empty() || !seen.insert(a.display.as_str()) {
+                return Err(fault(
+                    &format!("alarm[{}].display", a.display),
+                    Invalid::Value("alarm displays must be unique and non-empty".into()),
+                ));
+            }
+            Ok(Alarm {
+                display: a.display.clone(),
+                name: a.name.clone(),
+                error_code: a.error_code,
+                emcy: EmcyCode {
+                    code: a.emcy_code.unwrap_or(a.error_code),
+                    data: a.emcy_data.unwrap_or_default(),
+                },
+                resettable: a.resettable,
+                warning: a.warning,
+                description: a.description.clone(),
+            })
+        })
+        .collect()
+}
+
+/// `[motor_faults]` → the 603Fh code and EMCY bytes in the order of [`MOTOR_FAULT_NAMES`]: a
+/// code, or an alarm's display (its 603Fh code and EMCY bytes). Unknown names are reported
 /// first (the first in key order), then every missing name at once. Zero codes are checked in
 /// [`crate::validate`].
-fn motor_faults(map: &BTreeMap<String, u16>) -> Result<[u16; MOTOR_FAULT_COUNT], Fault> {
+fn motor_faults(
+    map: &BTreeMap<String, MotorFaultFile>,
+    alarms: &[Alarm],
+) -> Result<[MotorFaultCode; MOTOR_FAULT_COUNT], Fault> {
     if let Some(name) = map
         .keys()
         .find(|k| !MOTOR_FAULT_NAMES.contains(&k.as_str()))
@@ -286,9 +431,33 @@ fn motor_faults(map: &BTreeMap<String, u16>) -> Result<[u16; MOTOR_FAULT_COUNT],
     if !missing.is_empty() {
         return Err(fault("motor_faults", Invalid::MissingMotorFaults(missing)));
     }
-    let mut codes = [0u16; MOTOR_FAULT_COUNT];
+    let mut codes = [MotorFaultCode::default(); MOTOR_FAULT_COUNT];
     for (code, name) in codes.iter_mut().zip(MOTOR_FAULT_NAMES) {
-        *code = map.get(name).copied().unwrap_or(0);
+        *code = match map.get(name) {
+            None => MotorFaultCode::default(),
+            Some(MotorFaultFile::Code(c)) => MotorFaultCode {
+                error_code: *c,
+                emcy: EmcyCode {
+                    code: *c,
+                    data: [0; 5],
+                },
+            },
+            Some(MotorFaultFile::Alarm(display)) => {
+                let a = alarms
+                    .iter()
+                    .find(|a| a.display == *display)
+                    .ok_or_else(|| {
+                        fault(
+                            &format!("motor_faults.{name}"),
+                            Invalid::Value(format!("no [[alarm]] with display `{display}`")),
+                        )
+                    })?;
+                MotorFaultCode {
+                    error_code: a.error_code,
+                    emcy: a.emcy,
+                }
+            }
+        };
     }
     Ok(codes)
 }
@@ -375,6 +544,14 @@ fn object(o: &ObjectFile, key: &str) -> Result<Object, Fault> {
         index: o.index,
         code,
         name: o.name.clone(),
+        doc: if code == ObjectCode::Var {
+            Doc::default()
+        } else {
+            Doc {
+                unit: o.unit.clone(),
+                description: o.description.clone(),
+            }
+        },
         entries,
         derived: false,
     })
@@ -412,6 +589,7 @@ fn sub0(value: u8, access: Access, storage: Storage) -> Entry {
         max: Vec::new(),
         role: None,
         setting: false,
+        doc: Doc::default(),
     }
 }
 
@@ -553,6 +731,10 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         max,
         role,
         setting: a.setting,
+        doc: Doc {
+            unit: a.unit.clone(),
+            description: a.description.clone(),
+        },
     })
 }
 
@@ -604,6 +786,10 @@ fn domain_entry(
         max: Vec::new(),
         role: None,
         setting: a.setting,
+        doc: Doc {
+            unit: a.unit.clone(),
+            description: a.description.clone(),
+        },
     })
 }
 
@@ -888,6 +1074,7 @@ fn var(index: u16, name: &str, e: Entry) -> Object {
         name: name.into(),
         entries: vec![e],
         derived: true,
+        doc: Doc::default(),
     }
 }
 
@@ -918,6 +1105,7 @@ fn val(
         max,
         role: None,
         setting: false,
+        doc: Doc::default(),
     }
 }
 
@@ -1008,6 +1196,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
             ),
         ],
         derived: true,
+        doc: Doc::default(),
     });
 
     let coe = p.mailbox.coe;
@@ -1056,6 +1245,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
             name: pdo.name.clone(),
             entries,
             derived: true,
+            doc: Doc::default(),
         });
     }
 
@@ -1076,6 +1266,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         name: "Sync manager type".into(),
         entries: sm_types,
         derived: true,
+        doc: Doc::default(),
     });
 
     for (index, name, pdos) in [
@@ -1123,6 +1314,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
             name: name.into(),
             entries,
             derived: true,
+            doc: Doc::default(),
         });
     }
 
@@ -1182,6 +1374,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
                 ram_ro(0x20, "Sync error", Bool, vec![0]),
             ],
             derived: true,
+            doc: Doc::default(),
         });
     }
     Ok(v)

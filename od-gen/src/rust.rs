@@ -149,7 +149,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         "/// Profile `{}`: {} (generated from `{file}`).",
         p.name, p.device.name
     );
-    let _ = writeln!(out, "pub mod {} {{", p.name);
+    let _ = writeln!(out, "pub mod {} {{", p.module_name());
     if target.drive.is_some() && p.kind == ProfileKind::Device {
         let _ = writeln!(
             out,
@@ -232,7 +232,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.motor_faults.len()
         );
         for (code, name) in p.motor_faults.iter().zip(MOTOR_FAULT_NAMES) {
-            let _ = writeln!(out, "        {code:#06x}, // {name}");
+            let _ = writeln!(out, "        {:#06x}, // {name}", code.error_code);
         }
         let _ = writeln!(out, "    ];");
     }
@@ -664,7 +664,7 @@ pub fn generate_with(profiles: &[Profile], target: &Target) -> String {
     let _ = writeln!(out, "/// All compiled-in profiles, sorted by name.");
     let refs: Vec<String> = sorted
         .iter()
-        .map(|p| format!("&{}::PROFILE", p.name))
+        .map(|p| format!("&{}::PROFILE", p.module_name()))
         .collect();
     let _ = writeln!(
         out,
@@ -674,7 +674,7 @@ pub fn generate_with(profiles: &[Profile], target: &Target) -> String {
     );
     let _ = writeln!(
         out,
-        "/// The compiled-in profile with this name (the profile file's `name`)."
+        "/// The compiled-in profile with this name (the profile file's `name`; `-` and `_` are the\n/// same, so `sigma-v-sd` and `sigma_v_sd` both find it)."
     );
     let _ = writeln!(
         out,
@@ -682,7 +682,7 @@ pub fn generate_with(profiles: &[Profile], target: &Target) -> String {
     );
     let _ = writeln!(
         out,
-        "    ALL.iter().copied().find(|p| p.{device}.profile == name)"
+        "    ALL.iter().copied().find(|p| p.{device}.is_profile(name))"
     );
     let _ = writeln!(out, "}}\n");
     if target.drive.is_some() {

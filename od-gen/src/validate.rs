@@ -32,17 +32,19 @@ const KEYWORDS: [&str; 51] = [
 
 fn name(n: &str) -> Result<(), Fault> {
     let mut chars = n.chars();
+    let module = n.replace('-', "_");
     let ok = chars.next().is_some_and(|c| c.is_ascii_lowercase())
-        && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
-        && !KEYWORDS.contains(&n)
-        && n != "check";
+        && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_' || c == '-')
+        && !KEYWORDS.contains(&module.as_str())
+        && module != "check";
     if ok {
         Ok(())
     } else {
         Err(fault(
             "name",
             Invalid::Value(format!(
-                "`{n}` is not a lower-case Rust identifier `[a-z][a-z0-9_]*`"
+                "`{n}` is not a lower-case name `[a-z][a-z0-9_-]*` whose module name (`-` as `_`) \
+                 is a Rust identifier"
             )),
         ))
     }
@@ -451,7 +453,7 @@ fn motor_faults(p: &Profile) -> Result<(), Fault> {
     match MOTOR_FAULT_NAMES
         .iter()
         .zip(p.motor_faults)
-        .find(|(_, code)| *code == 0)
+        .find(|(_, code)| code.error_code == 0)
     {
         Some((name, _)) => Err(fault(
             &format!("motor_faults.{name}"),

@@ -16,7 +16,7 @@ fn module_shape() {
         "pub const MAX_RAM_SIZE: usize = ",
         "pub static ALL: [&crate::profile::DriveProfile; 1] = [&standard::PROFILE];",
         "pub fn by_name(name: &str) -> Option<&'static crate::profile::DriveProfile>",
-        "    ALL.iter().copied().find(|p| p.od.device.profile == name)",
+        "    ALL.iter().copied().find(|p| p.od.device.is_profile(name))",
         "use ::ethercat_slave::od::{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value};",
         "use crate::profile::{AppVars, DriveProfile};",
         "pub mod standard {",
@@ -56,7 +56,7 @@ fn device_target_has_the_dictionary_only() {
         for needle in [
             format!("pub static ALL: [&{slave}::od::Profile; 1] = [&standard::PROFILE];"),
             "pub static PROFILE: Profile = Profile {".to_string(),
-            "    ALL.iter().copied().find(|p| p.device.profile == name)".to_string(),
+            "    ALL.iter().copied().find(|p| p.device.is_profile(name))".to_string(),
             format!("let storable = {slave}::params::is_storable(&o[i], &e[j]);"),
             format!("const _: () = assert!({slave}::od::DataType::Bit8.code() == 0x0037"),
         ] {
@@ -191,7 +191,7 @@ fn motor_fault_table_order_matches_the_names() {
         .motor_faults
         .iter()
         .zip(MOTOR_FAULT_NAMES)
-        .map(|(c, n)| format!("{c:#06x}, // {n}"))
+        .map(|(c, n)| format!("{:#06x}, // {n}", c.error_code))
         .collect();
     assert_eq!(rows, expected);
     // over_current (code 1) first, identification (code 15) last, as in standard.toml.

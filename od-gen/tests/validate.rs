@@ -18,8 +18,11 @@ fn appended(extra: &str) -> String {
 
 fn invalid(text: &str) -> (String, Invalid) {
     match od_gen::parse(text, "bad.toml") {
-        Err(Error::Invalid { file, key, error }) => {
-            assert_eq!(file, "bad.toml");
+        Err(Error::Invalid {
+            file, key, error, ..
+        }) => {
+            // The profile, or the library that wrote the value at fault.
+            assert!(file == "bad.toml" || file.starts_with("library:"), "{file}");
             (key, error)
         }
         Err(e) => panic!("expected a validation error, got: {e}"),
@@ -173,8 +176,8 @@ fn too_many_pdo_entries() {
 #[test]
 fn role_on_wrong_type() {
     let (key, e) = invalid(&with(
-        "name = \"Controlword\"\ntype = \"UINT\"",
-        "name = \"Controlword\"\ntype = \"UDINT\"",
+        "index = 0x6040\nfrom = \"cia402\"",
+        "index = 0x6040\nfrom = \"cia402\"\ntype = \"UDINT\"",
     ));
     assert_eq!(
         e,
@@ -312,9 +315,26 @@ fn unknown_key_is_a_parse_error_naming_the_key() {
         &with("pdi_control = 0x05", "pdi_controll = 0x05"),
         "bad.toml",
     ) {
-        Err(Error::Parse { file, message }) => {
+        Err(Error::Invalid {
+            file,
+            key,
+            line,
+            error: Invalid::Format(message),
+        }) => {
             assert_eq!(file, "bad.toml");
-            assert!(message.contains("pdi_controll"), "{message}");
+            assert_eq!(key, "eeprom.pdi_controll");
+            assert!(
+                message.contains("unknown field `pdi_controll`"),
+                "{message}"
+            );
+            // The line of the misspelt key in the file.
+            let text = with("pdi_control = 0x05", "pdi_controll = 0x05");
+            let expected = text
+                .lines()
+                .position(|l| l.starts_with("pdi_controll"))
+                .unwrap()
+                + 1;
+            assert_eq!(line, Some(expected));
         }
         other => panic!("{other:?}"),
     }
@@ -331,8 +351,14 @@ fn errors_name_file_and_key() {
     )
     .unwrap_err()
     .to_string();
+    // File, line of the PDO entry, key.
+    let line = STANDARD
+        .lines()
+        .position(|l| l.contains("{ index = 0x6040, sub = 0, bits = 16 }"))
+        .unwrap()
+        + 1;
     assert!(
-        err.starts_with("x.toml: `rxpdo[0x1600].entries[0]`:"),
+        err.starts_with(&format!("x.toml:{line}: `rxpdo[0x1600].entries[0]`:")),
         "{err}"
     );
     assert!(od_gen::builtin("nope")
@@ -543,11 +569,11 @@ fn motor_faults_map_every_fault_of_the_standard_profile() {
     // Spot checks against the CiA402 table: DC link over-voltage, following error.
     let code = |name: &str| {
         let i = MOTOR_FAULT_NAMES.iter().position(|n| *n == name).unwrap();
-        p.motor_faults[i]
+        p.motor_faults[i].error_code
     };
     assert_eq!(code("bus_over_voltage"), 0x3210);
     assert_eq!(code("following_error"), 0x8611);
-    assert!(p.motor_faults.iter().all(|&c| c != 0));
+    assert!(p.motor_faults.iter().all(|c| c.error_code != 0));
 }
 
 #[test]
@@ -562,7 +588,13 @@ fn motor_faults_unknown_name_rejected() {
     // The message names the profile, the key and the valid names.
     let msg = od_gen::parse(&text, "mine.toml").unwrap_err().to_string();
     assert!(
-        msg.starts_with("mine.toml: `motor_faults.over_currant`: `over_currant` is not"),
+        msg.starts_with(&format!(
+            "mine.toml:{}: `motor_faults.over_currant`: `over_currant` is not",
+            text.lines()
+                .position(|l| l.starts_with("over_currant"))
+                .unwrap()
+                + 1
+        )),
         "{msg}"
     );
     for name in od_gen::model::MOTOR_FAULT_NAMES {
@@ -578,7 +610,15 @@ fn motor_faults_missing_name_rejected() {
     let msg = od_gen::parse(&with("encoder_crc = 0x7300", ""), "mine.toml")
         .unwrap_err()
         .to_string();
-    assert!(msg.starts_with("mine.toml: `motor_faults`:"), "{msg}");
+    let section = STANDARD
+        .lines()
+        .position(|l| l == "[motor_faults]")
+        .unwrap()
+        + 1;
+    assert!(
+        msg.starts_with(&format!("mine.toml:{section}: `motor_faults`:")),
+        "{msg}"
+    );
     assert!(msg.contains("missing: encoder_crc"), "{msg}");
 
     // No table at all: every fault is missing, listed in code order.
@@ -607,8 +647,18 @@ fn motor_faults_zero_code_rejected() {
 fn motor_faults_code_wider_than_16_bits_is_a_parse_error() {
     let text = with("over_speed = 0x8400", "over_speed = 0x18400");
     match od_gen::parse(&text, "bad.toml") {
-        Err(Error::Parse { message, .. }) => assert!(message.contains("over_speed"), "{message}"),
-        other => panic!("expected a parse error, got {other:?}"),
+        Err(Error::Invalid {
+            key,
+            error: Invalid::Format(message),
+            ..
+        }) => {
+            assert_eq!(key, "motor_faults.over_speed");
+            assert!(
+                message.contains("0x18400 is not a UINT error code"),
+                "{message}"
+            );
+        }
+        other => panic!("expected a format error, got {other:?}"),
     }
 }
 
@@ -621,7 +671,8 @@ fn motor_faults_are_ordered_by_fault_not_by_file_order() {
     let text = with_motor_faults(&fault_table(&reversed, |n| 0x1001 + position(n) as u16));
     let p = od_gen::parse(&text, "standard.toml").unwrap();
     let expected: Vec<u16> = (0x1001..=0x100F).collect();
-    assert_eq!(p.motor_faults.to_vec(), expected);
+    let codes: Vec<u16> = p.motor_faults.iter().map(|c| c.error_code).collect();
+    assert_eq!(codes, expected);
 }
 
 /// `kind`: a drive needs every motor fault mapped; a device has none, and says so.
@@ -639,7 +690,7 @@ fn profile_kind_decides_whether_motor_faults_belong() {
     );
     let p = od_gen::parse(&device, "standard.toml").unwrap();
     assert_eq!(p.kind, ProfileKind::Device);
-    assert!(p.motor_faults.iter().all(|&c| c == 0));
+    assert!(p.motor_faults.iter().all(|c| c.error_code == 0));
 
     // The same file as a drive lacks every fault.
     let drive_without = with_motor_faults("");

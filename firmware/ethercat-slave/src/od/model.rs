@@ -354,6 +354,15 @@ pub struct DeviceInfo {
 }
 
 impl DeviceInfo {
+    /// Whether this is the profile `name`; `-` and `_` are the same character, so the CLI name
+    /// `sigma-v-sd` and the Rust module spelling `sigma_v_sd` both match.
+    pub fn is_profile(&self, name: &str) -> bool {
+        let a = self.profile.as_bytes();
+        a.len() == name.len()
+            && a.iter()
+                .zip(name.bytes())
+                .all(|(&x, y)| x == y || (matches!(x, b'-' | b'_') && matches!(y, b'-' | b'_')))
+    }
     /// Whether `index:subindex` is a startup parameter ([`Self::settings`]).
     pub fn is_setting(&self, index: u16, subindex: u8) -> bool {
         self.settings.binary_search(&(index, subindex)).is_ok()
