@@ -19,7 +19,8 @@ fn main() {
             std::process::exit(1);
         }
     };
-    files.sort();
+    // By profile name (the stem): `sigma-v-sd` before `sigma-v-sd-2axis`.
+    files.sort_by_key(|p| p.file_stem().map(|s| s.to_os_string()));
     let mut out = String::from("/// Built-in profiles: (file stem, TOML text), sorted by name.\npub(crate) static BUILTIN: &[(&str, &str)] = &[\n");
     for f in &files {
         println!("cargo:rerun-if-changed={}", f.display());

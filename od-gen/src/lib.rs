@@ -133,7 +133,7 @@ pub fn load_dir(dir: &Path) -> Result<Vec<Profile>, Error> {
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .collect();
-    files.sort();
+    files.sort_by_key(|p| p.file_stem().map(|s| s.to_os_string()));
     files.iter().map(|f| load(f)).collect()
 }
 

@@ -13,7 +13,17 @@ fn od_gen(args: &[&str]) -> std::process::Output {
 fn list_esi_and_sii() {
     let out = od_gen(&["list"]);
     assert!(out.status.success());
-    assert_eq!(String::from_utf8_lossy(&out.stdout), "standard\n");
+    // The five seed drives (the Yaskawa one in two variants) and the project's own, by name.
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        "gha-e\nosd-g-e\nrse\nsdv3-e\nsigma-v-sd\nsigma-v-sd-2axis\nstandard\n"
+    );
+    // Both spellings name a profile.
+    for name in ["sigma-v-sd-2axis", "sigma_v_sd_2axis"] {
+        let out = od_gen(&["check", name]);
+        assert!(out.status.success(), "{name}");
+        assert_eq!(String::from_utf8_lossy(&out.stdout), "ok: sigma-v-sd-2axis\n");
+    }
 
     let out = od_gen(&["esi", "standard"]);
     assert!(out.status.success());

@@ -34,7 +34,7 @@ fn invalid(text: &str) -> (String, Invalid) {
 fn standard_profile_is_valid() {
     let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
     assert_eq!(p.name, "standard");
-    assert_eq!(od_gen::builtin_names(), ["standard"]);
+    assert!(od_gen::builtin_names().contains(&"standard"));
     assert_eq!(
         od_gen::builtin("standard").unwrap(),
         od_gen::parse(STANDARD, "builtin:standard").unwrap()

@@ -112,7 +112,7 @@ pub struct EventSide {
     /// Mailbox, CoE server, OD RAM copy.
     pub mailbox: MailboxSide<RAM_SIZE>,
     /// 1010h/1011h parameter storage in flash bank 2.
-    pub params: ParamStore<FlashStorage>,
+    pub params: ParamStore<FlashStorage, { crate::storage::SLOT_CAPACITY }>,
 }
 
 /// Longest single PDI transfer the ESC-event context makes while SYNC0 may wait for the lock:

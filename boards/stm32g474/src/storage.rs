@@ -15,6 +15,10 @@ use hal::storage::{NvStorage, StorageError};
 
 /// Flash page size in dual-bank mode (RM0440 §3.3.1).
 const PAGE_SIZE: usize = 2048;
+/// Largest parameter record a slot holds (one page): the capacity of the board's
+/// `ParamStore`. Enough for the standard profile; the vendor profiles store more and need
+/// slots of several pages (open: the board compiles one profile chosen at build time).
+pub const SLOT_CAPACITY: usize = PAGE_SIZE;
 /// Number of slots (one page each).
 const SLOTS: usize = 2;
 /// Offset (from the flash base) of slot 0: the last two pages of bank 2.

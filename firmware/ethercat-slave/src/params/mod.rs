@@ -87,9 +87,11 @@ pub const STORE_CAPABILITIES: u32 = SAVES_ON_COMMAND;
 pub const RESTORE_CAPABILITIES: u32 = 1 << 0;
 /// The two storage slots the records alternate between.
 pub const SLOTS: [usize; 2] = [0, 1];
-/// Default capacity of one record buffer; [`ParamStore`] holds two. Enough for the standard
-/// profile with full PDO mapping objects (`record_len` is checked against it in the tests).
-pub const DEFAULT_RECORD_CAPACITY: usize = 1024;
+/// Default capacity of one record buffer; [`ParamStore`] holds two. Enough for every built-in
+/// profile with full PDO mapping objects (the vendor profiles store a few hundred parameters,
+/// SDV3-E ≈ 4.5 KiB; [`max_record_len`] is checked against it in the tests). A board that
+/// compiles one profile sizes its store for that profile and its flash pages.
+pub const DEFAULT_RECORD_CAPACITY: usize = 8192;
 /// Sequence number of the first record written to empty storage.
 const FIRST_SEQUENCE: u32 = 1;
 
