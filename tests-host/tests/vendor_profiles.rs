@@ -1,0 +1,232 @@
+//! Every built-in profile (the five seed drives, the two-axis Σ-V-SD and the standard drive)
+//! under a real master, ethercrab in process: the identity and name the manual gives, every
+//! object read over SDO equal to its default from the profile file, and the default PDO mapping
+//! in OP at the profile's shortest and longest DC cycle; a cycle outside the profile's range is
+//! refused at SAFE-OP with AL status code 0x0035.
+//!
+//! The expectations come from the profile files (od-gen's model of the manual), read
+//! independently of the firmware's generated dictionary.
+
+use std::time::Duration;
+
+use board_sim::Segment;
+use ethercrab::subdevice_group::{DcConfiguration, PreOp};
+use ethercrab::{DcSync, DefaultLock, MainDevice, SubDeviceGroup};
+use od_gen::model::{DataType, Entry, Object, Profile, Role, Storage};
+use tests_host::{al_status, block_on, master_for};
+
+/// Largest process image of any profile's default mapping, with room (bytes).
+const MAX_PDI: usize = 512;
+/// ethercrab sizes its tables with a power of two ≥ 2; the tests use one drive.
+const MAX_SUBDEVICES: usize = 4;
+/// AL status error indication bit (ETG.1000.6 Table 9).
+const AL_ERROR: u16 = 0x10;
+/// AL status code "invalid DC SYNC configuration" / "DC SYNC0 cycle time" (ETG.1000.6
+/// Table 11): 0x0035 for a cycle outside the supported range.
+const AL_SYNC_CYCLE_INVALID: u16 = 0x0035;
+
+type Group = SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>;
+
+fn profiles() -> Vec<Profile> {
+    od_gen::builtin_profiles().expect("built-in profiles load")
+}
+
+/// Entries whose value the running drive produces, so a read shows the drive's state, not the
+/// file's default: process values the application writes (roles of the TxPDO side), the
+/// active synchronisation (1C32h/1C33h, ETG.1020: the slave fills them in), the diagnosis
+/// history (10F3h, ETG.1020 §13) and the serial number (1018h:04, set by the board).
+fn is_live(o: &Object, e: &Entry) -> bool {
+    let written_by_application = matches!(
+        e.role,
+        Some(
+            Role::Statusword
+                | Role::ErrorCode
+                | Role::ModesOfOperationDisplay
+                | Role::PositionActualValue
+                | Role::VelocityActualValue
+                | Role::TorqueActualValue
+        )
+    );
+    written_by_application
+        || matches!(o.index, 0x1C32 | 0x1C33 | 0x10F3)
+        || (o.index == 0x1018 && e.subindex == 4)
+}
+
+/// The default PDO mapping's process image sizes in bytes (outputs, inputs).
+fn default_image(p: &Profile) -> (usize, usize) {
+    (p.outputs_bits() as usize / 8, p.inputs_bits() as usize / 8)
+}
+
+/// What an SDO upload of the entry's default returns: the bytes, except that a VISIBLE_STRING
+/// variable ends at its first NUL (CiA 301 §7.1.6.3: a visible string may be shorter than its
+/// object; the stack sends the text, not the padding).
+fn upload_of(e: &Entry) -> Vec<u8> {
+    let mut bytes = e.initial_bytes();
+    if e.data_type == DataType::VisibleString && e.storage == Storage::Ram {
+        if let Some(nul) = bytes.iter().position(|b| *b == 0) {
+            bytes.truncate(nul);
+        }
+    }
+    bytes
+}
+
+async fn init(m: &board_sim::inproc::InProcess) -> Group {
+    m.maindevice
+        .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(m.shared.clock().now_fn())
+        .await
+        .expect("init")
+}
+
+#[test]
+fn identity_and_every_object_read_by_sdo_equals_the_profile() {
+    for p in profiles() {
+        block_on(async {
+            let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
+            tokio::task::spawn_local(transport);
+            let md: &MainDevice<'_> = &m.maindevice;
+            let group = init(&m).await;
+            let sd = group.subdevice(md, 0).expect("drive");
+            let id = sd.identity();
+            assert_eq!(
+                (id.vendor_id, id.product_id, id.revision),
+                (p.vendor.id, p.device.product_code, p.device.revision),
+                "{}: identity (SII)",
+                p.name
+            );
+            assert_eq!(sd.name(), p.device.name, "{}: name (SII)", p.name);
+
+            let mut read = 0;
+            for o in &p.objects {
+                for e in &o.entries {
+                    if !e.access.readable() || e.data_type == DataType::Domain || is_live(o, e) {
+                        continue;
+                    }
+                    let got = sd
+                        .sdo_read::<heapless08::Vec<u8, 1024>>(o.index, e.subindex)
+                        .await
+                        .unwrap_or_else(|err| {
+                            panic!(
+                                "{}: {:#06x}:{:02x} {}: {err:?}",
+                                p.name, o.index, e.subindex, e.name
+                            )
+                        });
+                    let expected = upload_of(e);
+                    assert_eq!(
+                        got.as_slice(),
+                        expected.as_slice(),
+                        "{}: {:#06x}:{:02x} {} ({:?})",
+                        p.name,
+                        o.index,
+                        e.subindex,
+                        e.name,
+                        e.storage == Storage::Const
+                    );
+                    read += 1;
+                }
+            }
+            assert!(read > 20, "{}: only {read} entries read", p.name);
+        });
+    }
+}
+
+/// PRE-OP → SAFE-OP → OP with DC SYNC0 at `cycle_ns`; returns the AL status and code when the
+/// drive refuses SAFE-OP, or the process image sizes in OP.
+async fn run_dc(p: &Profile, cycle_ns: u64) -> Result<(usize, usize), (u16, u16)> {
+    let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
+    tokio::task::spawn_local(transport);
+    let md: &MainDevice<'_> = &m.maindevice;
+    let mut group = init(&m).await;
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+    for _ in 0..100 {
+        group.tx_rx_sync_system_time(md).await.expect("time sync");
+        m.shared.advance(cycle_ns);
+    }
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_nanos(cycle_ns * 10),
+                sync0_period: Duration::from_nanos(cycle_ns),
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .expect("DC configuration");
+    let group = match group.into_safe_op(md).await {
+        Ok(g) => g,
+        Err(_) => return Err(al_status(md).await),
+    };
+    let group = group.request_into_op(md).await.expect("request OP");
+    let mut in_op = false;
+    for _ in 0..1000 {
+        let r = group.tx_rx_dc(md).await.expect("tx/rx");
+        m.shared.advance(cycle_ns);
+        if r.all_op() {
+            in_op = true;
+            break;
+        }
+    }
+    assert!(
+        in_op,
+        "{}: no OP at {cycle_ns} ns: {:?}",
+        p.name,
+        al_status(md).await
+    );
+    // A few cycles in OP with the right working counter (2 for the write + 1 for the read).
+    for _ in 0..20 {
+        let r = group.tx_rx_dc(md).await.expect("tx/rx");
+        m.shared.advance(cycle_ns);
+        assert!(r.all_op(), "{}: left OP at {cycle_ns} ns", p.name);
+        assert_eq!(r.working_counter, 3, "{}: working counter", p.name);
+    }
+    let sd = group.subdevice(md, 0).expect("drive");
+    let sizes = (sd.outputs_raw().len(), sd.inputs_raw().len());
+    let _ = group.into_safe_op(md).await.expect("OP -> SAFE-OP");
+    Ok(sizes)
+}
+
+/// The shortest cycle the profile accepts: `min_cycle_ns` rounded up to the control step.
+fn shortest(p: &Profile) -> u64 {
+    let step = u64::from(p.sync.cycle_step_ns.max(1));
+    u64::from(p.sync.min_cycle_ns).div_ceil(step) * step
+}
+
+/// The longest: `max_cycle_ns` rounded down to the control step.
+fn longest(p: &Profile) -> u64 {
+    let step = u64::from(p.sync.cycle_step_ns.max(1));
+    u64::from(p.sync.max_cycle_ns) / step * step
+}
+
+#[test]
+fn default_mapping_reaches_op_at_the_shortest_and_longest_dc_cycle() {
+    for p in profiles().into_iter().filter(|p| p.sync.dc_sync0) {
+        for cycle in [shortest(&p), longest(&p)] {
+            let sizes = block_on(run_dc(&p, cycle))
+                .unwrap_or_else(|s| panic!("{}: SAFE-OP refused at {cycle} ns: {s:?}", p.name));
+            assert_eq!(sizes, default_image(&p), "{}: process image", p.name);
+        }
+    }
+}
+
+#[test]
+fn a_cycle_outside_the_profile_range_is_refused_at_safeop_with_0x35() {
+    for p in profiles().into_iter().filter(|p| p.sync.dc_sync0) {
+        let step = u64::from(p.sync.cycle_step_ns.max(1));
+        let too_short = shortest(&p) - step;
+        let too_long = longest(&p) + step;
+        for cycle in [too_short, too_long].into_iter().filter(|c| *c > 0) {
+            let (status, code) = block_on(run_dc(&p, cycle))
+                .err()
+                .unwrap_or_else(|| panic!("{}: OP at {cycle} ns", p.name));
+            assert_eq!(
+                (status & AL_ERROR, code),
+                (AL_ERROR, AL_SYNC_CYCLE_INVALID),
+                "{}: {cycle} ns",
+                p.name
+            );
+        }
+    }
+}
