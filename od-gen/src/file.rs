@@ -409,6 +409,17 @@ pub struct PdoLimitsFile {
     /// (abort 0x06010006) or "allowed" (default).
     #[serde(default)]
     pub sdo_write_to_rx_mapped: Option<String>,
+    /// How many PDOs 1C12h / 1C13h can assign at once (their highest subindex); default: all
+    /// PDOs of the direction.
+    #[serde(default)]
+    pub max_assigned: Option<u8>,
+    /// Largest byte length of one PDO's mapping (default 256, the stack's limit).
+    #[serde(default)]
+    pub max_pdo_bytes: Option<u16>,
+    /// Largest process image per direction: the assigned PDOs of SM2 (and of SM3) together, in
+    /// bytes (default 256, the stack's limit).
+    #[serde(default)]
+    pub max_process_bytes: Option<u16>,
 }
 
 /// `[[rxpdo]]` / `[[txpdo]]`

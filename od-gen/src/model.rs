@@ -522,6 +522,11 @@ pub struct Doc {
     pub description: Option<String>,
 }
 
+/// The slave stack's limit on one PDO and on the process image of one direction, in bytes
+/// (`ethercat_slave::pdo::rules::MAX_PDO_BYTES`, `ethercat_slave::pdo::MAX_IMAGE`; the
+/// generated code asserts they agree). A profile's `[pdo]` limits may only be lower.
+pub const STACK_MAX_PDO_BYTES: u16 = 256;
+
 /// Objects the firmware's parameter storage never stores: 1010h/1011h (store/restore) and the
 /// SM parameters 1C32h/1C33h (the stack overwrites them with the active synchronisation).
 pub const NOT_STORED: [u16; 4] = [0x1010, 0x1011, 0x1C32, 0x1C33];
@@ -893,6 +898,12 @@ pub struct Profile {
     pub dc_op_modes: Vec<DcOpMode>,
     /// Maximum entries per PDO.
     pub max_pdo_entries: u8,
+    /// How many PDOs 1C12h/1C13h assign at most (`None`: every PDO of the direction).
+    pub max_assigned: Option<u8>,
+    /// Largest byte length of one PDO.
+    pub max_pdo_bytes: u16,
+    /// Largest process image per direction in bytes.
+    pub max_process_bytes: u16,
     /// SDO download to an RxPDO-mapped entry in SAFEOP/OP.
     pub sdo_write_to_rx_mapped: RxMappedWrite,
     /// ESM rules.

@@ -276,8 +276,47 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             Invalid::Value("must be 1..=254".into()),
         ));
     }
+    let limit = |value: Option<u16>, key: &str| -> Result<u16, Fault> {
+        match value {
+            None => Ok(STACK_MAX_PDO_BYTES),
+            Some(v) if (1..=STACK_MAX_PDO_BYTES).contains(&v) => Ok(v),
+            Some(_) => Err(fault(
+                key,
+                Invalid::Value(format!(
+                    "must be 1..={STACK_MAX_PDO_BYTES} (the stack's limit)"
+                )),
+            )),
+        }
+    };
+    let max_pdo_bytes = limit(f.pdo.max_pdo_bytes, "pdo.max_pdo_bytes")?;
+    let max_process_bytes = limit(f.pdo.max_process_bytes, "pdo.max_process_bytes")?;
     let rx_pdos = pdos(&f.rx_pdos, true, &declared, max_entries)?;
     let tx_pdos = pdos(&f.tx_pdos, false, &declared, max_entries)?;
+    for p in rx_pdos.iter().chain(&tx_pdos) {
+        if p.bits() > u32::from(max_pdo_bytes) * 8 {
+            let kind = if p.sm == 2 { "rxpdo" } else { "txpdo" };
+            return Err(fault(
+                &format!("{kind}[{:#06x}].entries", p.index),
+                Invalid::Value(format!(
+                    "{} bits exceed pdo.max_pdo_bytes = {max_pdo_bytes}",
+                    p.bits()
+                )),
+            ));
+        }
+    }
+    if let Some(max) = f.pdo.max_assigned {
+        for (pdos, key) in [(&rx_pdos, "rxpdo"), (&tx_pdos, "txpdo")] {
+            let n = pdos.iter().filter(|p| p.assigned).count();
+            if max == 0 || n > usize::from(max) {
+                return Err(fault(
+                    "pdo.max_assigned",
+                    Invalid::Value(format!(
+                        "must be ≥ 1 and ≥ the {n} PDOs the default {key} assignment holds"
+                    )),
+                ));
+            }
+        }
+    }
 
     let bits = |pdos: &[Pdo], sm: u8, key: &str| -> Result<u16, Fault> {
         let bits: u32 = pdos.iter().filter(|p| p.assigned).map(Pdo::bits).sum();
@@ -289,6 +328,17 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     };
     let out_len = bits(&rx_pdos, 2, "rxpdo")?;
     let in_len = bits(&tx_pdos, 3, "txpdo")?;
+    for (len, key) in [(out_len, "rxpdo"), (in_len, "txpdo")] {
+        if len > max_process_bytes {
+            return Err(fault(
+                key,
+                Invalid::Value(format!(
+                    "the default assignment maps {len} bytes, more than pdo.max_process_bytes = \
+                     {max_process_bytes}"
+                )),
+            ));
+        }
+    }
     let mbx = |s: &SmFileEntry, key: &str| -> Result<Sm, Fault> {
         let length = s.size.ok_or_else(|| fault(key, Invalid::Missing("size")))?;
         Ok(Sm {
@@ -347,6 +397,9 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         sync,
         dc_op_modes,
         max_pdo_entries: max_entries,
+        max_assigned: f.pdo.max_assigned,
+        max_pdo_bytes,
+        max_process_bytes,
         sdo_write_to_rx_mapped,
         esm,
         kind,
@@ -1273,7 +1326,9 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         (0x1C12u16, "RxPDO assign", &p.rx_pdos),
         (0x1C13, "TxPDO assign", &p.tx_pdos),
     ] {
-        let cap = u8::try_from(pdos.len()).unwrap_or(u8::MAX);
+        let cap = u8::try_from(pdos.len())
+            .unwrap_or(u8::MAX)
+            .min(p.max_assigned.unwrap_or(u8::MAX));
         let (access, storage) = if coe.pdo_assign {
             (Access::RW_PREOP, Storage::Ram)
         } else {

@@ -34,6 +34,7 @@ use std::fmt::Write as _;
 
 use crate::model::{
     Access, DataType, Entry, Object, Profile, ProfileKind, Role, Sm, Storage, MOTOR_FAULT_NAMES,
+    STACK_MAX_PDO_BYTES,
 };
 
 /// Where each RAM variable of a profile lives.
@@ -300,6 +301,12 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns, y.cycle_step_ns
     );
     let _ = writeln!(out, "            max_pdo_entries: {},", p.max_pdo_entries);
+    let _ = writeln!(out, "            max_pdo_bytes: {},", p.max_pdo_bytes);
+    let _ = writeln!(
+        out,
+        "            max_process_bytes: {},",
+        p.max_process_bytes
+    );
     let _ = writeln!(
         out,
         "            mailbox_protocols: {:#06x},",
@@ -596,6 +603,11 @@ fn data_type_codes(out: &mut String, target: &Target) {
             "const _: () = assert!({od}::Access::{name} == {bits:#04x}, \"od-gen's access bit {name} differs from the stack's\");"
         );
     }
+    let slave = target.slave;
+    let _ = writeln!(
+        out,
+        "const _: () = assert!({slave}::pdo::rules::MAX_PDO_BYTES == {STACK_MAX_PDO_BYTES} && {slave}::pdo::MAX_IMAGE == {STACK_MAX_PDO_BYTES}, \"od-gen's PDO byte limit differs from the stack's\");"
+    );
     out.push('\n');
 }
 

@@ -710,3 +710,45 @@ fn profile_kind_decides_whether_motor_faults_belong() {
     ));
     assert_eq!(key, "kind");
 }
+
+#[test]
+fn pdo_byte_and_assignment_limits() {
+    // The standard default RxPDO maps 7 bytes (controlword, target position, mode).
+    let (key, e) = invalid(&with(
+        "max_entries = 16",
+        "max_entries = 16\nmax_pdo_bytes = 6",
+    ));
+    assert_eq!(key, "rxpdo[0x1600].entries");
+    assert!(
+        matches!(e, Invalid::Value(ref m) if m.contains("max_pdo_bytes = 6")),
+        "{e:?}"
+    );
+    let (key, _) = invalid(&with(
+        "max_entries = 16",
+        "max_entries = 16\nmax_process_bytes = 6",
+    ));
+    assert_eq!(key, "rxpdo");
+    let (key, _) = invalid(&with(
+        "max_entries = 16",
+        "max_entries = 16\nmax_pdo_bytes = 257",
+    ));
+    assert_eq!(key, "pdo.max_pdo_bytes");
+    let (key, _) = invalid(&with(
+        "max_entries = 16",
+        "max_entries = 16\nmax_assigned = 0",
+    ));
+    assert_eq!(key, "pdo.max_assigned");
+
+    // Two RxPDOs, at most one assigned: 1C12h has subindex 1 only.
+    let two = with(
+        "max_entries = 16",
+        "max_entries = 16\nmax_assigned = 1\nmax_pdo_bytes = 7\nmax_process_bytes = 7",
+    ) + "\n[[rxpdo]]\nindex = 0x1601\nname = \"RxPDO 2\"\nsm = 2\nassigned = false\nentries = [{ index = 0x6040, sub = 0, bits = 16 }]\n";
+    let p = od_gen::parse(&two, "p.toml").unwrap();
+    let assign = p.object(0x1C12).unwrap();
+    assert_eq!(assign.entries.len(), 2, "subindex 0 and 1");
+    assert_eq!(assign.entries[0].max, vec![1]);
+    assert_eq!((p.max_pdo_bytes, p.max_process_bytes), (7, 7));
+    let unlimited = od_gen::builtin("standard").unwrap();
+    assert_eq!(unlimited.max_pdo_bytes, od_gen::model::STACK_MAX_PDO_BYTES);
+}

@@ -230,3 +230,125 @@ fn a_cycle_outside_the_profile_range_is_refused_at_safeop_with_0x35() {
         }
     }
 }
+
+/// CiA 301 / ETG.1000.6 SDO abort codes the PDO rules answer with.
+mod abort {
+    /// Object cannot be mapped to the PDO.
+    pub const NOT_MAPPABLE: u32 = 0x0604_0041;
+    /// Value of parameter written too high (subindex 0 beyond the highest subindex).
+    pub const VALUE_TOO_HIGH: u32 = 0x0609_0031;
+}
+/// AL status code "invalid output mapping" (ETG.1000.6 Table 11).
+const AL_INVALID_OUTPUT_MAPPING: u16 = 0x0025;
+
+fn abort_code(e: ethercrab::error::Error) -> u32 {
+    match e {
+        ethercrab::error::Error::Mailbox(ethercrab::error::MailboxError::Aborted {
+            code, ..
+        }) => u32::from(code),
+        other => panic!("expected an SDO abort, got {other:?}"),
+    }
+}
+
+/// A mapping entry value: index, subindex, bit length (ETG.1000.6 §5.6.7.4.7).
+fn mapping(index: u16, sub: u8, bits: u16) -> u32 {
+    u32::from(index) << 16 | u32::from(sub) << 8 | u32::from(bits)
+}
+
+#[test]
+fn pdo_remaps_that_break_the_profile_rules_are_refused() {
+    let mut image_limit_checked = Vec::new();
+    for p in profiles().into_iter().filter(|p| p.mailbox.coe.pdo_config) {
+        let Some(rx) = p.rx_pdos.iter().find(|pdo| !pdo.fixed) else {
+            continue;
+        };
+        let tx_only = p
+            .objects
+            .iter()
+            .flat_map(|o| o.entries.iter().map(move |e| (o.index, e)))
+            .find(|(_, e)| e.pdo.tx() && !e.pdo.rx() && e.bit_len == 16)
+            .expect("a TxPDO-only 16-bit entry");
+        // 32-bit RxPDO-mappable entries, to fill a mapping.
+        let rx32: Vec<u32> = p
+            .objects
+            .iter()
+            .flat_map(|o| o.entries.iter().map(move |e| (o.index, e)))
+            .filter(|(_, e)| e.pdo.rx() && e.bit_len == 32)
+            .map(|(i, e)| mapping(i, e.subindex, 32))
+            .collect();
+        let name = p.name.clone();
+        let checked = block_on(async {
+            let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
+            tokio::task::spawn_local(transport);
+            let md: &MainDevice<'_> = &m.maindevice;
+            let group = init(&m).await;
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(0x1C12, 0, 0u8).await.expect("1C12h:00 = 0");
+            sd.sdo_write(rx.index, 0, 0u8)
+                .await
+                .expect("mapping :00 = 0");
+
+            // An entry that is not RxPDO-mappable.
+            let e = sd
+                .sdo_write(rx.index, 1, mapping(tx_only.0, tx_only.1.subindex, 16))
+                .await
+                .expect_err("TxPDO-only entry in an RxPDO");
+            assert_eq!(abort_code(e), abort::NOT_MAPPABLE, "{name}");
+
+            // More entries than the profile's PDO holds.
+            let e = sd
+                .sdo_write(rx.index, 0, p.max_pdo_entries + 1)
+                .await
+                .expect_err("too many entries");
+            assert_eq!(abort_code(e), abort::VALUE_TOO_HIGH, "{name}");
+
+            // More PDOs assigned than the profile allows.
+            let e = sd
+                .sdo_write(
+                    0x1C12,
+                    0,
+                    p.max_assigned.unwrap_or(p.rx_pdos.len() as u8) + 1,
+                )
+                .await
+                .expect_err("too many PDOs assigned");
+            assert_eq!(abort_code(e), abort::VALUE_TOO_HIGH, "{name}");
+
+            // A mapping within the PDO limits but beyond the profile's process image limit is
+            // refused when the master asks for SAFE-OP.
+            let fill = usize::from(p.max_pdo_entries).min(rx32.len());
+            if fill * 4 > usize::from(p.max_process_bytes)
+                && fill * 4 <= usize::from(p.max_pdo_bytes)
+            {
+                for (i, value) in rx32.iter().take(fill).enumerate() {
+                    sd.sdo_write(rx.index, (i + 1) as u8, *value)
+                        .await
+                        .expect("entry");
+                }
+                sd.sdo_write(rx.index, 0, fill as u8)
+                    .await
+                    .expect("mapping :00 = n");
+                sd.sdo_write(0x1C12, 1, rx.index).await.expect("1C12h:01");
+                sd.sdo_write(0x1C12, 0, 1u8).await.expect("1C12h:00 = 1");
+                let group = group.into_pre_op_pdi(md).await;
+                let refused = match group {
+                    Err(_) => true,
+                    Ok(g) => g.into_safe_op(md).await.is_err(),
+                };
+                assert!(refused, "{name}: {} bytes of outputs accepted", fill * 4);
+                let (status, code) = al_status(md).await;
+                assert_eq!(
+                    (status & AL_ERROR, code),
+                    (AL_ERROR, AL_INVALID_OUTPUT_MAPPING),
+                    "{name}"
+                );
+                return true;
+            }
+            false
+        });
+        if checked {
+            image_limit_checked.push(p.name.clone());
+        }
+    }
+    // The SDV3-E (and its rebrand) limit the process image to 32 bytes per direction.
+    assert_eq!(image_limit_checked, ["osd-g-e", "sdv3-e"]);
+}

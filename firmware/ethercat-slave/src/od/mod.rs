@@ -67,6 +67,8 @@ pub(crate) const fn test_device() -> DeviceInfo {
             cycle_step_ns: 1,
         },
         max_pdo_entries: 8,
+        max_pdo_bytes: 256,
+        max_process_bytes: 256,
         mailbox_protocols: 0,
         coe: CoeDetails {
             sdo: true,

@@ -339,6 +339,12 @@ pub struct DeviceInfo {
     pub sync: SyncSupport,
     /// Maximum number of entries in one PDO.
     pub max_pdo_entries: u8,
+    /// Largest byte length of one PDO (≤ [`crate::pdo::rules::MAX_PDO_BYTES`]); a mapping
+    /// beyond it is refused with 0x06040042.
+    pub max_pdo_bytes: u16,
+    /// Largest process image per direction in bytes (≤ [`crate::pdo::MAX_IMAGE`]); an
+    /// assignment beyond it is refused at PREOP → SAFEOP with 0x0025 (outputs) / 0x0024 (inputs).
+    pub max_process_bytes: u16,
     /// Mailbox protocols (SII word 0x1C bits: 0x01 AoE, 0x02 EoE, 0x04 CoE, 0x08 FoE, 0x10 SoE,
     /// 0x20 VoE).
     pub mailbox_protocols: u16,

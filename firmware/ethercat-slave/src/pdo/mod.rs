@@ -84,8 +84,8 @@ pub struct PdoPlan {
 impl PdoPlan {
     /// Builds the plan of `dir` from the assignment and mapping objects in `od`. An assigned
     /// PDO that does not exist, a mapped entry that does not exist, is not mappable in this
-    /// direction or has another bit length, or a plan beyond the buffer limits gives
-    /// 0x0025 (outputs) / 0x0024 (inputs).
+    /// direction or has another bit length, or a plan beyond the buffer limits or the
+    /// profile's `max_process_bytes` gives 0x0025 (outputs) / 0x0024 (inputs).
     pub fn build(od: &Dictionary<'_>, dir: Direction) -> Result<Self, AlStatusCode> {
         let bad = dir.invalid_mapping();
         let mut plan = Self::default();
@@ -98,6 +98,11 @@ impl PdoPlan {
                 return Err(bad);
             }
             plan.add_pdo(od, dir, pdo)?;
+        }
+        // The profile's limit on the image of one direction (e.g. 32 bytes on the SDV3-E).
+        let max_bytes = usize::from(od.profile().device.max_process_bytes).min(MAX_IMAGE);
+        if usize::from(plan.bits) > max_bytes * 8 {
+            return Err(bad);
         }
         Ok(plan)
     }

@@ -8,7 +8,8 @@
 //!   the standard types (with the type's length).
 //! - Writing SI0 = n of a mapping object re-checks entries 1..=n, their number against
 //!   [`DeviceInfo::max_pdo_entries`](crate::od::DeviceInfo::max_pdo_entries) and their total size
-//!   against [`MAX_PDO_BYTES`] (0x06040042).
+//!   against [`DeviceInfo::max_pdo_bytes`](crate::od::DeviceInfo::max_pdo_bytes), at most
+//!   [`MAX_PDO_BYTES`] (0x06040042).
 //! - An assignment entry must name an existing mapping object of the matching direction (1C12h →
 //!   16xxh/17xxh, 1C13h → 1Axxh/1Bxxh), else 0x06090030; writing SI0 = n re-checks entries 1..=n.
 //!
@@ -151,7 +152,8 @@ fn check_mapping(
         let value = od.read_u32(index, si).ok_or(AbortCode::ValueTooHigh)?;
         total_bits += usize::from(check_mapping_entry(od, dir, value)?);
     }
-    if total_bits > MAX_PDO_BYTES * BITS_PER_BYTE {
+    let max_bytes = usize::from(od.profile().device.max_pdo_bytes).min(MAX_PDO_BYTES);
+    if total_bits > max_bytes * BITS_PER_BYTE {
         return Err(AbortCode::PdoLengthExceeded);
     }
     Ok(())

@@ -267,6 +267,8 @@ static PROFILE: Profile = Profile {
             cycle_step_ns: 1,
         },
         max_pdo_entries: 4,
+        max_pdo_bytes: 256,
+        max_process_bytes: 256,
         mailbox_protocols: COE_PROTOCOL,
         coe: CoeDetails {
             sdo: true,
