@@ -152,4 +152,28 @@ mod tests {
             }
         }
     }
+
+    /// Complete access reaches every object of every profile: a download keeps the object's
+    /// RAM values to restore them on failure, in a buffer of fixed size.
+    #[test]
+    fn every_object_fits_the_complete_access_buffer() {
+        use ethercat_slave::mailbox::coe::complete_access::UNDO_CAPACITY;
+        use ethercat_slave::od::Value;
+        for p in profiles::ALL {
+            for o in p.od.objects {
+                let ram: usize = o
+                    .entries
+                    .iter()
+                    .filter(|e| matches!(e.value, Value::Ram(_)))
+                    .map(|e| usize::from(e.bit_len).div_ceil(8))
+                    .sum();
+                assert!(
+                    ram <= UNDO_CAPACITY,
+                    "{} {:#06x}: {ram} bytes",
+                    p.od.device.profile,
+                    o.index
+                );
+            }
+        }
+    }
 }

@@ -750,3 +750,60 @@ pub fn build_script(source: &std::path::Path, out_file: &str, target: &Target) {
         std::process::exit(1);
     }
 }
+
+/// For a drive crate's build.rs: like [`build_script`] over the profile folder `dir`, and the
+/// environment variable `select_env` picks what is compiled in. Unset or empty: every profile of
+/// `dir`. Set: only that profile (a name in `dir`, with `-` or `_`, or a path to a `.toml`), so a
+/// board image carries exactly one dictionary. Either way the generated code ends with
+/// `pub use <module> as selected;`: the chosen profile, else `standard`, else the first.
+pub fn build_script_selecting(dir: &std::path::Path, out_file: &str, target: &Target, select_env: &str) {
+    println!("cargo:rerun-if-changed={}", dir.display());
+    println!("cargo:rerun-if-env-changed={select_env}");
+    let fail = |e: &dyn std::fmt::Display| -> ! {
+        eprintln!("od-gen: {e}");
+        std::process::exit(1);
+    };
+    let selection = std::env::var(select_env).ok().filter(|s| !s.trim().is_empty());
+    let profiles = match &selection {
+        None => crate::load_dir(dir).unwrap_or_else(|e| fail(&e)),
+        Some(name) => {
+            let path = std::path::Path::new(name.trim());
+            let file = if name.ends_with(".toml") {
+                path.to_path_buf()
+            } else {
+                let stems = [name.trim().to_string(), name.trim().replace('_', "-")];
+                stems
+                    .iter()
+                    .map(|s| dir.join(format!("{s}.toml")))
+                    .find(|p| p.is_file())
+                    .unwrap_or_else(|| {
+                        let names: Vec<String> = crate::load_dir(dir)
+                            .map(|ps| ps.into_iter().map(|p| p.name).collect())
+                            .unwrap_or_default();
+                        fail(&format!(
+                            "{select_env}={name}: no such profile in {} (profiles: {})",
+                            dir.display(),
+                            names.join(", ")
+                        ))
+                    })
+            };
+            println!("cargo:rerun-if-changed={}", file.display());
+            vec![crate::load(&file).unwrap_or_else(|e| fail(&e))]
+        }
+    };
+    let selected = profiles
+        .iter()
+        .find(|p| selection.is_some() || p.name == "standard")
+        .or(profiles.first())
+        .map(Profile::module_name)
+        .unwrap_or_else(|| fail(&format!("no profile in {}", dir.display())));
+    let mut code = generate_with(&profiles, target);
+    let _ = writeln!(
+        code,
+        "\n/// The profile a board image is built with (`{select_env}`; default `standard`).\npub use {selected} as selected;"
+    );
+    let out = std::path::PathBuf::from(std::env::var("OUT_DIR").unwrap_or_default()).join(out_file);
+    if let Err(e) = std::fs::write(&out, code) {
+        fail(&format!("cannot write {}: {e}", out.display()));
+    }
+}

@@ -37,8 +37,10 @@ use crate::pdo::rules as pdo_rules;
 
 /// Bits subindex 0 occupies in a complete-access stream (ETG.1000.6; SOEM `uint8 n; uint8 nu1`).
 pub const SI0_STREAM_BITS: usize = 16;
-/// Largest RAM footprint of an object a complete-access download can restore on failure.
-pub const UNDO_CAPACITY: usize = 256;
+/// Largest RAM footprint of an object a complete-access download can restore on failure (and
+/// of the stream buffers): the SDV3-E's parameter groups 3000h–3003h hold 397 bytes each; every
+/// built-in profile's objects are checked against it (`firmware` crate tests).
+pub const UNDO_CAPACITY: usize = 512;
 /// Bits per byte.
 const BITS_PER_BYTE: usize = 8;
 
