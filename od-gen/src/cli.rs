@@ -7,6 +7,11 @@
 //!                                               (16 bytes per line) to stdout without -o
 //! od-gen rust <profile-name-or-path>... [-o FILE]  the generated Rust (for inspection)
 //! od-gen check <profile-name-or-path>...        load and validate only
+//! od-gen table <profile-name-or-path> [--csv] [-o FILE]
+//!                                               the object table: one row per subindex,
+//!                                               aligned text, or CSV with --csv
+//! od-gen doc  <profile-name-or-path> [-o FILE]  the Markdown page of the profile
+//! od-gen doc  --all -o DIR                      every built-in profile's page + README.md
 //! ```
 //!
 //! A name without `/` and without `.toml` is a built-in profile; anything else is a path.
@@ -23,6 +28,10 @@ pub const USAGE: &str = "usage:
   od-gen sii  <profile-name-or-path> [-o FILE]   SII image (binary to FILE; hex dump to stdout without -o)
   od-gen rust <profile-name-or-path>... [-o FILE] generated Rust object dictionary
   od-gen check <profile-name-or-path>...         validate only
+  od-gen table <profile-name-or-path> [--csv] [-o FILE]
+                                                 object table (aligned text; CSV with --csv)
+  od-gen doc  <profile-name-or-path> [-o FILE]   Markdown page of the profile
+  od-gen doc  --all -o DIR                       pages of all built-in profiles + README.md
 A name without '/' and without '.toml' is a built-in profile (see `od-gen list`).";
 
 /// A command-line failure: a message for stderr.
@@ -68,6 +77,31 @@ fn write_out(path: Option<&PathBuf>, data: &[u8]) -> Result<(), CliError> {
     }
 }
 
+/// Writes `DIR/<name>.md` for every built-in profile and the index `DIR/README.md`
+/// (`od-gen doc --all -o DIR`); creates `DIR` if needed.
+fn write_all_pages(dir: &std::path::Path) -> Result<(), CliError> {
+    let io = |path: PathBuf| move |source| CliError::Od(Error::Io { path, source });
+    std::fs::create_dir_all(dir).map_err(io(dir.to_path_buf()))?;
+    let profiles = crate::builtin_profiles()?;
+    for p in &profiles {
+        let path = dir.join(format!("{}.md", p.name));
+        std::fs::write(&path, crate::doc::markdown(p)).map_err(io(path.clone()))?;
+    }
+    let path = dir.join("README.md");
+    std::fs::write(&path, crate::doc::index(&profiles)).map_err(io(path.clone()))?;
+    let names: Vec<&str> = profiles.iter().map(|p| p.name.as_str()).collect();
+    write_out(
+        None,
+        format!(
+            "wrote {} pages ({}) and README.md to {}\n",
+            names.len(),
+            names.join(", "),
+            dir.display()
+        )
+        .as_bytes(),
+    )
+}
+
 /// Hex dump: `offset: 16 bytes` per line.
 pub fn hex_dump(data: &[u8]) -> String {
     data.chunks(16)
@@ -86,6 +120,7 @@ pub fn run(args: &[String]) -> Result<(), CliError> {
         .ok_or_else(|| CliError::Usage("missing command".into()))?;
     let mut inputs = Vec::new();
     let mut out: Option<PathBuf> = None;
+    let (mut csv, mut all) = (false, false);
     let mut it = rest.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -95,8 +130,10 @@ pub fn run(args: &[String]) -> Result<(), CliError> {
                     .ok_or_else(|| CliError::Usage("-o needs a file name".into()))?;
                 out = Some(PathBuf::from(p));
             }
+            "--csv" if cmd == "table" => csv = true,
+            "--all" if cmd == "doc" => all = true,
             s if s.starts_with('-') => {
-                return Err(CliError::Usage(format!("unknown option `{s}`")))
+                return Err(CliError::Usage(format!("unknown option `{s}` for `{cmd}`")))
             }
             s => inputs.push(s.to_string()),
         }
@@ -120,6 +157,30 @@ pub fn run(args: &[String]) -> Result<(), CliError> {
             write_out(None, s.as_bytes())
         }
         "esi" => write_out(out.as_ref(), one(&inputs)?.esi_xml().as_bytes()),
+        "table" => {
+            let p = one(&inputs)?;
+            let text = if csv {
+                crate::table::csv(&p)
+            } else {
+                crate::table::text(&p)
+            };
+            write_out(out.as_ref(), text.as_bytes())
+        }
+        "doc" if all => {
+            if !inputs.is_empty() {
+                return Err(CliError::Usage(
+                    "`doc --all` takes no profile (it writes every built-in one)".into(),
+                ));
+            }
+            let dir = out.ok_or_else(|| {
+                CliError::Usage("`doc --all` needs -o DIR (e.g. docs/profiles)".into())
+            })?;
+            write_all_pages(&dir)
+        }
+        "doc" => write_out(
+            out.as_ref(),
+            crate::doc::markdown(&one(&inputs)?).as_bytes(),
+        ),
         "sii" => {
             let img = one(&inputs)?.sii_image();
             match out {

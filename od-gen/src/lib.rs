@@ -20,6 +20,8 @@
 //! | [`rust`] | the generated Rust (`OUT_DIR/profiles.rs` of the firmware) |
 //! | [`sii`] | the SII EEPROM image |
 //! | [`esi`] | the ESI XML |
+//! | [`table`] | the object table (`od-gen table`: CSV or aligned text) |
+//! | [`doc`] | the Markdown page of a profile (`od-gen doc`, `docs/profiles/`) |
 //! | [`cli`] | the `od-gen` command line |
 //!
 //! # Example
@@ -34,6 +36,7 @@
 
 pub mod cli;
 pub mod compose;
+pub mod doc;
 pub mod error;
 pub mod esi;
 pub mod file;
@@ -42,6 +45,7 @@ pub mod model;
 pub mod resolve;
 pub mod rust;
 pub mod sii;
+pub mod table;
 mod validate;
 
 use std::path::Path;

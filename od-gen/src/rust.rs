@@ -756,14 +756,21 @@ pub fn build_script(source: &std::path::Path, out_file: &str, target: &Target) {
 /// `dir`. Set: only that profile (a name in `dir`, with `-` or `_`, or a path to a `.toml`), so a
 /// board image carries exactly one dictionary. Either way the generated code ends with
 /// `pub use <module> as selected;`: the chosen profile, else `standard`, else the first.
-pub fn build_script_selecting(dir: &std::path::Path, out_file: &str, target: &Target, select_env: &str) {
+pub fn build_script_selecting(
+    dir: &std::path::Path,
+    out_file: &str,
+    target: &Target,
+    select_env: &str,
+) {
     println!("cargo:rerun-if-changed={}", dir.display());
     println!("cargo:rerun-if-env-changed={select_env}");
     let fail = |e: &dyn std::fmt::Display| -> ! {
         eprintln!("od-gen: {e}");
         std::process::exit(1);
     };
-    let selection = std::env::var(select_env).ok().filter(|s| !s.trim().is_empty());
+    let selection = std::env::var(select_env)
+        .ok()
+        .filter(|s| !s.trim().is_empty());
     let profiles = match &selection {
         None => crate::load_dir(dir).unwrap_or_else(|e| fail(&e)),
         Some(name) => {

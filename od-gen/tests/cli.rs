@@ -22,7 +22,10 @@ fn list_esi_and_sii() {
     for name in ["sigma-v-sd-2axis", "sigma_v_sd_2axis"] {
         let out = od_gen(&["check", name]);
         assert!(out.status.success(), "{name}");
-        assert_eq!(String::from_utf8_lossy(&out.stdout), "ok: sigma-v-sd-2axis\n");
+        assert_eq!(
+            String::from_utf8_lossy(&out.stdout),
+            "ok: sigma-v-sd-2axis\n"
+        );
     }
 
     let out = od_gen(&["esi", "standard"]);
@@ -88,6 +91,93 @@ fn rust_target_follows_the_profile_kind() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.starts_with("od-gen: `rust` takes drive profiles or device profiles"),
+        "{err}"
+    );
+}
+
+/// `table`: CSV with `--csv` (one row per entry), aligned text without; a path works like a
+/// name; unknown flags are usage errors.
+#[test]
+fn table_csv_and_text() {
+    let p = od_gen::builtin("standard").unwrap();
+    let out = od_gen(&["table", "standard", "--csv"]);
+    assert!(out.status.success());
+    let csv = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(csv, od_gen::table::csv(&p));
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("index,subindex,name,data_type,access,pdo_mapping,default,min,max")
+    );
+    let entries: usize = p.objects.iter().map(|o| o.entries.len()).sum();
+    assert_eq!(lines.clone().count(), entries);
+    let rows: Vec<&str> = lines.collect();
+    for want in [
+        "0x1000,0,Device type,UINT32,CONST,NO,131474,,",
+        "0x1001,0,Error register,UINT8,RO,TX,0,,",
+        "0x1008,0,Manufacturer device name,VISIBLE_STRING,CONST,NO,Open CiA402 Servo,,",
+        "0x1018,0,SubIndex 000,UINT8,CONST,NO,4,,",
+        "0x1018,1,Vendor ID,UINT32,CONST,NO,2119631874,,",
+        "0x10F3,3,Newest acknowledged message,UINT8,RW,NO,0,0,13",
+        "0x10F3,4,New messages available,BOOLEAN,RO,NO,0,,",
+    ] {
+        assert!(rows.contains(&want), "missing row {want}");
+    }
+    // Derived objects are rows too: 1C12h:01 = 0x1600.
+    assert!(rows
+        .iter()
+        .any(|r| r.starts_with("0x1C12,1,") && r.contains(",5632,")));
+    let cw = rows
+        .iter()
+        .find(|r| r.starts_with("0x6040,0,"))
+        .expect("6040h");
+    assert!(cw.contains(",UINT16,RW,RX,"), "{cw}");
+
+    // A path gives the same table.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/profiles/standard.toml");
+    let out = od_gen(&["table", path, "--csv"]);
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), csv);
+
+    // Without --csv: aligned text, header + one line per entry + a summary line.
+    let out = od_gen(&["table", "standard"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text, od_gen::table::text(&p));
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("index   sub  name"), "{}", lines[0]);
+    assert_eq!(lines.len(), entries + 2);
+    assert_eq!(
+        lines.last().copied(),
+        Some(format!("{} objects, {entries} entries", p.objects.len()).as_str())
+    );
+    // Columns line up: "type" starts at the same character position on every line.
+    let col = lines[0].find("type").unwrap();
+    for l in &lines[1..lines.len() - 1] {
+        let before: String = l.chars().take(col).collect();
+        assert!(before.ends_with("  "), "{l}");
+    }
+
+    // Errors: one line and usage, exit status 1, never a panic.
+    for args in [
+        &["table"][..],
+        &["table", "nope"],
+        &["table", "standard", "--bogus"],
+        &["table", "standard", "sdv3-e"],
+        &["table", "/nonexistent/x.toml", "--csv"],
+        &["esi", "standard", "--csv"],
+    ] {
+        let out = od_gen(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.starts_with("od-gen: "), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+    let err =
+        String::from_utf8_lossy(&od_gen(&["table", "standard", "--bogus"]).stderr).into_owned();
+    assert!(
+        err.contains("unknown option `--bogus`") && err.contains("usage:"),
         "{err}"
     );
 }

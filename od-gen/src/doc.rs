@@ -1,0 +1,991 @@
+//! The Markdown page of a profile (`od-gen doc`, `docs/profiles/<name>.md`) and the index of the
+//! built-in profiles (`docs/profiles/README.md`).
+//!
+//! Everything on a page is read from the resolved [`Profile`]: identity, mailbox, SMs,
+//! synchronisation, PDOs, the modes of 6502h, the homing methods of 60E3h, the alarm table, the
+//! motor-fault mapping, the `[[decision]]`s, the `[[replicate]]` rules and the object count. The
+//! output is deterministic (no dates, no paths): `od-gen/tests/doc.rs` compares the committed
+//! pages with a fresh generation.
+
+use std::fmt::Write as _;
+
+use crate::model::{DataType, Pdo, Profile, ProfileKind, Sm, Storage, MOTOR_FAULT_NAMES};
+use crate::table;
+
+/// The command that regenerates every page and the index (run in the workspace root).
+pub const REGENERATE_ALL: &str = "cargo run -p od-gen -- doc --all -o docs/profiles";
+
+/// The command that regenerates the page of one built-in profile (run in the workspace root).
+pub fn regenerate_one(name: &str) -> String {
+    format!("cargo run -p od-gen -- doc {name} -o docs/profiles/{name}.md")
+}
+
+/// Markdown-escapes text for a paragraph, list item or table cell: line breaks become spaces,
+/// characters with a Markdown meaning are backslash-escaped.
+pub fn md(s: &str) -> String {
+    let chars: Vec<char> = s.trim().chars().collect();
+    let mut o = String::with_capacity(s.len());
+    for (i, &c) in chars.iter().enumerate() {
+        let word = |j: Option<usize>| {
+            j.and_then(|j| chars.get(j))
+                .is_some_and(|c| c.is_alphanumeric())
+        };
+        match c {
+            '\r' => {}
+            '\n' => o.push(' '),
+            // `_` inside a word (`order_number`) is no emphasis in CommonMark.
+            '_' if word(i.checked_sub(1)) && word(Some(i + 1)) => o.push(c),
+            '\\' | '`' | '*' | '_' | '[' | '<' | '|' | '~' => {
+                o.push('\\');
+                o.push(c);
+            }
+            _ => o.push(c),
+        }
+    }
+    if o.starts_with(['#', '-', '+', '>', '=']) {
+        o.insert(0, '\\');
+    }
+    o
+}
+
+fn hex16(v: u16) -> String {
+    format!("0x{v:04X}")
+}
+
+fn hex32(v: u32) -> String {
+    format!("0x{v:08X}")
+}
+
+fn yes(b: bool) -> &'static str {
+    if b {
+        "yes"
+    } else {
+        "no"
+    }
+}
+
+/// A duration in ns as `1 ms`, `31.25 µs`, `250 µs` or `0 ns`, exact.
+pub fn duration(ns: u32) -> String {
+    let trim = |whole: u32, frac: u32, digits: usize| {
+        if frac == 0 {
+            whole.to_string()
+        } else {
+            let f = format!("{frac:0digits$}");
+            format!("{whole}.{}", f.trim_end_matches('0'))
+        }
+    };
+    if ns == 0 {
+        "0 ns".into()
+    } else if ns >= 1_000_000 {
+        format!("{} ms", trim(ns / 1_000_000, ns % 1_000_000, 6))
+    } else if ns >= 1_000 {
+        format!("{} µs", trim(ns / 1_000, ns % 1_000, 3))
+    } else {
+        format!("{ns} ns")
+    }
+}
+
+fn bytes_hex(b: &[u8]) -> String {
+    b.iter()
+        .map(|x| format!("{x:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A Markdown table: header cells, then rows (cells already escaped).
+fn md_table(out: &mut String, header: &[&str], rows: &[Vec<String>]) {
+    let _ = writeln!(out, "| {} |", header.join(" | "));
+    let _ = writeln!(
+        out,
+        "|{}|",
+        header.iter().map(|_| "---").collect::<Vec<_>>().join("|")
+    );
+    for r in rows {
+        let _ = writeln!(out, "| {} |", r.join(" | "));
+    }
+    out.push('\n');
+}
+
+/// The meaning of an SM control byte (ESC register 0x0804).
+pub fn control_byte(c: u8) -> String {
+    let mut parts = vec![
+        match c & 0x03 {
+            0 => "buffered".to_string(),
+            2 => "mailbox".to_string(),
+            m => format!("mode {m}"),
+        },
+        match (c >> 2) & 0x03 {
+            0 => "master reads".to_string(),
+            1 => "master writes".to_string(),
+            d => format!("direction {d}"),
+        },
+    ];
+    if c & 0x10 != 0 {
+        parts.push("ECAT interrupt".into());
+    }
+    if c & 0x20 != 0 {
+        parts.push("PDI interrupt".into());
+    }
+    if c & 0x40 != 0 {
+        parts.push("watchdog".into());
+    }
+    parts.join(", ")
+}
+
+/// The CiA402 modes of operation of the 6502h bits (bit, 6060h value, name).
+pub const MODE_BITS: [(u8, i8, &str); 9] = [
+    (0, 1, "Profile position (pp)"),
+    (1, 2, "Velocity (vl)"),
+    (2, 3, "Profile velocity (pv)"),
+    (3, 4, "Profile torque (tq)"),
+    (5, 6, "Homing (hm)"),
+    (6, 7, "Interpolated position (ip)"),
+    (7, 8, "Cyclic synchronous position (csp)"),
+    (8, 9, "Cyclic synchronous velocity (csv)"),
+    (9, 10, "Cyclic synchronous torque (cst)"),
+];
+
+/// The 6502h default, if the object is in the dictionary.
+pub fn supported_modes(p: &Profile) -> Option<u32> {
+    let e = p.entry(0x6502, 0)?;
+    let v = table::int_value(e.data_type, &e.initial_bytes())?;
+    u32::try_from(v).ok()
+}
+
+/// The 6502h bits as mode names (reserved and manufacturer-specific bits named as such).
+pub fn mode_names(v: u32) -> Vec<String> {
+    (0..32u8)
+        .filter(|b| v >> b & 1 == 1)
+        .map(|b| match MODE_BITS.iter().find(|m| m.0 == b) {
+            Some((_, mode, name)) => format!("{name}, 6060h = {mode}"),
+            None if b >= 16 => format!("bit {b}: manufacturer-specific"),
+            None => format!("bit {b}: reserved"),
+        })
+        .collect()
+}
+
+fn short_modes(v: u32) -> String {
+    let names: Vec<String> = (0..32u8)
+        .filter(|b| v >> b & 1 == 1)
+        .map(|b| match MODE_BITS.iter().find(|m| m.0 == b) {
+            Some((_, _, name)) => name.rsplit_once('(').map_or(name.to_string(), |(_, s)| {
+                s.trim_end_matches(')').to_string()
+            }),
+            None => format!("bit {b}"),
+        })
+        .collect();
+    names.join(", ")
+}
+
+fn value_or_dash(dt: DataType, b: &[u8]) -> String {
+    let t = table::value_text(dt, b);
+    if t.is_empty() {
+        "–".into()
+    } else {
+        md(&t)
+    }
+}
+
+fn identity(out: &mut String, p: &Profile) {
+    let d = &p.device;
+    out.push_str("## Identity\n\n");
+    let kind = match p.kind {
+        ProfileKind::Drive => "drive",
+        ProfileKind::Device => "device",
+    };
+    let mut rows = vec![
+        vec!["Profile".into(), format!("`{}` ({kind})", p.name)],
+        vec![
+            "Vendor (1018h:01)".into(),
+            format!("{} — {}", hex32(p.vendor.id), md(&p.vendor.name)),
+        ],
+        vec!["Device name (1008h, ESI Device/Name)".into(), md(&d.name)],
+        vec!["Order number (ESI Device/Type)".into(), md(&d.order_number)],
+        vec!["Product code (1018h:02)".into(), hex32(d.product_code)],
+        vec!["Revision (1018h:03)".into(), hex32(d.revision)],
+        vec![
+            "Serial number (1018h:04 default)".into(),
+            d.serial.to_string(),
+        ],
+        vec!["Hardware version (1009h)".into(), md(&d.hardware_version)],
+        vec!["Software version (100Ah)".into(), md(&d.software_version)],
+        vec![
+            "Group (type / name)".into(),
+            format!("{} / {}", md(&d.group_type), md(&d.group_name)),
+        ],
+        vec!["Physics".into(), md(&d.physics)],
+    ];
+    if d.profile_no != 0 {
+        rows.push(vec!["Profile number".into(), d.profile_no.to_string()]);
+    }
+    rows.push(vec!["DS402 channels".into(), d.ds402_channels.to_string()]);
+    let e = &p.eeprom;
+    rows.push(vec![
+        "EEPROM".into(),
+        format!(
+            "{} bytes; PDI control 0x{:02X}, ESC config 0x{:02X}, PDI config {}, \
+             SYNC impulse {}, PDI config 2 {}, station alias {}",
+            e.byte_size,
+            e.pdi_control,
+            e.esc_config,
+            hex16(e.pdi_config),
+            duration(u32::from(e.sync_impulse_len) * 10),
+            hex16(e.pdi_config2),
+            e.station_alias
+        ),
+    ]);
+    md_table(out, &["", ""], &rows);
+}
+
+fn mailbox(out: &mut String, p: &Profile) {
+    out.push_str("## Mailbox and CoE\n\n");
+    let m = &p.mailbox;
+    let protocols: Vec<&str> = crate::model::protocol::NAMES
+        .iter()
+        .filter(|(_, bit)| m.protocols & bit != 0)
+        .map(|(n, _)| *n)
+        .collect();
+    let c = m.coe;
+    let rows = vec![
+        vec![
+            "Protocols".into(),
+            if protocols.is_empty() {
+                "none".into()
+            } else {
+                protocols.join(", ")
+            },
+        ],
+        vec![
+            "Mailbox data link layer".into(),
+            yes(m.data_link_layer).into(),
+        ],
+        vec!["SDO".into(), yes(c.sdo).into()],
+        vec!["SDO information".into(), yes(c.sdo_info).into()],
+        vec!["SDO complete access".into(), yes(c.complete_access).into()],
+        vec![
+            "PDO assignment (1C12h/1C13h writable)".into(),
+            yes(c.pdo_assign).into(),
+        ],
+        vec![
+            "PDO configuration (16xxh/1Axxh writable)".into(),
+            yes(c.pdo_config).into(),
+        ],
+        vec!["Upload at startup".into(), yes(c.upload_at_startup).into()],
+        vec!["SII CoE details byte".into(), format!("0x{:02X}", c.bits())],
+    ];
+    md_table(out, &["feature", "supported"], &rows);
+}
+
+fn sync_managers(out: &mut String, p: &Profile) {
+    out.push_str("## SyncManagers\n\n");
+    let sm = &p.sm;
+    let row = |name: &str, use_: &str, s: Sm, size: String| {
+        vec![
+            name.to_string(),
+            use_.to_string(),
+            hex16(s.start),
+            size,
+            format!("0x{:02X} ({})", s.control, control_byte(s.control)),
+        ]
+    };
+    let mut rows = vec![
+        row(
+            "SM0",
+            "mailbox out (MBoxOut)",
+            sm.mailbox_out,
+            sm.mailbox_out.length.to_string(),
+        ),
+        row(
+            "SM1",
+            "mailbox in (MBoxIn)",
+            sm.mailbox_in,
+            sm.mailbox_in.length.to_string(),
+        ),
+        row(
+            "SM2",
+            "outputs (RxPDO)",
+            sm.outputs,
+            format!("{} (default assignment)", sm.outputs.length),
+        ),
+        row(
+            "SM3",
+            "inputs (TxPDO)",
+            sm.inputs,
+            format!("{} (default assignment)", sm.inputs.length),
+        ),
+    ];
+    if let (Some(o), Some(i)) = (sm.boot_out, sm.boot_in) {
+        rows.push(row(
+            "boot out",
+            "bootstrap mailbox out",
+            o,
+            o.length.to_string(),
+        ));
+        rows.push(row(
+            "boot in",
+            "bootstrap mailbox in",
+            i,
+            i.length.to_string(),
+        ));
+    }
+    md_table(
+        out,
+        &["SM", "use", "start", "size (bytes)", "control byte"],
+        &rows,
+    );
+}
+
+fn synchronisation(out: &mut String, p: &Profile) {
+    out.push_str("## Synchronisation\n\n");
+    let s = &p.sync;
+    let mut modes = Vec::new();
+    if s.free_run {
+        modes.push("free run");
+    }
+    if s.sm_synchronous {
+        modes.push("SM2-synchronous");
+    }
+    if s.dc_sync0 {
+        modes.push("DC SYNC0");
+    }
+    if s.dc_sync1 {
+        modes.push("DC SYNC1");
+    }
+    let sync_type = p
+        .entry(0x1C32, 1)
+        .and_then(|e| table::int_value(e.data_type, &e.initial_bytes()))
+        .map_or("–".to_string(), |v| v.to_string());
+    let rows = vec![
+        vec!["Sync modes".into(), modes.join(", ")],
+        vec![
+            "Sync modes supported (1C32h:04 / 1C33h:04)".into(),
+            hex16(s.modes_supported()),
+        ],
+        vec!["Default sync mode (1C32h:01)".into(), sync_type],
+        vec!["Minimum cycle time".into(), duration(s.min_cycle_ns)],
+        vec!["Maximum cycle time".into(), duration(s.max_cycle_ns)],
+        vec![
+            "Default cycle time (1C32h:02)".into(),
+            duration(s.default_cycle_ns),
+        ],
+        vec![
+            "DC cycle step".into(),
+            if s.cycle_step_ns <= 1 {
+                "any".into()
+            } else {
+                format!(
+                    "{} (other cycles: AL status code 0x0036)",
+                    duration(s.cycle_step_ns)
+                )
+            },
+        ],
+        vec![
+            "Calc and copy time (:06)".into(),
+            duration(s.calc_and_copy_ns),
+        ],
+        vec!["Delay time (:09)".into(), duration(s.delay_ns)],
+    ];
+    md_table(out, &["", ""], &rows);
+
+    if !p.dc_op_modes.is_empty() {
+        out.push_str("### DC op modes\n\n");
+        let rows: Vec<Vec<String>> = p
+            .dc_op_modes
+            .iter()
+            .map(|m| {
+                let act = m.assign_activate >> 8;
+                let sync = |on: bool, cycle: u32, factor: i16, shift: u32| {
+                    if !on {
+                        "–".to_string()
+                    } else if cycle == 0 {
+                        format!(
+                            "cycle = {factor} × the master's cycle, shift {}",
+                            duration(shift)
+                        )
+                    } else {
+                        format!(
+                            "cycle {} (factor {factor}), shift {}",
+                            duration(cycle),
+                            duration(shift)
+                        )
+                    }
+                };
+                vec![
+                    md(&m.name),
+                    md(&m.description),
+                    hex16(m.assign_activate),
+                    sync(
+                        act & 0x02 != 0,
+                        m.sync0_cycle_ns,
+                        m.sync0_factor,
+                        m.sync0_shift_ns,
+                    ),
+                    sync(
+                        act & 0x04 != 0,
+                        m.sync1_cycle_ns,
+                        m.sync1_factor,
+                        m.sync1_shift_ns,
+                    ),
+                ]
+            })
+            .collect();
+        md_table(
+            out,
+            &["name", "description", "AssignActivate", "SYNC0", "SYNC1"],
+            &rows,
+        );
+    }
+
+    out.push_str("### EtherCAT state machine\n\n");
+    let e = &p.esm;
+    let rows = vec![
+        vec![
+            "SAFEOP → OP needs valid outputs".into(),
+            yes(e.op_requires_outputs).into(),
+        ],
+        vec![
+            "SAFEOP → OP timeout".into(),
+            format!("{} ms", e.safeop_op_timeout_ms),
+        ],
+        vec![
+            "Leaving OP while Operation Enabled".into(),
+            match e.op_exit_while_enabled_error {
+                Some(c) => format!("fault, 603Fh = {}", hex16(c)),
+                None => "the drive is disabled (no fault)".into(),
+            },
+        ],
+    ];
+    md_table(out, &["", ""], &rows);
+}
+
+fn pdo_section(out: &mut String, p: &Profile, kind: &str, pdo: &Pdo) {
+    let bits = pdo.bits();
+    let mut flags = vec![format!("SM{}", pdo.sm)];
+    if pdo.fixed {
+        flags.push("fixed".into());
+    }
+    if pdo.mandatory {
+        flags.push("mandatory".into());
+    }
+    let size = if bits % 8 == 0 {
+        format!("{} bytes", bits / 8)
+    } else {
+        format!("{bits} bits")
+    };
+    flags.push(size);
+    let _ = writeln!(
+        out,
+        "#### {kind} {} {}\n\n{}\n",
+        hex16(pdo.index),
+        md(&pdo.name),
+        flags.join(", ")
+    );
+    let rows: Vec<Vec<String>> = pdo
+        .entries
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            if e.index == 0 {
+                vec![
+                    (i + 1).to_string(),
+                    "–".into(),
+                    "padding".into(),
+                    e.bits.to_string(),
+                    "–".into(),
+                ]
+            } else {
+                let ty = e
+                    .data_type
+                    .map_or_else(|| "–".to_string(), table::type_name);
+                let name = if e.name.is_empty() {
+                    p.entry(e.index, e.subindex)
+                        .map_or(String::new(), |x| x.name.clone())
+                } else {
+                    e.name.clone()
+                };
+                vec![
+                    (i + 1).to_string(),
+                    format!("{}:{:02X}", hex16(e.index), e.subindex),
+                    md(&name),
+                    e.bits.to_string(),
+                    ty,
+                ]
+            }
+        })
+        .collect();
+    md_table(out, &["#", "object", "name", "bits", "type"], &rows);
+}
+
+fn process_data(out: &mut String, p: &Profile) {
+    out.push_str("## Process data\n\n");
+    let assigned = |pdos: &[Pdo]| {
+        let v: Vec<String> = pdos
+            .iter()
+            .filter(|x| x.assigned)
+            .map(|x| hex16(x.index))
+            .collect();
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    let rows = vec![
+        vec![
+            "Outputs (SM2, default)".into(),
+            format!(
+                "{} bytes: {}",
+                p.outputs_bits().div_ceil(8),
+                assigned(&p.rx_pdos)
+            ),
+        ],
+        vec![
+            "Inputs (SM3, default)".into(),
+            format!(
+                "{} bytes: {}",
+                p.inputs_bits().div_ceil(8),
+                assigned(&p.tx_pdos)
+            ),
+        ],
+        vec![
+            "Entries per PDO (max)".into(),
+            p.max_pdo_entries.to_string(),
+        ],
+        vec![
+            "PDOs assigned at once per direction (max)".into(),
+            p.max_assigned
+                .map_or("every PDO of the direction".into(), |n| n.to_string()),
+        ],
+        vec![
+            "Bytes per PDO (max; larger mapping: abort 0x06040042)".into(),
+            p.max_pdo_bytes.to_string(),
+        ],
+        vec![
+            "Process image bytes per direction (max; larger: AL status code 0x0025 / 0x0024)"
+                .into(),
+            p.max_process_bytes.to_string(),
+        ],
+        vec![
+            "SDO download to an RxPDO-mapped entry in SAFEOP/OP".into(),
+            match p.sdo_write_to_rx_mapped {
+                crate::model::RxMappedWrite::Blocked => "blocked (abort 0x06010006)".into(),
+                crate::model::RxMappedWrite::Allowed => "allowed".into(),
+            },
+        ],
+    ];
+    md_table(out, &["", ""], &rows);
+
+    out.push_str("### Default PDO mapping\n\n");
+    let mut any = false;
+    for (kind, pdos) in [("RxPDO", &p.rx_pdos), ("TxPDO", &p.tx_pdos)] {
+        for pdo in pdos.iter().filter(|x| x.assigned) {
+            pdo_section(out, p, kind, pdo);
+            any = true;
+        }
+    }
+    if !any {
+        out.push_str("No PDO is assigned by default.\n\n");
+    }
+    let alternatives: Vec<(&str, &Pdo)> = p
+        .rx_pdos
+        .iter()
+        .map(|x| ("RxPDO", x))
+        .chain(p.tx_pdos.iter().map(|x| ("TxPDO", x)))
+        .filter(|(_, x)| !x.assigned)
+        .collect();
+    out.push_str("### Alternative PDOs (not assigned by default)\n\n");
+    if alternatives.is_empty() {
+        out.push_str("None.\n\n");
+    }
+    for (kind, pdo) in alternatives {
+        pdo_section(out, p, kind, pdo);
+    }
+}
+
+fn modes(out: &mut String, p: &Profile) {
+    out.push_str("## Supported modes of operation (6502h)\n\n");
+    match supported_modes(p) {
+        Some(v) => {
+            let _ = writeln!(out, "6502h default {}:\n", hex32(v));
+            let names = mode_names(v);
+            if names.is_empty() {
+                out.push_str("- none\n");
+            }
+            for n in names {
+                let _ = writeln!(out, "- {n}");
+            }
+            out.push('\n');
+        }
+        None => out.push_str("6502h is not in the dictionary.\n\n"),
+    }
+
+    out.push_str("## Homing methods (60E3h)\n\n");
+    match p.object(0x60E3) {
+        Some(o) => {
+            let methods: Vec<String> = o
+                .entries
+                .iter()
+                .filter(|e| o.entries.len() == 1 || e.subindex != 0)
+                .map(|e| value_or_dash(e.data_type, &e.initial_bytes()))
+                .collect();
+            let _ = writeln!(out, "{}\n", methods.join(", "));
+        }
+        None => {
+            out.push_str("60E3h is not in the dictionary.");
+            if let Some(e) = p.entry(0x6098, 0) {
+                let _ = write!(
+                    out,
+                    " Homing method 6098h: default {}, minimum {}, maximum {}.",
+                    value_or_dash(e.data_type, &e.default),
+                    value_or_dash(e.data_type, &e.min),
+                    value_or_dash(e.data_type, &e.max)
+                );
+            }
+            out.push_str("\n\n");
+        }
+    }
+}
+
+fn alarms(out: &mut String, p: &Profile) {
+    out.push_str("## Alarms\n\n");
+    if p.alarms.is_empty() {
+        out.push_str("The profile has no alarm table.\n\n");
+        return;
+    }
+    let warnings = p.alarms.iter().filter(|a| a.warning).count();
+    let _ = writeln!(
+        out,
+        "{} alarms ({} faults, {warnings} warnings). EMCY bytes 0–1 = the EMCY code, byte 2 = \
+         1001h, bytes 3–7 as listed.\n",
+        p.alarms.len(),
+        p.alarms.len() - warnings
+    );
+    let rows: Vec<Vec<String>> = p
+        .alarms
+        .iter()
+        .map(|a| {
+            vec![
+                md(&a.display),
+                md(&a.name),
+                hex16(a.error_code),
+                hex16(a.emcy.code),
+                bytes_hex(&a.emcy.data),
+                yes(a.resettable).into(),
+                if a.warning { "warning" } else { "fault" }.into(),
+                md(&a.description),
+            ]
+        })
+        .collect();
+    md_table(
+        out,
+        &[
+            "display",
+            "name",
+            "603Fh",
+            "EMCY code",
+            "EMCY bytes 3–7",
+            "resettable",
+            "kind",
+            "description",
+        ],
+        &rows,
+    );
+}
+
+fn motor_faults(out: &mut String, p: &Profile) {
+    if p.kind != ProfileKind::Drive {
+        return;
+    }
+    out.push_str("## Motor faults\n\n");
+    out.push_str(
+        "What the drive reports for each internal fault of the firmware \
+         (`firmware::motor::MotorFault`).\n\n",
+    );
+    let rows: Vec<Vec<String>> = MOTOR_FAULT_NAMES
+        .iter()
+        .zip(&p.motor_faults)
+        .map(|(name, f)| {
+            let alarms: Vec<String> = p
+                .alarms
+                .iter()
+                .filter(|a| a.error_code == f.error_code && a.emcy == f.emcy)
+                .map(|a| md(&a.display))
+                .collect();
+            vec![
+                format!("`{name}`"),
+                hex16(f.error_code),
+                hex16(f.emcy.code),
+                bytes_hex(&f.emcy.data),
+                if alarms.is_empty() {
+                    "–".into()
+                } else {
+                    alarms.join(", ")
+                },
+            ]
+        })
+        .collect();
+    md_table(
+        out,
+        &["fault", "603Fh", "EMCY code", "EMCY bytes 3–7", "alarm"],
+        &rows,
+    );
+}
+
+fn decisions(out: &mut String, p: &Profile) {
+    out.push_str("## Decisions: deviations from the manual and why\n\n");
+    if p.decisions.is_empty() {
+        out.push_str("The profile records no decisions.\n\n");
+        return;
+    }
+    let rules = p
+        .decisions
+        .iter()
+        .filter(|d| d.subject.starts_with("rule:"))
+        .count();
+    let _ = writeln!(
+        out,
+        "{} decisions ({rules} of them rules the profile format cannot express yet, subject \
+         \"rule: …\").\n",
+        p.decisions.len()
+    );
+    for (i, d) in p.decisions.iter().enumerate() {
+        let _ = writeln!(out, "### {}. {}\n", i + 1, md(&d.subject));
+        if !d.manual.is_empty() {
+            let _ = writeln!(out, "- **Manual:** {}", md(&d.manual));
+        }
+        let _ = writeln!(out, "- **Choice:** {}", md(&d.choice));
+        if !d.reason.is_empty() {
+            let _ = writeln!(out, "- **Reason:** {}", md(&d.reason));
+        }
+        out.push('\n');
+    }
+}
+
+fn replicate(out: &mut String, p: &Profile) {
+    if p.replicate.is_empty() {
+        return;
+    }
+    out.push_str("## Replicated objects\n\n");
+    out.push_str(
+        "Objects copied to further axes (`[[replicate]]`; the copies have no firmware role).\n\n",
+    );
+    let rows: Vec<Vec<String>> = p
+        .replicate
+        .iter()
+        .map(|&(first, last, offset)| {
+            let copies = p
+                .objects
+                .iter()
+                .filter(|o| {
+                    o.index
+                        .checked_sub(offset)
+                        .is_some_and(|src| (first..=last).contains(&src) && p.object(src).is_some())
+                })
+                .count();
+            vec![
+                format!("{}–{}", hex16(first), hex16(last)),
+                format!("+{}", hex16(offset)),
+                format!(
+                    "{}–{}",
+                    hex16(first.wrapping_add(offset)),
+                    hex16(last.wrapping_add(offset))
+                ),
+                copies.to_string(),
+            ]
+        })
+        .collect();
+    md_table(out, &["source", "offset", "target", "objects"], &rows);
+}
+
+fn object_count(out: &mut String, p: &Profile) {
+    out.push_str("## Object dictionary\n\n");
+    let entries: usize = p.objects.iter().map(|o| o.entries.len()).sum();
+    let derived = p.objects.iter().filter(|o| o.derived).count();
+    let _ = writeln!(
+        out,
+        "{} objects ({derived} derived by od-gen from the device, PDO, SM and sync sections), \
+         {entries} entries.\n",
+        p.objects.len()
+    );
+    let areas: [(&str, u16, u16); 5] = [
+        ("communication (1000h–1FFFh)", 0x1000, 0x1FFF),
+        ("manufacturer (2000h–5FFFh)", 0x2000, 0x5FFF),
+        ("device profile (6000h–9FFFh)", 0x6000, 0x9FFF),
+        ("other (A000h–FFFFh)", 0xA000, 0xFFFF),
+        ("below 1000h", 0x0000, 0x0FFF),
+    ];
+    let rows: Vec<Vec<String>> = areas
+        .iter()
+        .filter_map(|(name, lo, hi)| {
+            let objs: Vec<_> = p
+                .objects
+                .iter()
+                .filter(|o| (*lo..=*hi).contains(&o.index))
+                .collect();
+            (!objs.is_empty()).then(|| {
+                vec![
+                    (*name).to_string(),
+                    objs.len().to_string(),
+                    objs.iter()
+                        .map(|o| o.entries.len())
+                        .sum::<usize>()
+                        .to_string(),
+                ]
+            })
+        })
+        .collect();
+    md_table(out, &["area", "objects", "entries"], &rows);
+    let constants = p
+        .objects
+        .iter()
+        .flat_map(|o| &o.entries)
+        .filter(|e| e.storage == Storage::Const)
+        .count();
+    let _ = writeln!(
+        out,
+        "{constants} entries are constants. The full table: `od-gen table {}` (CSV with `--csv`).",
+        p.name
+    );
+}
+
+/// The Markdown page of a profile.
+pub fn markdown(p: &Profile) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "<!-- Generated by od-gen from the profile `{}`. Do not edit: change the profile, then run \
+         `{}`. -->\n",
+        p.name,
+        regenerate_one(&p.name)
+    );
+    let _ = writeln!(
+        out,
+        "# {}: {} ({})\n",
+        p.name,
+        md(&p.device.name),
+        md(&p.vendor.name)
+    );
+    if !p.description.is_empty() {
+        let _ = writeln!(out, "{}\n", md(&p.description));
+    }
+    let _ = writeln!(
+        out,
+        "Profile file: `{}.toml` (built-in profiles live in `od-gen/profiles/`; format: \
+         `od-gen/README.md`). ESI: `od-gen esi {0}`; SII image: `od-gen sii {0}`; object table: \
+         `od-gen table {0}`.\n",
+        p.name
+    );
+    identity(&mut out, p);
+    mailbox(&mut out, p);
+    sync_managers(&mut out, p);
+    synchronisation(&mut out, p);
+    process_data(&mut out, p);
+    modes(&mut out, p);
+    alarms(&mut out, p);
+    motor_faults(&mut out, p);
+    decisions(&mut out, p);
+    replicate(&mut out, p);
+    object_count(&mut out, p);
+    out
+}
+
+/// The index page of `profiles` (`docs/profiles/README.md`).
+pub fn index(profiles: &[Profile]) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "<!-- Generated by od-gen. Do not edit: run `{REGENERATE_ALL}`. -->\n"
+    );
+    out.push_str("# Drive profiles\n\n");
+    out.push_str(
+        "One page per built-in profile (`od-gen/profiles/*.toml`), generated from the profile by \
+         `od-gen doc`. `od-gen/tests/doc.rs` fails when a page differs from a fresh generation. \
+         How to add a profile: [adding-a-profile.md](../adding-a-profile.md).\n\n",
+    );
+    let rows: Vec<Vec<String>> = profiles
+        .iter()
+        .map(|p| {
+            vec![
+                format!("[{0}]({0}.md)", p.name),
+                md(&p.device.name),
+                md(&p.vendor.name),
+                hex32(p.device.product_code),
+                hex32(p.device.revision),
+                supported_modes(p).map_or("–".into(), short_modes),
+                p.alarms.len().to_string(),
+                p.decisions.len().to_string(),
+                p.objects.len().to_string(),
+            ]
+        })
+        .collect();
+    md_table(
+        &mut out,
+        &[
+            "profile",
+            "device",
+            "vendor",
+            "product code",
+            "revision",
+            "modes (6502h)",
+            "alarms",
+            "decisions",
+            "objects",
+        ],
+        &rows,
+    );
+    let _ = writeln!(
+        out,
+        "Regenerate all pages: `{REGENERATE_ALL}` (one page: `{}`).",
+        regenerate_one("<name>")
+    );
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations() {
+        assert_eq!(duration(0), "0 ns");
+        assert_eq!(duration(500), "500 ns");
+        assert_eq!(duration(31_250), "31.25 µs");
+        assert_eq!(duration(62_500), "62.5 µs");
+        assert_eq!(duration(250_000), "250 µs");
+        assert_eq!(duration(1_000_000), "1 ms");
+        assert_eq!(duration(1_500_000), "1.5 ms");
+        assert_eq!(duration(1_000_001), "1.000001 ms");
+    }
+
+    #[test]
+    fn escaping() {
+        assert_eq!(md("a|b"), "a\\|b");
+        assert_eq!(md("CACR-JUM****CA"), "CACR-JUM\\*\\*\\*\\*CA");
+        assert_eq!(md("1 ~ 10\nx"), "1 \\~ 10 x");
+        assert_eq!(md("# x"), "\\# x");
+        assert_eq!(md("order_number _x_"), "order_number \\_x\\_");
+        assert_eq!(md("[[alarm]] a -> b"), "\\[\\[alarm]] a -> b");
+    }
+
+    #[test]
+    fn control_bytes() {
+        assert_eq!(control_byte(0x26), "mailbox, master writes, PDI interrupt");
+        assert_eq!(
+            control_byte(0x64),
+            "buffered, master writes, PDI interrupt, watchdog"
+        );
+    }
+
+    #[test]
+    fn modes() {
+        assert_eq!(
+            mode_names(0x0001_0081),
+            [
+                "Profile position (pp), 6060h = 1",
+                "Cyclic synchronous position (csp), 6060h = 8",
+                "bit 16: manufacturer-specific"
+            ]
+        );
+        assert_eq!(short_modes(0x3AD), "pp, pv, tq, hm, csp, csv, cst");
+    }
+}
