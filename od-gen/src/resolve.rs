@@ -556,8 +556,17 @@ fn object(o: &ObjectFile, key: &str) -> Result<Object, Fault> {
             return Err(fault(key, Invalid::Missing("entry")));
         }
         let mut subs: BTreeMap<u8, Entry> = BTreeMap::new();
+        let mut names: BTreeSet<&str> = BTreeSet::new();
         for e in &o.entries {
             let ekey = format!("{key}.entry[{:#04x}]", e.sub);
+            // The ESI's DataType SubItems are keyed by name (EtherCATInfo.xsd `SubItemKey`), and
+            // subindex 0 is "SubIndex 000".
+            if !names.insert(e.name.as_str()) || e.name == "SubIndex 000" {
+                return Err(fault(
+                    &format!("{ekey}.name"),
+                    Invalid::DuplicateEntryName(e.name.clone()),
+                ));
+            }
             if e.sub == 0 {
                 return Err(fault(
                     &ekey,

@@ -752,3 +752,13 @@ fn pdo_byte_and_assignment_limits() {
     let unlimited = od_gen::builtin("standard").unwrap();
     assert_eq!(unlimited.max_pdo_bytes, od_gen::model::STACK_MAX_PDO_BYTES);
 }
+
+#[test]
+fn entry_names_are_unique_within_an_object() {
+    let text = appended(
+        "[[object]]\nindex = 0x2003\nname = \"Group\"\ncode = \"record\"\n[[object.entry]]\nsub = 1\nname = \"Reserve\"\ntype = \"UINT\"\naccess = \"ro\"\n[[object.entry]]\nsub = 2\nname = \"Reserve\"\ntype = \"UINT\"\naccess = \"ro\"",
+    );
+    let (key, e) = invalid(&text);
+    assert_eq!(key, "object[0x2003].entry[0x02].name");
+    assert_eq!(e, Invalid::DuplicateEntryName("Reserve".into()));
+}
