@@ -2,21 +2,34 @@
 //! drives from INIT to OP with DC SYNC0, enables the CiA402 power stage through the controlword,
 //! exchanges set-points and actual values for a number of cycles, and returns to INIT.
 //!
+//! The drives may be of different profiles ([`run_line`]). Vendor profiles map different
+//! default PDOs (the Σ-V-SD maps no 6060h, the RSE maps a touch-probe function after the target,
+//! ...), so the demo reads each drive's PDO layout by SDO in PRE-OP (1C12h/1C13h and the PDOs
+//! they assign, the reads ethercrab makes to size the image) and places controlword, target
+//! position and modes of operation where that drive maps them. A drive whose RxPDOs do not carry
+//! 6060h gets the mode (CSP) by SDO in PRE-OP instead. Only the first CiA402 axis of a drive is
+//! enabled (the firmware drives axis 1; a second axis's objects, e.g. 6840h, stay zero).
+//!
 //! The same scenario is the backbone of the end-to-end tests in `tests-host`, which assert on
 //! the [`Report`] it returns.
 
 use std::time::Duration;
 
 use ethercrab::subdevice_group::DcConfiguration;
-use ethercrab::{DcSync, MainDeviceConfig, Timeouts};
+use ethercrab::{Command, DcSync, MainDevice, MainDeviceConfig, Timeouts};
+use hal::esc::regs;
 
-use crate::inproc::InProcess;
+use crate::inproc::{InProcess, Shared};
 use crate::segment::Segment;
 
 /// Most drives a demo group holds.
 pub const MAX_DRIVES: usize = 16;
-/// Process-data image size of the group.
-pub const MAX_PDI: usize = 256;
+/// Process-data image size of the group. It fits one frame of the in-process master (with
+/// the DC PDU): ethercrab splits a larger image over several LRWs and sums their working
+/// counters, which the demo's expected working counter does not model. 16 drives of the
+/// standard profile (14 bytes each) or 14 of sigma-v-sd-2axis (72 bytes) fit; ethercrab
+/// refuses a larger line in PRE-OP.
+pub const MAX_PDI: usize = 1024;
 
 /// Controlword commands of CiA402 Table 5 used to enable the drive.
 pub mod cw {
@@ -31,9 +44,9 @@ pub mod cw {
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct Scenario {
-    /// Built-in profile name.
+    /// Built-in profile name ([`run`]; [`run_line`] takes the profile of every drive instead).
     pub profile: String,
-    /// Drives in the ring.
+    /// Drives in the ring ([`run`]; [`run_line`] takes one drive per profile name instead).
     pub drives: usize,
     /// Master cycle (and the SYNC0 period with DC).
     pub cycle: Duration,
@@ -41,6 +54,13 @@ pub struct Scenario {
     pub cycles: u32,
     /// DC SYNC0 (true) or free run (false).
     pub dc: bool,
+}
+
+impl Scenario {
+    /// The line [`run`] builds: [`Self::drives`] drives of [`Self::profile`].
+    pub fn line(&self) -> Vec<String> {
+        vec![self.profile.clone(); self.drives]
+    }
 }
 
 impl Default for Scenario {
@@ -58,6 +78,8 @@ impl Default for Scenario {
 /// Identity of one drive as the master read it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DriveInfo {
+    /// Built-in profile the drive was built with (as given to [`run_line`]).
+    pub profile: String,
     /// Name from the SII (General order string).
     pub name: String,
     /// Configured station address.
@@ -84,6 +106,10 @@ pub struct Report {
     pub states: Vec<String>,
     /// Cyclic exchanges in OP.
     pub samples: Vec<CycleSample>,
+    /// Per drive, its process-data layout as it reported it by SDO in PRE-OP.
+    pub layouts: Vec<PdoLayout>,
+    /// Per drive, the statusword and position actual value of the last cycle.
+    pub last_inputs: Vec<(u16, i32)>,
     /// Expected working counter of each cycle.
     pub expected_wkc: u16,
     /// Cycles whose working counter differed from the expected one.
@@ -111,13 +137,18 @@ fn le<const N: usize>(b: &[u8], at: usize) -> [u8; N] {
 /// exchange the cycles, go back to INIT. A macro because ethercrab's group types differ between
 /// DC (`tx_rx_dc`) and free run (`tx_rx`).
 macro_rules! operate {
-    ($group:ident, $txrx:ident, $md:ident, $shared:ident, $s:ident, $cycle_ns:ident, $report:ident, $log:ident) => {{
+    ($group:ident, $txrx:ident, $md:ident, $shared:ident, $s:ident, $ios:ident, $cycle_ns:ident, $report:ident, $log:ident) => {{
+        let mut all_op = false;
         for _ in 0..1000 {
             let r = $group.$txrx($md).await?;
             $shared.advance($cycle_ns);
             if r.all_op() {
+                all_op = true;
                 break;
             }
+        }
+        if !all_op {
+            return Err("not every drive reached OP within 1000 cycles".into());
         }
         $report.states.push("OP".into());
         for sd in $group.iter($md) {
@@ -125,17 +156,25 @@ macro_rules! operate {
             let cycle = sd.sdo_read::<u32>(SM_OUTPUT_PARAMETER, CYCLE_TIME).await?;
             $report.sync_parameters.push((mode, cycle));
         }
-        $log(format!("OP; 1C32h sync mode / cycle time per drive: {:?}", $report.sync_parameters));
+        $log(format!(
+            "OP; 1C32h sync mode / cycle time per drive: {:?}",
+            $report.sync_parameters
+        ));
         for i in 0..$s.cycles {
             let (controlword, target) = set_points(i);
-            for sd in $group.iter($md) {
-                write_outputs(&mut sd.outputs_raw_mut(), controlword, target);
+            for (sd, io) in $group.iter($md).zip(&$ios) {
+                io.write_outputs(&mut sd.outputs_raw_mut(), controlword, target);
             }
             let r = $group.$txrx($md).await?;
             if r.working_counter != $report.expected_wkc {
                 $report.wkc_errors += 1;
             }
-            let (sw, actual) = $group.iter($md).next().map(|sd| read_inputs(&sd.inputs_raw())).unwrap_or_default();
+            $report.last_inputs = $group
+                .iter($md)
+                .zip(&$ios)
+                .map(|(sd, io)| io.read_inputs(&sd.inputs_raw()))
+                .collect();
+            let (sw, actual) = $report.last_inputs.first().copied().unwrap_or_default();
             $report.samples.push(CycleSample {
                 working_counter: r.working_counter,
                 first_drive: (controlword, target, sw, actual),
@@ -144,9 +183,15 @@ macro_rules! operate {
         }
         if let Some(last) = $report.samples.last() {
             $log(format!(
-                "{} cycles: working counter {} (expected {}), {} wrong; drive 0 statusword {:#06x}, position actual {}",
-                $s.cycles, last.working_counter, $report.expected_wkc, $report.wkc_errors, last.first_drive.2, last.first_drive.3
+                "{} cycles: working counter {} (expected {}), {} wrong",
+                $s.cycles, last.working_counter, $report.expected_wkc, $report.wkc_errors
             ));
+            for (i, (sw, actual)) in $report.last_inputs.iter().enumerate() {
+                $log(format!(
+                    "  drive {i} ({}): statusword {sw:#06x}, position actual {actual}",
+                    $report.drives[i].profile
+                ));
+            }
         }
         let $group = $group.into_safe_op($md).await?;
         $report.states.push("SAFE-OP".into());
@@ -163,6 +208,165 @@ const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
 const SYNC_MODE: u8 = 1;
 const CYCLE_TIME: u8 = 2;
 
+/// Modes of operation 6060h: cyclic synchronous position (CiA402).
+const MODE_CSP: i8 = 8;
+
+/// CiA402 objects the demo exchanges (first axis).
+const CONTROLWORD: u16 = 0x6040;
+const STATUSWORD: u16 = 0x6041;
+const MODES_OF_OPERATION: u16 = 0x6060;
+const POSITION_ACTUAL: u16 = 0x6064;
+const TARGET_POSITION: u16 = 0x607A;
+
+/// PDO assignment objects of SM2 (RxPDOs) and SM3 (TxPDOs) (ETG.1000.6 Table 67).
+const RX_PDO_ASSIGN: u16 = 0x1C12;
+const TX_PDO_ASSIGN: u16 = 0x1C13;
+
+/// One object mapped into a drive's process data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MappedObject {
+    /// Object index (0 for a gap).
+    pub index: u16,
+    /// Subindex.
+    pub subindex: u8,
+    /// Length in bits.
+    pub bits: u8,
+    /// Offset in bits from the start of the drive's outputs (RxPDOs) or inputs (TxPDOs).
+    pub bit_offset: u32,
+}
+
+/// A drive's process-data layout: the PDOs assigned to SM2 (1C12h) and SM3 (1C13h) and the
+/// objects they map, in the order the process data carries them.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct PdoLayout {
+    /// RxPDOs assigned to SM2 (1C12h:01..).
+    pub rx_pdos: Vec<u16>,
+    /// TxPDOs assigned to SM3 (1C13h:01..).
+    pub tx_pdos: Vec<u16>,
+    /// Objects in the outputs (master → drive).
+    pub outputs: Vec<MappedObject>,
+    /// Objects in the inputs (drive → master).
+    pub inputs: Vec<MappedObject>,
+}
+
+impl PdoLayout {
+    /// Bytes of the outputs (the SM2 length).
+    pub fn output_bytes(&self) -> usize {
+        bytes(&self.outputs)
+    }
+    /// Bytes of the inputs (the SM3 length).
+    pub fn input_bytes(&self) -> usize {
+        bytes(&self.inputs)
+    }
+    /// Byte offset of `index`:00 in the outputs, if mapped on a byte boundary.
+    pub fn output(&self, index: u16) -> Option<usize> {
+        byte_offset(&self.outputs, index)
+    }
+    /// Byte offset of `index`:00 in the inputs, if mapped on a byte boundary.
+    pub fn input(&self, index: u16) -> Option<usize> {
+        byte_offset(&self.inputs, index)
+    }
+}
+
+fn bytes(objects: &[MappedObject]) -> usize {
+    let bits: u32 = objects.iter().map(|o| u32::from(o.bits)).sum();
+    bits.div_ceil(8) as usize
+}
+
+fn byte_offset(objects: &[MappedObject], index: u16) -> Option<usize> {
+    objects
+        .iter()
+        .find(|o| o.index == index && o.subindex == 0 && o.bit_offset % 8 == 0)
+        .map(|o| (o.bit_offset / 8) as usize)
+}
+
+/// Reads the PDOs assigned by `assign` (1C12h or 1C13h) and their mapping entries by SDO.
+async fn read_assignment<S>(
+    sd: &ethercrab::SubDeviceRef<'_, S>,
+    assign: u16,
+) -> Result<(Vec<u16>, Vec<MappedObject>), ethercrab::error::Error>
+where
+    S: std::ops::Deref<Target = ethercrab::SubDevice>,
+{
+    let mut pdos = Vec::new();
+    let mut objects = Vec::new();
+    let mut bit_offset = 0u32;
+    let count = sd.sdo_read::<u8>(assign, 0).await?;
+    for i in 1..=count {
+        let pdo = sd.sdo_read::<u16>(assign, i).await?;
+        pdos.push(pdo);
+        let entries = sd.sdo_read::<u8>(pdo, 0).await?;
+        for e in 1..=entries {
+            // Mapping entry: index (bits 31..16), subindex (15..8), length in bits (7..0).
+            let m = sd.sdo_read::<u32>(pdo, e).await?;
+            let object = MappedObject {
+                index: (m >> 16) as u16,
+                subindex: (m >> 8) as u8,
+                bits: m as u8,
+                bit_offset,
+            };
+            bit_offset += u32::from(object.bits);
+            objects.push(object);
+        }
+    }
+    Ok((pdos, objects))
+}
+
+/// Where the demo's objects sit in one drive's process data (byte offsets).
+#[derive(Clone, Copy, Debug)]
+struct Io {
+    controlword: usize,
+    target: Option<usize>,
+    mode: Option<usize>,
+    statusword: usize,
+    position: Option<usize>,
+}
+
+impl Io {
+    fn new(layout: &PdoLayout, drive: usize, profile: &str) -> Result<Self, String> {
+        let missing = |what: &str, pdos: &[u16], assign: u16| {
+            format!(
+                "drive {drive} ({profile}): {what} is not mapped in its PDOs \
+                 ({assign:04X}h assigns {pdos:04X?}); the demo cannot enable it"
+            )
+        };
+        Ok(Self {
+            controlword: layout
+                .output(CONTROLWORD)
+                .ok_or_else(|| missing("controlword 6040h", &layout.rx_pdos, RX_PDO_ASSIGN))?,
+            target: layout.output(TARGET_POSITION),
+            mode: layout.output(MODES_OF_OPERATION),
+            statusword: layout
+                .input(STATUSWORD)
+                .ok_or_else(|| missing("statusword 6041h", &layout.tx_pdos, TX_PDO_ASSIGN))?,
+            position: layout.input(POSITION_ACTUAL),
+        })
+    }
+
+    /// Writes controlword, target position and the mode (CSP) into the drive's outputs, each
+    /// where the drive maps it (not mapped: not written).
+    fn write_outputs(&self, out: &mut [u8], controlword: u16, target: i32) {
+        put(out, Some(self.controlword), &controlword.to_le_bytes());
+        put(out, self.target, &target.to_le_bytes());
+        put(out, self.mode, &MODE_CSP.to_le_bytes());
+    }
+
+    /// Statusword and position actual value (0 if not mapped) from the drive's inputs.
+    fn read_inputs(&self, inp: &[u8]) -> (u16, i32) {
+        (
+            u16::from_le_bytes(le(inp, self.statusword)),
+            self.position
+                .map_or(0, |at| i32::from_le_bytes(le(inp, at))),
+        )
+    }
+}
+
+fn put(out: &mut [u8], at: Option<usize>, value: &[u8]) {
+    if let Some(b) = at.and_then(|at| out.get_mut(at..at + value.len())) {
+        b.copy_from_slice(value);
+    }
+}
+
 /// Controlword and target position of cycle `i`: shutdown, switch on, then enable operation
 /// (CiA402 Table 5), with a target ramp of 100 increments per cycle.
 fn set_points(i: u32) -> (u16, i32) {
@@ -174,41 +378,33 @@ fn set_points(i: u32) -> (u16, i32) {
     (controlword, i as i32 * 100)
 }
 
-/// Modes of operation 6060h: cyclic synchronous position (CiA402).
-const MODE_CSP: u8 = 8;
-
-/// Writes controlword, target position and the mode (CSP) into a drive's outputs (default
-/// RxPDO 1600h layout: 6040h, 607Ah, 6060h).
-fn write_outputs(out: &mut [u8], controlword: u16, target: i32) {
-    if let Some(b) = out.get_mut(0..2) {
-        b.copy_from_slice(&controlword.to_le_bytes());
-    }
-    if let Some(b) = out.get_mut(2..6) {
-        b.copy_from_slice(&target.to_le_bytes());
-    }
-    if let Some(b) = out.get_mut(6) {
-        *b = MODE_CSP;
-    }
-}
-
-/// Statusword and position actual value from a drive's inputs (default TxPDO 1A00h layout).
-fn read_inputs(inp: &[u8]) -> (u16, i32) {
-    (
-        u16::from_le_bytes(le(inp, 0)),
-        i32::from_le_bytes(le(inp, 2)),
-    )
-}
-
-/// Runs the scenario, calling `log` with a line for everything worth telling a user.
+/// Runs the scenario ([`Scenario::drives`] drives of [`Scenario::profile`]), calling `log`
+/// with a line for everything worth telling a user.
 pub async fn run(
     s: &Scenario,
     log: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn std::error::Error>> {
-    let segment = Segment::new(&s.profile, s.drives)?;
+    run_line(&s.line(), s, log).await
+}
+
+/// Runs the scenario on a line of drives, one per built-in profile name in `profiles`, in ring
+/// order (profiles may differ; [`Scenario::profile`] and [`Scenario::drives`] are not used).
+pub async fn run_line<S: AsRef<str>>(
+    profiles: &[S],
+    s: &Scenario,
+    log: &mut dyn FnMut(String),
+) -> Result<Report, Box<dyn std::error::Error>> {
+    let profiles: Vec<String> = profiles.iter().map(|p| p.as_ref().to_string()).collect();
+    let segment = Segment::line(&profiles)?;
+    check_sync_modes(&profiles, s.dc)?;
     let (master, transport) = InProcess::connect(
         segment,
+        // Wall-clock timeouts: the simulated drives answer at once, but a loaded host may not
+        // run the master for a while (ethercrab's 10 ms EEPROM default times out there).
         Timeouts {
             pdu: Duration::from_millis(500),
+            eeprom: Duration::from_secs(2),
+            mailbox_response: Duration::from_secs(2),
             ..Timeouts::default()
         },
         MainDeviceConfig {
@@ -218,33 +414,163 @@ pub async fn run(
     );
     let transport = tokio::task::spawn_local(transport);
     let md = &*master.maindevice;
-    let shared = master.shared.clone();
-    let cycle_ns = s.cycle.as_nanos() as u64;
-    let mut report = Report {
-        expected_wkc: 3 * s.drives as u16,
-        ..Report::default()
-    };
+    let mut report = Report::default();
+    let outcome = operate_line(md, &master.shared, &profiles, s, &mut report, log).await;
+    if let Err(e) = outcome {
+        // Say where each drive stopped: the AL status and AL status code registers.
+        let mut states = Vec::new();
+        for (i, d) in report.drives.iter().enumerate() {
+            states.push(format!(
+                "drive {i} ({}) {}",
+                d.profile,
+                al_state(md, d.address).await
+            ));
+        }
+        transport.abort();
+        return Err(if states.is_empty() {
+            e
+        } else {
+            format!("{e}; {}", states.join("; ")).into()
+        });
+    }
+    {
+        let seg = master.shared.segment();
+        report.firmware_cycles = seg.drives().iter().map(|d| d.slave.cycles()).collect();
+        report.sim_time_ns = seg.now_ns();
+    }
+    report.frames = master.shared.frames();
+    drop(master);
+    transport.abort();
+    Ok(report)
+}
 
+/// Refuses a line in which a drive does not support the scenario's synchronisation (its
+/// 1C32h:04): the drive would refuse SAFE-OP (AL status code 0x0027 or 0x0030), and ethercrab
+/// only notices when its state-transition timeout runs out.
+fn check_sync_modes(profiles: &[String], dc: bool) -> Result<(), Box<dyn std::error::Error>> {
+    for (i, name) in profiles.iter().enumerate() {
+        let sync = od_gen::builtin(name)?.sync;
+        if dc && !sync.dc_sync0 {
+            return Err(format!(
+                "drive {i} ({name}) does not support DC SYNC0; run the demo with --free-run"
+            )
+            .into());
+        }
+        if !dc && !sync.free_run {
+            return Err(format!(
+                "drive {i} ({name}) does not support free run (DC SYNC0 only); run the demo without --free-run"
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// "AL status 0x0012 (PRE-OP, error), AL status code 0x001d" of the drive at `address`.
+async fn al_state(md: &MainDevice<'_>, address: u16) -> String {
+    let status = Command::fprd(address, regs::AL_STATUS.addr)
+        .receive::<u16>(md)
+        .await;
+    let code = Command::fprd(address, regs::AL_STATUS_CODE.addr)
+        .receive::<u16>(md)
+        .await;
+    match (status, code) {
+        (Ok(status), Ok(code)) => {
+            let state = match status & 0x0F {
+                1 => "INIT",
+                2 => "PRE-OP",
+                3 => "BOOT",
+                4 => "SAFE-OP",
+                8 => "OP",
+                _ => "unknown state",
+            };
+            let error = if status & 0x10 != 0 { ", error" } else { "" };
+            format!("AL status {status:#06x} ({state}{error}), AL status code {code:#06x}")
+        }
+        (Err(e), _) | (_, Err(e)) => format!("AL status not readable: {e}"),
+    }
+}
+
+/// The scenario from INIT to OP and back, on the master `md` connected to `shared`.
+async fn operate_line(
+    md: &MainDevice<'_>,
+    shared: &Shared,
+    profiles: &[String],
+    s: &Scenario,
+    report: &mut Report,
+    log: &mut dyn FnMut(String),
+) -> Result<(), Box<dyn std::error::Error>> {
+    let cycle_ns = s.cycle.as_nanos() as u64;
     let mut group = md
         .init_single_group::<MAX_DRIVES, MAX_PDI>(shared.clock().now_fn())
         .await?;
     report.states.push("PRE-OP".into());
     log(format!("found {} drive(s)", group.len()));
-    for mut sd in group.iter_mut(md) {
+    if group.len() != profiles.len() {
+        return Err(format!(
+            "found {} drive(s), but the line has {}",
+            group.len(),
+            profiles.len()
+        )
+        .into());
+    }
+    for (mut sd, profile) in group.iter_mut(md).zip(profiles) {
         let id = sd.identity();
         let info = DriveInfo {
+            profile: profile.clone(),
             name: sd.name().to_string(),
             address: sd.configured_address(),
             identity: (id.vendor_id, id.product_id, id.revision, id.serial),
         };
         log(format!(
-            "  {:#06x} {:?}: vendor {:#010x} product {:#010x} revision {:#010x}",
-            info.address, info.name, id.vendor_id, id.product_id, id.revision
+            "  {:#06x} {} {:?}: vendor {:#010x} product {:#010x} revision {:#010x}",
+            info.address, info.profile, info.name, id.vendor_id, id.product_id, id.revision
         ));
         report.drives.push(info);
         if s.dc {
             sd.set_dc_sync(DcSync::Sync0);
         }
+    }
+
+    // Each drive's PDO layout, read the way ethercrab reads it to size the process image; the
+    // outputs are written where this drive maps them.
+    let mut ios = Vec::with_capacity(profiles.len());
+    for (i, sd) in group.iter(md).enumerate() {
+        let profile = &profiles[i];
+        let (rx_pdos, outputs) = read_assignment(&sd, RX_PDO_ASSIGN).await?;
+        let (tx_pdos, inputs) = read_assignment(&sd, TX_PDO_ASSIGN).await?;
+        let layout = PdoLayout {
+            rx_pdos,
+            tx_pdos,
+            outputs,
+            inputs,
+        };
+        let io = Io::new(&layout, i, profile)?;
+        log(format!(
+            "  drive {i} ({profile}): RxPDOs {:04X?} ({} bytes), TxPDOs {:04X?} ({} bytes)",
+            layout.rx_pdos,
+            layout.output_bytes(),
+            layout.tx_pdos,
+            layout.input_bytes()
+        ));
+        if io.mode.is_none() {
+            // Not in the process data: the mode is a start-up parameter, written in PRE-OP as
+            // a master's init commands do.
+            sd.sdo_write(MODES_OF_OPERATION, 0, MODE_CSP)
+                .await
+                .map_err(|e| {
+                    format!("drive {i} ({profile}): writing 6060h:00 = {MODE_CSP} by SDO: {e}")
+                })?;
+            log(format!(
+                "  drive {i} ({profile}): 6060h is not mapped; modes of operation set to CSP by SDO"
+            ));
+        }
+        // Each drive with outputs adds 2 to the LRW's working counter, with inputs 1
+        // (ETG.1000.4 §5.4.3).
+        report.expected_wkc +=
+            2 * u16::from(layout.output_bytes() > 0) + u16::from(layout.input_bytes() > 0);
+        report.layouts.push(layout);
+        ios.push(io);
     }
 
     let group = group.into_pre_op_pdi(md).await?;
@@ -268,22 +594,13 @@ pub async fn run(
         report.states.push("SAFE-OP".into());
         log(format!("SAFE-OP, DC SYNC0 every {} µs", cycle_ns / 1000));
         let group = group.request_into_op(md).await?;
-        operate!(group, tx_rx_dc, md, shared, s, cycle_ns, report, log);
+        operate!(group, tx_rx_dc, md, shared, s, ios, cycle_ns, report, log);
     } else {
         let group = group.into_safe_op(md).await?;
         report.states.push("SAFE-OP".into());
         log("SAFE-OP, free run".into());
         let group = group.request_into_op(md).await?;
-        operate!(group, tx_rx, md, shared, s, cycle_ns, report, log);
+        operate!(group, tx_rx, md, shared, s, ios, cycle_ns, report, log);
     }
-
-    {
-        let seg = shared.segment();
-        report.firmware_cycles = seg.drives().iter().map(|d| d.slave.cycles()).collect();
-        report.sim_time_ns = seg.now_ns();
-    }
-    report.frames = shared.frames();
-    drop(master);
-    transport.abort();
-    Ok(report)
+    Ok(())
 }

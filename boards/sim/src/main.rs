@@ -1,18 +1,27 @@
 //! `sim-drive`: the simulated EtherCAT servo drive on a PC.
 //!
 //! ```text
-//! sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N] [--free-run]
+//! sim-drive [demo] [LINE] [--cycle-us US] [--cycles N] [--free-run]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
 //!     exchange, back to INIT, and print what happened (the default)
-//! sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S] [--drop-mailbox-read K]
+//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
+//!     print the names of the built-in profiles
 //! sim-drive plots [--out DIR]
 //!     measure the motor control on the simulated servo (current-loop frequency response,
 //!     speed step, load step, S-curve following error) and write the plots as SVG
 //!     (default directory: docs/plots)
+//!
+//! LINE, the drives in ring order (default: one drive of the standard profile), either
+//!     [--profile NAME] [--drives N]      N drives (default 1) of one profile, or
+//!     --drive NAME [--drive NAME ...]    one drive per --drive, profiles mixed in that order
 //! ```
+//!
+//! Profile names are the built-in profiles of `list-profiles` (`sdv3-e` and `sdv3_e` are the
+//! same). An unknown profile, `--drive` together with `--profile`/`--drives`, or any other
+//! usage error exits with code 2.
 
 use std::process::ExitCode;
 use std::time::Duration;
@@ -21,15 +30,18 @@ use board_sim::demo::{self, Scenario};
 use board_sim::{rawsock, Segment};
 
 const USAGE: &str =
-    "usage: sim-drive [demo] [--profile NAME] [--drives N] [--cycle-us US] [--cycles N]
-       sim-drive attach --iface IFNAME [--profile NAME] [--drives N] [--seconds S] [--drop-mailbox-read K]
+    "usage: sim-drive [demo] [LINE] [--cycle-us US] [--cycles N] [--free-run]
+       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K]
        sim-drive list-profiles
-       sim-drive plots [--out DIR]";
+       sim-drive plots [--out DIR]
+LINE (the drives in ring order; default one standard drive):
+       [--profile NAME] [--drives N]     N drives of one profile
+       --drive NAME [--drive NAME ...]   one drive per --drive, in that order (profiles may differ)";
 
 struct Args {
     command: String,
-    profile: String,
-    drives: usize,
+    /// Profile of every drive, in ring order (canonical names, as `list-profiles` prints them).
+    line: Vec<String>,
     cycle_us: u64,
     cycles: u32,
     iface: Option<String>,
@@ -42,8 +54,7 @@ struct Args {
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let mut a = Args {
         command: "demo".into(),
-        profile: "standard".into(),
-        drives: 1,
+        line: Vec::new(),
         cycle_us: 1000,
         cycles: 1000,
         iface: None,
@@ -52,14 +63,18 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         drop_mailbox_read: None,
         out: "docs/plots".into(),
     };
+    let mut profile: Option<String> = None;
+    let mut drives: Option<usize> = None;
+    let mut line: Vec<String> = Vec::new();
     let mut first = true;
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().ok_or_else(|| format!("{name} needs a value"));
         match arg.as_str() {
             "demo" | "attach" | "list-profiles" | "plots" if first => a.command = arg.clone(),
             "--out" => a.out = value("--out")?,
-            "--profile" => a.profile = value("--profile")?,
-            "--drives" => a.drives = number(&value("--drives")?, "--drives")?,
+            "--profile" => profile = Some(value("--profile")?),
+            "--drives" => drives = Some(number(&value("--drives")?, "--drives")?),
+            "--drive" => line.push(value("--drive")?),
             "--cycle-us" => a.cycle_us = number(&value("--cycle-us")?, "--cycle-us")?,
             "--cycles" => a.cycles = number(&value("--cycles")?, "--cycles")?,
             "--iface" => a.iface = Some(value("--iface")?),
@@ -76,10 +91,44 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         }
         first = false;
     }
-    if a.drives == 0 || a.drives > demo::MAX_DRIVES {
-        return Err(format!("--drives must be 1..={}", demo::MAX_DRIVES));
+    a.line = if line.is_empty() {
+        let drives = drives.unwrap_or(1);
+        if drives == 0 || drives > demo::MAX_DRIVES {
+            return Err(format!("--drives must be 1..={}", demo::MAX_DRIVES));
+        }
+        vec![profile.unwrap_or_else(|| "standard".into()); drives]
+    } else if profile.is_some() || drives.is_some() {
+        return Err(
+            "--drive cannot be combined with --profile or --drives: give either \
+                    --drive NAME once per drive (mixed line), or --profile NAME --drives N"
+                .into(),
+        );
+    } else if line.len() > demo::MAX_DRIVES {
+        return Err(format!(
+            "{} drives given with --drive, at most {} supported",
+            line.len(),
+            demo::MAX_DRIVES
+        ));
+    } else {
+        line
+    };
+    for name in &mut a.line {
+        *name = canonical_profile(name)?;
     }
     Ok(a)
+}
+
+/// The built-in profile `name` as od-gen spells it (`sdv3_e` → `sdv3-e`), or an error naming
+/// the available profiles.
+fn canonical_profile(name: &str) -> Result<String, String> {
+    let names = od_gen::builtin_names();
+    match names.iter().find(|n| od_gen::same_name(n, name)) {
+        Some(n) if firmware::profiles::by_name(n).is_some() => Ok(n.to_string()),
+        _ => Err(format!(
+            "unknown profile {name:?}; available profiles: {}",
+            names.join(", ")
+        )),
+    }
 }
 
 fn number<T: std::str::FromStr>(s: &str, name: &str) -> Result<T, String> {
@@ -134,7 +183,7 @@ fn plots(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 
 fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let iface = args.iface.as_deref().ok_or("attach needs --iface IFNAME")?;
-    let segment = Segment::new(&args.profile, args.drives)?;
+    let segment = Segment::line(&args.line)?;
     let faults = rawsock::Faults {
         drop_mailbox_read: args.drop_mailbox_read,
     };
@@ -145,16 +194,16 @@ fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 
 fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let scenario = Scenario {
-        profile: args.profile.clone(),
-        drives: args.drives,
+        profile: args.line[0].clone(),
+        drives: args.line.len(),
         cycle: Duration::from_micros(args.cycle_us),
         cycles: args.cycles,
         dc: !args.free_run,
     };
     println!(
-        "sim-drive demo: {} simulated drive(s), profile {:?}, built-in ethercrab master, {} cycle {} µs",
-        scenario.drives,
-        scenario.profile,
+        "sim-drive demo: {} simulated drive(s) [{}], built-in ethercrab master, {} cycle {} µs",
+        args.line.len(),
+        args.line.join(", "),
         if scenario.dc { "DC SYNC0" } else { "free-run" },
         args.cycle_us
     );
@@ -163,7 +212,7 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         .build()?;
     let local = tokio::task::LocalSet::new();
     let report = local.block_on(&rt, async {
-        demo::run(&scenario, &mut |line| println!("{line}")).await
+        demo::run_line(&args.line, &scenario, &mut |line| println!("{line}")).await
     })?;
     println!(
         "done: {} frames, {:.1} ms simulated, firmware cycles per drive {:?}",
@@ -175,4 +224,59 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         return Err(format!("{} cycles had a wrong working counter", report.wkc_errors).into());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(s: &str) -> Result<Args, String> {
+        parse(s.split_whitespace().map(String::from))
+    }
+
+    #[test]
+    fn drive_builds_a_mixed_line_in_order() {
+        let a = args("attach --iface veth0 --drive sdv3-e --drive rse --drive sigma_v_sd_2axis")
+            .expect("mixed line");
+        assert_eq!(a.command, "attach");
+        assert_eq!(a.line, ["sdv3-e", "rse", "sigma-v-sd-2axis"]);
+    }
+
+    #[test]
+    fn profile_and_drives_still_give_n_drives_of_one_profile() {
+        assert_eq!(args("demo").expect("default").line, ["standard"]);
+        assert_eq!(
+            args("demo --profile gha_e --drives 2").expect("two").line,
+            ["gha-e", "gha-e"]
+        );
+    }
+
+    #[test]
+    fn mixing_drive_with_profile_or_drives_is_refused() {
+        for bad in [
+            "demo --drive rse --profile rse",
+            "demo --drives 2 --drive rse",
+        ] {
+            let e = args(bad).err().expect(bad);
+            assert!(e.contains("--drive cannot be combined"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn unknown_profile_lists_the_available_ones() {
+        for bad in ["demo --drive nope", "demo --profile nope"] {
+            let e = args(bad).err().expect(bad);
+            assert!(e.contains("\"nope\""), "{e}");
+            for name in od_gen::builtin_names() {
+                assert!(e.contains(name), "{e} lacks {name}");
+            }
+        }
+    }
+
+    #[test]
+    fn line_length_is_bounded() {
+        let many = "demo ".to_string() + &"--drive rse ".repeat(demo::MAX_DRIVES + 1);
+        assert!(args(&many).is_err());
+        assert!(args("demo --drives 0").is_err());
+    }
 }

@@ -1,8 +1,11 @@
-//! A segment: simulated drives in one EtherCAT ring, with a simulated clock.
+//! A segment: simulated drives in one EtherCAT ring, each of its own profile (a line may mix
+//! profiles), with a simulated clock.
 //!
 //! Time is simulated: it moves only when a frame is processed (by the frame's time on the wire)
 //! or when the caller advances it. A test can therefore run thousands of 250 µs cycles as fast
 //! as the host allows and still see every SYNC0 at its exact time.
+
+use firmware::profile::DriveProfile;
 
 use crate::drive::SimDrive;
 use crate::esc::{self, Et1100};
@@ -29,9 +32,11 @@ pub enum SegmentError {
 impl std::fmt::Display for SegmentError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Self::UnknownProfile(n) => {
-                write!(f, "no built-in profile named {n:?} (try `list-profiles`)")
-            }
+            Self::UnknownProfile(n) => write!(
+                f,
+                "no built-in profile named {n:?}; available: {}",
+                od_gen::builtin_names().join(", ")
+            ),
             Self::Profile(e) => write!(f, "profile error: {e}"),
             Self::Slave(e) => write!(f, "firmware refused the profile: {e:?}"),
         }
@@ -81,18 +86,48 @@ pub struct Segment<D: SimDevice = SimDrive> {
 }
 
 impl Segment {
-    /// `count` drives of the built-in profile `profile`.
+    /// `count` drives of the built-in profile `profile` (`sdv3-e` or `sdv3_e`).
     pub fn new(profile: &str, count: usize) -> Result<Self, SegmentError> {
-        let fw_profile = firmware::profiles::by_name(profile)
-            .ok_or_else(|| SegmentError::UnknownProfile(profile.to_string()))?;
-        let sii = od_gen::builtin(profile)
-            .map_err(|e| SegmentError::Profile(e.to_string()))?
-            .sii_image();
+        let (fw_profile, sii) = load_profile(profile)?;
         let drives = (0..count)
             .map(|_| SimDrive::new(fw_profile, &sii).map_err(SegmentError::Slave))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self::from_devices(drives))
     }
+
+    /// A line of drives of (possibly) different built-in profiles, one drive per name, in ring
+    /// order: the first name is the drive next to the master (station 0x1000 with ethercrab,
+    /// 0x1001 with SOEM). Each drive runs its own profile: its own object dictionary, SII
+    /// (identity, SM layout) and default PDO mapping.
+    pub fn line<S: AsRef<str>>(profiles: &[S]) -> Result<Self, SegmentError> {
+        // Each profile is resolved (and its SII built) once, however often it occurs.
+        let mut loaded: Vec<(&str, &'static DriveProfile, Vec<u8>)> = Vec::new();
+        let mut drives = Vec::with_capacity(profiles.len());
+        for name in profiles {
+            let name = name.as_ref();
+            let at = match loaded.iter().position(|(n, ..)| *n == name) {
+                Some(at) => at,
+                None => {
+                    let (fw_profile, sii) = load_profile(name)?;
+                    loaded.push((name, fw_profile, sii));
+                    loaded.len() - 1
+                }
+            };
+            let (_, fw_profile, sii) = &loaded[at];
+            drives.push(SimDrive::new(fw_profile, sii).map_err(SegmentError::Slave)?);
+        }
+        Ok(Self::from_devices(drives))
+    }
+}
+
+/// The firmware profile and the SII image of the built-in profile `name`.
+fn load_profile(name: &str) -> Result<(&'static DriveProfile, Vec<u8>), SegmentError> {
+    let fw_profile = firmware::profiles::by_name(name)
+        .ok_or_else(|| SegmentError::UnknownProfile(name.to_string()))?;
+    let sii = od_gen::builtin(name)
+        .map_err(|e| SegmentError::Profile(e.to_string()))?
+        .sii_image();
+    Ok((fw_profile, sii))
 }
 
 impl<D: SimDevice> Segment<D> {
