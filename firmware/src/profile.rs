@@ -154,10 +154,12 @@ mod tests {
     }
 
     /// Complete access reaches every object of every profile: a download keeps the object's
-    /// RAM values to restore them on failure, in a buffer of fixed size.
+    /// RAM values to restore them on failure, and an upload stream (subindex 0 as 16 bits, then
+    /// every entry) is built in the SDO server's buffer; both are of fixed size.
     #[test]
-    fn every_object_fits_the_complete_access_buffer() {
-        use ethercat_slave::mailbox::coe::complete_access::UNDO_CAPACITY;
+    fn every_object_fits_the_complete_access_buffers() {
+        use ethercat_slave::mailbox::coe::complete_access::{SI0_STREAM_BITS, UNDO_CAPACITY};
+        use ethercat_slave::mailbox::coe::SEGMENT_BUFFER_CAPACITY;
         use ethercat_slave::od::Value;
         for p in profiles::ALL {
             for o in p.od.objects {
@@ -170,6 +172,18 @@ mod tests {
                 assert!(
                     ram <= UNDO_CAPACITY,
                     "{} {:#06x}: {ram} bytes",
+                    p.od.device.profile,
+                    o.index
+                );
+                let stream_bits: usize = SI0_STREAM_BITS
+                    + o.entries
+                        .iter()
+                        .skip(1)
+                        .map(|e| usize::from(e.bit_len))
+                        .sum::<usize>();
+                assert!(
+                    stream_bits.div_ceil(8) <= SEGMENT_BUFFER_CAPACITY,
+                    "{} {:#06x}: a {stream_bits}-bit stream",
                     p.od.device.profile,
                     o.index
                 );

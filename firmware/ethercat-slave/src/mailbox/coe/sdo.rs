@@ -40,7 +40,9 @@ use crate::od::{Dictionary, Entry, Value};
 /// Capacity in bytes of the buffer that holds a segmented download until its last segment (and
 /// the snapshot of a segmented upload of a RAM value). A segmented download larger than this is
 /// refused with 0x05040005 (out of memory) when the entry could hold it, else with 0x06070012.
-pub const SEGMENT_BUFFER_CAPACITY: usize = 256;
+/// It also holds a complete-access upload stream, so it is as large as the largest object
+/// complete access handles.
+pub const SEGMENT_BUFFER_CAPACITY: usize = super::complete_access::UNDO_CAPACITY;
 
 /// Minimum length of an SDO frame after the CoE header: command, index, subindex and 4 data
 /// bytes (ETG.1000.6 §5.6.2; mailbox length ≥ 0x0A with the CoE header).
