@@ -26,21 +26,21 @@ const OFF_2003: u16 = 8; // u8 RW in PREOP only
 const OFF_2008: u16 = 9; // RECORD: u8 SI0, u16, u32 (9, 10, 12)
 const OFF_2004: u16 = 16; // VISIBLE_STRING[64]
 const STRING_LEN: usize = 64;
-const OFF_2005: u16 = 80; // DOMAIN[300]
-const DOMAIN_LEN: usize = 300;
-const OFF_2006: u16 = 380; // u64 RW
-const OFF_6040: u16 = 388; // u16 RW, RxPDO
-const OFF_6041: u16 = 390; // u16 RO, TxPDO
-const OFF_607A: u16 = 392; // i32 RW, RxPDO
-const OFF_6064: u16 = 396; // i32 RO, TxPDO
-const OFF_1600: u16 = 400; // u8 + 4 × u32
-const OFF_1A00: u16 = 417; // u8 + 4 × u32
-const OFF_1C12: u16 = 434; // u8 + 2 × u16
-const OFF_1C13: u16 = 439; // u8 + 2 × u16
-const OFF_2009: u16 = 444; // BOOLEAN
-const OFF_200A: u16 = 445; // REAL32, 0.0..=10.0
-const OFF_1601: u16 = 449; // u8 + 6 × u32
-const RAM_SIZE: usize = 474;
+const OFF_2005: u16 = 80; // DOMAIN[600]: larger than the SDO segment buffer
+const DOMAIN_LEN: usize = 600;
+const OFF_2006: u16 = 680; // u64 RW
+const OFF_6040: u16 = 688; // u16 RW, RxPDO
+const OFF_6041: u16 = 690; // u16 RO, TxPDO
+const OFF_607A: u16 = 692; // i32 RW, RxPDO
+const OFF_6064: u16 = 696; // i32 RO, TxPDO
+const OFF_1600: u16 = 700; // u8 + 4 × u32
+const OFF_1A00: u16 = 717; // u8 + 4 × u32
+const OFF_1C12: u16 = 734; // u8 + 2 × u16
+const OFF_1C13: u16 = 739; // u8 + 2 × u16
+const OFF_2009: u16 = 744; // BOOLEAN
+const OFF_200A: u16 = 745; // REAL32, 0.0..=10.0
+const OFF_1601: u16 = 749; // u8 + 6 × u32
+const RAM_SIZE: usize = 774;
 
 const fn entry(
     subindex: u8,
