@@ -352,3 +352,127 @@ fn pdo_remaps_that_break_the_profile_rules_are_refused() {
     // The SDV3-E (and its rebrand) limit the process image to 32 bytes per direction.
     assert_eq!(image_limit_checked, ["osd-g-e", "sdv3-e"]);
 }
+
+/// PRE-OP: assign `rx` to 1C12h and `tx` to 1C13h (each replacing the default assignment), then
+/// into OP with DC SYNC0 at the default cycle; returns the process image sizes.
+async fn op_with_assignment(p: &Profile, rx: &[u16], tx: &[u16]) -> (usize, usize) {
+    let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
+    tokio::task::spawn_local(transport);
+    let md: &MainDevice<'_> = &m.maindevice;
+    let mut group = init(&m).await;
+    {
+        let sd = group.subdevice(md, 0).expect("drive");
+        for (assign, pdos) in [(0x1C12u16, rx), (0x1C13, tx)] {
+            sd.sdo_write(assign, 0, 0u8)
+                .await
+                .expect("assignment :00 = 0");
+            for (i, pdo) in pdos.iter().enumerate() {
+                sd.sdo_write(assign, (i + 1) as u8, *pdo)
+                    .await
+                    .expect("assignment entry");
+            }
+            sd.sdo_write(assign, 0, pdos.len() as u8)
+                .await
+                .expect("assignment :00 = n");
+        }
+    }
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let cycle_ns = u64::from(p.sync.default_cycle_ns);
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+    for _ in 0..100 {
+        group.tx_rx_sync_system_time(md).await.expect("time sync");
+        m.shared.advance(cycle_ns);
+    }
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_nanos(cycle_ns * 10),
+                sync0_period: Duration::from_nanos(cycle_ns),
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .expect("DC configuration");
+    let group = match group.into_safe_op(md).await {
+        Ok(g) => g,
+        Err(e) => panic!(
+            "{}: SAFE-OP with {rx:x?}/{tx:x?}: {e:?} {:?}",
+            p.name,
+            al_status(md).await
+        ),
+    };
+    let group = group.request_into_op(md).await.expect("request OP");
+    for _ in 0..1000 {
+        let r = group.tx_rx_dc(md).await.expect("tx/rx");
+        m.shared.advance(cycle_ns);
+        if r.all_op() {
+            let sd = group.subdevice(md, 0).expect("drive");
+            return (sd.outputs_raw().len(), sd.inputs_raw().len());
+        }
+    }
+    panic!(
+        "{}: no OP with {rx:x?}/{tx:x?}: {:?}",
+        p.name,
+        al_status(md).await
+    );
+}
+
+/// Each alternative PDO a manual offers (the PDOs not assigned by default, e.g. the fixed
+/// mappings of the GHA-E) brings the drive to OP in place of the default one, with the process
+/// image it maps.
+#[test]
+fn every_alternative_pdo_reaches_op() {
+    let mut tried = 0;
+    for p in profiles().into_iter().filter(|p| p.mailbox.coe.pdo_assign) {
+        let default_rx: Vec<u16> = p
+            .rx_pdos
+            .iter()
+            .filter(|x| x.assigned)
+            .map(|x| x.index)
+            .collect();
+        let default_tx: Vec<u16> = p
+            .tx_pdos
+            .iter()
+            .filter(|x| x.assigned)
+            .map(|x| x.index)
+            .collect();
+        let bytes = |pdos: &[od_gen::model::Pdo], chosen: &[u16]| -> usize {
+            pdos.iter()
+                .filter(|x| chosen.contains(&x.index))
+                .map(|x| x.bits() as usize / 8)
+                .sum()
+        };
+        for alt in p.rx_pdos.iter().filter(|x| !x.assigned) {
+            let sizes = block_on(op_with_assignment(&p, &[alt.index], &default_tx));
+            assert_eq!(
+                sizes,
+                (
+                    bytes(&p.rx_pdos, &[alt.index]),
+                    bytes(&p.tx_pdos, &default_tx)
+                ),
+                "{} {:#06x}",
+                p.name,
+                alt.index
+            );
+            tried += 1;
+        }
+        for alt in p.tx_pdos.iter().filter(|x| !x.assigned) {
+            let sizes = block_on(op_with_assignment(&p, &default_rx, &[alt.index]));
+            assert_eq!(
+                sizes,
+                (
+                    bytes(&p.rx_pdos, &default_rx),
+                    bytes(&p.tx_pdos, &[alt.index])
+                ),
+                "{} {:#06x}",
+                p.name,
+                alt.index
+            );
+            tried += 1;
+        }
+    }
+    assert!(tried >= 20, "only {tried} alternative PDOs");
+}
