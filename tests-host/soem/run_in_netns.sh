@@ -4,7 +4,8 @@
 # (pysoem) scenario on the other end. Everything vanishes with the namespace.
 #
 # Environment: PYTHON (venv python with pysoem), WORKSPACE, SCRIPT (in tests-host/soem),
-# SIM_ARGS (extra sim-drive attach arguments), PROFILE, DRIVES, SIM_LOG, RESULT.
+# SIM_ARGS (extra sim-drive attach arguments), PROFILE (empty: drives from SIM_ARGS), DRIVES,
+# SIM_LOG, RESULT.
 set -euo pipefail
 ip link set lo up
 ip link add ecm0 type veth peer name ecs0
@@ -21,7 +22,9 @@ done
 cd "$WORKSPACE"
 # The command the README documents for attaching a simulated drive to an interface.
 # shellcheck disable=SC2086 # SIM_ARGS is a word list
-cargo run --release -q -p board-sim -- attach --iface ecs0 --profile "$PROFILE" --drives "$DRIVES" --seconds 120 ${SIM_ARGS:-} >"$SIM_LOG" 2>&1 &
+# An empty PROFILE: the drives come from SIM_ARGS alone (a mixed line: --drive P --drive Q ...).
+if [ -n "${PROFILE:-}" ]; then drive_args=(--profile "$PROFILE" --drives "$DRIVES"); else drive_args=(); fi
+cargo run --release -q -p board-sim -- attach --iface ecs0 "${drive_args[@]}" --seconds 120 ${SIM_ARGS:-} >"$SIM_LOG" 2>&1 &
 sim=$!
 trap 'kill -INT $sim 2>/dev/null || true; wait $sim 2>/dev/null || true' EXIT
 # `cargo run` may have to build first; wait for the simulator to listen (bounded), never start

@@ -100,6 +100,13 @@ pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, 
     run_script("scenario.py", profile, drives, &[])
 }
 
+/// Runs the python script `tests-host/soem/<script>` against a line of simulated drives of the
+/// given profiles, in that order (`sim-drive attach --drive P --drive Q ...`).
+pub fn run_line(script: &str, profiles: &[&str]) -> Result<(serde_json::Value, String), String> {
+    let args: Vec<&str> = profiles.iter().flat_map(|p| ["--drive", *p]).collect();
+    run_script(script, "", profiles.len(), &args)
+}
+
 /// Runs the python script `tests-host/soem/<script>` (argument: the master's interface and the
 /// number of drives; it prints one JSON object) against `drives` simulated drives of `profile`
 /// attached with `sim-drive attach` plus `sim_args`; returns the JSON and the simulator's log.
