@@ -24,6 +24,8 @@ use crate::profile::{self, AppVars, DriveProfile, MOTOR_FAULT_COUNT};
 /// The connection to a motor's control interrupt.
 struct AxisPort {
     link: &'static AxisLink,
+    /// The motor encoder's increments per revolution (unit factors in rpm).
+    counts_per_rev: u32,
     /// The axis' trip counter at the last fault raised here.
     trips_seen: u32,
     /// The motor model last handed to the axis.
@@ -57,10 +59,12 @@ impl Drive {
     /// Connects the motor's control interrupt: from now on the set-points go to it and the
     /// actual values come from it; the commissioned motor data in `ram` go to it at once (the
     /// parameters were loaded at power-on). The board calls
-    /// [`crate::motor::axis::Axis::control_step`] with the same `link`.
-    pub fn attach_axis(&mut self, link: &'static AxisLink, ram: &[u8]) {
+    /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `counts_per_rev` is its
+    /// encoder's resolution (for profiles whose velocity unit is in rpm).
+    pub fn attach_axis(&mut self, link: &'static AxisLink, counts_per_rev: u32, ram: &[u8]) {
         let mut port = AxisPort {
             link,
+            counts_per_rev,
             trips_seen: link.feedback().trips,
             model_sent: None,
             results_written: false,
@@ -167,10 +171,15 @@ impl Drive {
             (AxisState::Identified, _) => {}
             _ => port.results_written = false,
         }
+        // The profile's user units (e.g. 6091h gear ratio): read each cycle, so a master's
+        // change applies at once.
+        let position_ratio = vars.position_factor.ratio(ram, port.counts_per_rev);
+        let velocity_ratio = vars.velocity_factor.ratio(ram, port.counts_per_rev);
         let targets = Targets {
             position: read_i32(ram, vars.target_position)
-                .map(|t| units::extend_position(t, feedback.position)),
-            velocity: read_i32(ram, vars.target_velocity).map_or(0.0, |v| v as f32),
+                .map(|t| units::target_position(t, feedback.position, position_ratio)),
+            velocity: read_i32(ram, vars.target_velocity)
+                .map_or(0.0, |v| velocity_ratio.velocity_to_internal(v as f32)),
             torque: units::torque_from_permille(
                 read_bytes::<2>(ram, vars.target_torque).map_or(0, i16::from_le_bytes),
                 rated_nm,
@@ -194,12 +203,13 @@ impl Drive {
         write_bytes(
             ram,
             vars.position_actual_value,
-            units::position_object(feedback.position).to_le_bytes(),
+            units::actual_position(feedback.position, position_ratio).to_le_bytes(),
         );
         write_bytes(
             ram,
             vars.velocity_actual_value,
-            units::velocity_object(feedback.velocity).to_le_bytes(),
+            units::velocity_object(velocity_ratio.velocity_from_internal(feedback.velocity))
+                .to_le_bytes(),
         );
         write_bytes(
             ram,

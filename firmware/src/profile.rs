@@ -2,6 +2,7 @@
 //! variables live in the OD RAM, and the profile's error code for every motor fault. od-gen
 //! generates one [`DriveProfile`] per profile file (`crate::profiles`).
 
+use cia402::units::Ratio;
 use ethercat_slave::mailbox::emcy;
 use ethercat_slave::od::Profile;
 
@@ -43,6 +44,77 @@ pub struct AppVars {
     pub motor_lq: Option<u16>,
     /// Commissioned rotor + load inertia (u32, g·mm²; 0 = not commissioned).
     pub motor_inertia: Option<u16>,
+    /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
+    pub position_factor: Factor,
+    /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
+    pub velocity_factor: Factor,
+}
+
+/// One side of a unit factor: a constant, or an unsigned object entry in the OD RAM (e.g.
+/// 6091h:01), read every cycle so that a master's write takes effect at once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Operand {
+    /// A fixed value.
+    Const(u32),
+    /// An unsigned little-endian entry of `len` (1..=4) bytes at OD RAM offset `at`.
+    Ram {
+        /// OD RAM offset.
+        at: u16,
+        /// Byte length.
+        len: u8,
+    },
+    /// The motor encoder's increments per revolution (from the axis; e.g. a velocity in rpm).
+    CountsPerRev,
+}
+
+impl Operand {
+    /// The value; an entry outside the RAM reads 0, an unknown encoder resolution too (which
+    /// [`Ratio::new`] turns into 1:1).
+    pub fn value(self, ram: &[u8], counts_per_rev: u32) -> u64 {
+        match self {
+            Self::Const(v) => u64::from(v),
+            Self::CountsPerRev => u64::from(counts_per_rev),
+            Self::Ram { at, len } => {
+                let start = usize::from(at);
+                let bytes = ram.get(start..start + usize::from(len.min(4)));
+                bytes.map_or(0, |b| {
+                    b.iter()
+                        .rev()
+                        .fold(0u64, |acc, &byte| acc << 8 | u64::from(byte))
+                })
+            }
+        }
+    }
+}
+
+/// internal = value × numerator / denominator × scale (profile `[units]`, see od-gen/README.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Factor {
+    /// Numerator.
+    pub numerator: Operand,
+    /// Denominator.
+    pub denominator: Operand,
+    /// A constant rational factor on top (e.g. 1/600 for 0.1 rpm from increments per
+    /// revolution), `(numerator, denominator)`.
+    pub scale: (u32, u32),
+}
+
+impl Factor {
+    /// 1:1.
+    pub const ONE: Self = Self {
+        numerator: Operand::Const(1),
+        denominator: Operand::Const(1),
+        scale: (1, 1),
+    };
+
+    /// The ratio with the current values of its entries and the motor encoder's resolution.
+    pub fn ratio(&self, ram: &[u8], counts_per_rev: u32) -> Ratio {
+        Ratio::new(
+            self.numerator.value(ram, counts_per_rev),
+            self.denominator.value(ram, counts_per_rev),
+        )
+        .times(Ratio::new(u64::from(self.scale.0), u64::from(self.scale.1)))
+    }
 }
 
 impl AppVars {
@@ -64,6 +136,8 @@ impl AppVars {
         motor_ld: None,
         motor_lq: None,
         motor_inertia: None,
+        position_factor: Factor::ONE,
+        velocity_factor: Factor::ONE,
     };
 }
 
@@ -189,5 +263,48 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn factors_read_their_entries_every_time() {
+        use super::{Factor, Operand};
+        use cia402::units::Ratio;
+        let mut ram = [0u8; 8];
+        ram[0..4].copy_from_slice(&10_000u32.to_le_bytes());
+        ram[4..6].copy_from_slice(&3u16.to_le_bytes());
+        let f = Factor {
+            numerator: Operand::Ram { at: 0, len: 4 },
+            denominator: Operand::Ram { at: 4, len: 2 },
+            scale: (1, 1),
+        };
+        assert_eq!(f.ratio(&ram, 0), Ratio::new(10_000, 3));
+        ram[4] = 5;
+        assert_eq!(
+            f.ratio(&ram, 0),
+            Ratio::new(10_000, 5),
+            "a master's write counts at once"
+        );
+        let scaled = Factor {
+            scale: (1, 600),
+            ..f
+        };
+        assert_eq!(scaled.ratio(&ram, 0), Ratio::new(10_000, 3_000));
+        // 0.1 rpm at 2^17 increments per revolution.
+        let rpm = Factor {
+            numerator: Operand::CountsPerRev,
+            denominator: Operand::Const(600),
+            scale: (1, 1),
+        };
+        assert_eq!(rpm.ratio(&ram, 1 << 17), Ratio::new(1 << 17, 600));
+        // Outside the RAM, zero, or no encoder resolution: 1:1, never a division by zero.
+        let outside = Factor {
+            numerator: Operand::Ram { at: 7, len: 4 },
+            ..Factor::ONE
+        };
+        assert_eq!(outside.ratio(&ram, 0), Ratio::ONE);
+        assert_eq!(rpm.ratio(&ram, 0), Ratio::ONE);
+        ram[4] = 0;
+        ram[5] = 0;
+        assert_eq!(f.ratio(&ram, 0), Ratio::ONE);
     }
 }

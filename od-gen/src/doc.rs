@@ -602,6 +602,43 @@ fn process_data(out: &mut String, p: &Profile) {
     }
 }
 
+/// `[units]`: what a position / velocity unit is in increments.
+fn units(out: &mut String, p: &Profile) {
+    use crate::model::{Factor, Operand};
+    out.push_str(
+        "## Units
+
+",
+    );
+    let side = |o: Operand| match o {
+        Operand::Const(v) => v.to_string(),
+        Operand::Entry(i, s) => format!("{i:04X}h:{s:02X}"),
+        Operand::CountsPerRev => "encoder increments per revolution".into(),
+    };
+    let factor = |f: &Factor| {
+        let mut t = format!("{} / {}", side(f.numerator), side(f.denominator));
+        if f.scale != (1, 1) {
+            let _ = write!(t, " × {}/{}", f.scale.0, f.scale.1);
+        }
+        t
+    };
+    let rows = vec![
+        vec![
+            "position (607Ah, 6064h)".to_string(),
+            format!("increments = value × {}", factor(&p.units.position)),
+        ],
+        vec![
+            "velocity (60FFh, 606Ch)".to_string(),
+            format!("increments/s = value × {}", factor(&p.units.velocity)),
+        ],
+        vec![
+            "torque (6071h, 6077h)".to_string(),
+            "0.1 % of the motor rated torque 6076h".to_string(),
+        ],
+    ];
+    md_table(out, &["object", "conversion (read every cycle)"], &rows);
+}
+
 fn modes(out: &mut String, p: &Profile) {
     out.push_str("## Supported modes of operation (6502h)\n\n");
     match supported_modes(p) {
@@ -880,6 +917,7 @@ pub fn markdown(p: &Profile) -> String {
     sync_managers(&mut out, p);
     synchronisation(&mut out, p);
     process_data(&mut out, p);
+    units(&mut out, p);
     modes(&mut out, p);
     alarms(&mut out, p);
     motor_faults(&mut out, p);

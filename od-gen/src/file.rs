@@ -40,6 +40,9 @@ pub struct ProfileFile {
     /// EtherCAT state machine rules (optional: every key has a default).
     #[serde(default)]
     pub esm: EsmFile,
+    /// `[units]`: how the position and velocity objects convert to the drive's internal units.
+    #[serde(default)]
+    pub units: UnitsFile,
     /// `[motor_faults]`: the CiA402 error code (603Fh, EMCY) of each internal motor fault, by
     /// fault name ([`crate::model::MOTOR_FAULT_NAMES`]). In a drive profile every fault must be
     /// mapped (an absent table is reported as every name missing); a device profile has none.
@@ -158,6 +161,20 @@ pub struct ReplicateFile {
     pub last: u16,
     /// Added to each index.
     pub offset: u16,
+}
+
+/// `[units]`: `position` and `velocity`, each a factor table
+/// `{ numerator, denominator, scale = [n, d] }` whose sides are integers or entries
+/// (`"0x6091:1"`); `velocity` may also be `"position"` (position units per second).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnitsFile {
+    /// Increments per position unit.
+    #[serde(default)]
+    pub position: Option<toml::Value>,
+    /// Increments/s per velocity unit.
+    #[serde(default)]
+    pub velocity: Option<toml::Value>,
 }
 
 /// `[vendor]`

@@ -915,6 +915,8 @@ pub struct Profile {
     pub motor_faults: [MotorFaultCode; MOTOR_FAULT_COUNT],
     /// The drive's alarm table (`[[alarm]]`).
     pub alarms: Vec<Alarm>,
+    /// Unit conversions of the position and velocity objects (`[units]`).
+    pub units: Units,
     /// Choices where the manual is silent, wrong or contradicts itself (`[[decision]]`).
     pub decisions: Vec<Decision>,
     /// Object ranges copied to further axes: (first, last, offset) (`[[replicate]]`).
@@ -925,6 +927,47 @@ pub struct Profile {
     pub tx_pdos: Vec<Pdo>,
     /// All objects (declared and derived), sorted by index.
     pub objects: Vec<Object>,
+}
+
+/// One side of a unit factor (`[units]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Operand {
+    /// A constant.
+    Const(u32),
+    /// An unsigned entry, read at run time: (index, subindex).
+    Entry(u16, u8),
+    /// The motor encoder's increments per revolution (`"counts_per_rev"`).
+    CountsPerRev,
+}
+
+/// internal = value × numerator / denominator × scale.0 / scale.1 (`[units]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Factor {
+    /// Numerator.
+    pub numerator: Operand,
+    /// Denominator.
+    pub denominator: Operand,
+    /// Constant rational factor.
+    pub scale: (u32, u32),
+}
+
+impl Factor {
+    /// 1:1.
+    pub const ONE: Self = Self {
+        numerator: Operand::Const(1),
+        denominator: Operand::Const(1),
+        scale: (1, 1),
+    };
+}
+
+/// How the position and velocity objects (607Ah/6064h, 60FFh/606Ch) convert to increments and
+/// increments/s (`[units]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Units {
+    /// Increments per position unit.
+    pub position: Factor,
+    /// Increments/s per velocity unit.
+    pub velocity: Factor,
 }
 
 /// What an EMCY message carries for an error: bytes 0–1 and the manufacturer field, bytes 3–7

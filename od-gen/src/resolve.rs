@@ -405,6 +405,10 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         kind,
         motor_faults,
         alarms,
+        units: Units {
+            position: Factor::ONE,
+            velocity: Factor::ONE,
+        },
         decisions: f
             .decisions
             .iter()
@@ -428,8 +432,126 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         declared.insert(o.index, o);
     }
     profile.objects = declared.into_values().collect();
+    profile.units = units(&f.units, &profile)?;
     crate::validate::check(&profile)?;
     Ok(profile)
+}
+
+/// `[units]` → [`Units`]: each side an integer ≥ 1 or an unsigned entry of at most 32 bits
+/// that exists (it is read at run time, so a master's write takes effect).
+fn units(u: &crate::file::UnitsFile, p: &Profile) -> Result<Units, Fault> {
+    let position = match &u.position {
+        None => Factor::ONE,
+        Some(v) => factor(v, p, "units.position")?,
+    };
+    let velocity = match &u.velocity {
+        None => Factor::ONE,
+        Some(toml::Value::String(s)) if s == "position" => position,
+        Some(v) => factor(v, p, "units.velocity")?,
+    };
+    Ok(Units { position, velocity })
+}
+
+fn factor(v: &toml::Value, p: &Profile, key: &str) -> Result<Factor, Fault> {
+    let t = v.as_table().ok_or_else(|| {
+        fault(
+            key,
+            Invalid::Value(
+                "a table { numerator, denominator, scale = [n, d] } (velocity: or \"position\")"
+                    .into(),
+            ),
+        )
+    })?;
+    if let Some(k) = t
+        .keys()
+        .find(|k| !matches!(k.as_str(), "numerator" | "denominator" | "scale"))
+    {
+        return Err(fault(&format!("{key}.{k}"), Invalid::NotAllowed("key")));
+    }
+    let side = |name: &str| -> Result<Operand, Fault> {
+        let k = format!("{key}.{name}");
+        match t.get(name) {
+            None => Ok(Operand::Const(1)),
+            Some(toml::Value::Integer(i)) => u32::try_from(*i)
+                .ok()
+                .filter(|v| *v >= 1)
+                .map(Operand::Const)
+                .ok_or_else(|| fault(&k, Invalid::Value("must be 1..=0xFFFFFFFF".into()))),
+            Some(toml::Value::String(s)) if s == "counts_per_rev" => Ok(Operand::CountsPerRev),
+            Some(toml::Value::String(s)) => {
+                let (index, sub) = parse_entry_ref(s).ok_or_else(|| {
+                    fault(&k, Invalid::Value(format!("`{s}` is not \"0xIIII:S\"")))
+                })?;
+                let e = p.entry(index, sub).ok_or_else(|| {
+                    fault(
+                        &k,
+                        Invalid::PdoEntryMissing {
+                            index,
+                            subindex: sub,
+                        },
+                    )
+                })?;
+                let unsigned = matches!(
+                    e.data_type,
+                    DataType::Usint | DataType::Uint | DataType::Uint24 | DataType::Udint
+                );
+                if !unsigned || !e.access.readable() {
+                    return Err(fault(
+                        &k,
+                        Invalid::Value(format!(
+                            "{index:#06x}:{sub} must be a readable unsigned entry of at most 32 bits"
+                        )),
+                    ));
+                }
+                Ok(Operand::Entry(index, sub))
+            }
+            Some(_) => Err(fault(
+                &k,
+                Invalid::Value("an integer, \"0xIIII:S\" or \"counts_per_rev\"".into()),
+            )),
+        }
+    };
+    let scale = match t.get("scale") {
+        None => (1, 1),
+        Some(v) => {
+            let pair: Option<(u32, u32)> = v.as_array().and_then(|a| match a.as_slice() {
+                [n, d] => Some((
+                    u32::try_from(n.as_integer()?).ok()?,
+                    u32::try_from(d.as_integer()?).ok()?,
+                )),
+                _ => None,
+            });
+            pair.filter(|(n, d)| *n >= 1 && *d >= 1).ok_or_else(|| {
+                fault(
+                    &format!("{key}.scale"),
+                    Invalid::Value("[numerator, denominator], both ≥ 1".into()),
+                )
+            })?
+        }
+    };
+    Ok(Factor {
+        numerator: side("numerator")?,
+        denominator: side("denominator")?,
+        scale,
+    })
+}
+
+/// `"0x6091:1"` → (0x6091, 1); the subindex may be decimal or `0x` hex.
+fn parse_entry_ref(s: &str) -> Option<(u16, u8)> {
+    let (i, sub) = s.split_once(':')?;
+    let index = u16::from_str_radix(
+        i.trim()
+            .strip_prefix("0x")
+            .or(i.trim().strip_prefix("0X"))?,
+        16,
+    )
+    .ok()?;
+    let sub = sub.trim();
+    let sub = match sub.strip_prefix("0x") {
+        Some(h) => u8::from_str_radix(h, 16).ok()?,
+        None => sub.parse().ok()?,
+    };
+    Some((index, sub))
 }
 
 /// `[[alarm]]` → [`Alarm`]s; `display` must be unique and non-empty.

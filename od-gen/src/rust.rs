@@ -166,7 +166,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     if let Some(drive) = target.drive {
         let _ = writeln!(
             out,
-            "    use {drive}::profile::{{AppVars, DriveProfile}};\n"
+            "    use {drive}::profile::{{AppVars, DriveProfile, Factor, Operand}};\n"
         );
     }
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
@@ -345,6 +345,16 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         for r in Role::ALL {
             let _ = writeln!(out, "            {}: {},", r.field(), var(r));
         }
+        let _ = writeln!(
+            out,
+            "            position_factor: {},",
+            factor(p, &layout, &p.units.position)
+        );
+        let _ = writeln!(
+            out,
+            "            velocity_factor: {},",
+            factor(p, &layout, &p.units.velocity)
+        );
         let _ = writeln!(out, "        }},");
         let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
     }
@@ -366,6 +376,41 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         "    const _: () = assert!(super::check::backup_agrees(OBJECTS, BACKUP), \"od-gen's backup flags differ from params::is_storable\");"
     );
     let _ = writeln!(out, "}}\n");
+}
+
+/// A `[units]` factor as the firmware's `Factor`: entries in the OD RAM by offset and length,
+/// constant entries by their value.
+fn factor(p: &Profile, layout: &RamLayout, f: &crate::model::Factor) -> String {
+    use crate::model::Operand as O;
+    let side = |o: &O| -> String {
+        match *o {
+            O::Const(v) => format!("Operand::Const({v})"),
+            O::CountsPerRev => "Operand::CountsPerRev".into(),
+            O::Entry(index, sub) => {
+                let e = p.entry(index, sub);
+                match (layout.offsets.get(&(index, sub)), e) {
+                    (Some(at), Some(e)) => {
+                        format!("Operand::Ram {{ at: {at}, len: {} }}", e.byte_len())
+                    }
+                    (None, Some(e)) => {
+                        let mut v = [0u8; 4];
+                        for (d, s) in v.iter_mut().zip(&e.default) {
+                            *d = *s;
+                        }
+                        format!("Operand::Const({})", u32::from_le_bytes(v).max(1))
+                    }
+                    _ => "Operand::Const(1)".into(),
+                }
+            }
+        }
+    };
+    format!(
+        "Factor {{ numerator: {}, denominator: {}, scale: ({}, {}) }}",
+        side(&f.numerator),
+        side(&f.denominator),
+        f.scale.0,
+        f.scale.1
+    )
 }
 
 /// `(index, subindex)` of every entry that `keep` selects, in dictionary order, as Rust tuples.

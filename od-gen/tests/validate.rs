@@ -762,3 +762,51 @@ fn entry_names_are_unique_within_an_object() {
     assert_eq!(key, "object[0x2003].entry[0x02].name");
     assert_eq!(e, Invalid::DuplicateEntryName("Reserve".into()));
 }
+
+#[test]
+fn units_factors_name_unsigned_entries_or_constants() {
+    use od_gen::model::{Factor, Operand};
+    let p = od_gen::builtin("gha-e").unwrap();
+    assert_eq!(
+        p.units.position,
+        Factor {
+            numerator: Operand::Entry(0x6091, 1),
+            denominator: Operand::Entry(0x6091, 2),
+            scale: (1, 1)
+        }
+    );
+    assert_eq!(
+        p.units.velocity, p.units.position,
+        "velocity = \"position\""
+    );
+    let sdv = od_gen::builtin("sdv3-e").unwrap();
+    assert_eq!(sdv.units.velocity.numerator, Operand::CountsPerRev);
+    assert_eq!(sdv.units.velocity.denominator, Operand::Const(600));
+    assert_eq!(
+        od_gen::builtin("standard").unwrap().units.position,
+        Factor::ONE
+    );
+
+    let units = |t: &str| format!("{STANDARD}\n[units]\n{t}\n");
+    let (key, _) = invalid(&units("position = { numerator = \"0x6091:1\" }"));
+    assert_eq!(
+        key, "units.position.numerator",
+        "no 6091h in the standard profile"
+    );
+    let (key, _) = invalid(&units("position = { numerator = \"0x6064:0\" }"));
+    assert_eq!(key, "units.position.numerator", "a signed entry");
+    let (key, _) = invalid(&units("position = { numerator = 0 }"));
+    assert_eq!(key, "units.position.numerator");
+    let (key, _) = invalid(&units("velocity = { scale = [1, 0] }"));
+    assert_eq!(key, "units.velocity.scale");
+    let (key, _) = invalid(&units("velocity = { factor = 3 }"));
+    assert_eq!(key, "units.velocity.factor");
+    let ok = od_gen::parse(
+        &units(
+            "position = { numerator = \"0x6076:0\", denominator = 1000 }\nvelocity = \"position\"",
+        ),
+        "p.toml",
+    )
+    .unwrap();
+    assert_eq!(ok.units.velocity.numerator, Operand::Entry(0x6076, 0));
+}

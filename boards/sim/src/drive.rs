@@ -88,7 +88,7 @@ impl SimDrive {
         let loaded = slave.load_parameters(&mut params);
         let servo = new_servo();
         let (drive, ram) = slave.application();
-        drive.attach_axis(servo.link(), ram);
+        drive.attach_axis(servo.link(), servo.counts_per_rev(), ram);
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.
         let _ = slave.start(&mut esc);
@@ -121,7 +121,7 @@ impl SimDrive {
         self.loaded = slave.load_parameters(&mut self.params);
         self.servo.restart_firmware();
         let (drive, ram) = slave.application();
-        drive.attach_axis(self.servo.link(), ram);
+        drive.attach_axis(self.servo.link(), self.servo.counts_per_rev(), ram);
         // As in `with_storage`: the simulated PDI does not fail.
         let _ = slave.start(&mut esc);
         self.esc = esc;

@@ -174,6 +174,11 @@ impl SimServo {
         self.link.publish(command);
     }
 
+    /// The encoder's increments per revolution (for [`firmware::drive::Drive::attach_axis`]).
+    pub fn counts_per_rev(&self) -> u32 {
+        counts_per_rev(&self.plant.config().encoder)
+    }
+
     /// The link, for the drive application ([`firmware::drive::Drive::attach_axis`]). Only
     /// one context may publish: a servo whose link is attached is commanded by the slave, not
     /// by [`SimServo::publish`].

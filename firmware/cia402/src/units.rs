@@ -54,9 +54,135 @@ pub fn to_object_units(value: f32, unit: f32) -> u32 {
     (value / unit + 0.5) as u32
 }
 
+/// The factor between a profile's user unit and the drive's internal unit (DESIGN.md §4:
+/// increments, increments/s): internal = value × numerator / denominator, e.g. the gear ratio
+/// 6091h or the position factor 6093h. Built fresh every cycle from the objects that hold it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ratio {
+    numerator: u64,
+    denominator: u64,
+}
+
+impl Ratio {
+    /// 1:1 (user unit = internal unit).
+    pub const ONE: Self = Self {
+        numerator: 1,
+        denominator: 1,
+    };
+
+    /// `numerator / denominator`. A zero on either side (a factor object the master set to 0,
+    /// which CiA402 ranges exclude) gives [`Self::ONE`], so that no conversion divides by zero
+    /// or collapses every value to 0.
+    pub fn new(numerator: u64, denominator: u64) -> Self {
+        if numerator == 0 || denominator == 0 {
+            Self::ONE
+        } else {
+            Self {
+                numerator,
+                denominator,
+            }
+        }
+    }
+
+    /// This ratio times `other` (e.g. a position factor times a constant per-second scale),
+    /// saturating.
+    pub fn times(self, other: Self) -> Self {
+        Self::new(
+            self.numerator.saturating_mul(other.numerator),
+            self.denominator.saturating_mul(other.denominator),
+        )
+    }
+
+    /// A position in user units as increments, saturating at the i64 range.
+    pub fn position_to_internal(self, user: i64) -> i64 {
+        if self == Self::ONE {
+            return user;
+        }
+        let wide = i128::from(user) * i128::from(self.numerator) / i128::from(self.denominator);
+        i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
+    }
+
+    /// Increments as a position in user units (rounded toward zero), saturating.
+    pub fn position_from_internal(self, increments: i64) -> i64 {
+        if self == Self::ONE {
+            return increments;
+        }
+        let wide =
+            i128::from(increments) * i128::from(self.denominator) / i128::from(self.numerator);
+        i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
+    }
+
+    /// A velocity in user units/s as increments/s.
+    pub fn velocity_to_internal(self, user: f32) -> f32 {
+        user * (self.numerator as f32 / self.denominator as f32)
+    }
+
+    /// Increments/s as a velocity in user units/s.
+    pub fn velocity_from_internal(self, increments_per_s: f32) -> f32 {
+        increments_per_s * (self.denominator as f32 / self.numerator as f32)
+    }
+}
+
+/// A 32-bit target position object (607Ah, user units) as increments: extended to 64 bits
+/// relative to the actual position in user units (so it is right across wraps of the 32-bit
+/// object), then scaled.
+pub fn target_position(target: i32, actual_increments: i64, ratio: Ratio) -> i64 {
+    let actual_user = ratio.position_from_internal(actual_increments);
+    ratio.position_to_internal(extend_position(target, actual_user))
+}
+
+/// An actual position in increments as its 32-bit object (6064h, user units; wraps).
+pub fn actual_position(increments: i64, ratio: Ratio) -> i32 {
+    position_object(ratio.position_from_internal(increments))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ratios_scale_positions_and_velocities_both_ways() {
+        // 10 000 increments per user unit (e.g. 6091h = 10000:1).
+        let r = Ratio::new(10_000, 1);
+        assert_eq!(r.position_to_internal(3), 30_000);
+        assert_eq!(r.position_from_internal(30_009), 3);
+        assert_eq!(r.position_from_internal(-30_009), -3, "toward zero");
+        assert_eq!(r.velocity_to_internal(2.5), 25_000.0);
+        assert_eq!(r.velocity_from_internal(25_000.0), 2.5);
+        // 1 user unit = 1/4 increment (numerator < denominator).
+        let q = Ratio::new(1, 4);
+        assert_eq!(q.position_to_internal(400), 100);
+        assert_eq!(q.position_from_internal(100), 400);
+        // 0.1 rpm per velocity unit at 2^17 increments/rev: × 131072 / 600.
+        let rpm = Ratio::new(1 << 17, 1).times(Ratio::new(1, 600));
+        assert_eq!(rpm.velocity_to_internal(600.0), 131_072.0);
+    }
+
+    #[test]
+    fn a_zero_factor_is_one_and_nothing_overflows() {
+        assert_eq!(Ratio::new(0, 5), Ratio::ONE);
+        assert_eq!(Ratio::new(5, 0), Ratio::ONE);
+        let huge = Ratio::new(u64::MAX, 1);
+        assert_eq!(huge.position_to_internal(i64::MAX), i64::MAX);
+        assert_eq!(huge.position_to_internal(i64::MIN), i64::MIN);
+        assert_eq!(
+            Ratio::new(1, u64::MAX).position_from_internal(i64::MAX),
+            i64::MAX
+        );
+        assert_eq!(huge.times(huge), Ratio::new(u64::MAX, 1));
+    }
+
+    #[test]
+    fn target_positions_extend_in_user_units() {
+        let r = Ratio::new(1000, 1);
+        // Actual 5 000 000 increments = 5000 units; a target of 5010 units is 10 units ahead.
+        assert_eq!(target_position(5010, 5_000_000, r), 5_010_000);
+        assert_eq!(actual_position(5_000_999, r), 5000);
+        // Across the wrap of the 32-bit user object.
+        let near = (i64::from(i32::MAX) - 1) * 1000;
+        assert_eq!(target_position(i32::MIN, near, r), near + 2000);
+        assert_eq!(target_position(7, 7, Ratio::ONE), 7);
+    }
 
     #[test]
     fn torque_round_trips_through_per_mille_of_rated() {

@@ -1,0 +1,162 @@
+//! A profile's user units between the bus and the motor (`[units]` in the profile file): the
+//! GHA-E converts positions with its electronic gear ratio 6091h (increments = instruction units
+//! × 6091h:01 / 6091h:02) and velocities in instruction units/s. Commanded by ethercrab over
+//! PDOs with DC SYNC0 (the GHA-E runs in DC mode only), the simulated motor turns by the
+//! converted amount and 6064h reads back in user units.
+
+use std::time::Duration;
+
+use board_sim::Segment;
+use ethercrab::subdevice_group::DcConfiguration;
+use ethercrab::{DcSync, MainDevice};
+use tests_host::{block_on, master_for};
+
+const CYCLE_NS: u64 = 1_000_000;
+/// Increments per revolution of the simulated servo's encoder.
+const CPR: u32 = 1 << 20;
+/// 6091h: one instruction unit = 0.1° (3600 per revolution).
+const UNITS_PER_REV: u32 = 3600;
+const SHUTDOWN: u16 = 0x06;
+const SWITCH_ON: u16 = 0x07;
+const ENABLE_OPERATION: u16 = 0x0F;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+/// 6060h modes: cyclic synchronous position / velocity.
+const CSP: u8 = 8;
+const CSV: u8 = 9;
+
+fn mapping(index: u16, sub: u8, bits: u8) -> u32 {
+    u32::from(index) << 16 | u32::from(sub) << 8 | u32::from(bits)
+}
+
+#[test]
+fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let mut group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(0x6091, 1, CPR).await.expect("6091h:01");
+            sd.sdo_write(0x6091, 2, UNITS_PER_REV)
+                .await
+                .expect("6091h:02");
+            // RxPDO: controlword, target position, mode; TxPDO: statusword, position actual.
+            for (pdo, assign, entries) in [
+                (
+                    0x1600u16,
+                    0x1C12u16,
+                    vec![
+                        mapping(0x6040, 0, 16),
+                        mapping(0x607A, 0, 32),
+                        mapping(0x6060, 0, 8),
+                    ],
+                ),
+                (
+                    0x1A00,
+                    0x1C13,
+                    vec![mapping(0x6041, 0, 16), mapping(0x6064, 0, 32)],
+                ),
+            ] {
+                sd.sdo_write(assign, 0, 0u8).await.expect("assign :00 = 0");
+                sd.sdo_write(pdo, 0, 0u8).await.expect("map :00 = 0");
+                for (i, e) in entries.iter().enumerate() {
+                    sd.sdo_write(pdo, (i + 1) as u8, *e).await.expect("entry");
+                }
+                sd.sdo_write(pdo, 0, entries.len() as u8)
+                    .await
+                    .expect("map :00 = n");
+                sd.sdo_write(assign, 1, pdo).await.expect("assign :01");
+                sd.sdo_write(assign, 0, 1u8).await.expect("assign :00 = 1");
+            }
+        }
+        for mut sd in group.iter_mut(md) {
+            sd.set_dc_sync(DcSync::Sync0);
+        }
+        let group = group.into_pre_op_pdi(md).await.expect("PRE-OP");
+        for _ in 0..100 {
+            group.tx_rx_sync_system_time(md).await.expect("time");
+            m.shared.advance(CYCLE_NS);
+        }
+        let group = group
+            .configure_dc_sync(
+                md,
+                DcConfiguration {
+                    start_delay: Duration::from_millis(10),
+                    sync0_period: Duration::from_nanos(CYCLE_NS),
+                    sync0_shift: Duration::ZERO,
+                },
+            )
+            .await
+            .expect("DC")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let sd = group.subdevice(md, 0).expect("drive");
+        let mut cycle = |cw: u16, target: i32, mode: u8| {
+            {
+                let mut out = sd.outputs_raw_mut();
+                out[0..2].copy_from_slice(&cw.to_le_bytes());
+                out[2..6].copy_from_slice(&target.to_le_bytes());
+                out[6] = mode;
+            }
+            let fut = group.tx_rx_dc(md);
+            async {
+                fut.await.expect("tx/rx");
+                m.shared.advance(CYCLE_NS);
+                let inp = sd.inputs_raw();
+                (
+                    u16::from_le_bytes([inp[0], inp[1]]),
+                    i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
+                )
+            }
+        };
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 20]
+            .into_iter()
+            .chain([SWITCH_ON; 10])
+            .chain([ENABLE_OPERATION; 40])
+        {
+            (sw, _) = cycle(cw, 0, CSP).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+
+        // CSP: 900 units (90°) in 300 ms, then hold.
+        let quarter_units = (UNITS_PER_REV / 4) as i32;
+        let mut actual = 0;
+        for k in 0..=300 {
+            (_, actual) = cycle(ENABLE_OPERATION, quarter_units * k / 300, CSP).await;
+        }
+        for _ in 0..100 {
+            (_, actual) = cycle(ENABLE_OPERATION, quarter_units, CSP).await;
+        }
+        let rotor = m.shared.segment().drives()[0].servo.plant.mech_angle_rad();
+        let rotor_counts = rotor / std::f64::consts::TAU * f64::from(CPR);
+        assert!(
+            (rotor_counts - f64::from(CPR / 4)).abs() < 300.0,
+            "rotor at {rotor_counts:.0} increments, expected {} (900 units × {CPR}/{UNITS_PER_REV})",
+            CPR / 4
+        );
+        assert!((actual - quarter_units).abs() <= 1, "6064h {actual} units");
+
+        // CSV: 60FFh = 1800 units/s (half a revolution per second) for 0.4 s.
+        sd.sdo_write(0x60FF, 0, 1800i32).await.expect("60FFh");
+        let before = m.shared.segment().drives()[0].servo.plant.mech_angle_rad();
+        for _ in 0..400 {
+            cycle(ENABLE_OPERATION, 0, CSV).await;
+        }
+        let after = m.shared.segment().drives()[0].servo.plant.mech_angle_rad();
+        let turned = (after - before) / std::f64::consts::TAU;
+        // 0.5 rev/s for 0.4 s = 0.2 rev, less the acceleration at the start.
+        assert!((0.17..=0.21).contains(&turned), "turned {turned:.3} rev");
+        let velocity: i32 = sd.sdo_read(0x606C, 0).await.expect("606Ch");
+        assert!((velocity - 1800).abs() < 60, "606Ch {velocity} units/s");
+    });
+}
