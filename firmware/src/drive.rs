@@ -13,6 +13,7 @@
 //! of the motor rated torque 6076h (mN·m).
 
 use cia402::device::Device;
+use cia402::faults::FaultReport;
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, PdsState};
 use cia402::units;
@@ -39,8 +40,11 @@ pub struct Drive {
     /// Where the CiA402 variables live (the profile's; a reference, so that reading it in the
     /// cycle copies a pointer, not the table).
     vars: &'static AppVars,
-    /// 603Fh code per motor fault (the profile's `[motor_faults]`).
-    fault_codes: &'static [u16; MOTOR_FAULT_COUNT],
+    /// 603Fh code and EMCY per motor fault (the profile's `[motor_faults]`).
+    fault_codes: &'static [FaultReport; MOTOR_FAULT_COUNT],
+    /// The EMCY code and manufacturer field of the fault the device holds (a motor fault's come
+    /// from the profile's alarm; an error the stack raises has its code and no data).
+    fault_emcy: (u16, [u8; 5]),
     device: Device,
     axis: Option<AxisPort>,
 }
@@ -51,6 +55,7 @@ impl Drive {
         Self {
             vars: &profile.vars,
             fault_codes: profile.motor_faults,
+            fault_emcy: (0, [0; 5]),
             device: Device::new(),
             axis: None,
         }
@@ -88,6 +93,14 @@ impl Drive {
     /// holds `code` until a fault reset (controlword bit 7 rising edge) leaves Fault. The caller
     /// reports the EMCY.
     pub fn fault(&mut self, code: u16, ram: &mut [u8]) {
+        self.report_fault(FaultReport::code(code), ram);
+    }
+
+    /// [`Self::fault`] with the profile's report: 603Fh = `report.error_code`, the EMCY the
+    /// next cycle announces carries `report.emcy_code` and `report.emcy_data`.
+    fn report_fault(&mut self, report: FaultReport, ram: &mut [u8]) {
+        self.fault_emcy = (report.emcy_code, report.emcy_data);
+        let code = report.error_code;
         write_u16(ram, self.vars.controlword, 0);
         let statusword = self.device.fault(code);
         write_u16(ram, self.vars.error_code, code);
@@ -131,16 +144,16 @@ impl Drive {
             port.trips_seen = feedback.trips;
             feedback
                 .fault
-                .map(|f| profile::motor_fault_code(self.fault_codes, f))
+                .map(|f| profile::motor_fault_report(self.fault_codes, f))
         } else {
             None
         };
-        if let Some(code) = new_fault {
+        if let Some(report) = new_fault {
             if !matches!(
                 self.device.state(),
                 PdsState::Fault | PdsState::FaultReactionActive
             ) {
-                self.fault(code, ram);
+                self.report_fault(report, ram);
             }
         }
         let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
@@ -243,9 +256,13 @@ impl Application for Drive {
     fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvent {
         let before = self.fault_code();
         self.step(ram, cycle_ns);
+        let (emcy_code, data) = self.fault_emcy;
         match (before, self.fault_code()) {
-            (Some(code), None) => AppEvent::ErrorCleared(code),
-            (None, Some(code)) => AppEvent::ErrorRaised(code),
+            (Some(_), None) => AppEvent::ErrorCleared(emcy_code),
+            (None, Some(_)) => AppEvent::ErrorRaised {
+                code: emcy_code,
+                data,
+            },
             _ => AppEvent::None,
         }
     }

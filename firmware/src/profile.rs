@@ -2,6 +2,7 @@
 //! variables live in the OD RAM, and the profile's error code for every motor fault. od-gen
 //! generates one [`DriveProfile`] per profile file (`crate::profiles`).
 
+pub use cia402::faults::FaultReport;
 use cia402::units::Ratio;
 use ethercat_slave::mailbox::emcy;
 use ethercat_slave::od::Profile;
@@ -151,7 +152,7 @@ pub struct DriveProfile {
     /// The CiA402 error code (603Fh, also the EMCY error code) of each internal motor fault,
     /// indexed by `MotorFault::code() - 1` (profile table `[motor_faults]`); read it with
     /// [`Self::motor_fault_code`].
-    pub motor_faults: &'static [u16; MOTOR_FAULT_COUNT],
+    pub motor_faults: &'static [FaultReport; MOTOR_FAULT_COUNT],
 }
 
 /// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].
@@ -162,14 +163,14 @@ impl DriveProfile {
     /// outside the table, which cannot happen while the table and [`MotorFault`] agree, as the
     /// generated code checks at compile time).
     pub fn motor_fault_code(&self, fault: MotorFault) -> u16 {
-        motor_fault_code(self.motor_faults, fault)
+        motor_fault_report(self.motor_faults, fault).error_code
     }
 }
 
-/// The error code `table` (a profile's `[motor_faults]`) gives `fault`; CiA 301 generic error
+/// What `table` (a profile's `[motor_faults]`) reports for `fault`; CiA 301 generic error
 /// ([`emcy::code::GENERIC`]) for a fault outside it.
-pub(crate) fn motor_fault_code(table: &[u16], fault: MotorFault) -> u16 {
-    cia402::faults::error_code(table, fault.code()).unwrap_or(emcy::code::GENERIC)
+pub(crate) fn motor_fault_report(table: &[FaultReport], fault: MotorFault) -> FaultReport {
+    cia402::faults::lookup(table, fault.code()).unwrap_or(FaultReport::code(emcy::code::GENERIC))
 }
 
 #[cfg(test)]

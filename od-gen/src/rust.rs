@@ -166,7 +166,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     if let Some(drive) = target.drive {
         let _ = writeln!(
             out,
-            "    use {drive}::profile::{{AppVars, DriveProfile, Factor, Operand}};\n"
+            "    use {drive}::profile::{{AppVars, DriveProfile, Factor, FaultReport, Operand}};\n"
         );
     }
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
@@ -225,15 +225,20 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     if target.drive.is_some() {
         let _ = writeln!(
             out,
-            "    /// 603Fh / EMCY error code of each internal motor fault (`[motor_faults]`), indexed by\n    /// `MotorFault::code() - 1` (the order of `super::MOTOR_FAULT_NAMES`)."
+            "    /// 603Fh code and EMCY of each internal motor fault (`[motor_faults]`), indexed by\n    /// `MotorFault::code() - 1` (the order of `super::MOTOR_FAULT_NAMES`)."
         );
         let _ = writeln!(
             out,
-            "    pub const MOTOR_FAULTS: [u16; {}] = [",
+            "    pub const MOTOR_FAULTS: [FaultReport; {}] = [",
             p.motor_faults.len()
         );
         for (code, name) in p.motor_faults.iter().zip(MOTOR_FAULT_NAMES) {
-            let _ = writeln!(out, "        {:#06x}, // {name}", code.error_code);
+            let d = code.emcy.data;
+            let _ = writeln!(
+                out,
+                "        FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }}, // {name}",
+                code.error_code, code.emcy.code, d[0], d[1], d[2], d[3], d[4]
+            );
         }
         let _ = writeln!(out, "    ];");
     }

@@ -18,7 +18,7 @@ fn module_shape() {
         "pub fn by_name(name: &str) -> Option<&'static crate::profile::DriveProfile>",
         "    ALL.iter().copied().find(|p| p.od.device.is_profile(name))",
         "use ::ethercat_slave::od::{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value};",
-        "use crate::profile::{AppVars, DriveProfile, Factor, Operand};",
+        "use crate::profile::{AppVars, DriveProfile, Factor, FaultReport, Operand};",
         "pub mod standard {",
         "pub const RAM_SIZE: usize = ",
         "pub const OUTPUTS_SIZE: usize = 7;",
@@ -27,7 +27,7 @@ fn module_shape() {
         "        od: Profile {",
         "        vars: AppVars {",
         "        motor_faults: &MOTOR_FAULTS,",
-        "pub const MOTOR_FAULTS: [u16; ",
+        "pub const MOTOR_FAULTS: [FaultReport; ",
         "const _: () = assert!(check::motor_fault_names_agree(&MOTOR_FAULT_NAMES)",
         "const _: () = assert!(::ethercat_slave::od::DataType::Unsigned16.code() == 0x0006",
         "const _: () = assert!(::ethercat_slave::od::Access::WRITE_PREOP == 0x08",
@@ -180,7 +180,9 @@ fn motor_fault_table_order_matches_the_names() {
         names.join(", ")
     )));
     assert!(code.contains("check::motor_fault_names_agree(&MOTOR_FAULT_NAMES)"));
-    let start = code.find("pub const MOTOR_FAULTS: [u16; 15] = [").unwrap();
+    let start = code
+        .find("pub const MOTOR_FAULTS: [FaultReport; 15] = [")
+        .unwrap();
     let rows: Vec<&str> = code[start..]
         .lines()
         .skip(1)
@@ -191,11 +193,16 @@ fn motor_fault_table_order_matches_the_names() {
         .motor_faults
         .iter()
         .zip(MOTOR_FAULT_NAMES)
-        .map(|(c, n)| format!("{:#06x}, // {n}", c.error_code))
+        .map(|(c, n)| {
+            format!(
+                "FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }}, // {n}",
+                c.error_code, c.error_code
+            )
+        })
         .collect();
     assert_eq!(rows, expected);
     // over_current (code 1) first, identification (code 15) last, as in standard.toml.
-    assert_eq!(rows.first().copied(), Some("0x2320, // over_current"));
-    assert_eq!(rows.last().copied(), Some("0x6320, // identification"));
+    assert!(rows[0].contains("error_code: 0x2320") && rows[0].ends_with("// over_current"));
+    assert!(rows[14].contains("error_code: 0x6320") && rows[14].ends_with("// identification"));
     assert!(code.contains("        motor_faults: &MOTOR_FAULTS,\n"));
 }

@@ -100,7 +100,7 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
             .await
             .expect("request OP");
         let sd = group.subdevice(md, 0).expect("drive");
-        let mut cycle = |cw: u16, target: i32, mode: u8| {
+        let cycle = |cw: u16, target: i32, mode: u8| {
             {
                 let mut out = sd.outputs_raw_mut();
                 out[0..2].copy_from_slice(&cw.to_le_bytes());

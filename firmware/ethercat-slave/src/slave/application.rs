@@ -8,9 +8,15 @@
 pub enum AppEvent {
     /// Nothing to report.
     None,
-    /// The application raised an error with this error code (EMCY error code; a drive's 603Fh).
-    ErrorRaised(u16),
-    /// The error with this code is gone (a drive's fault reset).
+    /// The application raised an error: the EMCY error code (a drive's 603Fh, or the profile's
+    /// EMCY code for the alarm) and the manufacturer-specific field of the EMCY (bytes 3–7).
+    ErrorRaised {
+        /// EMCY error code.
+        code: u16,
+        /// EMCY bytes 3–7.
+        data: [u8; 5],
+    },
+    /// The error with this EMCY code is gone (a drive's fault reset).
     ErrorCleared(u16),
 }
 

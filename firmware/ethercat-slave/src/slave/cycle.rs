@@ -76,11 +76,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 // (CiA 301). A full queue only loses that notification.
                 let _ = self.clear_error(code);
             }
-            AppEvent::ErrorRaised(code) => {
+            AppEvent::ErrorRaised { code, data } => {
                 // An application error (a drive: protection, encoder, ...): 1001h and the EMCY.
                 // A full EMCY queue loses only the message; 1001h and the application hold it.
-                let _ =
-                    self.report_error(code, emcy::register::DEVICE_PROFILE, [0; 5], None, now_ns);
+                let _ = self.report_error(code, emcy::register::DEVICE_PROFILE, data, None, now_ns);
             }
             AppEvent::None => {}
         }

@@ -1,0 +1,128 @@
+//! A motor fault reported as the profile's alarm: the SDV3-E maps the firmware's drive
+//! over-temperature to its alarm AH (Table 5-1: error code 4210h, error No. 26h, auxiliary code
+//! 8003h). Through ethercrab (in process, free run), the enabled drive overheats; it faults with
+//! 603Fh = 4210h, and the emergency in its mailbox carries the alarm's manufacturer field
+//! (Table 3-15: byte 3 error No., bytes 4–5 auxiliary code).
+
+use board_sim::Segment;
+use ethercrab::{Command, MainDevice};
+use tests_host::{block_on, master_for, FIRST_STATION};
+
+const CYCLE_NS: u64 = 1_000_000;
+const SHUTDOWN: u16 = 0x06;
+const SWITCH_ON: u16 = 0x07;
+const ENABLE_OPERATION: u16 = 0x0F;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const FAULT_BIT: u16 = 0x08;
+const CSP: u8 = 8;
+/// SM1 status register (ETG.1000.4 Table 58: SM n at 0x0800 + 8n, status at +5), bit 3
+/// "mailbox full".
+const SM1_STATUS: u16 = 0x080D;
+const MAILBOX_FULL: u8 = 0x08;
+/// Mailbox header (6 bytes) type 3 = CoE; CoE header service 1 = emergency (ETG.1000.6).
+const MAILBOX_HEADER: usize = 6;
+const TYPE_COE: u8 = 3;
+const COE_EMERGENCY: u16 = 1;
+
+#[test]
+fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
+    let p = od_gen::builtin("sdv3-e").expect("profile");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "AH")
+        .expect("alarm AH");
+    assert_eq!(
+        alarm.emcy.data,
+        [0x26, 0x03, 0x80, 0, 0],
+        "Table 5-1: 26h, 8003h"
+    );
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let sd = group.subdevice(md, 0).expect("drive");
+        // Default RxPDO 1600h: 6040h, 607Ah, 60FFh, 6071h, 6060h; TxPDO 1A00h: 6041h first.
+        let cycle = async |cw: u16| {
+            {
+                let mut out = sd.outputs_raw_mut();
+                out.fill(0);
+                out[0..2].copy_from_slice(&cw.to_le_bytes());
+                out[12] = CSP;
+            }
+            group.tx_rx(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+            let inp = sd.inputs_raw();
+            u16::from_le_bytes([inp[0], inp[1]])
+        };
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            sw = cycle(cw).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+
+        m.shared.segment().drives_mut()[0]
+            .servo
+            .plant
+            .set_drive_temperature(120.0);
+        let mut faulted = false;
+        for _ in 0..300 {
+            if cycle(ENABLE_OPERATION).await & FAULT_BIT != 0 {
+                faulted = true;
+                break;
+            }
+        }
+        assert!(faulted, "the drive faults");
+        // The emergency waits in SM1 (the master reads the whole mailbox, as SOEM does).
+        let mut mailbox = None;
+        for _ in 0..50 {
+            let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
+                .receive(md)
+                .await
+                .expect("SM1 status");
+            if status & MAILBOX_FULL != 0 {
+                let data: [u8; 256] = Command::fprd(FIRST_STATION, p.sm.mailbox_in.start)
+                    .receive(md)
+                    .await
+                    .expect("SM1");
+                mailbox = Some(data);
+                break;
+            }
+            cycle(ENABLE_OPERATION).await;
+        }
+        let mb = mailbox.expect("an emergency in SM1");
+        assert_eq!(mb[5] & 0x0F, TYPE_COE, "mailbox type");
+        let coe = &mb[MAILBOX_HEADER..];
+        assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code"
+        );
+        assert_eq!(coe[4] & 0x01, 0x01, "1001h generic error");
+        assert_eq!(
+            coe[5..10],
+            alarm.emcy.data,
+            "manufacturer field: error No., aux code"
+        );
+        assert_eq!(
+            sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"),
+            alarm.error_code
+        );
+    });
+}
