@@ -286,3 +286,68 @@ fn hyphenated_names_have_underscore_modules_and_both_spellings_find_them() {
     assert!(!od_gen::same_name("sigma-v-sd", "sigma-v-sd-2axis"));
     assert!(od_gen::builtin("standard").is_ok());
 }
+
+/// Each kind of error the issue lists names the file, the line and the key.
+#[test]
+fn every_error_kind_names_file_line_and_field() {
+    let extra = |t: &str| format!("{STANDARD}\n{t}\n");
+    let cases: Vec<(String, &str, &str)> = vec![
+        (
+            extra("[[object]]\nindex = 0x2F00\nname = \"Again\"\ntype = \"UINT\"\naccess = \"rw\""),
+            "object[0x2f00]",
+            "index = 0x2F00\nname = \"Again\"",
+        ),
+        (
+            STANDARD.replacen("default = 1270 ", "default = 1270\nmax = 1000 ", 1),
+            "object[0x6076].default",
+            "default = 1270",
+        ),
+        (
+            STANDARD.replacen(
+                "{ index = 0x6064, sub = 0, bits = 32 },  # position actual value",
+                "{ index = 0x6064, sub = 0, bits = 32 },\n    { index = 0x6040, sub = 0, bits = 16 },  # RxPDO only",
+                1,
+            ),
+            "txpdo[0x1a00].entries[2]",
+            "# RxPDO only",
+        ),
+        (
+            STANDARD.replacen("max_entries = 16", "max_entries = 2", 1),
+            "rxpdo[0x1600].entries",
+            "entries = [",
+        ),
+        (
+            extra("[[object]]\nindex = 0x2F01\nname = \"T\"\ntype = \"UINT17\"\naccess = \"rw\""),
+            "object[0x2f01].type",
+            "type = \"UINT17\"",
+        ),
+    ];
+    for (text, key, line_text) in cases {
+        let err = od_gen::parse(&text, "p.toml").unwrap_err();
+        let Error::Invalid {
+            file, key: k, line, ..
+        } = &err
+        else {
+            panic!("{err}")
+        };
+        assert_eq!(file, "p.toml", "{err}");
+        assert_eq!(k, key, "{err}");
+        let first = line_text.lines().next().unwrap();
+        // The line of the value, or of the object/PDO header it belongs to.
+        let value_line = text.lines().position(|l| l.contains(first)).unwrap() + 1;
+        let line = line.unwrap_or_else(|| panic!("no line: {err}"));
+        assert!(
+            line == value_line
+                || text
+                    .lines()
+                    .nth(line - 1)
+                    .is_some_and(|l| l.starts_with("[[")),
+            "{err}: line {line}, value at {value_line}"
+        );
+        assert!(
+            err.to_string()
+                .starts_with(&format!("p.toml:{line}: `{key}`")),
+            "{err}"
+        );
+    }
+}
