@@ -307,6 +307,81 @@ fn long_od_list_is_fragmented_one_fragment_per_call() {
     assert!(!b.coe.fragment_pending());
 }
 
+/// A dictionary of `n` objects after the standard profile's (indices 0x3000.., UINT constants):
+/// the size the issue asks SDO information to handle (300+ objects).
+fn large_profile(n: u16) -> &'static Profile {
+    use crate::od::{Access, DataType, Entry, Object, ObjectCode, PdoMappable, Value};
+    let base = profile();
+    let entry: &'static [Entry] = Box::leak(Box::new([Entry {
+        subindex: 0,
+        name: "Parameter",
+        data_type: DataType::Unsigned16,
+        bit_len: 16,
+        access: Access::RO,
+        pdo: PdoMappable::No,
+        value: Value::Const(&[0x34, 0x12]),
+        default: &[],
+        min: &[],
+        max: &[],
+    }]));
+    let mut objects: Vec<Object> = base.objects.to_vec();
+    objects.extend((0..n).map(|i| Object {
+        index: 0x3000 + i,
+        code: ObjectCode::Var,
+        name: "Parameter",
+        entries: entry,
+    }));
+    objects.sort_by_key(|o| o.index);
+    Box::leak(Box::new(Profile {
+        objects: Box::leak(objects.into_boxed_slice()),
+        ..*base
+    }))
+}
+
+/// SOEM's way: the object list (type 1) through a 128-byte mailbox, fragment after fragment
+/// (ETG.1000.6 §5.6.3.2: "incomplete" bit 7 and the fragments left), reassembled: every index,
+/// in order.
+#[test]
+fn an_od_list_of_more_than_300_objects_comes_whole_in_fragments() {
+    const MAILBOX_128: usize = 128;
+    let p = large_profile(320);
+    assert!(p.objects.len() > 300);
+    let mut ram = p.defaults.to_vec();
+    let mut coe = CoeServer::new();
+    let mut domain = Box::new(RamDomain::<DOMAIN_CAP>::new());
+    let mut resp = [0u8; MAILBOX_128 - MBX_HEADER];
+    let n = {
+        let mut od = Dictionary::new(p, &mut ram);
+        coe.handle_domains(
+            &mut od,
+            AlState::PreOp,
+            &od_list_request(1),
+            &mut resp,
+            &mut *domain,
+        )
+        .expect("answer")
+    };
+    let mut frames = vec![resp[..n].to_vec()];
+    while let Some(n) = coe.pending_fragment(&mut resp) {
+        frames.push(resp[..n].to_vec());
+    }
+    let last = frames.len() - 1;
+    let mut data = Vec::new();
+    for (k, f) in frames.iter().enumerate() {
+        let incomplete = if k < last { 0x80 } else { 0 };
+        assert_eq!(f[2], 0x02 | incomplete, "fragment {k}");
+        assert_eq!(
+            usize::from(u16::from_le_bytes([f[4], f[5]])),
+            last - k,
+            "fragments left"
+        );
+        data.extend_from_slice(&f[6..]);
+    }
+    assert!(frames.len() > 5, "{} fragments", frames.len());
+    let all: Vec<u16> = p.objects.iter().map(|o| o.index).collect();
+    assert_eq!(data, cat(&[&le16(1), &words(&all)]));
+}
+
 #[test]
 fn a_new_request_drops_the_remaining_fragments() {
     let mut b = Bench::new();
