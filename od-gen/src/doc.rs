@@ -639,6 +639,35 @@ fn units(out: &mut String, p: &Profile) {
     md_table(out, &["object", "conversion (read every cycle)"], &rows);
 }
 
+/// Entries with a list of accepted values (`allowed`).
+fn value_lists(out: &mut String, p: &Profile) {
+    let rows: Vec<Vec<String>> = p
+        .objects
+        .iter()
+        .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
+        .filter(|(_, e)| !e.allowed.is_empty())
+        .map(|(o, e)| {
+            let values: Vec<String> = e.allowed.iter().map(i64::to_string).collect();
+            vec![
+                format!("{:04X}h:{:02X}", o.index, e.subindex),
+                md(&e.name),
+                values.join(", "),
+            ]
+        })
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    out.push_str(
+        "## Accepted values
+
+An SDO download of any other value is refused with abort 0x06090030.
+
+",
+    );
+    md_table(out, &["entry", "name", "values"], &rows);
+}
+
 fn modes(out: &mut String, p: &Profile) {
     out.push_str("## Supported modes of operation (6502h)\n\n");
     match supported_modes(p) {
@@ -918,6 +947,7 @@ pub fn markdown(p: &Profile) -> String {
     synchronisation(&mut out, p);
     process_data(&mut out, p);
     units(&mut out, p);
+    value_lists(&mut out, p);
     modes(&mut out, p);
     alarms(&mut out, p);
     motor_faults(&mut out, p);

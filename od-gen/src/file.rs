@@ -522,6 +522,10 @@ pub struct ObjectFile {
     /// Maximum.
     #[serde(default)]
     pub max: Option<toml::Value>,
+    /// The only values an SDO download may write (integers); others are refused with
+    /// 0x06090030.
+    #[serde(default)]
+    pub allowed: Option<Vec<toml::Value>>,
     /// "ram", "const" or "domain" (DOMAIN type only); default: RAM when writable, PDO-mappable
     /// or given a role.
     #[serde(default)]
@@ -573,6 +577,10 @@ pub struct EntryFile {
     /// Maximum.
     #[serde(default)]
     pub max: Option<toml::Value>,
+    /// The only values an SDO download may write (integers); others are refused with
+    /// 0x06090030.
+    #[serde(default)]
+    pub allowed: Option<Vec<toml::Value>>,
     /// "ram", "const" or "domain" (DOMAIN type only); default: RAM when writable, PDO-mappable
     /// or given a role.
     #[serde(default)]
@@ -608,6 +616,8 @@ pub struct EntryAttrs {
     pub min: Option<toml::Value>,
     /// Maximum.
     pub max: Option<toml::Value>,
+    /// Accepted values.
+    pub allowed: Option<Vec<toml::Value>>,
     /// Storage.
     pub storage: Option<String>,
     /// Role.
@@ -633,6 +643,7 @@ macro_rules! attrs_of {
                     default: self.default.clone(),
                     min: self.min.clone(),
                     max: self.max.clone(),
+                    allowed: self.allowed.clone(),
                     storage: self.storage.clone(),
                     role: self.role.clone(),
                     setting: self.setting,

@@ -478,6 +478,9 @@ pub struct Entry {
     /// Startup parameter (profile `setting = true`): SDO information list type 5, ObjAccess
     /// bit 9, ESI `Flags/Setting`.
     pub setting: bool,
+    /// The only values an SDO download may write (profile key `allowed`); empty: any value in
+    /// `min..=max`.
+    pub allowed: Vec<i64>,
     /// Documentation.
     pub doc: Doc,
 }

@@ -752,6 +752,7 @@ fn first_value_key(a: &EntryAttrs) -> Option<&'static str> {
         (a.max.is_some(), "max"),
         (a.storage.is_some(), "storage"),
         (a.role.is_some(), "role"),
+        (a.allowed.is_some(), "allowed"),
     ]
     .into_iter()
     .find(|(set, _)| *set)
@@ -774,6 +775,7 @@ fn sub0(value: u8, access: Access, storage: Storage) -> Entry {
         role: None,
         setting: false,
         doc: Doc::default(),
+        allowed: Vec::new(),
     }
 }
 
@@ -866,6 +868,11 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         return Err(fault(key, Invalid::NotAllowed("min/max (on a string)")));
     }
     check_range(data_type, &default, &min, &max).map_err(|e| fault(&k("default"), e))?;
+    let allowed = match &a.allowed {
+        None => Vec::new(),
+        Some(values) => allowed_values(data_type, values, &default, &min, &max)
+            .map_err(|e| fault(&k("allowed"), e))?,
+    };
     let storage = match a.storage.as_deref() {
         None if access.writable() || pdo != PdoMapping::No || role.is_some() => Storage::Ram,
         None => Storage::Const,
@@ -915,6 +922,7 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         max,
         role,
         setting: a.setting,
+        allowed,
         doc: Doc {
             unit: a.unit.clone(),
             description: a.description.clone(),
@@ -970,6 +978,7 @@ fn domain_entry(
         max: Vec::new(),
         role: None,
         setting: a.setting,
+        allowed: Vec::new(),
         doc: Doc {
             unit: a.unit.clone(),
             description: a.description.clone(),
@@ -1099,6 +1108,49 @@ fn decode(dt: DataType, b: &[u8]) -> Option<Num> {
             Some(Num::Int(n))
         }
     }
+}
+
+/// `allowed`: integers of the entry's type, inside `min..=max`, without repeats, the default
+/// among them; sorted.
+fn allowed_values(
+    dt: DataType,
+    values: &[toml::Value],
+    default: &[u8],
+    min: &[u8],
+    max: &[u8],
+) -> Result<Vec<i64>, Invalid> {
+    if dt.is_string() || matches!(dt, DataType::Real | DataType::Lreal | DataType::Domain) {
+        return Err(Invalid::Value(
+            "only integer entries take a list of values".into(),
+        ));
+    }
+    if values.is_empty() {
+        return Err(Invalid::Value(
+            "an empty list would refuse every write".into(),
+        ));
+    }
+    let mut out = Vec::new();
+    for v in values {
+        let bytes = encode(dt, v)?;
+        check_range(dt, &bytes, min, max)
+            .map_err(|_| Invalid::Value(format!("{v} lies outside min..=max")))?;
+        let n = match decode(dt, &bytes) {
+            Some(Num::Int(n)) => i64::try_from(n).ok(),
+            _ => None,
+        }
+        .ok_or_else(|| Invalid::Value(format!("{v} is not an integer of the entry's type")))?;
+        if out.contains(&n) {
+            return Err(Invalid::Value(format!("{v} is listed twice")));
+        }
+        out.push(n);
+    }
+    if let Some(Num::Int(d)) = decode(dt, default) {
+        if !out.iter().any(|n| i128::from(*n) == d) {
+            return Err(Invalid::Value("the default is not in the list".into()));
+        }
+    }
+    out.sort_unstable();
+    Ok(out)
 }
 
 fn check_range(dt: DataType, default: &[u8], min: &[u8], max: &[u8]) -> Result<(), Invalid> {
@@ -1290,6 +1342,7 @@ fn val(
         role: None,
         setting: false,
         doc: Doc::default(),
+        allowed: Vec::new(),
     }
 }
 

@@ -160,7 +160,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     }
     let _ = writeln!(
         out,
-        "    use {}::od::{{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value}};\n",
+        "    use {}::od::{{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value, ValueList}};\n",
         target.slave
     );
     if let Some(drive) = target.drive {
@@ -204,6 +204,29 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        ] }},");
     }
     let _ = writeln!(out, "    ];");
+    let lists: Vec<String> = p
+        .objects
+        .iter()
+        .flat_map(|o| o.entries.iter().map(move |e| (o.index, e)))
+        .filter(|(_, e)| !e.allowed.is_empty())
+        .map(|(i, e)| {
+            let values: Vec<String> = e.allowed.iter().map(i64::to_string).collect();
+            format!(
+                "ValueList {{ index: {i:#06x}, subindex: {:#04x}, values: &[{}] }}",
+                e.subindex,
+                values.join(", ")
+            )
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "    /// Entries that accept only listed values (`allowed`), `(index, subindex)` ascending."
+    );
+    let _ = writeln!(
+        out,
+        "    pub const VALUE_LISTS: &[ValueList] = &[{}];",
+        lists.join(", ")
+    );
     let _ = writeln!(
         out,
         "    /// Startup parameters (`setting = true`), `(index, subindex)` ascending."
@@ -340,6 +363,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     let _ = writeln!(out, "        }},");
     let _ = writeln!(out, "        objects: OBJECTS,");
     let _ = writeln!(out, "        defaults: DEFAULTS,");
+    let _ = writeln!(out, "        value_lists: VALUE_LISTS,");
     let out = out_outer;
     for line in body.lines() {
         let _ = writeln!(out, "{pad}{line}");

@@ -810,3 +810,40 @@ fn units_factors_name_unsigned_entries_or_constants() {
     .unwrap();
     assert_eq!(ok.units.velocity.numerator, Operand::Entry(0x6076, 0));
 }
+
+#[test]
+fn allowed_value_lists_are_checked() {
+    let mode = |list: &str| {
+        with(
+            "default = 8             # cyclic synchronous position, the mode most EtherCAT masters run",
+            &format!("default = 8\nallowed = {list}"),
+        )
+    };
+    let p = od_gen::parse(&mode("[10, 8, 9, 0, -1]"), "p.toml").unwrap();
+    assert_eq!(
+        p.entry(0x6060, 0).unwrap().allowed,
+        vec![-1, 0, 8, 9, 10],
+        "sorted"
+    );
+    for (list, why) in [
+        ("[9, 10]", "the default is not in the list"),
+        ("[8, 8]", "listed twice"),
+        ("[]", "empty"),
+    ] {
+        let (key, e) = invalid(&mode(list));
+        assert_eq!(key, "object[0x6060].allowed", "{list}");
+        assert!(
+            matches!(e, Invalid::Value(ref m) if m.contains(why)),
+            "{list}: {e:?}"
+        );
+    }
+    // Values the type cannot hold.
+    for list in ["[8, 200]", "[8, \"x\"]"] {
+        let (key, _) = invalid(&mode(list));
+        assert_eq!(key, "object[0x6060].allowed", "{list}");
+    }
+    let (key, _) = invalid(&appended(
+        "[[object]]\nindex = 0x2003\nname = \"S\"\ntype = \"STRING\"\nbits = 16\naccess = \"rw\"\nallowed = [1]",
+    ));
+    assert_eq!(key, "object[0x2003].allowed");
+}

@@ -237,6 +237,8 @@ mod abort {
     pub const NOT_MAPPABLE: u32 = 0x0604_0041;
     /// Value of parameter written too high (subindex 0 beyond the highest subindex).
     pub const VALUE_TOO_HIGH: u32 = 0x0609_0031;
+    /// Value range of parameter exceeded.
+    pub const VALUE_RANGE: u32 = 0x0609_0030;
 }
 /// AL status code "invalid output mapping" (ETG.1000.6 Table 11).
 const AL_INVALID_OUTPUT_MAPPING: u16 = 0x0025;
@@ -475,4 +477,97 @@ fn every_alternative_pdo_reaches_op() {
         }
     }
     assert!(tried >= 20, "only {tried} alternative PDOs");
+}
+
+/// Little-endian bytes of `v` in an entry of `bytes` bytes.
+fn le_bytes(v: i64, bytes: usize) -> Vec<u8> {
+    v.to_le_bytes()[..bytes].to_vec()
+}
+
+/// Entries with a list of accepted values (`allowed`, e.g. the modes 6060h a drive supports, the
+/// homing methods of 6098h): every listed value is written by SDO, a value between them that is
+/// not listed is refused with 0x06090030 and leaves the entry unchanged.
+#[test]
+fn values_outside_an_entrys_list_are_refused_with_0x06090030() {
+    let mut checked = 0;
+    for p in profiles() {
+        let lists: Vec<(u16, &Entry)> = p
+            .objects
+            .iter()
+            .flat_map(|o| o.entries.iter().map(move |e| (o.index, e)))
+            .filter(|(_, e)| !e.allowed.is_empty() && e.access.0 & 0x08 != 0)
+            .collect();
+        if lists.is_empty() {
+            continue;
+        }
+        block_on(async {
+            let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
+            tokio::task::spawn_local(transport);
+            let md: &MainDevice<'_> = &m.maindevice;
+            let group = init(&m).await;
+            let sd = group.subdevice(md, 0).expect("drive");
+            for (index, e) in lists {
+                let at = format!("{} {index:#06x}:{:02x}", p.name, e.subindex);
+                let len = e.byte_len();
+                let first = *e.allowed.first().expect("a value");
+                let last = *e.allowed.last().expect("a value");
+                let gap = (first..=last)
+                    .find(|v| !e.allowed.contains(v))
+                    .unwrap_or_else(|| panic!("{at}: no gap in the list"));
+                for v in [first, last] {
+                    let bytes = le_bytes(v, len);
+                    let r = match len {
+                        1 => sd.sdo_write(index, e.subindex, bytes[0]).await,
+                        2 => {
+                            sd.sdo_write(
+                                index,
+                                e.subindex,
+                                u16::from_le_bytes([bytes[0], bytes[1]]),
+                            )
+                            .await
+                        }
+                        _ => {
+                            sd.sdo_write(
+                                index,
+                                e.subindex,
+                                u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+                            )
+                            .await
+                        }
+                    };
+                    r.unwrap_or_else(|err| panic!("{at} = {v}: {err:?}"));
+                }
+                let bytes = le_bytes(gap, len);
+                let r = match len {
+                    1 => sd.sdo_write(index, e.subindex, bytes[0]).await,
+                    2 => {
+                        sd.sdo_write(index, e.subindex, u16::from_le_bytes([bytes[0], bytes[1]]))
+                            .await
+                    }
+                    _ => {
+                        sd.sdo_write(
+                            index,
+                            e.subindex,
+                            u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+                        )
+                        .await
+                    }
+                };
+                let err = r.expect_err(&format!("{at} = {gap} accepted"));
+                assert_eq!(abort_code(err), abort::VALUE_RANGE, "{at} = {gap}");
+                let now = sd
+                    .sdo_read::<heapless08::Vec<u8, 8>>(index, e.subindex)
+                    .await
+                    .expect("read back");
+                assert_eq!(
+                    now.as_slice(),
+                    le_bytes(last, len).as_slice(),
+                    "{at}: unchanged"
+                );
+                checked += 1;
+            }
+        });
+    }
+    // SDV3-E/OSD-G-E 605Ah and 6060h, GHA-E 6060h, 607Eh and 6098h.
+    assert!(checked >= 7, "{checked} lists checked");
 }

@@ -384,9 +384,31 @@ pub struct Profile {
     pub objects: &'static [Object],
     /// Initial OD RAM content; its length is the OD RAM size.
     pub defaults: &'static [u8],
+    /// Entries that accept only listed values (profile key `allowed`), sorted by
+    /// (index, subindex): an SDO download of another value is refused with 0x06090030.
+    pub value_lists: &'static [ValueList],
+}
+
+/// The values an entry accepts (e.g. the modes of operation a drive supports in 6060h).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ValueList {
+    /// Index.
+    pub index: u16,
+    /// Subindex.
+    pub subindex: u8,
+    /// The accepted values.
+    pub values: &'static [i64],
 }
 
 impl Profile {
+    /// The values `index:subindex` accepts, if the profile lists them.
+    pub fn value_list(&self, index: u16, subindex: u8) -> Option<&'static [i64]> {
+        self.value_lists
+            .binary_search_by_key(&(index, subindex), |l| (l.index, l.subindex))
+            .ok()
+            .and_then(|i| self.value_lists.get(i))
+            .map(|l| l.values)
+    }
     /// The object with this index.
     pub fn object(&self, index: u16) -> Option<&'static Object> {
         self.objects

@@ -126,6 +126,27 @@ pub(crate) fn check_range(entry: &Entry, data: &[u8]) -> Result<(), AbortCode> {
     Ok(())
 }
 
+/// A profile's list of accepted values (`Profile::value_lists`): a value not in it is refused
+/// with 0x06090030 (value range of parameter exceeded).
+pub(crate) fn check_value_list(
+    list: Option<&[i64]>,
+    entry: &Entry,
+    data: &[u8],
+) -> Result<(), AbortCode> {
+    let Some(list) = list else {
+        return Ok(());
+    };
+    let value = match Number::decode(entry.data_type, data) {
+        Some(Number::Signed(v)) => Some(v),
+        Some(Number::Unsigned(v)) => i64::try_from(v).ok(),
+        _ => None,
+    };
+    match value {
+        Some(v) if list.contains(&v) => Ok(()),
+        _ => Err(AbortCode::ValueRange),
+    }
+}
+
 /// An unsigned entry narrower than its bytes (BOOLEAN, BITn) must not set the unused high bits.
 fn check_bit_width(entry: &Entry, value: Number) -> Result<(), AbortCode> {
     let bits = u32::from(entry.bit_len);

@@ -218,6 +218,7 @@ fn fixture(revision: u32) -> &'static Profile {
         },
         objects: &OBJECTS,
         defaults: &DEFAULTS,
+        value_lists: &[],
         ..*base
     }))
 }

@@ -293,6 +293,7 @@ mod tests {
         device: crate::od::test_device(),
         objects: &OBJECTS,
         defaults: &DEFAULTS,
+        value_lists: &[],
     };
 
     fn od_with(ram: &mut [u8; 31], mapping: &[u32]) {

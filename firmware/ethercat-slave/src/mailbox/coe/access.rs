@@ -4,7 +4,7 @@
 
 use hal::esc::AlState;
 
-use crate::od::value::{as_u32, check_length, check_range};
+use crate::od::value::{as_u32, check_length, check_range, check_value_list};
 use crate::od::{AbortCode, Access, DataType, Dictionary, Entry, ObjectCode, StoreError, Value};
 use crate::pdo::rules as pdo_rules;
 
@@ -85,7 +85,7 @@ fn state_bit(state: AlState, kind: AccessKind) -> u8 {
 }
 
 /// Runs every download check on `data` and stores it: access, RxPDO-mapped (0x06010006),
-/// length, subindex 0 count, PDO rules, range.
+/// length, subindex 0 count, PDO rules, range, the profile's list of accepted values.
 pub(crate) fn write_entry(
     od: &mut Dictionary<'_>,
     state: AlState,
@@ -111,6 +111,7 @@ pub(crate) fn write_found(
     check_subindex0(od, index, subindex, data)?;
     pdo_rules::check_write(od, index, subindex, data)?;
     check_range(entry, data)?;
+    check_value_list(od.profile().value_list(index, subindex), entry, data)?;
     od.set_value(entry, data).map_err(store_abort)
 }
 

@@ -284,6 +284,7 @@ static PROFILE: Profile = Profile {
     },
     objects: &OBJECTS,
     defaults: &DEFAULTS,
+    value_lists: &[],
 };
 
 // ---------------------------------------------------------------------------------------------
