@@ -380,6 +380,18 @@ fn synchronisation(out: &mut String, p: &Profile) {
             },
         ],
         vec![
+            "Accepted DC cycles".into(),
+            if s.allowed_cycles_ns.is_empty() {
+                "every step in range".into()
+            } else {
+                let list: Vec<String> = s.allowed_cycles_ns.iter().map(|c| duration(*c)).collect();
+                format!(
+                    "{} only (other cycles: AL status code 0x0036)",
+                    list.join(", ")
+                )
+            },
+        ],
+        vec![
             "Calc and copy time (:06)".into(),
             duration(s.calc_and_copy_ns),
         ],

@@ -345,6 +345,10 @@ pub struct SyncFile {
     /// (default 1: any cycle in range).
     #[serde(default = "one")]
     pub cycle_step_ns: u32,
+    /// The only DC cycles accepted (ascending), when the drive has a fixed set; empty: every
+    /// multiple of `cycle_step_ns` in range.
+    #[serde(default)]
+    pub allowed_cycles_ns: Vec<u32>,
 }
 
 fn one() -> u32 {

@@ -647,7 +647,7 @@ pub struct Mailbox {
 }
 
 /// Synchronisation support.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Sync {
     /// Free run.
     pub free_run: bool,
@@ -669,6 +669,8 @@ pub struct Sync {
     pub delay_ns: u32,
     /// A DC SYNC0 cycle must be a whole multiple of this, ns (1 = any).
     pub cycle_step_ns: u32,
+    /// The only DC cycles accepted, ns (empty: any multiple of the step in range).
+    pub allowed_cycles_ns: Vec<u32>,
 }
 
 impl Sync {

@@ -169,6 +169,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         calc_and_copy_ns: f.sync.calc_and_copy_ns,
         delay_ns: f.sync.delay_ns,
         cycle_step_ns: f.sync.cycle_step_ns,
+        allowed_cycles_ns: f.sync.allowed_cycles_ns.clone(),
     };
     let esm = EsmRules {
         op_requires_outputs: f.esm.op_requires_outputs,

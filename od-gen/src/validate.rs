@@ -258,6 +258,25 @@ fn sync(p: &Profile) -> Result<(), Fault> {
             Invalid::Sync("default_cycle_ns outside min_cycle_ns..=max_cycle_ns".into()),
         ));
     }
+    if !y.allowed_cycles_ns.is_empty() {
+        let ascending = y.allowed_cycles_ns.windows(2).all(|w| w[0] < w[1]);
+        let fits = y
+            .allowed_cycles_ns
+            .iter()
+            .all(|c| (y.min_cycle_ns..=y.max_cycle_ns).contains(c) && c % y.cycle_step_ns == 0);
+        let ends = y.allowed_cycles_ns.first() == Some(&y.min_cycle_ns)
+            && y.allowed_cycles_ns.last() == Some(&y.max_cycle_ns);
+        if !ascending || !fits || !ends || !y.allowed_cycles_ns.contains(&y.default_cycle_ns) {
+            return Err(fault(
+                "sync.allowed_cycles_ns",
+                Invalid::Sync(
+                    "must ascend from min_cycle_ns to max_cycle_ns in multiples of cycle_step_ns \
+                     and hold default_cycle_ns"
+                        .into(),
+                ),
+            ));
+        }
+    }
     let mut names = BTreeSet::new();
     for (i, m) in p.dc_op_modes.iter().enumerate() {
         let key = format!("dc_op_mode[{i}]");

@@ -847,3 +847,27 @@ fn allowed_value_lists_are_checked() {
     ));
     assert_eq!(key, "object[0x2003].allowed");
 }
+
+#[test]
+fn allowed_cycles_must_span_the_range_in_steps() {
+    let set = |list: &str| {
+        with(
+            "cycle_step_ns = 31_250",
+            &format!("cycle_step_ns = 31_250\nallowed_cycles_ns = {list}"),
+        )
+    };
+    let p = od_gen::parse(&set("[31_250, 1_000_000, 10_000_000]"), "p.toml").unwrap();
+    assert_eq!(
+        p.sync.allowed_cycles_ns,
+        vec![31_250, 1_000_000, 10_000_000]
+    );
+    for bad in [
+        "[31_250, 10_000_000]",                       // no default (1 ms)
+        "[1_000_000, 31_250, 10_000_000]",            // not ascending
+        "[31_250, 1_000_000]",                        // does not reach max_cycle_ns
+        "[31_250, 1_000_000, 1_000_001, 10_000_000]", // not a step multiple
+    ] {
+        let (key, _) = invalid(&set(bad));
+        assert_eq!(key, "sync.allowed_cycles_ns", "{bad}");
+    }
+}

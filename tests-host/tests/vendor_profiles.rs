@@ -211,6 +211,42 @@ fn default_mapping_reaches_op_at_the_shortest_and_longest_dc_cycle() {
     }
 }
 
+/// AL status code "DC SYNC0 cycle time" not supported (ETG.1000.6 Table 11).
+const AL_SYNC0_CYCLE_TIME: u16 = 0x0036;
+
+/// A profile with a fixed set of cycles (the GHA-E: 125/250/500/1000/2000 µs) refuses a cycle in
+/// range that is a multiple of its step but not in the set, and accepts each one in it.
+#[test]
+fn a_cycle_outside_the_profiles_set_is_refused_with_0x36() {
+    let mut checked = 0;
+    for p in profiles()
+        .into_iter()
+        .filter(|p| !p.sync.allowed_cycles_ns.is_empty())
+    {
+        let set = &p.sync.allowed_cycles_ns;
+        let step = u64::from(p.sync.cycle_step_ns.max(1));
+        let gap = (u64::from(set[0])..=u64::from(set[set.len() - 1]))
+            .step_by(step as usize)
+            .find(|c| !set.iter().any(|s| u64::from(*s) == *c))
+            .expect("a stepped cycle outside the set");
+        let (status, code) = block_on(run_dc(&p, gap))
+            .err()
+            .unwrap_or_else(|| panic!("{}: OP at {gap} ns", p.name));
+        assert_eq!(
+            (status & AL_ERROR, code),
+            (AL_ERROR, AL_SYNC0_CYCLE_TIME),
+            "{}",
+            p.name
+        );
+        for c in set {
+            block_on(run_dc(&p, u64::from(*c)))
+                .unwrap_or_else(|s| panic!("{}: {c} ns refused: {s:?}", p.name));
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 1, "the GHA-E");
+}
+
 #[test]
 fn a_cycle_outside_the_profile_range_is_refused_at_safeop_with_0x35() {
     for p in profiles().into_iter().filter(|p| p.sync.dc_sync0) {

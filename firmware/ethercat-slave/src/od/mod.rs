@@ -65,6 +65,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             min_cycle_ns: 0,
             max_cycle_ns: 0,
             cycle_step_ns: 1,
+            allowed_cycles_ns: &[],
         },
         max_pdo_entries: 8,
         max_pdo_bytes: 256,

@@ -255,6 +255,9 @@ pub struct SyncSupport {
     /// Granularity of the DC SYNC0 cycle in ns: an accepted cycle is a whole multiple of it
     /// (e.g. the control-loop period); 1 accepts any cycle in range.
     pub cycle_step_ns: u32,
+    /// The only DC cycles accepted, when the drive has a fixed set (e.g. 125/250/500/1000/2000 µs
+    /// on the GHA-E); empty: every multiple of `cycle_step_ns` in range.
+    pub allowed_cycles_ns: &'static [u32],
 }
 
 /// EtherCAT state machine rules of a profile (profile section `[esm]`).

@@ -265,6 +265,7 @@ static PROFILE: Profile = Profile {
             min_cycle_ns: 1_000_000,
             max_cycle_ns: 10_000_000,
             cycle_step_ns: 1,
+            allowed_cycles_ns: &[],
         },
         max_pdo_entries: 4,
         max_pdo_bytes: 256,

@@ -52,7 +52,8 @@ impl SyncConfig {
 
     /// Whether the profile accepts this configuration; the AL status code if not
     /// (ETG.1000.6 Table 11: 0x0027, 0x0028, 0x0030, 0x0035 cycle out of range, 0x0036 cycle
-    /// in range but not a whole multiple of [`SyncSupport::cycle_step_ns`]).
+    /// in range but not a whole multiple of [`SyncSupport::cycle_step_ns`] or not one of
+    /// [`SyncSupport::allowed_cycles_ns`]).
     pub fn check(&self, support: &SyncSupport) -> Result<(), AlStatusCode> {
         match self.mode {
             SyncMode::FreeRun if !support.free_run => Err(AlStatusCode::FreeRunNotSupported),
@@ -68,6 +69,12 @@ impl SyncConfig {
             }
             SyncMode::DcSync0 | SyncMode::DcSync1
                 if support.cycle_step_ns > 1 && self.cycle_ns % support.cycle_step_ns != 0 =>
+            {
+                Err(AlStatusCode::DcSync0CycleTime)
+            }
+            SyncMode::DcSync0 | SyncMode::DcSync1
+                if !support.allowed_cycles_ns.is_empty()
+                    && !support.allowed_cycles_ns.contains(&self.cycle_ns) =>
             {
                 Err(AlStatusCode::DcSync0CycleTime)
             }
@@ -88,7 +95,34 @@ mod tests {
         min_cycle_ns: 125_000,
         max_cycle_ns: 10_000_000,
         cycle_step_ns: 1,
+        allowed_cycles_ns: &[],
     };
+
+    #[test]
+    fn dc_cycle_not_in_the_profiles_set_is_0x36() {
+        let set = SyncSupport {
+            min_cycle_ns: 125_000,
+            max_cycle_ns: 2_000_000,
+            cycle_step_ns: 125_000,
+            allowed_cycles_ns: &[125_000, 250_000, 500_000, 1_000_000, 2_000_000],
+            ..SUPPORT
+        };
+        let c = |cycle_ns| SyncConfig {
+            mode: SyncMode::DcSync0,
+            cycle_ns,
+        };
+        for ok in [125_000, 250_000, 500_000, 1_000_000, 2_000_000] {
+            assert_eq!(c(ok).check(&set), Ok(()), "{ok} ns");
+        }
+        for bad in [375_000, 750_000, 1_125_000] {
+            assert_eq!(
+                c(bad).check(&set).map_err(|c| c.code()),
+                Err(0x0036),
+                "{bad} ns"
+            );
+        }
+        assert_eq!(c(4_000_000).check(&set).map_err(|c| c.code()), Err(0x0035));
+    }
 
     #[test]
     fn dc_cycle_inside_limits_is_accepted() {
