@@ -1,35 +1,15 @@
 //! The ESI parsed with the crates.io `ethercat-esi` 0.2.0 crate and checked with the project's
 //! structural lints (esi-sii.md §1.3–§1.4 and §5).
 
-use std::collections::{BTreeMap, BTreeSet};
+mod common;
 
+use common::{child, elements, hexdec, text};
 use ethercat_esi::EtherCatInfo;
 use od_gen::model::Profile;
 use roxmltree::{Document, Node};
 
 fn standard() -> Profile {
     od_gen::builtin("standard").expect("standard profile loads")
-}
-
-fn hexdec(s: &str) -> u32 {
-    match s.strip_prefix("#x") {
-        Some(h) => u32::from_str_radix(h, 16).unwrap(),
-        None => s.parse().unwrap(),
-    }
-}
-
-fn child<'a>(n: Node<'a, 'a>, tag: &str) -> Node<'a, 'a> {
-    n.children()
-        .find(|c| c.has_tag_name(tag))
-        .unwrap_or_else(|| panic!("<{tag}> missing in <{}>", n.tag_name().name()))
-}
-
-fn text<'a>(n: Node<'a, 'a>, tag: &str) -> &'a str {
-    child(n, tag).text().unwrap_or("")
-}
-
-fn elements<'a>(n: Node<'a, 'a>) -> Vec<Node<'a, 'a>> {
-    n.children().filter(Node::is_element).collect()
 }
 
 #[test]
@@ -90,245 +70,12 @@ fn parses_with_ethercat_esi_and_matches_the_profile() {
     assert_eq!(d.tx_pdo[0].entries.len(), 3);
 }
 
-/// XSD `DeviceType` sequence (esi-sii.md §1.4), restricted to what ethercat-esi 0.2.0 accepts.
-const DEVICE_ORDER: [&str; 12] = [
-    "Type",
-    "Name",
-    "URL",
-    "Info",
-    "GroupType",
-    "Profile",
-    "Fmmu",
-    "Sm",
-    "RxPdo",
-    "TxPdo",
-    "Mailbox",
-    "Dc",
-];
-
+/// The structural lints of esi-sii.md §1 (element order, flags, SM and PDO agreement with the
+/// SII; `common::esi_lints`, run on every profile in `all_profiles.rs`) on the standard profile.
 #[test]
 fn structural_lints() {
     let p = standard();
-    let xml = p.esi_xml();
-    let doc = Document::parse(&xml).expect("well-formed XML");
-    let root = doc.root_element();
-    assert_eq!(root.tag_name().name(), "EtherCATInfo");
-    assert_eq!(
-        elements(root)
-            .iter()
-            .map(|n| n.tag_name().name())
-            .collect::<Vec<_>>(),
-        ["Vendor", "Descriptions"]
-    );
-    assert_eq!(hexdec(text(child(root, "Vendor"), "Id")), p.vendor.id);
-
-    let desc = child(root, "Descriptions");
-    let group = child(child(desc, "Groups"), "Group");
-    let device = child(child(desc, "Devices"), "Device");
-    assert_eq!(device.attribute("Physics"), Some("YY"));
-
-    // Element order as in the XSD sequence (Eeprom last), no children ethercat-esi rejects.
-    let order = |tag: &str| {
-        DEVICE_ORDER
-            .iter()
-            .position(|t| *t == tag)
-            .or((tag == "Eeprom").then_some(DEVICE_ORDER.len()))
-    };
-    let tags: Vec<&str> = elements(device)
-        .iter()
-        .map(|n| n.tag_name().name())
-        .collect();
-    let pos: Vec<usize> = tags
-        .iter()
-        .map(|t| order(t).unwrap_or_else(|| panic!("unexpected <{t}>")))
-        .collect();
-    assert!(
-        pos.windows(2).all(|w| w[0] <= w[1]),
-        "Device children out of order: {tags:?}"
-    );
-    for t in [
-        "Type",
-        "Name",
-        "GroupType",
-        "Profile",
-        "Fmmu",
-        "Sm",
-        "RxPdo",
-        "TxPdo",
-        "Mailbox",
-        "Dc",
-        "Eeprom",
-    ] {
-        assert!(tags.contains(&t), "<{t}> missing");
-    }
-    assert_eq!(text(device, "GroupType"), text(group, "Type"));
-
-    // HexDec values are #x…, never 0x….
-    assert!(!xml.contains(">0x") && !xml.contains("\"0x"));
-
-    // Fmmu and Sm vocabularies.
-    let fmmus: Vec<&str> = device
-        .children()
-        .filter(|n| n.has_tag_name("Fmmu"))
-        .map(|n| n.text().unwrap())
-        .collect();
-    assert_eq!(fmmus, ["Outputs", "Inputs", "MBoxState"]);
-    let sms: Vec<Node> = device.children().filter(|n| n.has_tag_name("Sm")).collect();
-    assert_eq!(
-        sms.iter().map(|n| n.text().unwrap()).collect::<Vec<_>>(),
-        ["MBoxOut", "MBoxIn", "Outputs", "Inputs"]
-    );
-    let sm2_control = hexdec(sms[2].attribute("ControlByte").unwrap());
-    assert_ne!(sm2_control & 0x40, 0, "SM2 watchdog trigger");
-
-    // Dictionary: every DataType referenced is declared, names unique, DT shapes conventional.
-    let dict = child(child(device, "Profile"), "Dictionary");
-    assert_eq!(text(child(device, "Profile"), "ProfileNo"), "402");
-    let dts: Vec<Node> = child(dict, "DataTypes")
-        .children()
-        .filter(|n| n.has_tag_name("DataType"))
-        .collect();
-    let mut declared: BTreeMap<&str, u32> = BTreeMap::new();
-    for dt in &dts {
-        assert!(
-            declared
-                .insert(text(*dt, "Name"), text(*dt, "BitSize").parse().unwrap())
-                .is_none(),
-            "duplicate DataType"
-        );
-    }
-    let mut referenced = BTreeSet::new();
-    for dt in &dts {
-        if let Some(b) = dt.children().find(|c| c.has_tag_name("BaseType")) {
-            referenced.insert(b.text().unwrap());
-        }
-        for (i, si) in dt
-            .children()
-            .filter(|c| c.has_tag_name("SubItem"))
-            .enumerate()
-        {
-            referenced.insert(text(si, "Type"));
-            if i == 0 {
-                assert_eq!(
-                    (text(si, "SubIdx"), text(si, "Type"), text(si, "BitOffs")),
-                    ("0", "USINT", "0")
-                );
-            }
-            if i == 1 {
-                assert_eq!(text(si, "BitOffs"), "16", "subindex 1 starts at bit 16");
-            }
-        }
-    }
-    let objects: Vec<Node> = child(dict, "Objects")
-        .children()
-        .filter(|n| n.has_tag_name("Object"))
-        .collect();
-    let mut by_index: BTreeMap<u16, Node> = BTreeMap::new();
-    for o in &objects {
-        referenced.insert(text(*o, "Type"));
-        let idx = hexdec(text(*o, "Index")) as u16;
-        assert!(
-            by_index.insert(idx, *o).is_none(),
-            "duplicate object {idx:#x}"
-        );
-        let bits: u32 = text(*o, "BitSize").parse().unwrap();
-        assert_eq!(
-            declared.get(text(*o, "Type")),
-            Some(&bits),
-            "object {idx:#x} BitSize equals its type's"
-        );
-    }
-    for r in &referenced {
-        assert!(
-            declared.contains_key(r),
-            "DataType {r} referenced but not declared"
-        );
-    }
-    assert_eq!(
-        by_index.keys().copied().collect::<Vec<_>>(),
-        p.objects.iter().map(|o| o.index).collect::<Vec<_>>()
-    );
-    // 1C12 is an array in the DTxxxxARR + DTxxxx shape.
-    assert_eq!(text(*by_index.get(&0x1C12).unwrap(), "Type"), "DT1C12");
-    assert!(declared.contains_key("DT1C12ARR"));
-
-    // Each PDO entry exists in the dictionary with equal bit length and PdoMapping.
-    for (tag, mapping) in [("RxPdo", 'R'), ("TxPdo", 'T')] {
-        for pdo in device.children().filter(|n| n.has_tag_name(tag)) {
-            assert!(
-                pdo.attribute("Sm").is_some(),
-                "every PDO has Sm (ethercat-esi)"
-            );
-            let entries: Vec<Node> = pdo.children().filter(|n| n.has_tag_name("Entry")).collect();
-            assert!(!entries.is_empty());
-            for e in entries {
-                let idx = hexdec(text(e, "Index")) as u16;
-                if idx == 0 {
-                    continue;
-                }
-                let sub: u32 = hexdec(text(e, "SubIndex"));
-                assert_eq!(sub, 0);
-                let o = by_index
-                    .get(&idx)
-                    .unwrap_or_else(|| panic!("PDO entry {idx:#x} not in the dictionary"));
-                assert_eq!(text(e, "BitLen"), text(*o, "BitSize"));
-                assert_eq!(text(e, "DataType"), text(*o, "Type"));
-                let pm = text(child(*o, "Flags"), "PdoMapping");
-                assert!(pm.contains(mapping), "{idx:#x} PdoMapping {pm}");
-            }
-        }
-    }
-
-    // PDO mapping and assignment objects are writable in PREOP only.
-    for idx in [0x1600u16, 0x1A00, 0x1C12, 0x1C13] {
-        let dt = dts
-            .iter()
-            .find(|d| text(**d, "Name") == format!("DT{idx:04X}"))
-            .unwrap();
-        for si in dt.children().filter(|c| c.has_tag_name("SubItem")) {
-            let a = child(child(si, "Flags"), "Access");
-            assert_eq!(
-                (a.text(), a.attribute("WriteRestrictions")),
-                (Some("rw"), Some("PreOP")),
-                "{idx:#x}"
-            );
-        }
-    }
-
-    // Mailbox/CoE attributes follow the CoE details flags.
-    let coe = child(child(device, "Mailbox"), "CoE");
-    assert_eq!(
-        child(device, "Mailbox").attribute("DataLinkLayer"),
-        Some("true")
-    );
-    assert_eq!(coe.attribute("SdoInfo"), Some("true"));
-    assert_eq!(coe.attribute("CompleteAccess"), Some("true"));
-    assert_eq!(coe.attribute("PdoAssign"), Some("true"));
-    assert_eq!(coe.attribute("PdoConfig"), Some("true"));
-
-    // Dc op modes.
-    let modes: Vec<(&str, &str)> = child(device, "Dc")
-        .children()
-        .filter(|n| n.has_tag_name("OpMode"))
-        .map(|m| (text(m, "Name"), text(m, "AssignActivate")))
-        .collect();
-    assert_eq!(modes, [("FreeRun", "#x0000"), ("DC", "#x0300")]);
-
-    // Eeprom: ConfigData = SII bytes 0..13, ByteSize = SII size word.
-    let img = p.sii_image();
-    let eeprom = child(device, "Eeprom");
-    let cfg = text(eeprom, "ConfigData");
-    let want: String = img[..14].iter().map(|b| format!("{b:02X}")).collect();
-    assert_eq!(cfg, want);
-    let size_word = u16::from_le_bytes([img[0x7C], img[0x7D]]);
-    assert_eq!(
-        text(eeprom, "ByteSize").parse::<usize>().unwrap(),
-        (usize::from(size_word) + 1) * 128
-    );
-    assert!(
-        eeprom.children().all(|c| !c.has_tag_name("BootStrap")),
-        "no bootstrap mailbox declared"
-    );
+    common::esi_lints(&p, &p.esi_xml(), &p.sii_image());
 }
 
 #[test]

@@ -132,10 +132,35 @@ fn identity_and_every_object_read_by_sdo_equals_the_profile() {
 /// PRE-OP → SAFE-OP → OP with DC SYNC0 at `cycle_ns`; returns the AL status and code when the
 /// drive refuses SAFE-OP, or the process image sizes in OP.
 async fn run_dc(p: &Profile, cycle_ns: u64) -> Result<(usize, usize), (u16, u16)> {
+    run_dc_assigned(p, cycle_ns, None).await
+}
+
+/// [`run_dc`], with `assignment` = (RxPDOs, TxPDOs) written to 1C12h/1C13h in PRE-OP first.
+async fn run_dc_assigned(
+    p: &Profile,
+    cycle_ns: u64,
+    assignment: Option<(&[u16], &[u16])>,
+) -> Result<(usize, usize), (u16, u16)> {
     let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
     let mut group = init(&m).await;
+    if let Some((rx, tx)) = assignment {
+        let sd = group.subdevice(md, 0).expect("drive");
+        for (assign, pdos) in [(0x1C12u16, rx), (0x1C13, tx)] {
+            sd.sdo_write(assign, 0, 0u8)
+                .await
+                .expect("assignment :00 = 0");
+            for (i, pdo) in pdos.iter().enumerate() {
+                sd.sdo_write(assign, (i + 1) as u8, *pdo)
+                    .await
+                    .expect("assignment entry");
+            }
+            sd.sdo_write(assign, 0, pdos.len() as u8)
+                .await
+                .expect("assignment :00 = n");
+        }
+    }
     for mut sd in group.iter_mut(md) {
         sd.set_dc_sync(DcSync::Sync0);
     }
@@ -394,68 +419,9 @@ fn pdo_remaps_that_break_the_profile_rules_are_refused() {
 /// PRE-OP: assign `rx` to 1C12h and `tx` to 1C13h (each replacing the default assignment), then
 /// into OP with DC SYNC0 at the default cycle; returns the process image sizes.
 async fn op_with_assignment(p: &Profile, rx: &[u16], tx: &[u16]) -> (usize, usize) {
-    let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
-    tokio::task::spawn_local(transport);
-    let md: &MainDevice<'_> = &m.maindevice;
-    let mut group = init(&m).await;
-    {
-        let sd = group.subdevice(md, 0).expect("drive");
-        for (assign, pdos) in [(0x1C12u16, rx), (0x1C13, tx)] {
-            sd.sdo_write(assign, 0, 0u8)
-                .await
-                .expect("assignment :00 = 0");
-            for (i, pdo) in pdos.iter().enumerate() {
-                sd.sdo_write(assign, (i + 1) as u8, *pdo)
-                    .await
-                    .expect("assignment entry");
-            }
-            sd.sdo_write(assign, 0, pdos.len() as u8)
-                .await
-                .expect("assignment :00 = n");
-        }
-    }
-    for mut sd in group.iter_mut(md) {
-        sd.set_dc_sync(DcSync::Sync0);
-    }
-    let cycle_ns = u64::from(p.sync.default_cycle_ns);
-    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
-    for _ in 0..100 {
-        group.tx_rx_sync_system_time(md).await.expect("time sync");
-        m.shared.advance(cycle_ns);
-    }
-    let group = group
-        .configure_dc_sync(
-            md,
-            DcConfiguration {
-                start_delay: Duration::from_nanos(cycle_ns * 10),
-                sync0_period: Duration::from_nanos(cycle_ns),
-                sync0_shift: Duration::ZERO,
-            },
-        )
+    run_dc_assigned(p, u64::from(p.sync.default_cycle_ns), Some((rx, tx)))
         .await
-        .expect("DC configuration");
-    let group = match group.into_safe_op(md).await {
-        Ok(g) => g,
-        Err(e) => panic!(
-            "{}: SAFE-OP with {rx:x?}/{tx:x?}: {e:?} {:?}",
-            p.name,
-            al_status(md).await
-        ),
-    };
-    let group = group.request_into_op(md).await.expect("request OP");
-    for _ in 0..1000 {
-        let r = group.tx_rx_dc(md).await.expect("tx/rx");
-        m.shared.advance(cycle_ns);
-        if r.all_op() {
-            let sd = group.subdevice(md, 0).expect("drive");
-            return (sd.outputs_raw().len(), sd.inputs_raw().len());
-        }
-    }
-    panic!(
-        "{}: no OP with {rx:x?}/{tx:x?}: {:?}",
-        p.name,
-        al_status(md).await
-    );
+        .unwrap_or_else(|s| panic!("{}: SAFE-OP refused with {rx:x?}/{tx:x?}: {s:?}", p.name))
 }
 
 /// Each alternative PDO a manual offers (the PDOs not assigned by default, e.g. the fixed
