@@ -13,6 +13,8 @@ import time
 
 import pysoem
 
+from od_common import describe, drain_info_errors
+
 DOMAIN = 0x2FF0
 DOMAIN_LEN = 64 * 1024
 
@@ -23,28 +25,6 @@ def abort_of(f):
         return None
     except pysoem.SdoError as e:
         return e.abort_code
-
-
-def describe(obj):
-    d = {
-        "index": obj.index,
-        "name": obj.name.decode("ascii", "replace") if isinstance(obj.name, bytes) else obj.name,
-        "object_code": obj.object_code,
-        "data_type": obj.data_type,
-    }
-    try:
-        d["entries"] = [
-            {
-                "name": e.name.decode("ascii", "replace") if isinstance(e.name, bytes) else e.name,
-                "data_type": e.data_type,
-                "bit_length": e.bit_length,
-                "obj_access": e.obj_access,
-            }
-            for e in obj.entries
-        ]
-    except Exception as e:  # noqa: BLE001 - reported, not hidden
-        d["entries_error"] = repr(e)
-    return d
 
 
 def main():
@@ -58,17 +38,7 @@ def main():
     t = time.monotonic()
     out["od"] = [describe(o) for o in s.od]
     out["od_seconds"] = time.monotonic() - t
-    # SOEM asks for the entry description of every subindex up to the highest one; objects with
-    # gaps (1C32h/1C33h) get an SDO Info Error for each missing subindex (ETG.1000.6), which SOEM
-    # keeps in its error list and pysoem raises on the next SDO call, one per call. Drain them.
-    stale = 0
-    while stale < 256:
-        try:
-            s.sdo_read(0x1000, 0)
-            break
-        except Exception:  # noqa: BLE001 - the stale SDO info errors
-            stale += 1
-    out["stale_info_errors"] = stale
+    out["stale_info_errors"] = drain_info_errors(s, 256)
 
     out["ca_1c12"] = s.sdo_read(0x1C12, 0, ca=True).hex()
     out["ca_1a00"] = s.sdo_read(0x1A00, 0, ca=True).hex()

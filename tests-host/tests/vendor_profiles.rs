@@ -486,6 +486,32 @@ fn le_bytes(v: i64, bytes: usize) -> Vec<u8> {
     v.to_le_bytes()[..bytes].to_vec()
 }
 
+/// An expedited SDO download of `v` into an integer entry of `len` (1, 2 or 4) bytes.
+async fn write_int(
+    sd: &ethercrab::SubDeviceRef<'_, &ethercrab::SubDevice>,
+    index: u16,
+    subindex: u8,
+    v: i64,
+    len: usize,
+) -> Result<(), ethercrab::error::Error> {
+    let b = le_bytes(v, len);
+    match len {
+        1 => sd.sdo_write(index, subindex, b[0]).await,
+        2 => {
+            sd.sdo_write(index, subindex, u16::from_le_bytes([b[0], b[1]]))
+                .await
+        }
+        _ => {
+            sd.sdo_write(
+                index,
+                subindex,
+                u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            )
+            .await
+        }
+    }
+}
+
 /// Entries with a list of accepted values (`allowed`, e.g. the modes 6060h a drive supports, the
 /// homing methods of 6098h): every listed value is written by SDO, a value between them that is
 /// not listed is refused with 0x06090030 and leaves the entry unchanged.
@@ -517,44 +543,11 @@ fn values_outside_an_entrys_list_are_refused_with_0x06090030() {
                     .find(|v| !e.allowed.contains(v))
                     .unwrap_or_else(|| panic!("{at}: no gap in the list"));
                 for v in [first, last] {
-                    let bytes = le_bytes(v, len);
-                    let r = match len {
-                        1 => sd.sdo_write(index, e.subindex, bytes[0]).await,
-                        2 => {
-                            sd.sdo_write(
-                                index,
-                                e.subindex,
-                                u16::from_le_bytes([bytes[0], bytes[1]]),
-                            )
-                            .await
-                        }
-                        _ => {
-                            sd.sdo_write(
-                                index,
-                                e.subindex,
-                                u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
-                            )
-                            .await
-                        }
-                    };
-                    r.unwrap_or_else(|err| panic!("{at} = {v}: {err:?}"));
-                }
-                let bytes = le_bytes(gap, len);
-                let r = match len {
-                    1 => sd.sdo_write(index, e.subindex, bytes[0]).await,
-                    2 => {
-                        sd.sdo_write(index, e.subindex, u16::from_le_bytes([bytes[0], bytes[1]]))
-                            .await
-                    }
-                    _ => {
-                        sd.sdo_write(
-                            index,
-                            e.subindex,
-                            u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
-                        )
+                    write_int(&sd, index, e.subindex, v, len)
                         .await
-                    }
-                };
+                        .unwrap_or_else(|err| panic!("{at} = {v}: {err:?}"));
+                }
+                let r = write_int(&sd, index, e.subindex, gap, len).await;
                 let err = r.expect_err(&format!("{at} = {gap} accepted"));
                 assert_eq!(abort_code(err), abort::VALUE_RANGE, "{at} = {gap}");
                 let now = sd
