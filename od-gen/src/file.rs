@@ -349,6 +349,16 @@ pub struct SyncFile {
     /// multiple of `cycle_step_ns` in range.
     #[serde(default)]
     pub allowed_cycles_ns: Vec<u32>,
+    /// Default of 1C32h:01 / 1C33h:01: "free_run", "sm_synchronous" or "dc_sync0" (default:
+    /// free run if supported, else SM-synchronous, else DC SYNC0).
+    #[serde(default)]
+    pub default_sync_mode: Option<String>,
+    /// Whether the master may write 1C32h:01 / 1C33h:01 in PREOP (default true).
+    #[serde(default = "yes")]
+    pub sync_mode_writable: bool,
+    /// Whether the master may write 1C32h:02 / 1C33h:02 in PREOP (default true).
+    #[serde(default = "yes")]
+    pub cycle_time_writable: bool,
 }
 
 fn one() -> u32 {

@@ -671,6 +671,12 @@ pub struct Sync {
     pub cycle_step_ns: u32,
     /// The only DC cycles accepted, ns (empty: any multiple of the step in range).
     pub allowed_cycles_ns: Vec<u32>,
+    /// Default of 1C32h:01 (0 free run, 1 SM-synchronous, 2 DC SYNC0; 1C33h: 0x22 for 1).
+    pub default_sync_mode: u16,
+    /// 1C32h/1C33h:01 writable in PREOP.
+    pub sync_mode_writable: bool,
+    /// 1C32h/1C33h:02 writable in PREOP.
+    pub cycle_time_writable: bool,
 }
 
 impl Sync {

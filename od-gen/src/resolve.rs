@@ -170,6 +170,25 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         delay_ns: f.sync.delay_ns,
         cycle_step_ns: f.sync.cycle_step_ns,
         allowed_cycles_ns: f.sync.allowed_cycles_ns.clone(),
+        default_sync_mode: match f.sync.default_sync_mode.as_deref() {
+            None if f.sync.free_run => 0,
+            None if f.sync.sm_synchronous => 1,
+            None if f.sync.dc_sync0 => 2,
+            None => 3,
+            Some("free_run") if f.sync.free_run => 0,
+            Some("sm_synchronous") if f.sync.sm_synchronous => 1,
+            Some("dc_sync0") if f.sync.dc_sync0 => 2,
+            Some(s) => {
+                return Err(fault(
+                    "sync.default_sync_mode",
+                    Invalid::Sync(format!(
+                        "`{s}` is not a supported mode of free_run, sm_synchronous, dc_sync0"
+                    )),
+                ))
+            }
+        },
+        sync_mode_writable: f.sync.sync_mode_writable,
+        cycle_time_writable: f.sync.cycle_time_writable,
     };
     let esm = EsmRules {
         op_requires_outputs: f.esm.op_requires_outputs,
@@ -1566,15 +1585,13 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         (0x1C32u16, "SM output parameter", 1u16),
         (0x1C33, "SM input parameter", 0x22),
     ] {
-        let mode = if y.free_run {
-            0
-        } else if y.sm_synchronous {
+        // 1C33h follows 1C32h; its SM-synchronous value is 0x22 (synchronous with SM2).
+        let mode = if y.default_sync_mode == 1 {
             sm_sync_mode
-        } else if y.dc_sync0 {
-            2
         } else {
-            3
+            y.default_sync_mode
         };
+        let writable = |w: bool| if w { Access::RW_PREOP } else { Access::RO };
         let u32b = |x: u32| x.to_le_bytes().to_vec();
         let u16b = |x: u16| x.to_le_bytes().to_vec();
         v.push(Object {
@@ -1587,7 +1604,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
                     1,
                     "Sync mode",
                     Uint,
-                    Access::RW_PREOP,
+                    writable(y.sync_mode_writable),
                     Storage::Ram,
                     u16b(mode),
                     Vec::new(),
@@ -1597,7 +1614,7 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
                     2,
                     "Cycle time",
                     Udint,
-                    Access::RW_PREOP,
+                    writable(y.cycle_time_writable),
                     Storage::Ram,
                     u32b(y.default_cycle_ns),
                     u32b(y.min_cycle_ns),

@@ -871,3 +871,35 @@ fn allowed_cycles_must_span_the_range_in_steps() {
         assert_eq!(key, "sync.allowed_cycles_ns", "{bad}");
     }
 }
+
+#[test]
+fn sync_mode_default_and_writability() {
+    let p = od_gen::builtin("rse").unwrap();
+    let mode = p.entry(0x1C32, 1).unwrap();
+    assert_eq!(mode.default, vec![2, 0], "DC SYNC0");
+    assert!(!mode.access.writable());
+    assert!(!p.entry(0x1C33, 2).unwrap().access.writable());
+    let std = od_gen::builtin("standard").unwrap();
+    assert_eq!(
+        std.entry(0x1C32, 1).unwrap().default,
+        vec![0, 0],
+        "free run"
+    );
+    assert!(std.entry(0x1C32, 1).unwrap().access.writable());
+    // SM-synchronous: 1C33h:01 = 0x22 (synchronous with SM2).
+    let sm = od_gen::parse(
+        &with(
+            "dc_sync1 = false",
+            "dc_sync1 = false\ndefault_sync_mode = \"sm_synchronous\"",
+        ),
+        "p.toml",
+    )
+    .unwrap();
+    assert_eq!(sm.entry(0x1C32, 1).unwrap().default, vec![1, 0]);
+    assert_eq!(sm.entry(0x1C33, 1).unwrap().default, vec![0x22, 0]);
+    let (key, _) = invalid(&with(
+        "dc_sync1 = false",
+        "dc_sync1 = false\ndefault_sync_mode = \"dc_sync1\"",
+    ));
+    assert_eq!(key, "sync.default_sync_mode");
+}

@@ -566,3 +566,35 @@ fn values_outside_an_entrys_list_are_refused_with_0x06090030() {
     // SDV3-E/OSD-G-E 605Ah and 6060h, GHA-E 6060h, 607Eh and 6098h.
     assert!(checked >= 7, "{checked} lists checked");
 }
+
+/// 1C32h:01/:02 (the sync mode and cycle the master asks for) are read-only where the manual
+/// says so (RSE: both; SDV3-E: the mode, chosen by the drive at PREOP -> SAFEOP): a download is
+/// refused with 0x06010002; elsewhere it is served in PREOP.
+#[test]
+fn sync_mode_and_cycle_time_are_writable_as_the_profile_says() {
+    const READ_ONLY: u32 = 0x0601_0002;
+    for p in profiles() {
+        block_on(async {
+            let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
+            tokio::task::spawn_local(transport);
+            let md: &MainDevice<'_> = &m.maindevice;
+            let group = init(&m).await;
+            let sd = group.subdevice(md, 0).expect("drive");
+            let mode: u16 = sd.sdo_read(0x1C32, 1).await.expect("1C32h:01");
+            assert_eq!(mode, p.sync.default_sync_mode, "{}: 1C32h:01", p.name);
+            let r = sd.sdo_write(0x1C32, 1, mode).await;
+            match (p.sync.sync_mode_writable, r) {
+                (true, Ok(())) => {}
+                (false, Err(e)) => assert_eq!(abort_code(e), READ_ONLY, "{}", p.name),
+                (w, r) => panic!("{}: 1C32h:01 writable {w}, download {r:?}", p.name),
+            }
+            let cycle = p.sync.default_cycle_ns;
+            let r = sd.sdo_write(0x1C32, 2, cycle).await;
+            match (p.sync.cycle_time_writable, r) {
+                (true, Ok(())) => {}
+                (false, Err(e)) => assert_eq!(abort_code(e), READ_ONLY, "{}", p.name),
+                (w, r) => panic!("{}: 1C32h:02 writable {w}, download {r:?}", p.name),
+            }
+        });
+    }
+}
