@@ -126,3 +126,25 @@ fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
         );
     });
 }
+
+/// SDV3-E §3.6: an emergency is sent only when the ESM is not in Init. An error raised in Init
+/// sets 1001h but queues no emergency (there is no mailbox to carry it).
+#[test]
+fn no_emergency_is_queued_in_init() {
+    let mut seg = Segment::new("sdv3-e", 1).expect("profile");
+    let now = seg.now_ns();
+    let slave = &mut seg.drives_mut()[0].slave;
+    let alarm = od_gen::builtin("sdv3-e")
+        .expect("profile")
+        .alarms
+        .into_iter()
+        .find(|a| a.display == "AH")
+        .expect("alarm AH");
+    let handed_back = slave.report_error(alarm.emcy.code, 0, alarm.emcy.data, None, now);
+    assert!(
+        handed_back.is_err(),
+        "no mailbox in Init: the emergency is not queued"
+    );
+    assert_eq!(slave.pending_emcys(), 0);
+    assert_eq!(slave.error_register() & 0x01, 0x01, "1001h generic error");
+}
