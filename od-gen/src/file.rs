@@ -359,6 +359,10 @@ pub struct SyncFile {
     /// Whether the master may write 1C32h:02 / 1C33h:02 in PREOP (default true).
     #[serde(default = "yes")]
     pub cycle_time_writable: bool,
+    /// 1C32h:20 reads TRUE while DC-synchronised without error (default false: ETG.1020,
+    /// TRUE = sync error).
+    #[serde(default)]
+    pub sync_flag_in_sync: bool,
 }
 
 fn one() -> u32 {

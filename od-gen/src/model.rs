@@ -677,6 +677,8 @@ pub struct Sync {
     pub sync_mode_writable: bool,
     /// 1C32h/1C33h:02 writable in PREOP.
     pub cycle_time_writable: bool,
+    /// 1C32h:20 TRUE = synchronised without error (instead of ETG.1020's TRUE = error).
+    pub sync_flag_in_sync: bool,
 }
 
 impl Sync {

@@ -189,6 +189,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         },
         sync_mode_writable: f.sync.sync_mode_writable,
         cycle_time_writable: f.sync.cycle_time_writable,
+        sync_flag_in_sync: f.sync.sync_flag_in_sync,
     };
     let esm = EsmRules {
         op_requires_outputs: f.esm.op_requires_outputs,

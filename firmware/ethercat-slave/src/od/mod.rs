@@ -66,6 +66,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             max_cycle_ns: 0,
             cycle_step_ns: 1,
             allowed_cycles_ns: &[],
+            sync_flag_in_sync: false,
         },
         max_pdo_entries: 8,
         max_pdo_bytes: 256,

@@ -258,6 +258,22 @@ pub struct SyncSupport {
     /// The only DC cycles accepted, when the drive has a fixed set (e.g. 125/250/500/1000/2000 µs
     /// on the GHA-E); empty: every multiple of `cycle_step_ns` in range.
     pub allowed_cycles_ns: &'static [u32],
+    /// 1C32h:20 reads TRUE while DC-synchronised without error (the RSE's definition) instead
+    /// of ETG.1020's TRUE = sync error.
+    pub sync_flag_in_sync: bool,
+}
+
+impl SyncSupport {
+    /// The value of 1C32h:20 (BOOLEAN): ETG.1020 "sync error" = `error`; with
+    /// [`Self::sync_flag_in_sync`] it is TRUE while `dc_synchronised` and no error.
+    pub fn sync_error_flag(&self, error: bool, dc_synchronised: bool) -> u8 {
+        let flag = if self.sync_flag_in_sync {
+            dc_synchronised && !error
+        } else {
+            error
+        };
+        u8::from(flag)
+    }
 }
 
 /// EtherCAT state machine rules of a profile (profile section `[esm]`).

@@ -266,6 +266,7 @@ static PROFILE: Profile = Profile {
             max_cycle_ns: 10_000_000,
             cycle_step_ns: 1,
             allowed_cycles_ns: &[],
+            sync_flag_in_sync: false,
         },
         max_pdo_entries: 4,
         max_pdo_bytes: 256,

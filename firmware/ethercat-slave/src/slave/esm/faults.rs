@@ -112,7 +112,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             .read_u32(ERROR_SETTINGS, SUB_SYNC_ERROR_LIMIT)
             .map_or(DEFAULT_COUNTER_LIMIT, |v| v as u16);
         if self.sync_supervisor.tripped(limit) && !self.status.error {
-            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[1]);
+            let flag = self.profile.device.sync.sync_error_flag(true, true);
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[flag]);
             self.sync_supervisor.reset();
             // ETG.1000.6 Table 11 (OP → SAFEOP + error): pulses missed while the SYNC unit still
             // runs are a synchronization error (0x001A); a SYNC unit the master switched off

@@ -96,7 +96,23 @@ mod tests {
         max_cycle_ns: 10_000_000,
         cycle_step_ns: 1,
         allowed_cycles_ns: &[],
+        sync_flag_in_sync: false,
     };
+
+    #[test]
+    fn sync_error_flag_follows_etg_or_the_profiles_inverse() {
+        // ETG.1020: TRUE = sync error.
+        assert_eq!(SUPPORT.sync_error_flag(false, true), 0);
+        assert_eq!(SUPPORT.sync_error_flag(true, true), 1);
+        // RSE: TRUE = synchronised without error.
+        let in_sync = SyncSupport {
+            sync_flag_in_sync: true,
+            ..SUPPORT
+        };
+        assert_eq!(in_sync.sync_error_flag(false, true), 1);
+        assert_eq!(in_sync.sync_error_flag(false, false), 0, "free run");
+        assert_eq!(in_sync.sync_error_flag(true, true), 0);
+    }
 
     #[test]
     fn dc_cycle_not_in_the_profiles_set_is_0x36() {

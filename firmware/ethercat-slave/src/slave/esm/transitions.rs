@@ -226,7 +226,9 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             self.calc_and_copy_max_ns = 0;
         }
         if from == AlState::PreOp && to == AlState::SafeOp {
-            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[0]);
+            let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
+            let flag = self.profile.device.sync.sync_error_flag(false, dc);
+            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[flag]);
             self.publish_sync_parameters();
             // Inputs are valid from SAFEOP on: write them once before the master reads SM3.
             self.run_application(self.now_ns);
