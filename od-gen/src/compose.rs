@@ -78,7 +78,7 @@ pub fn compose(text: &str, source: &str, dir: Option<&Path>) -> Result<Composed,
     let mut sources = Vec::new();
     let mut table = layered(text, source, dir, &mut sources, 0)?;
     expand_libraries(&mut table, source, &mut sources)?;
-    remove_omitted(&mut table);
+    remove_omitted(&mut table, source)?;
     replicate(&mut table, source)?;
     Ok(Composed { table, sources })
 }
@@ -302,8 +302,49 @@ fn is_omitted(v: &Value) -> bool {
     v.get("omit").and_then(Value::as_bool) == Some(true)
 }
 
+/// The first `omit` that is not a boolean, as a key path.
+fn bad_omit(table: &Table) -> Option<String> {
+    let not_bool = |v: &Value| v.get("omit").is_some_and(|o| !o.is_bool());
+    for (key, id) in MERGE_BY {
+        for e in table
+            .get(key)
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+        {
+            let at = match e.get(id) {
+                Some(Value::Integer(i)) => format!("{key}[{i:#06x}]"),
+                Some(Value::String(s)) => format!("{key}[{s}]"),
+                _ => key.to_string(),
+            };
+            if not_bool(e) {
+                return Some(format!("{at}.omit"));
+            }
+            for entry in e
+                .get("entry")
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+            {
+                if not_bool(entry) {
+                    let sub = entry.get("sub").and_then(Value::as_integer).unwrap_or(0);
+                    return Some(format!("{at}.entry[{sub:#04x}].omit"));
+                }
+            }
+        }
+    }
+    None
+}
+
 /// Removes elements marked `omit = true` (objects, their entries, PDOs, alarms, op modes).
-fn remove_omitted(table: &mut Table) {
+fn remove_omitted(table: &mut Table, source: &str) -> Result<(), Error> {
+    if let Some(key) = bad_omit(table) {
+        return Err(invalid(
+            source,
+            &key,
+            Invalid::Value("must be true or false".into()),
+        ));
+    }
     for (key, _) in MERGE_BY {
         if let Some(Value::Array(elements)) = table.get_mut(key) {
             elements.retain(|e| !is_omitted(e));
@@ -318,6 +359,7 @@ fn remove_omitted(table: &mut Table) {
             }
         }
     }
+    Ok(())
 }
 
 fn int(t: &Table, key: &str) -> Option<i64> {

@@ -351,3 +351,25 @@ fn every_error_kind_names_file_line_and_field() {
         );
     }
 }
+
+#[test]
+fn omit_must_be_a_boolean_and_false_keeps_the_object() {
+    let text = |v: &str| {
+        format!("name = \"e\"\ndescription = \"\"\nextends = \"standard\"\n[[object]]\nindex = 0x2F00\nomit = {v}\n")
+    };
+    match od_gen::parse(&text("\"yes\""), "e.toml") {
+        Err(Error::Invalid { key, line, .. }) => {
+            assert_eq!(key, "object[0x2f00].omit");
+            assert_eq!(line, Some(6));
+        }
+        other => panic!("{other:?}"),
+    }
+    let kept = od_gen::parse(
+        &text("false").replacen("name = \"e\"", "name = \"e\"", 1),
+        "e.toml",
+    )
+    .unwrap();
+    assert!(kept.object(0x2F00).is_some());
+    let gone = od_gen::parse(&text("true"), "e.toml").unwrap();
+    assert!(gone.object(0x2F00).is_none());
+}
