@@ -17,6 +17,7 @@ use cia402::faults::FaultReport;
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, PdsState};
 use cia402::units;
+use ethercat_slave::od::ErrorReport;
 use ethercat_slave::slave::{AppEvent, Application};
 
 use crate::motor::axis::{AxisCommand, AxisLink, AxisState, ControlMode, MotorModel};
@@ -273,8 +274,15 @@ impl Application for Drive {
         was_enabled
     }
 
-    fn raise_error(&mut self, code: u16, ram: &mut [u8]) {
-        self.fault(code, ram);
+    fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]) {
+        self.report_fault(
+            FaultReport {
+                error_code: report.error_code,
+                emcy_code: report.emcy_code,
+                emcy_data: report.emcy_data,
+            },
+            ram,
+        );
     }
 }
 

@@ -462,7 +462,12 @@ fn synchronisation(out: &mut String, p: &Profile) {
         vec![
             "Leaving OP while Operation Enabled".into(),
             match e.op_exit_while_enabled_error {
-                Some(c) => format!("fault, 603Fh = {}", hex16(c)),
+                Some(c) => format!(
+                    "fault, 603Fh = {}, EMCY {} [{}]",
+                    hex16(c.error_code),
+                    hex16(c.emcy.code),
+                    bytes_hex(&c.emcy.data)
+                ),
                 None => "the drive is disabled (no fault)".into(),
             },
         ],

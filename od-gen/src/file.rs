@@ -383,7 +383,7 @@ pub struct EsmFile {
     /// CiA402 error code (603Fh) raised when the EtherCAT state leaves OP while the drive is in
     /// Operation Enabled; absent: the drive is only disabled.
     #[serde(default)]
-    pub op_exit_while_enabled_error: Option<u16>,
+    pub op_exit_while_enabled_error: Option<MotorFaultFile>,
 }
 
 /// The ETG default SafeopOpTimeout of the ESI (ms).

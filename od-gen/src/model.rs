@@ -831,7 +831,7 @@ pub struct EsmRules {
     pub safeop_op_timeout_ms: u32,
     /// CiA402 error code raised when the state leaves OP while the drive is in Operation
     /// Enabled (`None`: the drive is only disabled).
-    pub op_exit_while_enabled_error: Option<u16>,
+    pub op_exit_while_enabled_error: Option<MotorFaultCode>,
 }
 
 /// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP/OP.

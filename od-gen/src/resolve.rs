@@ -191,10 +191,16 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         cycle_time_writable: f.sync.cycle_time_writable,
         sync_flag_in_sync: f.sync.sync_flag_in_sync,
     };
+    let alarms = alarms(f)?;
     let esm = EsmRules {
         op_requires_outputs: f.esm.op_requires_outputs,
         safeop_op_timeout_ms: f.esm.safeop_op_timeout_ms,
-        op_exit_while_enabled_error: f.esm.op_exit_while_enabled_error,
+        op_exit_while_enabled_error: f
+            .esm
+            .op_exit_while_enabled_error
+            .as_ref()
+            .map(|r| fault_report(r, &alarms, "esm.op_exit_while_enabled_error"))
+            .transpose()?,
     };
     let kind = match f.kind.as_deref() {
         None => ProfileKind::Drive,
@@ -205,7 +211,6 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             )
         })?,
     };
-    let alarms = alarms(f)?;
     let motor_faults = match kind {
         ProfileKind::Drive => motor_faults(&f.motor_faults, &alarms)?,
         ProfileKind::Device if f.motor_faults.is_empty() => {
@@ -631,31 +636,39 @@ fn motor_faults(
     for (code, name) in codes.iter_mut().zip(MOTOR_FAULT_NAMES) {
         *code = match map.get(name) {
             None => MotorFaultCode::default(),
-            Some(MotorFaultFile::Code(c)) => MotorFaultCode {
-                error_code: *c,
-                emcy: EmcyCode {
-                    code: *c,
-                    data: [0; 5],
-                },
-            },
-            Some(MotorFaultFile::Alarm(display)) => {
-                let a = alarms
-                    .iter()
-                    .find(|a| a.display == *display)
-                    .ok_or_else(|| {
-                        fault(
-                            &format!("motor_faults.{name}"),
-                            Invalid::Value(format!("no [[alarm]] with display `{display}`")),
-                        )
-                    })?;
-                MotorFaultCode {
-                    error_code: a.error_code,
-                    emcy: a.emcy,
-                }
-            }
+            Some(r) => fault_report(r, alarms, &format!("motor_faults.{name}"))?,
         };
     }
     Ok(codes)
+}
+
+/// A code (the same in 603Fh and the EMCY, no manufacturer data) or an alarm's display (its
+/// 603Fh code and EMCY bytes).
+fn fault_report(r: &MotorFaultFile, alarms: &[Alarm], key: &str) -> Result<MotorFaultCode, Fault> {
+    match r {
+        MotorFaultFile::Code(c) => Ok(MotorFaultCode {
+            error_code: *c,
+            emcy: EmcyCode {
+                code: *c,
+                data: [0; 5],
+            },
+        }),
+        MotorFaultFile::Alarm(display) => {
+            let a = alarms
+                .iter()
+                .find(|a| a.display == *display)
+                .ok_or_else(|| {
+                    fault(
+                        key,
+                        Invalid::Value(format!("no [[alarm]] with display `{display}`")),
+                    )
+                })?;
+            Ok(MotorFaultCode {
+                error_code: a.error_code,
+                emcy: a.emcy,
+            })
+        }
+    }
 }
 
 /// The section an object index is derived from, if od-gen generates it.

@@ -351,8 +351,13 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {} }},",
         m.op_requires_outputs,
         m.safeop_op_timeout_ms,
-        m.op_exit_while_enabled_error
-            .map_or("None".into(), |c| format!("Some({c:#06x})"))
+        m.op_exit_while_enabled_error.map_or("None".into(), |c| {
+            let d = c.emcy.data;
+            format!(
+                "Some({}::od::ErrorReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }})",
+                target.slave, c.error_code, c.emcy.code, d[0], d[1], d[2], d[3], d[4]
+            )
+        })
     );
     let _ = writeln!(
         out,

@@ -445,13 +445,13 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
         (
             p.esm.op_requires_outputs,
             p.esm.safeop_op_timeout_ms,
-            p.esm.op_exit_while_enabled_error
+            p.esm.op_exit_while_enabled_error.map(|r| r.error_code)
         ),
         (false, 2500, Some(0x8700))
     );
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(0x8700) },"
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }) },"
     ));
 
     // Without [esm] and the new keys: the documented defaults.

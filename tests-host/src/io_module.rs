@@ -94,7 +94,7 @@ impl Application for IoModule {
         false
     }
 
-    fn raise_error(&mut self, _code: u16, _ram: &mut [u8]) {}
+    fn raise_error(&mut self, _report: ethercat_slave::od::ErrorReport, _ram: &mut [u8]) {}
 }
 
 /// The I/O module on a simulated ET1100.

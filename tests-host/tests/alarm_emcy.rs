@@ -148,3 +148,84 @@ fn no_emergency_is_queued_in_init() {
     assert_eq!(slave.pending_emcys(), 0);
     assert_eq!(slave.error_register() & 0x01, 0x01, "1001h generic error");
 }
+
+/// SDV3-E §5.2 10): leaving OP while the drive is Operation Enabled raises its alarm ESr: the
+/// drive faults with 603Fh = 8801h and the emergency carries error No. 39h, aux code 801Ch.
+#[test]
+fn leaving_op_while_enabled_raises_the_profiles_alarm() {
+    let p = od_gen::builtin("sdv3-e").expect("profile");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "ESr")
+        .expect("alarm ESr");
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            let mut sw = 0;
+            for cw in [SHUTDOWN; 5]
+                .into_iter()
+                .chain([SWITCH_ON; 5])
+                .chain([ENABLE_OPERATION; 30])
+            {
+                {
+                    let mut out = sd.outputs_raw_mut();
+                    out.fill(0);
+                    out[0..2].copy_from_slice(&cw.to_le_bytes());
+                    out[12] = CSP;
+                }
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.advance(CYCLE_NS);
+                let inp = sd.inputs_raw();
+                sw = u16::from_le_bytes([inp[0], inp[1]]);
+            }
+            assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        }
+        let group = group.into_safe_op(md).await.expect("OP -> SAFE-OP");
+        let mut mailbox = None;
+        for _ in 0..50 {
+            let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
+                .receive(md)
+                .await
+                .expect("SM1 status");
+            if status & MAILBOX_FULL != 0 {
+                let data: [u8; 256] = Command::fprd(FIRST_STATION, p.sm.mailbox_in.start)
+                    .receive(md)
+                    .await
+                    .expect("SM1");
+                mailbox = Some(data);
+                break;
+            }
+            group.tx_rx(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        let mb = mailbox.expect("an emergency in SM1");
+        let coe = &mb[MAILBOX_HEADER..];
+        assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code"
+        );
+        assert_eq!(
+            coe[5..10],
+            [0x39, 0x1C, 0x80, 0, 0],
+            "error No. 39h, aux 801Ch"
+        );
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), 0x8801);
+    });
+}

@@ -181,7 +181,8 @@ fn profile_error_on_leaving_op_while_enabled_faults_the_drive() {
         // The standard profile with `[esm] op_exit_while_enabled_error = 0x8700`.
         let mut segment = Segment::new("standard", 1).expect("segment");
         let mut profile = firmware::profiles::standard::PROFILE;
-        profile.od.device.esm.op_exit_while_enabled_error = Some(OP_EXIT_ERROR);
+        profile.od.device.esm.op_exit_while_enabled_error =
+            Some(ethercat_slave::od::ErrorReport::code(OP_EXIT_ERROR));
         let profile = Box::leak(Box::new(profile));
         let sii = od_gen::builtin("standard").expect("standard").sii_image();
         let mut drive = SimDrive::new(profile, &sii).expect("drive");

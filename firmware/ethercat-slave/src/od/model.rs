@@ -285,10 +285,34 @@ pub struct EsmRules {
     /// How long a SAFEOP → OP request may wait for the first SYNC0 / the first outputs before
     /// it is refused, in ms (ESI `Info/StateMachine/Timeout/SafeopOpTimeout`).
     pub safeop_op_timeout_ms: u32,
-    /// Error code the application raises (EMCY; a drive: 603Fh, PDS Fault) when the EtherCAT
-    /// state leaves OP while the application was active (a drive: Operation Enabled); `None`:
-    /// the application only puts its outputs into their safe state.
-    pub op_exit_while_enabled_error: Option<u16>,
+    /// The error the application raises (a drive: 603Fh, PDS Fault; and its EMCY) when the
+    /// EtherCAT state leaves OP while the application was active (a drive: Operation Enabled);
+    /// `None`: the application only puts its outputs into their safe state.
+    pub op_exit_while_enabled_error: Option<ErrorReport>,
+}
+
+/// An application error as the profile reports it: the error code the application holds (a
+/// drive's 603Fh) and the EMCY message (e.g. a vendor alarm: the Σ-V-SD sends FF00h with its
+/// alarm number in the manufacturer field).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ErrorReport {
+    /// The application's error code (603Fh).
+    pub error_code: u16,
+    /// EMCY bytes 0–1.
+    pub emcy_code: u16,
+    /// EMCY bytes 3–7 (manufacturer-specific error field).
+    pub emcy_data: [u8; 5],
+}
+
+impl ErrorReport {
+    /// The same code in the application and the EMCY, no manufacturer data.
+    pub const fn code(code: u16) -> Self {
+        Self {
+            error_code: code,
+            emcy_code: code,
+            emcy_data: [0; 5],
+        }
+    }
 }
 
 impl EsmRules {

@@ -1,6 +1,8 @@
 //! The device application the slave runs in every process-data cycle: what makes the slave a
 //! drive, an I/O module or anything else. The stack knows nothing about it beyond this trait.
 
+use crate::od::ErrorReport;
+
 /// What happened to the application's error state during a cycle: the slave turns it into the
 /// EMCY, 1001h and 10F3h bookkeeping of CiA 301 / ETG.1020.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,9 +37,11 @@ pub trait Application {
     /// `EsmRules::op_exit_while_enabled_error`. `cycle_ns` is the cycle that was running.
     fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool;
 
-    /// The slave raises application error `code` (a profile rule such as
-    /// `op_exit_while_enabled_error`); the slave reports the EMCY itself.
-    fn raise_error(&mut self, code: u16, ram: &mut [u8]);
+    /// The slave raises an application error (a profile rule such as
+    /// `op_exit_while_enabled_error`): the application holds `report.error_code` and, when the
+    /// error clears, announces it with `report.emcy_code` (`AppEvent::ErrorCleared`); the slave
+    /// sends the raising EMCY itself.
+    fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]);
 }
 
 /// A slave without an application: process data are copied to and from the OD and nothing else
@@ -54,5 +58,5 @@ impl Application for NoApplication {
         false
     }
 
-    fn raise_error(&mut self, _: u16, _: &mut [u8]) {}
+    fn raise_error(&mut self, _: ErrorReport, _: &mut [u8]) {}
 }

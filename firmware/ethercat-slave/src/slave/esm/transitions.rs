@@ -188,19 +188,19 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             // Profile rule (`[esm] op_exit_while_enabled_error`): leaving OP while the
             // application was active is an application error (a drive: Operation Enabled →
             // 603Fh, EMCY, PDS Fault).
-            if let Some(code) = self
+            if let Some(report) = self
                 .profile
                 .device
                 .esm
                 .op_exit_while_enabled_error
                 .filter(|_| was_enabled)
             {
-                self.app.raise_error(code, &mut self.ram);
+                self.app.raise_error(report, &mut self.ram);
                 // A full EMCY queue or a stopped mailbox loses only the EMCY; 1001h/603Fh hold.
                 let _ = self.report_error(
-                    code,
+                    report.emcy_code,
                     emcy::register::DEVICE_PROFILE,
-                    [0; 5],
+                    report.emcy_data,
                     None,
                     self.now_ns,
                 );
