@@ -1,8 +1,8 @@
-//! A motor fault reported as the profile's alarm: the SDV3-E maps the firmware's drive
-//! over-temperature to its alarm AH (Table 5-1: error code 4210h, error No. 26h, auxiliary code
-//! 8003h). Through ethercrab (in process, free run), the enabled drive overheats; it faults with
-//! 603Fh = 4210h, and the emergency in its mailbox carries the alarm's manufacturer field
-//! (Table 3-15: byte 3 error No., bytes 4–5 auxiliary code).
+//! Errors reported as the profile's alarms (SDV3-E, through ethercrab in process, free run): the
+//! firmware's drive over-temperature is alarm AH (Table 5-1: error code 4210h, error No. 26h,
+//! auxiliary code 8003h), leaving OP while enabled is alarm ESr (8801h, 39h, 801Ch); each sets
+//! 603Fh and sends an emergency whose manufacturer field carries error No. and auxiliary code
+//! (Table 3-15: byte 3, bytes 4–5). No emergency is queued in Init (§3.6).
 
 use board_sim::Segment;
 use ethercrab::{Command, MainDevice};
@@ -25,6 +25,83 @@ const MAILBOX_HEADER: usize = 6;
 const TYPE_COE: u8 = 3;
 const COE_EMERGENCY: u16 = 1;
 
+/// The drive from INIT to OP (free run): an ethercrab group in OP.
+macro_rules! into_op {
+    ($m:expr, $md:expr) => {
+        $md.init_single_group::<4, 64>($m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op($md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op($md)
+            .await
+            .expect("request OP")
+    };
+}
+
+/// One cycle with controlword `cw` in CSP (default RxPDO 1600h: 6040h, 607Ah, 60FFh, 6071h,
+/// 6060h at byte 12); evaluates to the statusword (TxPDO 1A00h: 6041h first).
+macro_rules! cycle {
+    ($m:expr, $md:expr, $group:expr, $cw:expr) => {{
+        let sd = $group.subdevice($md, 0).expect("drive");
+        {
+            let mut out = sd.outputs_raw_mut();
+            out.fill(0);
+            out[0..2].copy_from_slice(&($cw as u16).to_le_bytes());
+            out[12] = CSP;
+        }
+        $group.tx_rx($md).await.expect("tx/rx");
+        $m.shared.advance(CYCLE_NS);
+        let inp = sd.inputs_raw();
+        u16::from_le_bytes([inp[0], inp[1]])
+    }};
+}
+
+/// Shutdown, switch on, enable operation (CiA402); asserts Operation Enabled.
+macro_rules! enable {
+    ($m:expr, $md:expr, $group:expr) => {{
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            sw = cycle!($m, $md, $group, cw);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+    }};
+}
+
+/// Waits (cycling) until SM1 holds a mailbox and reads it whole, as SOEM does; evaluates to the
+/// CoE part (after the 6-byte mailbox header): CoE header, EMCY code, 1001h, manufacturer field.
+macro_rules! emergency {
+    ($m:expr, $md:expr, $group:expr, $sm1_start:expr) => {{
+        let mut mailbox = None;
+        for _ in 0..50 {
+            let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
+                .receive($md)
+                .await
+                .expect("SM1 status");
+            if status & MAILBOX_FULL != 0 {
+                let data: [u8; 256] = Command::fprd(FIRST_STATION, $sm1_start)
+                    .receive($md)
+                    .await
+                    .expect("SM1");
+                mailbox = Some(data);
+                break;
+            }
+            $group.tx_rx($md).await.expect("tx/rx");
+            $m.shared.advance(CYCLE_NS);
+        }
+        let mb = mailbox.expect("an emergency in SM1");
+        assert_eq!(mb[5] & 0x0F, TYPE_COE, "mailbox type");
+        let coe = mb[MAILBOX_HEADER..MAILBOX_HEADER + 10].to_vec();
+        assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
+        coe
+    }};
+}
+
 #[test]
 fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
     let p = od_gen::builtin("sdv3-e").expect("profile");
@@ -42,73 +119,22 @@ fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
-        let sd = group.subdevice(md, 0).expect("drive");
-        // Default RxPDO 1600h: 6040h, 607Ah, 60FFh, 6071h, 6060h; TxPDO 1A00h: 6041h first.
-        let cycle = async |cw: u16| {
-            {
-                let mut out = sd.outputs_raw_mut();
-                out.fill(0);
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[12] = CSP;
-            }
-            group.tx_rx(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-            let inp = sd.inputs_raw();
-            u16::from_le_bytes([inp[0], inp[1]])
-        };
-        let mut sw = 0;
-        for cw in [SHUTDOWN; 5]
-            .into_iter()
-            .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 30])
-        {
-            sw = cycle(cw).await;
-        }
-        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
-
+        let group = into_op!(m, md);
+        enable!(m, md, group);
         m.shared.segment().drives_mut()[0]
             .servo
             .plant
             .set_drive_temperature(120.0);
-        let mut faulted = false;
-        for _ in 0..300 {
-            if cycle(ENABLE_OPERATION).await & FAULT_BIT != 0 {
-                faulted = true;
-                break;
+        let faulted = async {
+            for _ in 0..300 {
+                if cycle!(m, md, group, ENABLE_OPERATION) & FAULT_BIT != 0 {
+                    return true;
+                }
             }
-        }
-        assert!(faulted, "the drive faults");
-        // The emergency waits in SM1 (the master reads the whole mailbox, as SOEM does).
-        let mut mailbox = None;
-        for _ in 0..50 {
-            let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
-                .receive(md)
-                .await
-                .expect("SM1 status");
-            if status & MAILBOX_FULL != 0 {
-                let data: [u8; 256] = Command::fprd(FIRST_STATION, p.sm.mailbox_in.start)
-                    .receive(md)
-                    .await
-                    .expect("SM1");
-                mailbox = Some(data);
-                break;
-            }
-            cycle(ENABLE_OPERATION).await;
-        }
-        let mb = mailbox.expect("an emergency in SM1");
-        assert_eq!(mb[5] & 0x0F, TYPE_COE, "mailbox type");
-        let coe = &mb[MAILBOX_HEADER..];
-        assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
+            false
+        };
+        assert!(faulted.await, "the drive faults");
+        let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
         assert_eq!(
             u16::from_le_bytes([coe[2], coe[3]]),
             alarm.emcy.code,
@@ -120,6 +146,7 @@ fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
             alarm.emcy.data,
             "manufacturer field: error No., aux code"
         );
+        let sd = group.subdevice(md, 0).expect("drive");
         assert_eq!(
             sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"),
             alarm.error_code
@@ -163,58 +190,10 @@ fn leaving_op_while_enabled_raises_the_profiles_alarm() {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            let mut sw = 0;
-            for cw in [SHUTDOWN; 5]
-                .into_iter()
-                .chain([SWITCH_ON; 5])
-                .chain([ENABLE_OPERATION; 30])
-            {
-                {
-                    let mut out = sd.outputs_raw_mut();
-                    out.fill(0);
-                    out[0..2].copy_from_slice(&cw.to_le_bytes());
-                    out[12] = CSP;
-                }
-                group.tx_rx(md).await.expect("tx/rx");
-                m.shared.advance(CYCLE_NS);
-                let inp = sd.inputs_raw();
-                sw = u16::from_le_bytes([inp[0], inp[1]]);
-            }
-            assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
-        }
+        let group = into_op!(m, md);
+        enable!(m, md, group);
         let group = group.into_safe_op(md).await.expect("OP -> SAFE-OP");
-        let mut mailbox = None;
-        for _ in 0..50 {
-            let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
-                .receive(md)
-                .await
-                .expect("SM1 status");
-            if status & MAILBOX_FULL != 0 {
-                let data: [u8; 256] = Command::fprd(FIRST_STATION, p.sm.mailbox_in.start)
-                    .receive(md)
-                    .await
-                    .expect("SM1");
-                mailbox = Some(data);
-                break;
-            }
-            group.tx_rx(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
-        let mb = mailbox.expect("an emergency in SM1");
-        let coe = &mb[MAILBOX_HEADER..];
-        assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
+        let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
         assert_eq!(
             u16::from_le_bytes([coe[2], coe[3]]),
             alarm.emcy.code,
