@@ -51,6 +51,18 @@ const MERGE_BY: [(&str, &str); 5] = [
     ("alarm", "display"),
 ];
 
+/// The key identifying an element of the array of tables `array` (`MERGE_BY`, and `sub` for
+/// an object's `entry`): what merging, `omit` and error locations select elements by.
+pub(crate) fn id_key(array: &str) -> Option<&'static str> {
+    if array == "entry" {
+        return Some("sub");
+    }
+    MERGE_BY
+        .iter()
+        .find(|(k, _)| *k == array)
+        .map(|(_, id)| *id)
+}
+
 /// The libraries shipped with od-gen (`profiles/common/*.toml`): (name, text).
 pub fn libraries() -> &'static [(&'static str, &'static str)] {
     crate::BUILTIN_LIBRARIES
@@ -147,15 +159,10 @@ fn layered(
 /// `<dir>/<name>.toml` (either spelling of the name), else the built-in profile.
 fn find_base(name: &str, dir: Option<&Path>) -> Option<(String, String, Option<PathBuf>)> {
     if let Some(dir) = dir {
-        for stem in [
-            name.to_string(),
-            name.replace('_', "-"),
-            name.replace('-', "_"),
-        ] {
-            let path = dir.join(format!("{stem}.toml"));
-            if let Ok(text) = std::fs::read_to_string(&path) {
-                return Some((path.display().to_string(), text, Some(dir.to_path_buf())));
-            }
+        let path = crate::profile_file(dir, name);
+        if let Some(text) = path.as_ref().and_then(|p| std::fs::read_to_string(p).ok()) {
+            let path = path.map(|p| p.display().to_string()).unwrap_or_default();
+            return Some((path, text, Some(dir.to_path_buf())));
         }
     }
     crate::builtin_text(name)
@@ -165,7 +172,7 @@ fn find_base(name: &str, dir: Option<&Path>) -> Option<(String, String, Option<P
 /// Merges a derived profile's table over its base.
 pub fn merge_profile(base: &mut Table, derived: Table) {
     for (key, value) in derived {
-        let merge_key = MERGE_BY.iter().find(|(k, _)| *k == key).map(|(_, id)| *id);
+        let merge_key = id_key(&key);
         match (base.get_mut(&key), value) {
             (Some(Value::Array(old)), Value::Array(new)) if key == "decision" => old.extend(new),
             (Some(Value::Array(old)), Value::Array(new)) if merge_key.is_some() => {
@@ -183,19 +190,14 @@ pub fn merge_profile(base: &mut Table, derived: Table) {
 /// with a new id are appended.
 fn merge_elements(old: &mut Vec<Value>, new: Vec<Value>, id: &str) {
     for element in new {
-        let existing = element.get(id).and_then(|wanted| {
-            old.iter_mut()
-                .find(|o| o.get(id).is_some_and(|v| same_id(v, wanted)))
-        });
+        let existing = element
+            .get(id)
+            .and_then(|wanted| old.iter_mut().find(|o| o.get(id) == Some(wanted)));
         match (existing, element) {
             (Some(Value::Table(o)), Value::Table(n)) => merge_object(o, n),
             (_, element) => old.push(element),
         }
     }
-}
-
-fn same_id(a: &Value, b: &Value) -> bool {
-    a == b
 }
 
 /// Merges an object (or PDO, alarm, op mode) table: keys override, `entry` merges by `sub`.

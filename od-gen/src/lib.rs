@@ -82,6 +82,18 @@ pub fn same_name(a: &str, b: &str) -> bool {
             .all(|(x, y)| x == y || (matches!(x, b'-' | b'_') && matches!(y, b'-' | b'_')))
 }
 
+/// `<dir>/<name>.toml` if it exists, the name spelt as given, with `-` or with `_`.
+pub fn profile_file(dir: &Path, name: &str) -> Option<std::path::PathBuf> {
+    [
+        name.to_string(),
+        name.replace('_', "-"),
+        name.replace('-', "_"),
+    ]
+    .iter()
+    .map(|stem| dir.join(format!("{stem}.toml")))
+    .find(|p| p.is_file())
+}
+
 /// The file stem and text of a built-in profile, by either spelling of its name.
 pub(crate) fn builtin_text(name: &str) -> Option<(&'static str, &'static str)> {
     BUILTIN.iter().copied().find(|(n, _)| same_name(n, name))

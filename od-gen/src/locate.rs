@@ -8,7 +8,7 @@
 
 use toml_edit::{ImDocument, Item, Table};
 
-use crate::compose::Source;
+use crate::compose::{id_key, Source};
 
 /// One segment of a key path.
 #[derive(Debug, PartialEq, Eq)]
@@ -30,17 +30,6 @@ fn segments(path: &str) -> Vec<Segment<'_>> {
             },
         })
         .collect()
-}
-
-/// The key identifying an element of an array of tables (see `compose::MERGE_BY`).
-fn id_key(array: &str) -> Option<&'static str> {
-    match array {
-        "object" | "rxpdo" | "txpdo" => Some("index"),
-        "entry" => Some("sub"),
-        "dc_op_mode" => Some("name"),
-        "alarm" => Some("display"),
-        _ => None,
-    }
 }
 
 fn parse_int(s: &str) -> Option<i64> {

@@ -857,21 +857,16 @@ pub fn build_script_selecting(
             let file = if name.ends_with(".toml") {
                 path.to_path_buf()
             } else {
-                let stems = [name.trim().to_string(), name.trim().replace('_', "-")];
-                stems
-                    .iter()
-                    .map(|s| dir.join(format!("{s}.toml")))
-                    .find(|p| p.is_file())
-                    .unwrap_or_else(|| {
-                        let names: Vec<String> = crate::load_dir(dir)
-                            .map(|ps| ps.into_iter().map(|p| p.name).collect())
-                            .unwrap_or_default();
-                        fail(&format!(
-                            "{select_env}={name}: no such profile in {} (profiles: {})",
-                            dir.display(),
-                            names.join(", ")
-                        ))
-                    })
+                crate::profile_file(dir, name.trim()).unwrap_or_else(|| {
+                    let names: Vec<String> = crate::load_dir(dir)
+                        .map(|ps| ps.into_iter().map(|p| p.name).collect())
+                        .unwrap_or_default();
+                    fail(&format!(
+                        "{select_env}={name}: no such profile in {} (profiles: {})",
+                        dir.display(),
+                        names.join(", ")
+                    ))
+                })
             };
             println!("cargo:rerun-if-changed={}", file.display());
             vec![crate::load(&file).unwrap_or_else(|e| fail(&e))]
