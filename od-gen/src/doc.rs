@@ -9,7 +9,9 @@
 
 use std::fmt::Write as _;
 
-use crate::model::{DataType, Pdo, Profile, ProfileKind, Sm, Storage, MOTOR_FAULT_NAMES};
+use crate::model::{
+    DataType, MotorFaultCode, Pdo, Profile, ProfileKind, Sm, Storage, MOTOR_FAULT_NAMES,
+};
 use crate::table;
 
 /// The command that regenerates every page and the index (run in the workspace root).
@@ -396,6 +398,38 @@ fn synchronisation(out: &mut String, p: &Profile) {
             duration(s.calc_and_copy_ns),
         ],
         vec!["Delay time (:09)".into(), duration(s.delay_ns)],
+        vec![
+            "Free-run cycle (1C32h:02 in free run)".into(),
+            if s.free_run {
+                format!(
+                    "{} – {} (other values: AL status code 0x0035 at PREOP → SAFEOP)",
+                    duration(s.free_run_min_cycle_ns),
+                    duration(s.free_run_max_cycle_ns)
+                )
+            } else {
+                "–".into()
+            },
+        ],
+        vec![
+            "Input shift time (1C33h:03)".into(),
+            match s.input_shift {
+                Some(i) => format!(
+                    "written by the master in PREOP, multiples of {} (else abort 0x06090030), at \
+                     most the SYNC0 cycle − {} (else AL status code 0x0035)",
+                    duration(i.step_ns),
+                    duration(i.reserve_ns)
+                ),
+                None => "read-only".into(),
+            },
+        ],
+        vec![
+            "Sync error counter trips".into(),
+            if s.sync_error_at_limit {
+                "on reaching 10F1h:02".into()
+            } else {
+                "on exceeding 10F1h:02 (ETG.1020)".into()
+            },
+        ],
     ];
     md_table(out, &["", ""], &rows);
 
@@ -462,17 +496,31 @@ fn synchronisation(out: &mut String, p: &Profile) {
         vec![
             "Leaving OP while Operation Enabled".into(),
             match e.op_exit_while_enabled_error {
-                Some(c) => format!(
-                    "fault, 603Fh = {}, EMCY {} [{}]",
-                    hex16(c.error_code),
-                    hex16(c.emcy.code),
-                    bytes_hex(&c.emcy.data)
-                ),
+                Some(c) => format!("fault, {}", error_report(&c)),
                 None => "the drive is disabled (no fault)".into(),
             },
         ],
     ];
     md_table(out, &["", ""], &rows);
+    if !e.al_error_alarms.is_empty() {
+        out.push_str("AL errors the drive also reports as its own errors (fault, 603Fh and EMCY in place of the ESM emergency):\n\n");
+        let rows: Vec<Vec<String>> = e
+            .al_error_alarms
+            .iter()
+            .map(|(code, c)| vec![hex16(*code), error_report(c)])
+            .collect();
+        md_table(out, &["AL status code", "drive error"], &rows);
+    }
+}
+
+/// `603Fh = …, EMCY … […]`: how the drive reports an error.
+fn error_report(c: &MotorFaultCode) -> String {
+    format!(
+        "603Fh = {}, EMCY {} [{}]",
+        hex16(c.error_code),
+        hex16(c.emcy.code),
+        bytes_hex(&c.emcy.data)
+    )
 }
 
 fn pdo_section(out: &mut String, p: &Profile, kind: &str, pdo: &Pdo) {

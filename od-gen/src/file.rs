@@ -363,6 +363,33 @@ pub struct SyncFile {
     /// TRUE = sync error).
     #[serde(default)]
     pub sync_flag_in_sync: bool,
+    /// Shortest free-run cycle (1C32h:02 in free run, the local timer's period), ns; default
+    /// `min_cycle_ns`.
+    #[serde(default)]
+    pub free_run_min_cycle_ns: Option<u32>,
+    /// Longest free-run cycle, ns; default `max_cycle_ns`.
+    #[serde(default)]
+    pub free_run_max_cycle_ns: Option<u32>,
+    /// The master may set the input shift time 1C33h:03 (absent: 1C33h:03 is read-only).
+    #[serde(default)]
+    pub input_shift: Option<InputShiftFile>,
+    /// The sync error counter trips when it reaches 10F1h:02 (default false: when it exceeds
+    /// it, ETG.1020).
+    #[serde(default)]
+    pub sync_error_at_limit: bool,
+}
+
+/// `[sync.input_shift]`: a writable input shift time 1C33h:03 (ETG.1020: inputs latched this long
+/// after SYNC0).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputShiftFile {
+    /// An SDO download must be a whole multiple of this, ns (else abort 0x06090030).
+    pub step_ns: u32,
+    /// At PREOP → SAFEOP in a DC mode the shift must be at most the SYNC0 cycle minus this, ns
+    /// (else AL status code 0x0035).
+    #[serde(default)]
+    pub reserve_ns: u32,
 }
 
 fn one() -> u32 {
@@ -384,6 +411,21 @@ pub struct EsmFile {
     /// Operation Enabled; absent: the drive is only disabled.
     #[serde(default)]
     pub op_exit_while_enabled_error: Option<MotorFaultFile>,
+    /// AL errors the stack raises by itself (sync error, watchdog, PLL, refused cycle time, ...)
+    /// that the drive also reports as one of its errors (603Fh, EMCY in place of the ESM
+    /// transition emergency).
+    #[serde(default)]
+    pub al_error_alarms: Vec<AlErrorAlarmFile>,
+}
+
+/// One `[esm] al_error_alarms` row.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlErrorAlarmFile {
+    /// The AL status code (ETG.1000.6 Table 11).
+    pub al_status_code: u16,
+    /// The drive error: a CiA402 error code or an `[[alarm]]` display.
+    pub error: MotorFaultFile,
 }
 
 /// The ETG default SafeopOpTimeout of the ESI (ms).
@@ -399,6 +441,7 @@ impl Default for EsmFile {
             op_requires_outputs: true,
             safeop_op_timeout_ms: DEFAULT_SAFEOP_OP_TIMEOUT_MS,
             op_exit_while_enabled_error: None,
+            al_error_alarms: Vec::new(),
         }
     }
 }

@@ -679,6 +679,23 @@ pub struct Sync {
     pub cycle_time_writable: bool,
     /// 1C32h:20 TRUE = synchronised without error (instead of ETG.1020's TRUE = error).
     pub sync_flag_in_sync: bool,
+    /// Shortest free-run cycle (1C32h:02 in free run), ns.
+    pub free_run_min_cycle_ns: u32,
+    /// Longest free-run cycle, ns.
+    pub free_run_max_cycle_ns: u32,
+    /// Writable input shift time 1C33h:03 (`None`: read-only).
+    pub input_shift: Option<InputShift>,
+    /// The sync error counter trips on reaching 10F1h:02 (else on exceeding it).
+    pub sync_error_at_limit: bool,
+}
+
+/// A writable input shift time 1C33h:03.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InputShift {
+    /// Values are whole multiples of this, ns.
+    pub step_ns: u32,
+    /// The shift is at most the SYNC0 cycle minus this, ns.
+    pub reserve_ns: u32,
 }
 
 impl Sync {
@@ -823,7 +840,7 @@ pub struct Eeprom {
 }
 
 /// EtherCAT state machine rules of a profile (`[esm]`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EsmRules {
     /// SAFEOP → OP only after the master wrote the outputs once.
     pub op_requires_outputs: bool,
@@ -832,6 +849,9 @@ pub struct EsmRules {
     /// CiA402 error code raised when the state leaves OP while the drive is in Operation
     /// Enabled (`None`: the drive is only disabled).
     pub op_exit_while_enabled_error: Option<MotorFaultCode>,
+    /// AL errors of the stack that the drive also reports as one of its errors, by AL status
+    /// code (ascending, unique).
+    pub al_error_alarms: Vec<(u16, MotorFaultCode)>,
 }
 
 /// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP/OP.

@@ -6,7 +6,9 @@ use std::path::Path;
 
 use crate::compose;
 use crate::error::{fault, Error, Fault, Invalid};
-use crate::file::{EntryAttrs, MotorFaultFile, ObjectFile, PdoFile, ProfileFile, SmFileEntry};
+use crate::file::{
+    AlErrorAlarmFile, EntryAttrs, MotorFaultFile, ObjectFile, PdoFile, ProfileFile, SmFileEntry,
+};
 use crate::model::*;
 
 /// Parses TOML text into a checked profile. `source` names the file in error messages.
@@ -190,6 +192,13 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         sync_mode_writable: f.sync.sync_mode_writable,
         cycle_time_writable: f.sync.cycle_time_writable,
         sync_flag_in_sync: f.sync.sync_flag_in_sync,
+        free_run_min_cycle_ns: f.sync.free_run_min_cycle_ns.unwrap_or(f.sync.min_cycle_ns),
+        free_run_max_cycle_ns: f.sync.free_run_max_cycle_ns.unwrap_or(f.sync.max_cycle_ns),
+        input_shift: f.sync.input_shift.as_ref().map(|i| InputShift {
+            step_ns: i.step_ns,
+            reserve_ns: i.reserve_ns,
+        }),
+        sync_error_at_limit: f.sync.sync_error_at_limit,
     };
     let alarms = alarms(f)?;
     let esm = EsmRules {
@@ -201,6 +210,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .as_ref()
             .map(|r| fault_report(r, &alarms, "esm.op_exit_while_enabled_error"))
             .transpose()?,
+        al_error_alarms: al_error_alarms(&f.esm.al_error_alarms, &alarms)?,
     };
     let kind = match f.kind.as_deref() {
         None => ProfileKind::Drive,
@@ -669,6 +679,41 @@ fn fault_report(r: &MotorFaultFile, alarms: &[Alarm], key: &str) -> Result<Motor
             })
         }
     }
+}
+
+/// `[esm] al_error_alarms`: AL status codes (non-zero, each once) with the drive error each
+/// raises, sorted by code.
+fn al_error_alarms(
+    rows: &[AlErrorAlarmFile],
+    alarms: &[Alarm],
+) -> Result<Vec<(u16, MotorFaultCode)>, Fault> {
+    let mut out: Vec<(u16, MotorFaultCode)> = Vec::with_capacity(rows.len());
+    for (i, row) in rows.iter().enumerate() {
+        let key = format!("esm.al_error_alarms[{i}]");
+        let code = row.al_status_code;
+        if code == 0 {
+            return Err(fault(
+                &format!("{key}.al_status_code"),
+                Invalid::Value("0x0000 is \"no error\"".into()),
+            ));
+        }
+        if out.iter().any(|(c, _)| *c == code) {
+            return Err(fault(
+                &format!("{key}.al_status_code"),
+                Invalid::Value(format!("AL status code {code:#06x} is listed twice")),
+            ));
+        }
+        let report = fault_report(&row.error, alarms, &format!("{key}.error"))?;
+        if report.error_code == 0 {
+            return Err(fault(
+                &format!("{key}.error"),
+                Invalid::Value("0 is \"no error\" (603Fh)".into()),
+            ));
+        }
+        out.push((code, report));
+    }
+    out.sort_by_key(|(c, _)| *c);
+    Ok(out)
 }
 
 /// The section an object index is derived from, if od-gen generates it.
@@ -1631,10 +1676,24 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
                     writable(y.cycle_time_writable),
                     Storage::Ram,
                     u32b(y.default_cycle_ns),
-                    u32b(y.min_cycle_ns),
-                    u32b(y.max_cycle_ns),
+                    // In free run the master sets the local timer's period here (ETG.1020).
+                    u32b(y.min_cycle_ns.min(y.free_run_min_cycle_ns)),
+                    u32b(y.max_cycle_ns.max(y.free_run_max_cycle_ns)),
                 ),
-                ram_ro(3, "Shift time", Udint, u32b(0)),
+                match (index, y.input_shift) {
+                    // The input shift time the master may set ([sync.input_shift]).
+                    (0x1C33, Some(shift)) => val(
+                        3,
+                        "Shift time",
+                        Udint,
+                        Access::RW_PREOP,
+                        Storage::Ram,
+                        u32b(0),
+                        u32b(0),
+                        u32b(y.max_cycle_ns.saturating_sub(shift.reserve_ns)),
+                    ),
+                    _ => ram_ro(3, "Shift time", Udint, u32b(0)),
+                },
                 ram_ro(4, "Sync modes supported", Uint, u16b(y.modes_supported())),
                 ram_ro(5, "Minimum cycle time", Udint, u32b(y.min_cycle_ns)),
                 ram_ro(6, "Calc and copy time", Udint, u32b(y.calc_and_copy_ns)),

@@ -33,8 +33,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::model::{
-    Access, DataType, Entry, Object, Profile, ProfileKind, Role, Sm, Storage, MOTOR_FAULT_NAMES,
-    STACK_MAX_PDO_BYTES,
+    Access, DataType, Entry, MotorFaultCode, Object, Profile, ProfileKind, Role, Sm, Storage,
+    MOTOR_FAULT_NAMES, STACK_MAX_PDO_BYTES,
 };
 
 /// Where each RAM variable of a profile lives.
@@ -325,8 +325,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     let _ = writeln!(out, "            inputs: {},", sm(p.sm.inputs, 0));
     let _ = writeln!(
         out,
-        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {}, cycle_step_ns: {}, allowed_cycles_ns: &{:?}, sync_flag_in_sync: {} }},",
-        y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns, y.cycle_step_ns, y.allowed_cycles_ns, y.sync_flag_in_sync
+        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {}, cycle_step_ns: {}, allowed_cycles_ns: &{:?}, sync_flag_in_sync: {}, free_run_min_cycle_ns: {}, free_run_max_cycle_ns: {}, input_shift_step_ns: {}, input_shift_reserve_ns: {}, sync_error_at_limit: {} }},",
+        y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns, y.cycle_step_ns, y.allowed_cycles_ns, y.sync_flag_in_sync,
+        y.free_run_min_cycle_ns, y.free_run_max_cycle_ns,
+        y.input_shift.map_or(0, |i| i.step_ns), y.input_shift.map_or(0, |i| i.reserve_ns),
+        y.sync_error_at_limit
     );
     let _ = writeln!(out, "            max_pdo_entries: {},", p.max_pdo_entries);
     let _ = writeln!(out, "            max_pdo_bytes: {},", p.max_pdo_bytes);
@@ -346,18 +349,33 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         c.sdo, c.sdo_info, c.pdo_assign, c.pdo_config, c.upload_at_startup, c.complete_access
     );
     let m = &p.esm;
-    let _ = writeln!(
-        out,
-        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {} }},",
-        m.op_requires_outputs,
-        m.safeop_op_timeout_ms,
-        m.op_exit_while_enabled_error.map_or("None".into(), |c| {
-            let d = c.emcy.data;
+    let report = |c: &MotorFaultCode| {
+        let d = c.emcy.data;
+        format!(
+            "{}::od::ErrorReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }}",
+            target.slave, c.error_code, c.emcy.code, d[0], d[1], d[2], d[3], d[4]
+        )
+    };
+    let al_error_alarms: Vec<String> = m
+        .al_error_alarms
+        .iter()
+        .map(|(code, c)| {
             format!(
-                "Some({}::od::ErrorReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }})",
-                target.slave, c.error_code, c.emcy.code, d[0], d[1], d[2], d[3], d[4]
+                "{}::od::AlErrorAlarm {{ al_status_code: {code:#06x}, report: {} }}",
+                target.slave,
+                report(c)
             )
         })
+        .collect();
+    let _ = writeln!(
+        out,
+        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}] }},",
+        m.op_requires_outputs,
+        m.safeop_op_timeout_ms,
+        m.op_exit_while_enabled_error
+            .as_ref()
+            .map_or("None".into(), |c| format!("Some({})", report(c))),
+        al_error_alarms.join(", ")
     );
     let _ = writeln!(
         out,

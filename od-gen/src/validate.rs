@@ -258,6 +258,31 @@ fn sync(p: &Profile) -> Result<(), Fault> {
             Invalid::Sync("default_cycle_ns outside min_cycle_ns..=max_cycle_ns".into()),
         ));
     }
+    if y.free_run_min_cycle_ns == 0 || y.free_run_min_cycle_ns > y.free_run_max_cycle_ns {
+        return Err(fault(
+            "sync.free_run_min_cycle_ns",
+            Invalid::Sync("free-run cycle range must be non-empty and above 0 ns".into()),
+        ));
+    }
+    if y.free_run
+        && !(y.free_run_min_cycle_ns..=y.free_run_max_cycle_ns).contains(&y.default_cycle_ns)
+    {
+        // 1C32h:02's default is the free-run period until the master writes another.
+        return Err(fault(
+            "sync.default_cycle_ns",
+            Invalid::Sync("default_cycle_ns outside the free-run cycle range".into()),
+        ));
+    }
+    if let Some(shift) = y.input_shift {
+        if shift.step_ns == 0 || shift.reserve_ns >= y.max_cycle_ns || !y.dc_sync0 {
+            return Err(fault(
+                "sync.input_shift",
+                Invalid::Sync(
+                    "needs dc_sync0, step_ns above 0 and reserve_ns below max_cycle_ns".into(),
+                ),
+            ));
+        }
+    }
     if !y.allowed_cycles_ns.is_empty() {
         let ascending = y.allowed_cycles_ns.windows(2).all(|w| w[0] < w[1]);
         let fits = y

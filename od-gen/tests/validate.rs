@@ -451,7 +451,7 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
     );
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }) },"
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[] },"
     ));
 
     // Without [esm] and the new keys: the documented defaults.
@@ -902,4 +902,81 @@ fn sync_mode_default_and_writability() {
         "dc_sync1 = false\ndefault_sync_mode = \"dc_sync1\"",
     ));
     assert_eq!(key, "sync.default_sync_mode");
+}
+
+#[test]
+fn free_run_range_input_shift_and_al_error_alarms() {
+    // SDV3-E: the free-run range widens nothing (1 ms..10 ms inside 250 µs..10 ms); 1C33h:03 is
+    // writable in PREOP with the range 0..max cycle − reserve.
+    let p = od_gen::builtin("sdv3-e").unwrap();
+    assert_eq!(p.sync.free_run_min_cycle_ns, 1_000_000);
+    let cycle = p.entry(0x1C32, 2).unwrap();
+    assert_eq!(cycle.min, 250_000u32.to_le_bytes().to_vec());
+    let shift = p.entry(0x1C33, 3).unwrap();
+    assert!(shift.access.writable());
+    assert_eq!(shift.max, (10_000_000u32 - 62_500).to_le_bytes().to_vec());
+    assert!(
+        !p.entry(0x1C32, 3).unwrap().access.writable(),
+        "1C32h:03 stays RO"
+    );
+    // A free-run range beyond the DC range widens the SDO range of 1C32h:02.
+    let wide = od_gen::parse(
+        &with(
+            "cycle_step_ns = 31_250",
+            "cycle_step_ns = 31_250\nfree_run_max_cycle_ns = 20_000_000",
+        ),
+        "p.toml",
+    )
+    .unwrap();
+    let cycle = wide.entry(0x1C32, 2).unwrap();
+    assert_eq!(cycle.max, 20_000_000u32.to_le_bytes().to_vec());
+    assert!(!wide.entry(0x1C33, 3).unwrap().access.writable());
+
+    // Errors: an empty free-run range, a default outside it, a shift without a step.
+    let (key, _) = invalid(&with(
+        "cycle_step_ns = 31_250",
+        "cycle_step_ns = 31_250\nfree_run_min_cycle_ns = 5_000_000\nfree_run_max_cycle_ns = 4_000_000",
+    ));
+    assert_eq!(key, "sync.free_run_min_cycle_ns");
+    let (key, _) = invalid(&with(
+        "cycle_step_ns = 31_250",
+        "cycle_step_ns = 31_250\nfree_run_min_cycle_ns = 2_000_000",
+    ));
+    assert_eq!(
+        key, "sync.default_cycle_ns",
+        "default 1 ms below the free-run range"
+    );
+    let (key, _) = invalid(&with(
+        "cycle_step_ns = 31_250",
+        "cycle_step_ns = 31_250\ninput_shift = { step_ns = 0 }",
+    ));
+    assert_eq!(key, "sync.input_shift");
+
+    // [esm] al_error_alarms: sorted by code; an unknown alarm, a repeated code, code 0.
+    let p = od_gen::builtin("rse").unwrap();
+    let codes: Vec<u16> = p.esm.al_error_alarms.iter().map(|(c, _)| *c).collect();
+    assert!(codes.windows(2).all(|w| w[0] < w[1]), "{codes:?}");
+    let esm = |rows: &str| {
+        with(
+            "safeop_op_timeout_ms = 9000",
+            &format!("safeop_op_timeout_ms = 9000\nal_error_alarms = [{rows}]"),
+        )
+    };
+    let ok = od_gen::parse(
+        &esm("{ al_status_code = 0x001A, error = 0x8700 }"),
+        "p.toml",
+    )
+    .unwrap();
+    assert_eq!(ok.esm.al_error_alarms[0].0, 0x001A);
+    assert_eq!(ok.esm.al_error_alarms[0].1.error_code, 0x8700);
+    let (key, _) = invalid(&esm("{ al_status_code = 0x001A, error = \"A.99\" }"));
+    assert_eq!(key, "esm.al_error_alarms[0].error");
+    let (key, _) = invalid(&esm(
+        "{ al_status_code = 0x001A, error = 0x8700 }, { al_status_code = 0x001A, error = 0x8701 }",
+    ));
+    assert_eq!(key, "esm.al_error_alarms[1].al_status_code");
+    let (key, _) = invalid(&esm("{ al_status_code = 0, error = 0x8700 }"));
+    assert_eq!(key, "esm.al_error_alarms[0].al_status_code");
+    let (key, _) = invalid(&esm("{ al_status_code = 0x001A, error = 0 }"));
+    assert_eq!(key, "esm.al_error_alarms[0].error");
 }

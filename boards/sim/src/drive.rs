@@ -19,7 +19,8 @@ use firmware::params::{Loaded, ParamError, ParamStore};
 /// profile can be chosen by name at run time.
 pub const SIM_RAM: usize = profiles::MAX_RAM_SIZE;
 
-/// Free-run cycle of the simulated board's local timer (the target uses a hardware timer).
+/// Period of the simulated board's local timer while no free-run cycle is configured (below
+/// SAFEOP); in free run it ticks at the cycle the slave accepted from 1C32h:02 (ETG.1020).
 pub const FREE_RUN_PERIOD_NS: u64 = 1_000_000;
 
 /// LED update period (ETG.1300 flickering switches every 50 ms; the STM32 board uses 10 ms too).
@@ -145,6 +146,15 @@ impl SimDrive {
         .min()
     }
 
+    /// The local timer's period: the free-run cycle (1C32h:02) the slave accepted, else
+    /// [`FREE_RUN_PERIOD_NS`].
+    fn free_run_period_ns(&self) -> u64 {
+        match self.slave.cycle_ns() {
+            cycle if cycle != 0 && self.free_running() => u64::from(cycle),
+            _ => FREE_RUN_PERIOD_NS,
+        }
+    }
+
     fn free_running(&self) -> bool {
         self.slave.sync_mode() == SyncMode::FreeRun
             && matches!(
@@ -166,8 +176,9 @@ impl SimDrive {
         if self.free_running() && now_ns >= self.next_free_run_ns {
             self.cycle(now_ns);
         }
+        let period = self.free_run_period_ns();
         while self.next_free_run_ns <= now_ns {
-            self.next_free_run_ns += FREE_RUN_PERIOD_NS;
+            self.next_free_run_ns += period;
         }
         if now_ns >= self.next_led_ns {
             let (run, err) = self.slave.leds(now_ns);

@@ -276,6 +276,17 @@ pub static EVENT_STATS: ContextStats = ContextStats::new();
 static CYCLE_REQUESTS: AtomicU8 = AtomicU8::new(0);
 /// A free-run tick (`tasks::free_run`).
 pub const REQUEST_FREE_RUN: u8 = 1 << 0;
+/// Period of the free-run ticks before the slave accepted a free-run cycle (1 ms, the usual
+/// 1C32h:02 default).
+pub const DEFAULT_FREE_RUN_PERIOD_NS: u32 = 1_000_000;
+/// The free-run cycle the slave accepted from 1C32h:02 at PREOP → SAFEOP (ETG.1020: the local
+/// timer's period), published by the cycle context for `tasks::free_run`.
+static FREE_RUN_PERIOD_NS: AtomicU32 = AtomicU32::new(DEFAULT_FREE_RUN_PERIOD_NS);
+
+/// The period `tasks::free_run` ticks at.
+pub fn free_run_period_ns() -> u32 {
+    FREE_RUN_PERIOD_NS.load(Ordering::Relaxed)
+}
 
 /// Asks the cycle context to run one cycle; it decides from the sync mode whether the
 /// request applies.
@@ -289,7 +300,7 @@ pub struct CycleHandler;
 
 impl Handler<typelevel::EXTI4> for CycleHandler {
     /// ISR: ESC SYNC0, EXTI4 at P1.
-    /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free-run 1 kHz.
+    /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free run at 1C32h:02.
     /// - Budget: `on_sync0` ≤ 2,000 instructions (DESIGN.md §6) ≈ 12 µs at 170 MHz, plus the
     ///   PDI bus time: (3 + n_out) + (2 + n_in) bytes × 376 ns, e.g. 2 × 32 B of PDO ≈ 26 µs.
     ///   Everything (lock wait included) must end before the next SYNC0, less the FOC load.
@@ -307,7 +318,14 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
         let result = with_drive(|d| {
             let run = match d.core.sync_mode() {
                 SyncMode::DcSync0 | SyncMode::DcSync1 => edge,
-                SyncMode::FreeRun => requests & REQUEST_FREE_RUN != 0,
+                SyncMode::FreeRun => {
+                    // In free run the slave's cycle is 1C32h:02 (0 below SAFEOP: keep the last).
+                    let cycle_ns = d.core.cycle_ns();
+                    if cycle_ns != 0 {
+                        FREE_RUN_PERIOD_NS.store(cycle_ns, Ordering::Relaxed);
+                    }
+                    requests & REQUEST_FREE_RUN != 0
+                }
                 // `on_esc_event` runs the cycle itself when it sees the SM2 event.
                 SyncMode::SmSynchronous => false,
             };

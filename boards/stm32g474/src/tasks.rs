@@ -18,9 +18,6 @@ use crate::leds::Leds;
 /// Wait before serving again while SPI_IRQ stays asserted after a service (an event the stack
 /// did not acknowledge yet): keeps a stuck event from monopolising the P2 context.
 const IRQ_RETRY: Duration = Duration::from_micros(250);
-/// Free-run cycle period. [placeholder] the firmware should hand the board the cycle time of
-/// 1C32h:02 once it supports free run; 1 ms is the usual default.
-const FREE_RUN_PERIOD: Duration = Duration::from_millis(1);
 /// Fallback poll of the AL events, in case an IRQ edge was lost (also keeps the 64-bit cycle
 /// count extension alive: it needs a call every < 25 s).
 const ESC_POLL_PERIOD: Duration = Duration::from_millis(10);
@@ -46,14 +43,21 @@ pub async fn esc_event(irq: ExtiInput<'static, Blocking>) {
     }
 }
 
-/// Free-run ticks (P2): requests a cycle every [`FREE_RUN_PERIOD`]; the cycle context ignores
-/// it unless the slave is in free-run mode.
+/// Free-run ticks (P2): requests a cycle every [`irq::free_run_period_ns`] (the free-run cycle
+/// 1C32h:02 the slave accepted); the cycle context ignores it unless the slave is in free-run
+/// mode.
 #[embassy_executor::task]
 pub async fn free_run() {
-    let mut ticker = Ticker::every(FREE_RUN_PERIOD);
+    let mut period_ns = irq::free_run_period_ns();
+    let mut ticker = Ticker::every(Duration::from_nanos(u64::from(period_ns)));
     loop {
         ticker.next().await;
         irq::request_cycle(irq::REQUEST_FREE_RUN);
+        let current = irq::free_run_period_ns();
+        if current != period_ns {
+            period_ns = current;
+            ticker = Ticker::every(Duration::from_nanos(u64::from(period_ns)));
+        }
     }
 }
 

@@ -27,3 +27,25 @@ pub const TX_ASSIGN: u16 = 0x1C13;
 pub const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
 /// Sync manager 3 (inputs) parameter (ETG.1020 §5.1).
 pub const SM_INPUT_PARAMETER: u16 = 0x1C33;
+
+/// Subindices of the SM parameters 1C32h/1C33h (ETG.1020 §5.1).
+pub mod sm_parameter {
+    /// Synchronization type (0 free run, 1 SM-synchronous, 2 DC SYNC0, 3 DC SYNC1).
+    pub const SUB_SYNC_TYPE: u8 = 0x01;
+    /// Cycle time, ns.
+    pub const SUB_CYCLE_TIME: u8 = 0x02;
+    /// Shift time, ns (1C32h: outputs valid after SYNC0; 1C33h: inputs latched after SYNC0).
+    pub const SUB_SHIFT_TIME: u8 = 0x03;
+    /// Minimum cycle time, ns.
+    pub const SUB_MIN_CYCLE_TIME: u8 = 0x05;
+    /// Calc and copy time, ns.
+    pub const SUB_CALC_AND_COPY_TIME: u8 = 0x06;
+    /// Delay time, ns.
+    pub const SUB_DELAY_TIME: u8 = 0x09;
+    /// SM-event missed counter.
+    pub const SUB_SM_EVENT_MISSED: u8 = 0x0B;
+    /// Cycle time too small counter.
+    pub const SUB_CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
+    /// Sync error.
+    pub const SUB_SYNC_ERROR: u8 = 0x20;
+}

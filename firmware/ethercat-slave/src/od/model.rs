@@ -261,6 +261,20 @@ pub struct SyncSupport {
     /// 1C32h:20 reads TRUE while DC-synchronised without error (the RSE's definition) instead
     /// of ETG.1020's TRUE = sync error.
     pub sync_flag_in_sync: bool,
+    /// Shortest free-run cycle in ns: in free run 1C32h:02 is the local timer's period
+    /// (ETG.1020) and must lie in `free_run_min_cycle_ns..=free_run_max_cycle_ns` at
+    /// PREOP → SAFEOP (else AL status code 0x0035).
+    pub free_run_min_cycle_ns: u32,
+    /// Longest free-run cycle in ns.
+    pub free_run_max_cycle_ns: u32,
+    /// Granularity of the input shift time 1C33h:03 the master may write in PREOP, ns; 0: the
+    /// entry is read-only. A value that is not a multiple is refused (abort 0x06090030).
+    pub input_shift_step_ns: u32,
+    /// In a DC mode the input shift must be at most the SYNC0 cycle minus this, ns (else
+    /// PREOP → SAFEOP is refused with 0x0035).
+    pub input_shift_reserve_ns: u32,
+    /// The sync error counter trips when it reaches 10F1h:02 instead of when it exceeds it.
+    pub sync_error_at_limit: bool,
 }
 
 impl SyncSupport {
@@ -273,6 +287,12 @@ impl SyncSupport {
             error
         };
         u8::from(flag)
+    }
+
+    /// Whether `shift_ns` is a value the master may write to the input shift time 1C33h:03: a
+    /// whole multiple of [`Self::input_shift_step_ns`] (the range is the entry's).
+    pub fn input_shift_on_step(&self, shift_ns: u32) -> bool {
+        self.input_shift_step_ns != 0 && shift_ns % self.input_shift_step_ns == 0
     }
 }
 
@@ -289,6 +309,20 @@ pub struct EsmRules {
     /// EtherCAT state leaves OP while the application was active (a drive: Operation Enabled);
     /// `None`: the application only puts its outputs into their safe state.
     pub op_exit_while_enabled_error: Option<ErrorReport>,
+    /// AL errors the stack raises by itself (sync error, SM watchdog, PLL, a refused cycle
+    /// time, ...) that the drive also reports as one of its errors: the application raises the
+    /// report (603Fh, PDS Fault) and its EMCY goes out in place of the ESM transition emergency.
+    /// Sorted by AL status code.
+    pub al_error_alarms: &'static [AlErrorAlarm],
+}
+
+/// One `[esm] al_error_alarms` row: an AL status code and the error the drive reports with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AlErrorAlarm {
+    /// AL status code (ETG.1000.6 Table 11).
+    pub al_status_code: u16,
+    /// The drive's error.
+    pub report: ErrorReport,
 }
 
 /// An application error as the profile reports it: the error code the application holds (a
@@ -319,6 +353,15 @@ impl EsmRules {
     /// [`Self::safeop_op_timeout_ms`] in ns.
     pub const fn safeop_op_timeout_ns(&self) -> u64 {
         self.safeop_op_timeout_ms as u64 * 1_000_000
+    }
+
+    /// The drive error the profile reports with AL status code `code`, if any.
+    pub fn al_error_alarm(&self, code: u16) -> Option<ErrorReport> {
+        self.al_error_alarms
+            .binary_search_by_key(&code, |a| a.al_status_code)
+            .ok()
+            .and_then(|i| self.al_error_alarms.get(i))
+            .map(|a| a.report)
     }
 }
 

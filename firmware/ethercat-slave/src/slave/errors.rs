@@ -88,6 +88,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// state before, `w1` = AL status code, `w2` = state after) and the 10F3h message
     /// `0xA000_E800` (error, parameters: AL status code u16, state before u8, state after u8);
     /// the master's error acknowledge clears it.
+    ///
+    /// An AL status code the profile lists in `[esm] al_error_alarms` is also one of the
+    /// drive's errors: the application raises it (603Fh, PDS Fault) and its emergency (code and
+    /// manufacturer bytes from the profile) goes out instead of the ESM transition emergency;
+    /// the 10F3h message is the same. The application's fault reset clears it.
     pub(super) fn track_al_error(
         &mut self,
         from: AlState,
@@ -104,7 +109,20 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 .with(DiagParam::U16(al))
                 .with(DiagParam::U8(f))
                 .with(DiagParam::U8(t));
-            let _ = self.report_error(code, 0, [f, c0, c1, t, 0], Some(&msg), self.now_ns);
+            let now = self.now_ns;
+            let _ = match self.profile.device.esm.al_error_alarm(al) {
+                Some(report) => {
+                    self.app.raise_error(report, &mut self.ram);
+                    self.report_error(
+                        report.emcy_code,
+                        emcy::register::DEVICE_PROFILE,
+                        report.emcy_data,
+                        Some(&msg),
+                        now,
+                    )
+                }
+                None => self.report_error(code, 0, [f, c0, c1, t, 0], Some(&msg), now),
+            };
         } else if was.error && !outcome.status.error {
             let _ = self.clear_error(code);
         }

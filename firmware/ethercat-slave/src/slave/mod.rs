@@ -57,16 +57,10 @@ pub use mailbox_side::MailboxSide;
 const SM_OUTPUTS: u8 = 2;
 /// SM channel of the process-data inputs.
 const SM_INPUTS: u8 = 3;
-/// 1C32h/1C33h subindices the stack maintains.
-const SUB_SYNC_TYPE: u8 = 0x01;
-const SUB_CYCLE_TIME: u8 = 0x02;
-const SUB_SHIFT_TIME: u8 = 0x03;
-const SUB_MIN_CYCLE_TIME: u8 = 0x05;
-const SUB_CALC_AND_COPY_TIME: u8 = 0x06;
-const SUB_DELAY_TIME: u8 = 0x09;
-const SUB_SM_EVENT_MISSED: u8 = 0x0B;
-const SUB_CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
-const SUB_SYNC_ERROR: u8 = 0x20;
+use crate::od::index::sm_parameter::{
+    SUB_CALC_AND_COPY_TIME, SUB_CYCLE_TIME, SUB_CYCLE_TIME_TOO_SMALL, SUB_DELAY_TIME,
+    SUB_MIN_CYCLE_TIME, SUB_SHIFT_TIME, SUB_SM_EVENT_MISSED, SUB_SYNC_ERROR, SUB_SYNC_TYPE,
+};
 /// 10F1h (error settings, ETG.1020 §5.1) :02 sync error counter limit.
 const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
 
@@ -263,7 +257,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         self.sync.mode
     }
 
-    /// The SYNC0 cycle in ns in DC mode, else 0.
+    /// The cycle in ns (valid from SAFEOP on): the SYNC0 cycle in DC modes, the free-run
+    /// period (1C32h:02) in free run, 0 when SM-synchronous.
     pub fn cycle_ns(&self) -> u32 {
         self.sync.cycle_ns
     }
@@ -326,7 +321,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         }
         if job.state == AlState::SafeOp {
             // Masters may activate SYNC0 only after SAFEOP was reached (SOEM's dc_sync).
-            let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
+            let sync = self.read_sync(pdi)?;
             if sync != self.sync {
                 self.sync_supervisor.reset();
             }
@@ -362,6 +357,24 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             let n = e.byte_len().min(bytes.len());
             let _ = od.set_value(e, bytes.get(..n).unwrap_or(&[]));
         }
+    }
+
+    /// The synchronisation the master configured: DC registers, 1C32h:01 and (free run)
+    /// 1C32h:02.
+    fn read_sync<P: EscPdi>(&mut self, pdi: &mut P) -> Result<SyncConfig, P::Error> {
+        let sm_sync = self.sm_sync_requested();
+        let free_run_cycle_ns = self
+            .dictionary()
+            .read_u32(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME)
+            .unwrap_or(0);
+        SyncConfig::read(pdi, sm_sync, free_run_cycle_ns)
+    }
+
+    /// 1C33h:03, the input shift time the master set (0 if the profile has none).
+    fn input_shift_ns(&mut self) -> u32 {
+        self.dictionary()
+            .read_u32(SM_INPUT_PARAMETER, SUB_SHIFT_TIME)
+            .unwrap_or(0)
     }
 
     fn sm_sync_requested(&self) -> bool {

@@ -4,6 +4,8 @@
 
 use hal::esc::AlState;
 
+use crate::od::index::sm_parameter::SUB_SHIFT_TIME;
+use crate::od::index::SM_INPUT_PARAMETER;
 use crate::od::value::{as_u32, check_length, check_range, check_value_list};
 use crate::od::{AbortCode, Access, DataType, Dictionary, Entry, ObjectCode, StoreError, Value};
 use crate::pdo::rules as pdo_rules;
@@ -112,7 +114,26 @@ pub(crate) fn write_found(
     pdo_rules::check_write(od, index, subindex, data)?;
     check_range(entry, data)?;
     check_value_list(od.profile().value_list(index, subindex), entry, data)?;
+    check_input_shift_step(od, index, subindex, data)?;
     od.set_value(entry, data).map_err(store_abort)
+}
+
+/// The input shift time 1C33h:03, where the profile lets the master write it, takes whole
+/// multiples of the profile's step only (0x06090030 otherwise).
+fn check_input_shift_step(
+    od: &Dictionary<'_>,
+    index: u16,
+    subindex: u8,
+    data: &[u8],
+) -> Result<(), AbortCode> {
+    if (index, subindex) != (SM_INPUT_PARAMETER, SUB_SHIFT_TIME) {
+        return Ok(());
+    }
+    let support = &od.profile().device.sync;
+    match as_u32(data) {
+        Some(shift) if support.input_shift_on_step(shift) => Ok(()),
+        _ => Err(AbortCode::ValueRange),
+    }
 }
 
 /// Subindex 0 of an ARRAY or RECORD may not exceed the highest existing subindex (0x06090031).

@@ -111,7 +111,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             .dictionary()
             .read_u32(ERROR_SETTINGS, SUB_SYNC_ERROR_LIMIT)
             .map_or(DEFAULT_COUNTER_LIMIT, |v| v as u16);
-        if self.sync_supervisor.tripped(limit) && !self.status.error {
+        let at_limit = self.profile.device.sync.sync_error_at_limit;
+        if self.sync_supervisor.tripped(limit, at_limit) && !self.status.error {
             let flag = self.profile.device.sync.sync_error_flag(true, true);
             self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[flag]);
             self.sync_supervisor.reset();

@@ -83,9 +83,10 @@ impl SyncSupervisor {
         missed
     }
 
-    /// Whether the counter is above `limit` (a limit of 0 disables supervision, ETG.1020).
-    pub fn tripped(&self, limit: u16) -> bool {
-        limit != 0 && self.counter > limit
+    /// Whether the counter is above `limit` (ETG.1020), or with `at_limit` has reached it (the
+    /// Σ-V-SD's rule, `SyncSupport::sync_error_at_limit`); a limit of 0 disables supervision.
+    pub fn tripped(&self, limit: u16, at_limit: bool) -> bool {
+        limit != 0 && (self.counter > limit || (at_limit && self.counter == limit))
     }
 
     /// Whether a SYNC0 has been seen since the last reset.
@@ -129,7 +130,7 @@ mod tests {
             s.on_sync0(k * 1_000_000, CYCLE);
             assert_eq!(s.check(k * 1_000_000 + 900_000, CYCLE), 0);
         }
-        assert!(!s.tripped(DEFAULT_COUNTER_LIMIT));
+        assert!(!s.tripped(DEFAULT_COUNTER_LIMIT, false));
     }
 
     #[test]
@@ -139,10 +140,12 @@ mod tests {
         // SYNC0 due at 1 ms is late after 1.5 ms.
         assert_eq!(s.check(1_400_000, CYCLE), 0);
         assert_eq!(s.check(1_600_000, CYCLE), 1);
-        assert!(!s.tripped(4), "counter 3");
+        assert!(!s.tripped(4, false), "counter 3");
+        assert!(s.tripped(3, true), "counter 3 reaches a limit of 3");
+        assert!(!s.tripped(3, false), "but does not exceed it");
         s.on_sync0(2_000_000, CYCLE);
         assert_eq!(s.check(3_600_000, CYCLE), 1);
-        assert!(s.tripped(4), "counter 3 - 1 + 3 = 5 > 4");
+        assert!(s.tripped(4, false), "counter 3 - 1 + 3 = 5 > 4");
     }
 
     #[test]
@@ -150,9 +153,10 @@ mod tests {
         let mut s = SyncSupervisor::default();
         s.on_sync0(0, CYCLE);
         assert_eq!(s.check(2_600_000, CYCLE), 2);
-        assert!(s.tripped(4));
+        assert!(s.tripped(4, false));
         assert_eq!(s.missed_total(), 2);
-        assert!(!s.tripped(0), "limit 0 disables supervision");
+        assert!(!s.tripped(0, false), "limit 0 disables supervision");
+        assert!(!s.tripped(0, true), "also when tripping at the limit");
     }
 
     #[test]

@@ -91,15 +91,15 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 let sm1 = read_sm(pdi, 1)?;
                 checks.boot_mailbox = sm_check::check_boot_mailbox(sm0, sm1, device);
             }
-            (AlState::PreOp, Some(AlState::SafeOp)) => {
-                checks.process_data = self.prepare_process_data(pdi)?;
-                let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
-                checks.sync = sync.check(&device.sync);
-                self.sync = sync;
-            }
-            (AlState::SafeOp, Some(AlState::Op)) => {
-                let sync = SyncConfig::read(pdi, self.sm_sync_requested())?;
-                checks.sync = sync.check(&device.sync);
+            (AlState::PreOp, Some(AlState::SafeOp)) | (AlState::SafeOp, Some(AlState::Op)) => {
+                if from == AlState::PreOp {
+                    checks.process_data = self.prepare_process_data(pdi)?;
+                }
+                let sync = self.read_sync(pdi)?;
+                let shift = self.input_shift_ns();
+                checks.sync = sync
+                    .check(&device.sync)
+                    .and_then(|()| sync.check_input_shift(shift, &device.sync));
                 self.sync = sync;
             }
             _ => {}
