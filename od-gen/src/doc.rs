@@ -424,11 +424,19 @@ fn synchronisation(out: &mut String, p: &Profile) {
         ],
         vec![
             "Sync error counter trips".into(),
-            if s.sync_error_at_limit {
-                "on reaching 10F1h:02".into()
-            } else {
-                "on exceeding 10F1h:02 (ETG.1020)".into()
-            },
+            format!(
+                "{}; +3 per SYNC0 that did not come{}, −1 per SYNC0",
+                if s.sync_error_at_limit {
+                    "on reaching 10F1h:02"
+                } else {
+                    "on exceeding 10F1h:02 (ETG.1020)"
+                },
+                if s.sync_error_on_missed_outputs {
+                    " and per SYNC0 in OP without new outputs since the previous one"
+                } else {
+                    ""
+                }
+            ),
         ],
     ];
     md_table(out, &["", ""], &rows);

@@ -245,6 +245,10 @@ pub struct EepromFile {
     /// Word 4: configured station alias (0x0012).
     #[serde(default)]
     pub station_alias: u16,
+    /// A parameter ("0xIIII:S", UNSIGNED16 in RAM) whose non-zero value the firmware writes to
+    /// 0x0012 at power-on, in place of the SII's alias.
+    #[serde(default)]
+    pub station_alias_parameter: Option<String>,
     /// Words 5 and 6: reserved, ESC-specific.
     #[serde(default)]
     pub reserved: [u16; 2],
@@ -377,6 +381,10 @@ pub struct SyncFile {
     /// it, ETG.1020).
     #[serde(default)]
     pub sync_error_at_limit: bool,
+    /// In OP in a DC mode, a SYNC0 without new outputs (SM2) since the previous one counts as a
+    /// missed event (default false: only SYNC0 events that did not come).
+    #[serde(default)]
+    pub sync_error_on_missed_outputs: bool,
 }
 
 /// `[sync.input_shift]`: a writable input shift time 1C33h:03 (ETG.1020: inputs latched this long

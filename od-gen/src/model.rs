@@ -687,6 +687,8 @@ pub struct Sync {
     pub input_shift: Option<InputShift>,
     /// The sync error counter trips on reaching 10F1h:02 (else on exceeding it).
     pub sync_error_at_limit: bool,
+    /// A SYNC0 without new outputs counts as a missed event (in OP, DC modes).
+    pub sync_error_on_missed_outputs: bool,
 }
 
 /// A writable input shift time 1C33h:03.
@@ -837,6 +839,8 @@ pub struct Eeprom {
     pub station_alias: u16,
     /// Words 5 and 6.
     pub reserved: [u16; 2],
+    /// The parameter whose non-zero value replaces the alias at power-on (index, subindex).
+    pub station_alias_parameter: Option<(u16, u8)>,
 }
 
 /// EtherCAT state machine rules of a profile (`[esm]`).

@@ -199,6 +199,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             reserve_ns: i.reserve_ns,
         }),
         sync_error_at_limit: f.sync.sync_error_at_limit,
+        sync_error_on_missed_outputs: f.sync.sync_error_on_missed_outputs,
     };
     let alarms = alarms(f)?;
     let esm = EsmRules {
@@ -283,6 +284,18 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         pdi_config2: e.pdi_config2,
         station_alias: e.station_alias,
         reserved: e.reserved,
+        station_alias_parameter: e
+            .station_alias_parameter
+            .as_deref()
+            .map(|s| {
+                parse_entry_ref(s).ok_or_else(|| {
+                    fault(
+                        "eeprom.station_alias_parameter",
+                        Invalid::Value(format!("`{s}` is not \"0xIIII:S\"")),
+                    )
+                })
+            })
+            .transpose()?,
     };
 
     // Declared objects.

@@ -449,6 +449,20 @@ fn eeprom(p: &Profile) -> Result<(), Fault> {
             },
         ));
     }
+    if let Some((index, subindex)) = p.eeprom.station_alias_parameter {
+        let key = "eeprom.station_alias_parameter";
+        let e = p
+            .entry(index, subindex)
+            .ok_or_else(|| fault(key, Invalid::PdoEntryMissing { index, subindex }))?;
+        if e.data_type != DataType::Uint || e.storage != Storage::Ram || !e.access.writable() {
+            return Err(fault(
+                key,
+                Invalid::Value(format!(
+                    "{index:#06x}:{subindex} must be a writable UINT parameter in RAM"
+                )),
+            ));
+        }
+    }
     Ok(())
 }
 

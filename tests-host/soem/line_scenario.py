@@ -28,6 +28,14 @@ def main():
         out["slaves"].append(
             {"name": s.name, "man": s.man, "id": s.id, "rev": s.rev, "sdo_identity": ident}
         )
+    # A Python master is not real time: SYNC0 events without new outputs are routine here, so the
+    # sync error supervision of the drives that count them (the Sigma-V-SD, 10F1h:02 = 0
+    # disables it, ETG.1020) is switched off, as a master without real-time cycles must.
+    for s in m.slaves:
+        try:
+            s.sdo_write(0x10F1, 2, struct.pack("<I", 0))
+        except pysoem.SdoError:
+            pass
     # DC before config_map: SOEM's config_map requests SAFE-OP at its end, and the GHA-E runs in
     # DC SYNC0 only (it refuses free run with AL status code 0x0027).
     out["dc"] = m.config_dc()

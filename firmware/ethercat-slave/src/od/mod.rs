@@ -72,6 +72,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             input_shift_step_ns: 0,
             input_shift_reserve_ns: 0,
             sync_error_at_limit: false,
+            sync_error_on_missed_outputs: false,
         },
         max_pdo_entries: 8,
         max_pdo_bytes: 256,
@@ -92,6 +93,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             al_error_alarms: &[],
         },
         sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
+        station_alias_parameter: None,
         settings: &[],
     }
 }

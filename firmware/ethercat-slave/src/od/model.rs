@@ -275,6 +275,11 @@ pub struct SyncSupport {
     pub input_shift_reserve_ns: u32,
     /// The sync error counter trips when it reaches 10F1h:02 instead of when it exceeds it.
     pub sync_error_at_limit: bool,
+    /// In OP in a DC mode, a SYNC0 at which the master has not written the outputs (SM2) since
+    /// the previous SYNC0 counts as a missed event for the sync error counter and 1C32h:0B
+    /// (ETG.1020's SM-event supervision; the Σ-V-SD's rule); otherwise only SYNC0 events that
+    /// did not come are counted.
+    pub sync_error_on_missed_outputs: bool,
 }
 
 impl SyncSupport {
@@ -440,6 +445,10 @@ pub struct DeviceInfo {
     pub esm: EsmRules,
     /// SDO download to an RxPDO-mapped entry in SAFEOP/OP.
     pub sdo_write_to_rx_mapped: RxMappedWrite,
+    /// A parameter (index, subindex; UNSIGNED16) whose value, if not 0, the slave writes to the
+    /// configured station alias 0x0012 at power-on ([`crate::slave::SlaveCore::start`]), in
+    /// place of the alias the ESC loaded from SII word 4 (e.g. the GHA-E's Pn-410).
+    pub station_alias_parameter: Option<(u16, u8)>,
     /// The startup parameters ("settings": profile `setting = true`; SDO information list
     /// type 5, ObjAccess bit 9), as `(index, subindex)` sorted ascending.
     pub settings: &'static [(u16, u8)],

@@ -30,10 +30,19 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             return Ok(None);
         }
         self.cycle_started_ns = now_ns;
-        if matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1) {
-            self.sync_supervisor.on_sync0(now_ns, self.sync.cycle_ns);
-        }
         let device = &self.profile.device;
+        if matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1) {
+            // Profile rule: in OP, were the outputs written since the last SYNC0? The SM2 event
+            // stays pending until the buffer is read below.
+            let outputs = if device.sync.sync_error_on_missed_outputs && state == AlState::Op {
+                let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
+                Some(events.any(AlEvent::sm(SM_OUTPUTS)))
+            } else {
+                None
+            };
+            self.sync_supervisor
+                .on_sync0(now_ns, self.sync.cycle_ns, outputs);
+        }
         let rx_len = self.rx_plan.byte_len();
         if rx_len > 0 {
             if let Some(image) = self.rx_image.get_mut(..rx_len) {

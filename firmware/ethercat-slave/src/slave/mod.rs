@@ -193,7 +193,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
 
     /// Brings the ESC interface up after power-on: AL status INIT without error, and the AL
     /// event mask that drives the IRQ line (AL control, SM activation, mailbox SM0/SM1, SM2 for
-    /// SM-synchronous cycles, process-data watchdog).
+    /// SM-synchronous cycles, process-data watchdog), and the station alias from the profile's
+    /// alias parameter if it has one and it is not 0 (call after [`Self::load_parameters`]).
     pub fn start<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
         let mask = AlEvent::AL_CONTROL
             | AlEvent::SM_ACTIVATION
@@ -202,6 +203,14 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             | AlEvent::sm(1)
             | AlEvent::sm(SM_OUTPUTS);
         pdi.write_u32(regs::AL_EVENT_MASK.addr, mask)?;
+        // Profile rule: a parameter sets the station alias at power-on (the ESC loaded SII word
+        // 4 into 0x0012 before; the PDI may overwrite the register).
+        if let Some((index, subindex)) = self.profile.device.station_alias_parameter {
+            let alias = self.dictionary().read_u32(index, subindex).unwrap_or(0);
+            if let Ok(alias @ 1..) = u16::try_from(alias) {
+                pdi.write_u16(regs::STATION_ALIAS.addr, alias)?;
+            }
+        }
         pdi.write_u16(regs::AL_STATUS_CODE.addr, AlStatusCode::NoError.code())?;
         pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())
     }

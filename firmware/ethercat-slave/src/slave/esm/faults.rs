@@ -77,7 +77,9 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     }
 
     /// Counts missed SYNC0 events in DC modes (SAFEOP, OP) and leaves OP with 0x001A when the
-    /// counter passes 10F1h:02; mirrors 1C32h:0B (missed) and 1C32h:20 (sync error).
+    /// counter passes 10F1h:02 (with the profile's rules: SYNC0 events without new outputs
+    /// count too, the limit may trip on reaching it); mirrors 1C32h:0B (missed) and 1C32h:20
+    /// (sync error).
     pub(in crate::slave) fn supervise_sync<P: EscPdi>(
         &mut self,
         pdi: &mut P,
@@ -98,10 +100,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 ErrorIndication::LocalError,
             );
         }
-        if self.sync_supervisor.check(now_ns, self.sync.cycle_ns) == 0 {
+        self.sync_supervisor.check(now_ns, self.sync.cycle_ns);
+        let Some(missed) = self.sync_supervisor.missed_update() else {
             return Ok(());
-        }
-        let missed = self.sync_supervisor.missed_total();
+        };
         self.write_od(
             SM_OUTPUT_PARAMETER,
             SUB_SM_EVENT_MISSED,

@@ -34,6 +34,8 @@ pub struct SyncSupervisor {
     last_sync0_ns: Option<u64>,
     /// Consecutive SYNC0 intervals that were not a whole number of cycles.
     off_period: u8,
+    /// [`Self::missed_total`] when [`Self::missed_update`] last returned it.
+    missed_published: u16,
 }
 
 impl SyncSupervisor {
@@ -42,9 +44,16 @@ impl SyncSupervisor {
         *self = Self::default();
     }
 
-    /// A SYNC0 arrived at `now_ns`; the next one is due one `cycle_ns` later.
-    pub fn on_sync0(&mut self, now_ns: u64, cycle_ns: u32) {
-        self.counter = self.counter.saturating_sub(GOOD_WEIGHT);
+    /// A SYNC0 arrived at `now_ns`; the next one is due one `cycle_ns` later. `outputs`:
+    /// whether the master wrote the outputs since the previous SYNC0, where that is supervised
+    /// (`None`: not supervised); a SYNC0 without them counts as a missed event.
+    pub fn on_sync0(&mut self, now_ns: u64, cycle_ns: u32, outputs: Option<bool>) {
+        if outputs == Some(false) {
+            self.counter = self.counter.saturating_add(MISSED_WEIGHT);
+            self.missed_total = self.missed_total.saturating_add(1);
+        } else {
+            self.counter = self.counter.saturating_sub(GOOD_WEIGHT);
+        }
         self.next_due_ns = Some(now_ns.saturating_add(u64::from(cycle_ns)));
         if let Some(last) = self.last_sync0_ns {
             if on_period(now_ns.saturating_sub(last), u64::from(cycle_ns)) {
@@ -98,6 +107,14 @@ impl SyncSupervisor {
     pub fn missed_total(&self) -> u16 {
         self.missed_total
     }
+
+    /// [`Self::missed_total`] if it changed since the last call (for 1C32h:0B).
+    pub fn missed_update(&mut self) -> Option<u16> {
+        (self.missed_total != self.missed_published).then(|| {
+            self.missed_published = self.missed_total;
+            self.missed_total
+        })
+    }
 }
 
 /// Whether `interval` is a whole number (≥ 1) of `cycle`s within the PLL tolerance (missed
@@ -127,7 +144,7 @@ mod tests {
     fn regular_sync0_never_trips() {
         let mut s = SyncSupervisor::default();
         for k in 0..1000u64 {
-            s.on_sync0(k * 1_000_000, CYCLE);
+            s.on_sync0(k * 1_000_000, CYCLE, None);
             assert_eq!(s.check(k * 1_000_000 + 900_000, CYCLE), 0);
         }
         assert!(!s.tripped(DEFAULT_COUNTER_LIMIT, false));
@@ -136,14 +153,14 @@ mod tests {
     #[test]
     fn one_miss_does_not_trip_but_misses_one_good_cycle_apart_do() {
         let mut s = SyncSupervisor::default();
-        s.on_sync0(0, CYCLE);
+        s.on_sync0(0, CYCLE, None);
         // SYNC0 due at 1 ms is late after 1.5 ms.
         assert_eq!(s.check(1_400_000, CYCLE), 0);
         assert_eq!(s.check(1_600_000, CYCLE), 1);
         assert!(!s.tripped(4, false), "counter 3");
         assert!(s.tripped(3, true), "counter 3 reaches a limit of 3");
         assert!(!s.tripped(3, false), "but does not exceed it");
-        s.on_sync0(2_000_000, CYCLE);
+        s.on_sync0(2_000_000, CYCLE, None);
         assert_eq!(s.check(3_600_000, CYCLE), 1);
         assert!(s.tripped(4, false), "counter 3 - 1 + 3 = 5 > 4");
     }
@@ -151,7 +168,7 @@ mod tests {
     #[test]
     fn loss_of_sync0_trips_after_two_cycles() {
         let mut s = SyncSupervisor::default();
-        s.on_sync0(0, CYCLE);
+        s.on_sync0(0, CYCLE, None);
         assert_eq!(s.check(2_600_000, CYCLE), 2);
         assert!(s.tripped(4, false));
         assert_eq!(s.missed_total(), 2);
@@ -160,9 +177,32 @@ mod tests {
     }
 
     #[test]
+    fn sync0_without_new_outputs_counts_as_missed_where_supervised() {
+        // Σ-V-SD §4.4 (4) worked example: outputs missing at every other SYNC0:
+        // 0, 3, 2, 5, 4, 7, 6, 9 → the limit 9 is reached at the 8th event (4th miss).
+        let mut s = SyncSupervisor::default();
+        let mut counters = Vec::new();
+        for (k, fresh) in [true, false, true, false, true, false, true, false]
+            .into_iter()
+            .enumerate()
+        {
+            s.on_sync0(k as u64 * 1_000_000, CYCLE, Some(fresh));
+            counters.push(s.counter);
+        }
+        assert_eq!(counters, [0, 3, 2, 5, 4, 7, 6, 9]);
+        assert!(s.tripped(9, true));
+        assert!(!s.tripped(9, false));
+        assert_eq!(s.missed_total(), 4);
+        // Unsupervised (`None`) a SYNC0 is always a good event.
+        let mut s = SyncSupervisor::default();
+        s.on_sync0(0, CYCLE, None);
+        assert_eq!((s.counter, s.missed_total()), (0, 0));
+    }
+
+    #[test]
     fn long_outage_is_counted_without_looping_per_cycle() {
         let mut s = SyncSupervisor::default();
-        s.on_sync0(0, 31_250);
+        s.on_sync0(0, 31_250, None);
         assert_eq!(s.check(10_000_000_000, 31_250), u16::MAX);
     }
 
@@ -170,13 +210,13 @@ mod tests {
     fn pll_is_lost_when_sync0_comes_at_another_period() {
         let mut s = SyncSupervisor::default();
         for k in 0..5u64 {
-            s.on_sync0(k * 1_000_000 + (k % 2) * 50_000, CYCLE); // 50 µs jitter: locked
+            s.on_sync0(k * 1_000_000 + (k % 2) * 50_000, CYCLE, None); // 50 µs jitter: locked
         }
         assert!(!s.pll_lost());
         let mut t = 4_000_000;
         for _ in 0..3 {
             t += 1_500_000; // the master changed 0x09A0 to 1.5 ms
-            s.on_sync0(t, CYCLE);
+            s.on_sync0(t, CYCLE, None);
         }
         assert!(s.pll_lost());
     }
@@ -185,7 +225,7 @@ mod tests {
     fn missed_pulses_are_not_a_period_change() {
         let mut s = SyncSupervisor::default();
         for t in [0, 1_000_000, 3_000_000, 4_000_000, 7_000_000] {
-            s.on_sync0(t, CYCLE);
+            s.on_sync0(t, CYCLE, None);
         }
         assert!(!s.pll_lost());
     }

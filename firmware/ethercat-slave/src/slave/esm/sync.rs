@@ -134,6 +134,7 @@ mod tests {
         input_shift_step_ns: 0,
         input_shift_reserve_ns: 0,
         sync_error_at_limit: false,
+        sync_error_on_missed_outputs: false,
     };
 
     #[test]

@@ -1,0 +1,388 @@
+//! The synchronisation rules the vendor profiles give as data (`[sync]`, `[esm]
+//! al_error_alarms`), under a real master (ethercrab, in process):
+//!
+//! - SDV3-E §3.5.2: in free run the master writes the cycle to 1C32h:02, 1 ms – 10 ms; the drive
+//!   runs its cycle at that period; a shorter one (a valid DC cycle) is refused at SAFE-OP.
+//! - Σ-V-SD §2.6 / §4.4 (3): the input shift time 1C33h:03 takes multiples of 125 µs up to the
+//!   SYNC0 cycle − 125 µs.
+//! - Σ-V-SD §4.4 (4): the sync error counter (+3 per SYNC0 without an SM2 event or a SYNC0 that
+//!   did not come, −1 per good one) trips when it reaches 10F1h:02 and raises alarm A.A12
+//!   (603Fh 0A12h, EMCY FF00h) with ESM → SAFEOP.
+//! - GHA-E §6.1: a SYNC0 period outside the allowed set is alarm Co03.
+
+use std::time::Duration;
+
+use board_sim::inproc::InProcess;
+use board_sim::Segment;
+use ethercrab::subdevice_group::{DcConfiguration, PreOp};
+use ethercrab::{Command, DcSync, DefaultLock, MainDevice, SubDeviceGroup};
+use od_gen::model::Profile;
+use tests_host::{al_status, block_on, master_for, FIRST_STATION};
+
+const MAX_SUBDEVICES: usize = 4;
+const MAX_PDI: usize = 512;
+type Group = SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>;
+
+/// AL status values (ETG.1000.6 Table 9): state | 0x10 error indication.
+const PREOP: u16 = 0x02;
+const SAFEOP: u16 = 0x04;
+const AL_ERROR: u16 = 0x10;
+/// AL status codes (ETG.1000.6 Table 11).
+const SYNC_ERROR: u16 = 0x001A;
+const INVALID_SYNC_CYCLE_TIME: u16 = 0x0035;
+const SYNC0_CYCLE_TIME: u16 = 0x0036;
+/// SDO abort "value range of parameter exceeded" (ETG.1000.6 Table 41).
+const ABORT_VALUE_RANGE: u32 = 0x0609_0030;
+/// 1C32h (SM output parameter) / 1C33h (SM input parameter), ETG.1020 §5.1.
+const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
+const SM_INPUT_PARAMETER: u16 = 0x1C33;
+const SUB_CYCLE_TIME: u8 = 0x02;
+const SUB_SHIFT_TIME: u8 = 0x03;
+const SUB_SM_EVENT_MISSED: u8 = 0x0B;
+/// 603Fh error code (CiA402).
+const ERROR_CODE: u16 = 0x603F;
+/// ESC SYNC0 cycle time register (ETG.1000.4 Table 60).
+const DC_SYNC0_CYCLE: u16 = 0x09A0;
+/// SM1 status register (SM n at 0x0800 + 8n, status at +5), bit 3 "mailbox full".
+const SM1_STATUS: u16 = 0x080D;
+const MAILBOX_FULL: u8 = 0x08;
+/// Mailbox header (6 bytes), type 3 = CoE; CoE service 1 = emergency.
+const MAILBOX_HEADER: usize = 6;
+const TYPE_COE: u8 = 3;
+const COE_EMERGENCY: u16 = 1;
+
+fn profile(name: &str) -> Profile {
+    od_gen::builtin(name).expect("built-in profile")
+}
+
+async fn init(m: &InProcess) -> Group {
+    m.maindevice
+        .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(m.shared.clock().now_fn())
+        .await
+        .expect("init")
+}
+
+fn abort_code(e: ethercrab::error::Error) -> u32 {
+    match e {
+        ethercrab::error::Error::Mailbox(ethercrab::error::MailboxError::Aborted {
+            code, ..
+        }) => u32::from(code),
+        other => panic!("expected an SDO abort, got {other:?}"),
+    }
+}
+
+/// Waits (advancing `step_ns` per poll) until SM1 holds a mailbox and returns its CoE part:
+/// CoE header, EMCY code, 1001h, manufacturer field.
+async fn emergency(m: &InProcess, md: &MainDevice<'_>, sm1_start: u16, step_ns: u64) -> Vec<u8> {
+    for _ in 0..50 {
+        let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
+            .receive(md)
+            .await
+            .expect("SM1 status");
+        if status & MAILBOX_FULL != 0 {
+            let mb: [u8; 64] = Command::fprd(FIRST_STATION, sm1_start)
+                .receive(md)
+                .await
+                .expect("SM1");
+            assert_eq!(mb[5] & 0x0F, TYPE_COE, "mailbox type");
+            let coe = mb[MAILBOX_HEADER..MAILBOX_HEADER + 10].to_vec();
+            assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
+            return coe;
+        }
+        m.shared.advance(step_ns);
+    }
+    panic!("no emergency in SM1");
+}
+
+/// PREOP → SAFEOP with DC SYNC0 at `cycle_ns` (the default mapping); `Err` = AL status.
+async fn dc_safe_op(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: Group,
+    cycle_ns: u64,
+) -> Result<
+    SubDeviceGroup<
+        MAX_SUBDEVICES,
+        MAX_PDI,
+        DefaultLock,
+        ethercrab::subdevice_group::SafeOp,
+        ethercrab::subdevice_group::HasDc,
+    >,
+    (u16, u16),
+> {
+    let mut group = group;
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+    for _ in 0..100 {
+        group.tx_rx_sync_system_time(md).await.expect("time sync");
+        m.shared.advance(cycle_ns);
+    }
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_nanos(cycle_ns * 10),
+                sync0_period: Duration::from_nanos(cycle_ns),
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .expect("DC configuration");
+    match group.into_safe_op(md).await {
+        Ok(g) => Ok(g),
+        Err(_) => Err(al_status(md).await),
+    }
+}
+
+/// Advances simulated time to one `cycle_ns` after `since` (the frames of the cycle take wire
+/// time too): the master's cycle stays phase-locked to SYNC0, one SYNC0 per cycle.
+fn finish_cycle(m: &InProcess, since: u64, cycle_ns: u64) {
+    let spent = m.shared.clock().now() - since;
+    m.shared.advance(cycle_ns.saturating_sub(spent));
+}
+
+#[test]
+fn sdv3e_free_run_cycle_is_1c32h_02_and_must_be_1_to_10_ms() {
+    let p = profile("sdv3-e");
+    assert_eq!(
+        (p.sync.free_run_min_cycle_ns, p.sync.free_run_max_cycle_ns),
+        (1_000_000, 10_000_000),
+        "§3.5.2"
+    );
+    // 500 µs: a valid DC cycle (the SDO range of 1C32h:02 is 250 µs – 10 ms), not a free-run one.
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME, 500_000u32)
+            .await
+            .expect("1C32h:02 = 500 µs is in the entry's range");
+        assert!(group.into_safe_op(md).await.is_err(), "SAFE-OP refused");
+        assert_eq!(
+            al_status(md).await,
+            (PREOP | AL_ERROR, INVALID_SYNC_CYCLE_TIME)
+        );
+    });
+    // 2 ms: accepted, and the drive's cycle runs every 2 ms.
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME, 2_000_000u32)
+            .await
+            .expect("1C32h:02 = 2 ms");
+        let group = group.into_safe_op(md).await.expect("SAFE-OP in free run");
+        let cycles = || m.shared.segment().drives()[0].slave.cycles();
+        let before = cycles();
+        const SPAN_NS: u64 = 40_000_000;
+        const STEP_NS: u64 = 500_000;
+        for _ in 0..SPAN_NS / STEP_NS {
+            group.tx_rx(md).await.expect("tx/rx");
+            m.shared.advance(STEP_NS);
+        }
+        let ran = cycles() - before;
+        assert!(
+            (19..=21).contains(&ran),
+            "{ran} cycles in 40 ms: the free-run period is not 2 ms"
+        );
+        let cycle: u32 = group
+            .subdevice(md, 0)
+            .expect("drive")
+            .sdo_read(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME)
+            .await
+            .expect("1C32h:02");
+        assert_eq!(cycle, 2_000_000);
+    });
+}
+
+#[test]
+fn sigma_v_sd_input_shift_takes_125_us_steps_up_to_the_cycle_minus_125_us() {
+    const CYCLE_NS: u64 = 1_000_000;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        let err = sd
+            .sdo_write(SM_INPUT_PARAMETER, SUB_SHIFT_TIME, 130_000u32)
+            .await
+            .expect_err("not a multiple of 125 µs");
+        assert_eq!(abort_code(err), ABORT_VALUE_RANGE);
+        sd.sdo_write(SM_INPUT_PARAMETER, SUB_SHIFT_TIME, 875_000u32)
+            .await
+            .expect("7 × 125 µs");
+        let shift: u32 = sd
+            .sdo_read(SM_INPUT_PARAMETER, SUB_SHIFT_TIME)
+            .await
+            .expect("1C33h:03");
+        assert_eq!(shift, 875_000);
+        // 875 µs = 1 ms − 125 µs: the largest shift a 1 ms cycle takes.
+        assert!(dc_safe_op(&m, md, group, CYCLE_NS).await.is_ok());
+    });
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(SM_INPUT_PARAMETER, SUB_SHIFT_TIME, 1_000_000u32)
+            .await
+            .expect("in range for the longest cycle (4 ms)");
+        let refused = dc_safe_op(&m, md, group, CYCLE_NS).await.err();
+        assert_eq!(refused, Some((PREOP | AL_ERROR, INVALID_SYNC_CYCLE_TIME)));
+    });
+}
+
+/// Σ-V-SD in OP with DC SYNC0 at 1 ms; then `missed_cycle(k)` decides for 30 cycles whether
+/// cycle k's SYNC0 comes without new outputs (the master skips its frame) or, with
+/// `slow_sync0`, SYNC0 runs at 2 ms so that every other one does not come. Asserts the sync
+/// error with alarm A.A12 and that it tripped after 4 missed events (counter 9 = the limit).
+fn sigma_v_sd_sync_error(slow_sync0: bool, missed_cycle: fn(usize) -> bool) {
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("sigma-v-sd");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "A.A12")
+        .expect("alarm A.A12");
+    let limit = p.entry(0x10F1, 2).expect("10F1h:02").initial_bytes()[0];
+    assert_eq!(limit, 9, "§4.4 (4): default 9");
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("request OP");
+        let mut in_op = false;
+        for _ in 0..100 {
+            let r = group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+            if r.all_op() {
+                in_op = true;
+                break;
+            }
+        }
+        assert!(in_op, "OP: {:?}", al_status(md).await);
+        for _ in 0..5 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(al_status(md).await, (0x08, 0), "OP without error");
+        if slow_sync0 {
+            Command::fpwr(FIRST_STATION, DC_SYNC0_CYCLE)
+                .send(md, 2 * CYCLE_NS as u32)
+                .await
+                .expect("0x09A0");
+        }
+        for k in 0..30 {
+            let since = m.shared.clock().now();
+            if !missed_cycle(k) {
+                group.tx_rx_dc(md).await.expect("tx/rx");
+            }
+            finish_cycle(&m, since, CYCLE_NS);
+        }
+        assert_eq!(al_status(md).await, (SAFEOP | AL_ERROR, SYNC_ERROR));
+        let coe = emergency(&m, md, p.sm.mailbox_in.start, CYCLE_NS).await;
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code"
+        );
+        assert_eq!(&coe[5..10], &alarm.emcy.data, "manufacturer field");
+        let sd = group.subdevice(md, 0).expect("drive");
+        let code: u16 = sd.sdo_read(ERROR_CODE, 0).await.expect("603Fh");
+        assert_eq!(code, alarm.error_code, "603Fh = A.A12");
+        let missed: u16 = sd
+            .sdo_read(SM_OUTPUT_PARAMETER, SUB_SM_EVENT_MISSED)
+            .await
+            .expect("1C32h:0B");
+        assert_eq!(
+            missed, 4,
+            "tripped on reaching the limit: 3, 2, 5, 4, 7, 6, 9"
+        );
+    });
+}
+
+#[test]
+fn sigma_v_sd_sync0_without_outputs_trips_at_the_limit_as_alarm_a_a12() {
+    // §4.4 (4) worked example: the process data fail at every other SYNC0.
+    sigma_v_sd_sync_error(false, |k| k % 2 == 0);
+}
+
+#[test]
+fn sigma_v_sd_missed_sync0_trips_at_the_limit_as_alarm_a_a12() {
+    sigma_v_sd_sync_error(true, |_| false);
+}
+
+#[test]
+fn sigma_v_sd_a_single_missing_frame_does_not_trip() {
+    // One miss in ten cycles: +3 then −1 per good cycle never reaches 9.
+    const CYCLE_NS: u64 = 1_000_000;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("request OP");
+        for _ in 0..100 {
+            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
+                break;
+            }
+            m.shared.advance(CYCLE_NS);
+        }
+        m.shared.advance(CYCLE_NS);
+        for k in 0..100 {
+            let since = m.shared.clock().now();
+            if k % 10 != 0 {
+                group.tx_rx_dc(md).await.expect("tx/rx");
+            }
+            finish_cycle(&m, since, CYCLE_NS);
+        }
+        assert_eq!(al_status(md).await, (0x08, 0), "still OP");
+        let missed: u16 = group
+            .subdevice(md, 0)
+            .expect("drive")
+            .sdo_read(SM_OUTPUT_PARAMETER, SUB_SM_EVENT_MISSED)
+            .await
+            .expect("1C32h:0B");
+        assert_eq!(missed, 10, "every missing frame counted in 1C32h:0B");
+    });
+}
+
+#[test]
+fn gha_e_sync0_period_outside_the_allowed_set_is_alarm_co03() {
+    let p = profile("gha-e");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "Co03")
+        .expect("alarm Co03");
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        // 375 µs: inside 125 µs – 2 ms, a multiple of 125 µs, not one of 125/250/500 µs, 1/2 ms.
+        let refused = dc_safe_op(&m, md, group, 375_000).await.err();
+        assert_eq!(refused, Some((PREOP | AL_ERROR, SYNC0_CYCLE_TIME)));
+        let coe = emergency(&m, md, p.sm.mailbox_in.start, 1_000_000).await;
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code"
+        );
+        let group = init(&m).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        let code: u16 = sd.sdo_read(ERROR_CODE, 0).await.expect("603Fh");
+        assert_eq!(code, alarm.error_code, "603Fh = Co03");
+    });
+}
