@@ -181,13 +181,14 @@ mod tests {
         // Σ-V-SD §4.4 (4) worked example: outputs missing at every other SYNC0:
         // 0, 3, 2, 5, 4, 7, 6, 9 → the limit 9 is reached at the 8th event (4th miss).
         let mut s = SyncSupervisor::default();
-        let mut counters = Vec::new();
-        for (k, fresh) in [true, false, true, false, true, false, true, false]
+        let mut counters = [0u16; 8];
+        for (k, (fresh, counter)) in [true, false, true, false, true, false, true, false]
             .into_iter()
+            .zip(counters.iter_mut())
             .enumerate()
         {
             s.on_sync0(k as u64 * 1_000_000, CYCLE, Some(fresh));
-            counters.push(s.counter);
+            *counter = s.counter;
         }
         assert_eq!(counters, [0, 3, 2, 5, 4, 7, 6, 9]);
         assert!(s.tripped(9, true));
