@@ -385,6 +385,13 @@ pub struct SyncFile {
     /// missed event (default false: only SYNC0 events that did not come).
     #[serde(default)]
     pub sync_error_on_missed_outputs: bool,
+    /// The 1C32h subindex that counts missed events (default 0x0B, ETG.1020).
+    #[serde(default = "sm_event_missed_subindex")]
+    pub sm_event_missed_subindex: u8,
+}
+
+fn sm_event_missed_subindex() -> u8 {
+    0x0B
 }
 
 /// `[sync.input_shift]`: a writable input shift time 1C33h:03 (ETG.1020: inputs latched this long

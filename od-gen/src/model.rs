@@ -530,6 +530,10 @@ pub struct Doc {
 /// generated code asserts they agree). A profile's `[pdo]` limits may only be lower.
 pub const STACK_MAX_PDO_BYTES: u16 = 256;
 
+/// The SM output and input parameter objects (ETG.1020 §5.1): generated from `[sync]`, or
+/// declared by a profile in its manual's layout.
+pub const SM_PARAMETER_OBJECTS: [u16; 2] = [0x1C32, 0x1C33];
+
 /// Objects the firmware's parameter storage never stores: 1010h/1011h (store/restore) and the
 /// SM parameters 1C32h/1C33h (the stack overwrites them with the active synchronisation).
 pub const NOT_STORED: [u16; 4] = [0x1010, 0x1011, 0x1C32, 0x1C33];
@@ -689,6 +693,8 @@ pub struct Sync {
     pub sync_error_at_limit: bool,
     /// A SYNC0 without new outputs counts as a missed event (in OP, DC modes).
     pub sync_error_on_missed_outputs: bool,
+    /// The 1C32h subindex that counts missed events.
+    pub sm_event_missed_subindex: u8,
 }
 
 /// A writable input shift time 1C33h:03.

@@ -200,6 +200,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         }),
         sync_error_at_limit: f.sync.sync_error_at_limit,
         sync_error_on_missed_outputs: f.sync.sync_error_on_missed_outputs,
+        sm_event_missed_subindex: f.sync.sm_event_missed_subindex,
     };
     let alarms = alarms(f)?;
     let esm = EsmRules {
@@ -478,7 +479,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         objects: Vec::new(),
     };
     for o in derived_objects(&profile)? {
-        declared.insert(o.index, o);
+        // A declared SM parameter object (the manual's layout) replaces the generated one.
+        let declared_sm_parameter =
+            SM_PARAMETER_OBJECTS.contains(&o.index) && declared.contains_key(&o.index);
+        if !declared_sm_parameter {
+            declared.insert(o.index, o);
+        }
     }
     profile.objects = declared.into_values().collect();
     profile.units = units(&f.units, &profile)?;
@@ -735,8 +741,11 @@ fn derived_from(index: u16, f: &ProfileFile) -> Option<&'static str> {
         0x1008 | 0x1009 | 0x100A | 0x1018 => Some("device"),
         0x1600..=0x17FF => Some("rxpdo"),
         0x1A00..=0x1BFF => Some("txpdo"),
-        0x1C00 | 0x1C10..=0x1C2F => Some("sm"),
-        0x1C32 | 0x1C33 => Some("sync"),
+        // 1C10h/1C11h (PDO assignment of the mailbox SMs) are not generated: a profile whose
+        // manual lists them declares them.
+        0x1C00 | 0x1C12..=0x1C2F => Some("sm"),
+        // 1C32h/1C33h are generated from [sync] unless the profile declares its manual's
+        // layout (checked against [sync] by `validate`).
         _ => {
             let _ = f;
             None

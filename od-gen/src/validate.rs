@@ -13,6 +13,7 @@ pub(crate) fn check(p: &Profile) -> Result<(), Fault> {
     sms(p)?;
     mailbox(p)?;
     sync(p)?;
+    sm_parameters(p)?;
     roles(p)?;
     settings(p)?;
     esm(p)?;
@@ -461,6 +462,97 @@ fn eeprom(p: &Profile) -> Result<(), Fault> {
                     "{index:#06x}:{subindex} must be a writable UINT parameter in RAM"
                 )),
             ));
+        }
+    }
+    Ok(())
+}
+
+/// A declared 1C32h/1C33h (the manual's layout instead of the generated one) must carry what
+/// the stack reads and writes, consistent with `[sync]`: :01 sync type (UINT in RAM, writable
+/// exactly when `sync_mode_writable`), :02 cycle time (UDINT in RAM, writable exactly when
+/// `cycle_time_writable`, then with a range that holds the DC and free-run cycles), 1C33h:03
+/// writable exactly when `input_shift` is given (then a UDINT in RAM), 1C32h:03 read-only. The
+/// stack refreshes the other RAM entries it knows (:03, :05, :06, :09, :0A, :0B, :0C, :20) and
+/// leaves constant ones (the manual's fixed values) as declared.
+fn sm_parameters(p: &Profile) -> Result<(), Fault> {
+    let y = &p.sync;
+    // The missed-event counter lives at ETG's 0x0B unless a declared 1C32h puts it elsewhere.
+    let counter = p
+        .entry(0x1C32, y.sm_event_missed_subindex)
+        .filter(|e| e.storage == Storage::Ram && !e.access.writable());
+    if counter.is_none() {
+        return Err(fault(
+            "sync.sm_event_missed_subindex",
+            Invalid::Sync(format!(
+                "1C32h:{:02X} must be a read-only entry in RAM",
+                y.sm_event_missed_subindex
+            )),
+        ));
+    }
+    for o in p
+        .objects
+        .iter()
+        .filter(|o| SM_PARAMETER_OBJECTS.contains(&o.index) && !o.derived)
+    {
+        let key = |sub: u8| format!("object[{:#06x}].entry[{sub}]", o.index);
+        let bad = |sub: u8, what: &str| {
+            Err(fault(
+                &key(sub),
+                Invalid::Sync(format!("{:#06x}:{sub:02X}: {what}", o.index)),
+            ))
+        };
+        let ram_of = |sub: u8, t: DataType| {
+            o.entry(sub)
+                .filter(|e| e.data_type == t && e.storage == Storage::Ram)
+        };
+        if o.code != ObjectCode::Record {
+            return Err(fault(
+                &format!("object[{:#06x}].code", o.index),
+                Invalid::Sync("an SM parameter object is a RECORD".into()),
+            ));
+        }
+        let Some(mode) = ram_of(1, DataType::Uint) else {
+            return bad(1, "the sync type must be a UINT in RAM");
+        };
+        if mode.access.writable() != y.sync_mode_writable {
+            return bad(1, "writable exactly when sync.sync_mode_writable");
+        }
+        let Some(cycle) = ram_of(2, DataType::Udint) else {
+            return bad(2, "the cycle time must be a UDINT in RAM");
+        };
+        if cycle.access.writable() != y.cycle_time_writable {
+            return bad(2, "writable exactly when sync.cycle_time_writable");
+        }
+        if cycle.access.writable() {
+            let le = |b: &[u8]| {
+                let mut a = [0u8; 4];
+                let n = b.len().min(4);
+                a[..n].copy_from_slice(&b[..n]);
+                u32::from_le_bytes(a)
+            };
+            let lowest = y.min_cycle_ns.min(y.free_run_min_cycle_ns);
+            let highest = y.max_cycle_ns.max(y.free_run_max_cycle_ns);
+            if cycle.min.is_empty()
+                || cycle.max.is_empty()
+                || le(&cycle.min) > lowest
+                || le(&cycle.max) < highest
+            {
+                return bad(
+                    2,
+                    "a writable cycle time needs min/max holding the DC and free-run cycles",
+                );
+            }
+        }
+        let shift = o.entry(3);
+        let shift_writable = shift.is_some_and(|e| e.access.writable());
+        match (o.index, y.input_shift.is_some()) {
+            (0x1C33, true) if ram_of(3, DataType::Udint).is_none() || !shift_writable => {
+                return bad(3, "sync.input_shift needs a writable UDINT in RAM");
+            }
+            (0x1C33, false) | (0x1C32, _) if shift_writable => {
+                return bad(3, "writable only as 1C33h:03 with sync.input_shift");
+            }
+            _ => {}
         }
     }
     Ok(())

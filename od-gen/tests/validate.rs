@@ -980,3 +980,94 @@ fn free_run_range_input_shift_and_al_error_alarms() {
     let (key, _) = invalid(&esm("{ al_status_code = 0x001A, error = 0 }"));
     assert_eq!(key, "esm.al_error_alarms[0].error");
 }
+
+#[test]
+fn declared_sm_parameters_replace_the_generated_ones_and_are_checked_against_sync() {
+    // Σ-V-SD §4.4 (3): the manual's layout.
+    let p = od_gen::builtin("sigma-v-sd").unwrap();
+    let o = p.object(0x1C32).unwrap();
+    assert!(!o.derived);
+    assert_eq!(o.entries.last().unwrap().subindex, 12);
+    assert!(o.entry(0x20).is_none());
+    assert_eq!(p.entry(0x1C33, 4).unwrap().default, vec![0x25, 0]);
+    assert!(p.entry(0x1C33, 3).unwrap().access.writable());
+    assert!(!p.entry(0x1C32, 2).unwrap().access.writable());
+    // The standard profile keeps the generated objects.
+    assert!(
+        od_gen::builtin("standard")
+            .unwrap()
+            .object(0x1C32)
+            .unwrap()
+            .derived
+    );
+
+    let declared = |sync_extra: &str, entries: &str| {
+        with(
+            "cycle_step_ns = 31_250",
+            &format!(
+                "cycle_step_ns = 31_250\n{sync_extra}\n\n[[object]]\nindex = 0x1C32\nname = \"SM output parameter\"\ncode = \"record\"\nentry = [\n{entries}\n]\n\n[sync.dummy_never_used]",
+            ),
+        )
+        .replace("\n\n[sync.dummy_never_used]", "")
+    };
+    // standard.toml: sync_mode_writable and cycle_time_writable default to true.
+    let ok_entries = "{ sub = 1, name = \"Sync mode\", type = \"UINT\", access = \"rw_preop\", storage = \"ram\", default = 0 },\n\
+        { sub = 2, name = \"Cycle time\", type = \"UDINT\", access = \"rw_preop\", storage = \"ram\", default = 1_000_000, min = 31_250, max = 10_000_000 },\n\
+        { sub = 3, name = \"Shift time\", type = \"UDINT\", access = \"ro\", storage = \"const\", default = 5_000 },\n\
+        { sub = 11, name = \"SM event missed\", type = \"UINT\", access = \"ro\", storage = \"ram\", default = 0 },";
+    let p = od_gen::parse(&declared("", ok_entries), "p.toml").unwrap();
+    assert_eq!(
+        p.entry(0x1C32, 3).unwrap().default,
+        5_000u32.to_le_bytes().to_vec()
+    );
+    assert!(p.entry(0x1C32, 0x20).is_none());
+    assert!(p.object(0x1C33).unwrap().derived, "1C33h still generated");
+
+    // :01 read-only while sync_mode_writable = true.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replacen("access = \"rw_preop\"", "access = \"ro\"", 1),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[1]");
+    // :02 range narrower than the DC cycles.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replace("min = 31_250", "min = 62_500"),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[2]");
+    // :02 not in RAM.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replace(
+            "type = \"UDINT\", access = \"rw_preop\", storage = \"ram\"",
+            "type = \"UDINT\", access = \"ro\", storage = \"const\"",
+        ),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[2]");
+    // 1C32h:03 writable.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replace(
+            "access = \"ro\", storage = \"const\", default = 5_000",
+            "access = \"rw_preop\", storage = \"ram\", default = 5_000",
+        ),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[3]");
+    // No missed-event counter at :0B (the default place).
+    let (key, _) = invalid(&declared("", &ok_entries.replace("sub = 11", "sub = 13")));
+    assert_eq!(key, "sync.sm_event_missed_subindex");
+    // ... unless [sync] names where it is.
+    assert!(od_gen::parse(
+        &declared(
+            "sm_event_missed_subindex = 13",
+            &ok_entries.replace("sub = 11", "sub = 13")
+        ),
+        "p.toml"
+    )
+    .is_ok());
+    // Other communication objects stay derived-only.
+    let (key, _) = invalid(&appended(
+        "[[object]]\nindex = 0x1C12\nname = \"x\"\ncode = \"array\"\nentry = [{ sub = 1, name = \"a\", type = \"UINT\", access = \"ro\", default = 0 }]",
+    ));
+    assert_eq!(key, "object[0x1c12]");
+}

@@ -38,7 +38,10 @@ const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
 const SM_INPUT_PARAMETER: u16 = 0x1C33;
 const SUB_CYCLE_TIME: u8 = 0x02;
 const SUB_SHIFT_TIME: u8 = 0x03;
-const SUB_SM_EVENT_MISSED: u8 = 0x0B;
+/// The Σ-V-SD's "SM2 event miss count" (§4.4 (3): 1C32h:0C, UDINT; ETG.1020 has :0B).
+const SIGMA_MISS_COUNT: u8 = 0x0C;
+/// SDO abort "subindex does not exist" (ETG.1000.6 Table 41).
+const ABORT_NO_SUBINDEX: u32 = 0x0609_0011;
 /// 603Fh error code (CiA402).
 const ERROR_CODE: u16 = 0x603F;
 /// ESC SYNC0 cycle time register (ETG.1000.4 Table 60).
@@ -300,10 +303,11 @@ fn sigma_v_sd_sync_error(slow_sync0: bool, missed_cycle: fn(usize) -> bool) {
         let sd = group.subdevice(md, 0).expect("drive");
         let code: u16 = sd.sdo_read(ERROR_CODE, 0).await.expect("603Fh");
         assert_eq!(code, alarm.error_code, "603Fh = A.A12");
-        let missed: u16 = sd
-            .sdo_read(SM_OUTPUT_PARAMETER, SUB_SM_EVENT_MISSED)
+        // §4.4 (3): the miss count is 1C32h:0C (UDINT) on this drive.
+        let missed: u32 = sd
+            .sdo_read(SM_OUTPUT_PARAMETER, SIGMA_MISS_COUNT)
             .await
-            .expect("1C32h:0B");
+            .expect("1C32h:0C");
         assert_eq!(
             missed, 4,
             "tripped on reaching the limit: 3, 2, 5, 4, 7, 6, 9"
@@ -348,13 +352,35 @@ fn sigma_v_sd_a_single_missing_frame_does_not_trip() {
             finish_cycle(&m, since, CYCLE_NS);
         }
         assert_eq!(al_status(md).await, (0x08, 0), "still OP");
-        let missed: u16 = group
-            .subdevice(md, 0)
-            .expect("drive")
-            .sdo_read(SM_OUTPUT_PARAMETER, SUB_SM_EVENT_MISSED)
+        let sd = group.subdevice(md, 0).expect("drive");
+        let missed: u32 = sd
+            .sdo_read(SM_OUTPUT_PARAMETER, SIGMA_MISS_COUNT)
             .await
-            .expect("1C32h:0B");
-        assert_eq!(missed, 10, "every missing frame counted in 1C32h:0B");
+            .expect("1C32h:0C");
+        assert_eq!(missed, 10, "every missing frame counted in 1C32h:0C");
+        // §4.4 (3): the manual's layout, fixed values unchanged by the running cycle, :0A the
+        // SYNC0 cycle.
+        let sub0: u8 = sd.sdo_read(SM_OUTPUT_PARAMETER, 0).await.expect("1C32h:00");
+        assert_eq!(sub0, 12);
+        let sub0: u8 = sd.sdo_read(SM_INPUT_PARAMETER, 0).await.expect("1C33h:00");
+        assert_eq!(sub0, 10);
+        for (sub, value) in [
+            (3u8, 125_000u32),
+            (5, 250_000),
+            (6, 62_500),
+            (9, 125_000),
+            (10, 1_000_000),
+        ] {
+            let v: u32 = sd.sdo_read(SM_OUTPUT_PARAMETER, sub).await.expect("1C32h");
+            assert_eq!(v, value, "1C32h:{sub:02X}");
+        }
+        let supported: u16 = sd.sdo_read(SM_INPUT_PARAMETER, 4).await.expect("1C33h:04");
+        assert_eq!(supported, 0x0025, "input shift with local timer");
+        let err = sd
+            .sdo_read::<u8>(SM_OUTPUT_PARAMETER, 0x20)
+            .await
+            .expect_err("no :20 on this drive");
+        assert_eq!(abort_code(err), ABORT_NO_SUBINDEX);
     });
 }
 

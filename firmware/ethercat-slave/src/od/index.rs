@@ -42,7 +42,10 @@ pub mod sm_parameter {
     pub const SUB_CALC_AND_COPY_TIME: u8 = 0x06;
     /// Delay time, ns.
     pub const SUB_DELAY_TIME: u8 = 0x09;
-    /// SM-event missed counter.
+    /// Sync0 cycle time, ns (the SYNC0 cycle the master configured in the ESC).
+    pub const SUB_SYNC0_CYCLE_TIME: u8 = 0x0A;
+    /// SM-event missed counter (ETG.1020; a profile may place it elsewhere:
+    /// `SyncSupport::sm_event_missed_subindex`).
     pub const SUB_SM_EVENT_MISSED: u8 = 0x0B;
     /// Cycle time too small counter.
     pub const SUB_CYCLE_TIME_TOO_SMALL: u8 = 0x0C;

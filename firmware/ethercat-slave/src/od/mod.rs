@@ -73,6 +73,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             input_shift_reserve_ns: 0,
             sync_error_at_limit: false,
             sync_error_on_missed_outputs: false,
+            sm_event_missed_subindex: 0x0B,
         },
         max_pdo_entries: 8,
         max_pdo_bytes: 256,

@@ -280,6 +280,9 @@ pub struct SyncSupport {
     /// (ETG.1020's SM-event supervision; the Σ-V-SD's rule); otherwise only SYNC0 events that
     /// did not come are counted.
     pub sync_error_on_missed_outputs: bool,
+    /// The 1C32h subindex that counts missed events (ETG.1020: 0x0B "SM-event missed counter";
+    /// the Σ-V-SD has it at 0x0C).
+    pub sm_event_missed_subindex: u8,
 }
 
 impl SyncSupport {

@@ -134,7 +134,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 self.write_od(index, SUB_MIN_CYCLE_TIME, &min_cycle);
             }
         }
-        if self.sync.cycle_ns != 0 && elapsed > self.sync.cycle_ns {
+        // A profile that counts missed events at :0C (Σ-V-SD) has no "cycle time too small".
+        let counter_at_0c =
+            self.profile.device.sync.sm_event_missed_subindex == SUB_CYCLE_TIME_TOO_SMALL;
+        if self.sync.cycle_ns != 0 && elapsed > self.sync.cycle_ns && !counter_at_0c {
             self.cycle_too_small = self.cycle_too_small.saturating_add(1);
             let count = self.cycle_too_small.to_le_bytes();
             self.write_od(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME_TOO_SMALL, &count);

@@ -106,7 +106,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         };
         self.write_od(
             SM_OUTPUT_PARAMETER,
-            SUB_SM_EVENT_MISSED,
+            self.profile.device.sync.sm_event_missed_subindex,
             &missed.to_le_bytes(),
         );
         let limit = self

@@ -44,6 +44,13 @@ impl SyncSupervisor {
         *self = Self::default();
     }
 
+    /// Clears the sync error counter only (on SAFEOP → OP: events missed in SAFEOP do not count
+    /// against OP; the Σ-V-SD manual §4.4 (4) says so, ETG.1020 leaves it open). The SYNC0
+    /// schedule and the missed-event total stay.
+    pub fn restart_counter(&mut self) {
+        self.counter = 0;
+    }
+
     /// A SYNC0 arrived at `now_ns`; the next one is due one `cycle_ns` later. `outputs`:
     /// whether the master wrote the outputs since the previous SYNC0, where that is supervised
     /// (`None`: not supervised); a SYNC0 without them counts as a missed event.
@@ -194,6 +201,9 @@ mod tests {
         assert!(s.tripped(9, true));
         assert!(!s.tripped(9, false));
         assert_eq!(s.missed_total(), 4);
+        // SAFEOP → OP starts the counter afresh.
+        s.restart_counter();
+        assert_eq!((s.counter, s.missed_total()), (0, 4));
         // Unsupervised (`None`) a SYNC0 is always a good event.
         let mut s = SyncSupervisor::default();
         s.on_sync0(0, CYCLE, None);

@@ -135,6 +135,7 @@ mod tests {
         input_shift_reserve_ns: 0,
         sync_error_at_limit: false,
         sync_error_on_missed_outputs: false,
+        sm_event_missed_subindex: 0x0B,
     };
 
     #[test]

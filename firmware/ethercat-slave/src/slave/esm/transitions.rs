@@ -219,6 +219,9 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             self.mailbox_reset = true;
             self.emcy_out.clear();
         }
+        if from == AlState::SafeOp && to == AlState::Op {
+            self.sync_supervisor.restart_counter();
+        }
         if rank_to <= 2 && to != from {
             // Entering or returning to SAFEOP or below: supervision and the OP gate restart.
             self.sync_supervisor.reset();
@@ -237,10 +240,13 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         Ok(())
     }
 
-    /// Mirrors the active synchronisation into 1C32h/1C33h (:01 sync type, :02 cycle time).
+    /// Mirrors the active synchronisation into 1C32h/1C33h (:01 sync type, :02 cycle time, and
+    /// :0A Sync0 cycle time where the profile has it: the SYNC0 cycle, 0 without DC).
     pub(in crate::slave) fn publish_sync_parameters(&mut self) {
         let mode = self.sync.mode as u16;
         let cycle = self.sync.cycle_ns;
+        let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
+        let sync0_cycle = if dc { cycle } else { 0 };
         let mut od = Dictionary::new(self.profile, &mut self.ram);
         for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
             if let Some(e) = od.entry(index, SUB_SYNC_TYPE) {
@@ -250,6 +256,9 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 if let Some(e) = od.entry(index, SUB_CYCLE_TIME) {
                     let _ = od.set_value(e, &cycle.to_le_bytes()[..e.byte_len().min(4)]);
                 }
+            }
+            if let Some(e) = od.entry(index, SUB_SYNC0_CYCLE_TIME) {
+                let _ = od.set_value(e, &sync0_cycle.to_le_bytes()[..e.byte_len().min(4)]);
             }
         }
     }
