@@ -508,6 +508,21 @@ fn synchronisation(out: &mut String, p: &Profile) {
                 None => "the drive is disabled (no fault)".into(),
             },
         ],
+        vec![
+            "Error register 1001h".into(),
+            if p.emcy.register_mask == 0xFF {
+                "CiA 301 class bits".into()
+            } else {
+                format!("bits 0x{:02X} only", p.emcy.register_mask)
+            },
+        ],
+        vec![
+            "Emergency of an AL error".into(),
+            format!(
+                "{} [state before, AL status code, state after, 0]",
+                hex16(p.emcy.al_error_code)
+            ),
+        ],
     ];
     md_table(out, &["", ""], &rows);
     if !e.al_error_alarms.is_empty() {

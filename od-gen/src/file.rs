@@ -40,6 +40,9 @@ pub struct ProfileFile {
     /// EtherCAT state machine rules (optional: every key has a default).
     #[serde(default)]
     pub esm: EsmFile,
+    /// `[emcy]`: how 1001h and the stack's own emergencies are formed (optional).
+    #[serde(default)]
+    pub emcy: EmcyFile,
     /// `[units]`: how the position and velocity objects convert to the drive's internal units.
     #[serde(default)]
     pub units: UnitsFile,
@@ -431,6 +434,39 @@ pub struct EsmFile {
     /// transition emergency).
     #[serde(default)]
     pub al_error_alarms: Vec<AlErrorAlarmFile>,
+}
+
+/// `[emcy]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EmcyFile {
+    /// `"cia301"` (default: every class bit of CiA 301) or `"generic"` (1001h bit 0 only).
+    #[serde(default = "cia301")]
+    pub error_register: String,
+    /// Emergency code of an AL error that no `[esm] al_error_alarms` row names (default 0xA000,
+    /// ETG.1000.6 "EtherCAT state machine transition").
+    #[serde(default = "esm_transition_code")]
+    pub al_error_code: u16,
+}
+
+fn cia301() -> String {
+    "cia301".into()
+}
+
+/// ETG.1000.6 emergency code 0xA000 (EtherCAT state machine transition).
+pub const ESM_TRANSITION_EMCY: u16 = 0xA000;
+
+fn esm_transition_code() -> u16 {
+    ESM_TRANSITION_EMCY
+}
+
+impl Default for EmcyFile {
+    fn default() -> Self {
+        Self {
+            error_register: cia301(),
+            al_error_code: ESM_TRANSITION_EMCY,
+        }
+    }
 }
 
 /// One `[esm] al_error_alarms` row.

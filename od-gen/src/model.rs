@@ -849,6 +849,15 @@ pub struct Eeprom {
     pub station_alias_parameter: Option<(u16, u8)>,
 }
 
+/// How 1001h and the stack's own emergencies are formed (`[emcy]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EmcyRules {
+    /// The 1001h bits the drive uses (0xFF: CiA 301 classes; 0x01: generic only).
+    pub register_mask: u8,
+    /// Emergency code of an AL error no alarm names.
+    pub al_error_code: u16,
+}
+
 /// EtherCAT state machine rules of a profile (`[esm]`).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EsmRules {
@@ -951,6 +960,8 @@ pub struct Profile {
     pub sdo_write_to_rx_mapped: RxMappedWrite,
     /// ESM rules.
     pub esm: EsmRules,
+    /// Error register and emergency rules (`[emcy]`).
+    pub emcy: EmcyRules,
     /// A drive (the firmware's profiles) or another device on the slave stack.
     pub kind: ProfileKind,
     /// 603Fh error code and EMCY bytes of each internal motor fault, in the order of

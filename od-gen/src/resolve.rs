@@ -214,6 +214,27 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .transpose()?,
         al_error_alarms: al_error_alarms(&f.esm.al_error_alarms, &alarms)?,
     };
+    let emcy = EmcyRules {
+        register_mask: match f.emcy.error_register.as_str() {
+            "cia301" => 0xFF,
+            "generic" => 0x01,
+            other => {
+                return Err(fault(
+                    "emcy.error_register",
+                    Invalid::Value(format!("`{other}` is not cia301 or generic")),
+                ))
+            }
+        },
+        al_error_code: match f.emcy.al_error_code {
+            0 => {
+                return Err(fault(
+                    "emcy.al_error_code",
+                    Invalid::Value("0x0000 is the error-reset emergency".into()),
+                ))
+            }
+            c => c,
+        },
+    };
     let kind = match f.kind.as_deref() {
         None => ProfileKind::Drive,
         Some(s) => ProfileKind::parse(s).ok_or_else(|| {
@@ -452,6 +473,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         max_process_bytes,
         sdo_write_to_rx_mapped,
         esm,
+        emcy,
         kind,
         motor_faults,
         alarms,

@@ -387,6 +387,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         "            station_alias_parameter: {:?},",
         p.eeprom.station_alias_parameter
     );
+    let _ = writeln!(
+        out,
+        "            emcy: {}::od::EmcyRules {{ register_mask: {:#04x}, al_error_code: {:#06x} }},",
+        target.slave, p.emcy.register_mask, p.emcy.al_error_code
+    );
     let _ = writeln!(out, "            settings: SETTINGS,");
     let _ = writeln!(out, "        }},");
     let _ = writeln!(out, "        objects: OBJECTS,");

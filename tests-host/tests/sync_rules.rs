@@ -44,6 +44,16 @@ const SIGMA_MISS_COUNT: u8 = 0x0C;
 const ABORT_NO_SUBINDEX: u32 = 0x0609_0011;
 /// 603Fh error code (CiA402).
 const ERROR_CODE: u16 = 0x603F;
+/// 1001h error register and its bit 0 "generic error" (CiA 301).
+const ERROR_REGISTER: u16 = 0x1001;
+const GENERIC_ERROR: u8 = 0x01;
+/// 10F1h:02 sync error counter limit (ETG.1020); 0 switches the supervision off.
+const ERROR_SETTINGS: u16 = 0x10F1;
+/// Σ-V-SD §2.7: every emergency is FF00h.
+const SIGMA_EMCY_CODE: u16 = 0xFF00;
+/// AL status OP (ETG.1000.6 Table 9); SM watchdog AL status code (Table 11).
+const OP: u16 = 0x08;
+const SM_WATCHDOG: u16 = 0x001B;
 /// ESC SYNC0 cycle time register (ETG.1000.4 Table 60).
 const DC_SYNC0_CYCLE: u16 = 0x09A0;
 /// SM1 status register (SM n at 0x0800 + 8n, status at +5), bit 3 "mailbox full".
@@ -300,9 +310,12 @@ fn sigma_v_sd_sync_error(slow_sync0: bool, missed_cycle: fn(usize) -> bool) {
             "EMCY code"
         );
         assert_eq!(&coe[5..10], &alarm.emcy.data, "manufacturer field");
+        assert_eq!(coe[4], GENERIC_ERROR, "§4.2: 1001h uses bit 0 only");
         let sd = group.subdevice(md, 0).expect("drive");
         let code: u16 = sd.sdo_read(ERROR_CODE, 0).await.expect("603Fh");
         assert_eq!(code, alarm.error_code, "603Fh = A.A12");
+        let register: u8 = sd.sdo_read(ERROR_REGISTER, 0).await.expect("1001h");
+        assert_eq!(register, GENERIC_ERROR, "§4.2: 1001h uses bit 0 only");
         // §4.4 (3): the miss count is 1C32h:0C (UDINT) on this drive.
         let missed: u32 = sd
             .sdo_read(SM_OUTPUT_PARAMETER, SIGMA_MISS_COUNT)
@@ -381,6 +394,49 @@ fn sigma_v_sd_a_single_missing_frame_does_not_trip() {
             .await
             .expect_err("no :20 on this drive");
         assert_eq!(abort_code(err), ABORT_NO_SUBINDEX);
+    });
+}
+
+#[test]
+fn sigma_v_sd_sm_watchdog_is_an_ff00h_emergency_with_the_generic_bit_only() {
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("sigma-v-sd");
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        // Sync supervision off, so that only the SM watchdog sees the master stop.
+        group
+            .subdevice(md, 0)
+            .expect("drive")
+            .sdo_write(ERROR_SETTINGS, 2, 0u32)
+            .await
+            .expect("10F1h:02 = 0");
+        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("request OP");
+        for _ in 0..100 {
+            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
+                break;
+            }
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(al_status(md).await, (OP, 0));
+        // The ESC's default process-data watchdog: 100 ms.
+        m.shared.advance(120 * CYCLE_NS);
+        assert_eq!(al_status(md).await, (SAFEOP | AL_ERROR, SM_WATCHDOG));
+        let coe = emergency(&m, md, p.sm.mailbox_in.start, CYCLE_NS).await;
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            SIGMA_EMCY_CODE,
+            "§2.7"
+        );
+        assert_eq!(coe[4], GENERIC_ERROR, "§4.2: bit 0 only");
+        assert_eq!(
+            u16::from_le_bytes([coe[6], coe[7]]),
+            SM_WATCHDOG,
+            "the AL status code where the alarm code goes"
+        );
     });
 }
 

@@ -95,6 +95,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
         },
         sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
         station_alias_parameter: None,
+        emcy: crate::od::EmcyRules::CIA301,
         settings: &[],
     }
 }

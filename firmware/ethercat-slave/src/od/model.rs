@@ -324,6 +324,27 @@ pub struct EsmRules {
     pub al_error_alarms: &'static [AlErrorAlarm],
 }
 
+/// How a profile forms the error register 1001h and the stack's own emergencies (`[emcy]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EmcyRules {
+    /// The 1001h bits the drive uses: 0xFF for every CiA 301 class bit, 0x01 for a drive that
+    /// sets only the generic bit (Σ-V-SD §4.2). Applied to 1001h and the register byte of
+    /// every emergency.
+    pub register_mask: u8,
+    /// The emergency code of an AL error the profile does not report as one of its alarms
+    /// (ETG.1000.6: 0xA000 "EtherCAT state machine transition"; FF00h on a drive whose every
+    /// emergency is FF00h).
+    pub al_error_code: u16,
+}
+
+impl EmcyRules {
+    /// CiA 301 error register classes and ETG's AL error emergency.
+    pub const CIA301: Self = Self {
+        register_mask: 0xFF,
+        al_error_code: 0xA000,
+    };
+}
+
 /// One `[esm] al_error_alarms` row: an AL status code and the error the drive reports with it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AlErrorAlarm {
@@ -452,6 +473,8 @@ pub struct DeviceInfo {
     /// configured station alias 0x0012 at power-on ([`crate::slave::SlaveCore::start`]), in
     /// place of the alias the ESC loaded from SII word 4 (e.g. the GHA-E's Pn-410).
     pub station_alias_parameter: Option<(u16, u8)>,
+    /// How the error register and emergencies are formed (profile section `[emcy]`).
+    pub emcy: EmcyRules,
     /// The startup parameters ("settings": profile `setting = true`; SDO information list
     /// type 5, ObjAccess bit 9), as `(index, subindex)` sorted ascending.
     pub settings: &'static [(u16, u8)],

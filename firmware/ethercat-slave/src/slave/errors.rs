@@ -20,15 +20,29 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         diag: Option<&DiagMessage>,
         now_ns: u64,
     ) -> Result<(), Emergency> {
+        self.report_error_as(code, code, extra_register_bits, data, diag, now_ns)
+    }
+
+    /// [`Self::report_error`] with the error tracked in 1001h under `code` and the emergency
+    /// sent with `emcy_code` (a profile's own code for an error the stack knows by ETG's).
+    fn report_error_as(
+        &mut self,
+        code: u16,
+        emcy_code: u16,
+        extra_register_bits: u8,
+        data: [u8; 5],
+        diag: Option<&DiagMessage>,
+        now_ns: u64,
+    ) -> Result<(), Emergency> {
         self.errors.raise(code, extra_register_bits);
-        let register = self.errors.register();
+        let register = self.register_bits();
         self.publish_error_register();
         if let Some(msg) = diag {
             let mut od = Dictionary::new(self.profile, &mut self.ram);
             // The emergency goes out below in any case; bit 0 of 10F3h:05 adds nothing here.
             let _ = self.diag.report(&mut od, msg, now_ns, register);
         }
-        self.post_emcy(Emergency::new(code, register, data))
+        self.post_emcy(Emergency::new(emcy_code, register, data))
     }
 
     /// The error `code` is gone: clears it from 1001h; when it was the last active error,
@@ -48,7 +62,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// Stores a diagnosis message (info, warning or an error that needs no 1001h bit) in
     /// 10F3h; sends it as an emergency too when 10F3h:05 bit 0 asks for it.
     pub fn report_diag(&mut self, msg: &DiagMessage, now_ns: u64) -> Result<(), DiagError> {
-        let register = self.errors.register();
+        let register = self.register_bits();
         let mut od = Dictionary::new(self.profile, &mut self.ram);
         if let Some(e) = self.diag.report(&mut od, msg, now_ns, register)? {
             let _ = self.post_emcy(e);
@@ -68,7 +82,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
 
     /// The error register 1001h.
     pub fn error_register(&self) -> u8 {
-        self.errors.register()
+        self.register_bits()
+    }
+
+    /// 1001h from the active errors, limited to the bits the profile uses.
+    fn register_bits(&self) -> u8 {
+        self.errors.register() & self.profile.device.emcy.register_mask
     }
 
     /// Emergencies waiting for the mailbox.
@@ -78,7 +97,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
 
     /// Mirrors the active errors into 1001h.
     pub(super) fn publish_error_register(&mut self) {
-        let register = self.errors.register();
+        let register = self.register_bits();
         self.write_od(crate::od::index::ERROR_REGISTER, 0, &[register]);
     }
 
@@ -121,7 +140,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                         now,
                     )
                 }
-                None => self.report_error(code, 0, [f, c0, c1, t, 0], Some(&msg), now),
+                None => {
+                    // Tracked under ETG's code (cleared by the acknowledge below), sent with the
+                    // profile's emergency code (ETG's 0xA000 unless the profile says otherwise).
+                    let emcy_code = self.profile.device.emcy.al_error_code;
+                    self.report_error_as(code, emcy_code, 0, [f, c0, c1, t, 0], Some(&msg), now)
+                }
             };
         } else if was.error && !outcome.status.error {
             let _ = self.clear_error(code);

@@ -290,6 +290,7 @@ static PROFILE: Profile = Profile {
         esm: crate::od::test_device().esm,
         sdo_write_to_rx_mapped: crate::od::RxMappedWrite::Allowed,
         station_alias_parameter: None,
+        emcy: crate::od::EmcyRules::CIA301,
         settings: &[],
     },
     objects: &OBJECTS,
