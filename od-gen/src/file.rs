@@ -252,9 +252,22 @@ pub struct EepromFile {
     /// 0x0012 at power-on, in place of the SII's alias.
     #[serde(default)]
     pub station_alias_parameter: Option<String>,
+    /// The parameter is used only while this entry holds this value (SDV3-E P4.02 = 1).
+    #[serde(default)]
+    pub station_alias_selector: Option<EntryValueFile>,
     /// Words 5 and 6: reserved, ESC-specific.
     #[serde(default)]
     pub reserved: [u16; 2],
+}
+
+/// `{ entry = "0xIIII:S", value = n }`: a condition on an entry's value.
+#[derive(Debug, Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct EntryValueFile {
+    /// The entry.
+    pub entry: String,
+    /// The value it must hold.
+    pub value: u32,
 }
 
 /// One SyncManager: `{ start, size, control }`.
@@ -408,6 +421,10 @@ pub struct InputShiftFile {
     /// (else AL status code 0x0035).
     #[serde(default)]
     pub reserve_ns: u32,
+    /// A parameter ("0xIIII:S") that sets 1C33h:03 at power-on, in `step_ns` units (SDV3-E
+    /// P4.09).
+    #[serde(default)]
+    pub parameter: Option<String>,
 }
 
 fn one() -> u32 {

@@ -704,6 +704,8 @@ pub struct InputShift {
     pub step_ns: u32,
     /// The shift is at most the SYNC0 cycle minus this, ns.
     pub reserve_ns: u32,
+    /// The parameter (index, subindex) that sets the shift at power-on, in steps.
+    pub parameter: Option<(u16, u8)>,
 }
 
 impl Sync {
@@ -847,6 +849,8 @@ pub struct Eeprom {
     pub reserved: [u16; 2],
     /// The parameter whose non-zero value replaces the alias at power-on (index, subindex).
     pub station_alias_parameter: Option<(u16, u8)>,
+    /// Only while this entry (index, subindex) holds this value.
+    pub station_alias_selector: Option<(u16, u8, u32)>,
 }
 
 /// How 1001h and the stack's own emergencies are formed (`[emcy]`).

@@ -194,10 +194,18 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         sync_flag_in_sync: f.sync.sync_flag_in_sync,
         free_run_min_cycle_ns: f.sync.free_run_min_cycle_ns.unwrap_or(f.sync.min_cycle_ns),
         free_run_max_cycle_ns: f.sync.free_run_max_cycle_ns.unwrap_or(f.sync.max_cycle_ns),
-        input_shift: f.sync.input_shift.as_ref().map(|i| InputShift {
-            step_ns: i.step_ns,
-            reserve_ns: i.reserve_ns,
-        }),
+        input_shift: f
+            .sync
+            .input_shift
+            .as_ref()
+            .map(|i| {
+                Ok::<_, Fault>(InputShift {
+                    step_ns: i.step_ns,
+                    reserve_ns: i.reserve_ns,
+                    parameter: entry_ref(i.parameter.as_deref(), "sync.input_shift.parameter")?,
+                })
+            })
+            .transpose()?,
         sync_error_at_limit: f.sync.sync_error_at_limit,
         sync_error_on_missed_outputs: f.sync.sync_error_on_missed_outputs,
         sm_event_missed_subindex: f.sync.sm_event_missed_subindex,
@@ -306,18 +314,19 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         pdi_config2: e.pdi_config2,
         station_alias: e.station_alias,
         reserved: e.reserved,
-        station_alias_parameter: e
-            .station_alias_parameter
-            .as_deref()
-            .map(|s| {
-                parse_entry_ref(s).ok_or_else(|| {
-                    fault(
-                        "eeprom.station_alias_parameter",
-                        Invalid::Value(format!("`{s}` is not \"0xIIII:S\"")),
-                    )
-                })
+        station_alias_parameter: entry_ref(
+            e.station_alias_parameter.as_deref(),
+            "eeprom.station_alias_parameter",
+        )?,
+        station_alias_selector: e
+            .station_alias_selector
+            .as_ref()
+            .map(|c| {
+                entry_ref(Some(&c.entry), "eeprom.station_alias_selector.entry")
+                    .map(|r| r.map(|(i, s)| (i, s, c.value)))
             })
-            .transpose()?,
+            .transpose()?
+            .flatten(),
     };
 
     // Declared objects.
@@ -611,6 +620,15 @@ fn factor(v: &toml::Value, p: &Profile, key: &str) -> Result<Factor, Fault> {
         denominator: side("denominator")?,
         scale,
     })
+}
+
+/// An optional `"0xIIII:S"` key → (index, subindex); existence is checked by `validate`.
+fn entry_ref(s: Option<&str>, key: &str) -> Result<Option<(u16, u8)>, Fault> {
+    s.map(|s| {
+        parse_entry_ref(s)
+            .ok_or_else(|| fault(key, Invalid::Value(format!("`{s}` is not \"0xIIII:S\""))))
+    })
+    .transpose()
 }
 
 /// `"0x6091:1"` → (0x6091, 1); the subindex may be decimal or `0x` hex.

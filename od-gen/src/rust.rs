@@ -325,10 +325,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     let _ = writeln!(out, "            inputs: {},", sm(p.sm.inputs, 0));
     let _ = writeln!(
         out,
-        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {}, cycle_step_ns: {}, allowed_cycles_ns: &{:?}, sync_flag_in_sync: {}, free_run_min_cycle_ns: {}, free_run_max_cycle_ns: {}, input_shift_step_ns: {}, input_shift_reserve_ns: {}, sync_error_at_limit: {}, sync_error_on_missed_outputs: {}, sm_event_missed_subindex: {:#04x} }},",
+        "            sync: SyncSupport {{ free_run: {}, sm_synchronous: {}, dc_sync0: {}, dc_sync1: {}, min_cycle_ns: {}, max_cycle_ns: {}, cycle_step_ns: {}, allowed_cycles_ns: &{:?}, sync_flag_in_sync: {}, free_run_min_cycle_ns: {}, free_run_max_cycle_ns: {}, input_shift_step_ns: {}, input_shift_reserve_ns: {}, input_shift_parameter: {:?}, sync_error_at_limit: {}, sync_error_on_missed_outputs: {}, sm_event_missed_subindex: {:#04x} }},",
         y.free_run, y.sm_synchronous, y.dc_sync0, y.dc_sync1, y.min_cycle_ns, y.max_cycle_ns, y.cycle_step_ns, y.allowed_cycles_ns, y.sync_flag_in_sync,
         y.free_run_min_cycle_ns, y.free_run_max_cycle_ns,
         y.input_shift.map_or(0, |i| i.step_ns), y.input_shift.map_or(0, |i| i.reserve_ns),
+        y.input_shift.and_then(|i| i.parameter),
         y.sync_error_at_limit, y.sync_error_on_missed_outputs, y.sm_event_missed_subindex
     );
     let _ = writeln!(out, "            max_pdo_entries: {},", p.max_pdo_entries);
@@ -386,6 +387,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         out,
         "            station_alias_parameter: {:?},",
         p.eeprom.station_alias_parameter
+    );
+    let _ = writeln!(
+        out,
+        "            station_alias_selector: {:?},",
+        p.eeprom.station_alias_selector
     );
     let _ = writeln!(
         out,

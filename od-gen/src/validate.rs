@@ -283,6 +283,9 @@ fn sync(p: &Profile) -> Result<(), Fault> {
                 ),
             ));
         }
+        if let Some(at) = shift.parameter {
+            integer_parameter(p, at, "sync.input_shift.parameter")?;
+        }
     }
     if !y.allowed_cycles_ns.is_empty() {
         let ascending = y.allowed_cycles_ns.windows(2).all(|w| w[0] < w[1]);
@@ -450,19 +453,43 @@ fn eeprom(p: &Profile) -> Result<(), Fault> {
             },
         ));
     }
-    if let Some((index, subindex)) = p.eeprom.station_alias_parameter {
-        let key = "eeprom.station_alias_parameter";
-        let e = p
-            .entry(index, subindex)
-            .ok_or_else(|| fault(key, Invalid::PdoEntryMissing { index, subindex }))?;
-        if e.data_type != DataType::Uint || e.storage != Storage::Ram || !e.access.writable() {
+    if let Some(at) = p.eeprom.station_alias_parameter {
+        integer_parameter(p, at, "eeprom.station_alias_parameter")?;
+    }
+    if let Some((index, subindex, _)) = p.eeprom.station_alias_selector {
+        if p.eeprom.station_alias_parameter.is_none() {
             return Err(fault(
-                key,
-                Invalid::Value(format!(
-                    "{index:#06x}:{subindex} must be a writable UINT parameter in RAM"
-                )),
+                "eeprom.station_alias_selector",
+                Invalid::Value("needs eeprom.station_alias_parameter".into()),
             ));
         }
+        integer_parameter(p, (index, subindex), "eeprom.station_alias_selector.entry")?;
+    }
+    Ok(())
+}
+
+/// A parameter the firmware reads at power-on: an integer entry of at most 32 bits in RAM,
+/// writable (so a master can set it and 1010h can store it).
+fn integer_parameter(p: &Profile, (index, subindex): (u16, u8), key: &str) -> Result<(), Fault> {
+    let e = p
+        .entry(index, subindex)
+        .ok_or_else(|| fault(key, Invalid::PdoEntryMissing { index, subindex }))?;
+    let integer = matches!(
+        e.data_type,
+        DataType::Usint
+            | DataType::Uint
+            | DataType::Udint
+            | DataType::Sint
+            | DataType::Int
+            | DataType::Dint
+    );
+    if !integer || e.storage != Storage::Ram || !e.access.writable() {
+        return Err(fault(
+            key,
+            Invalid::Value(format!(
+                "{index:#06x}:{subindex} must be a writable integer parameter of at most 32 bits in RAM"
+            )),
+        ));
     }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! ethercrab master, the expected identity from the profile, and the SOEM (pysoem) harness.
 
 pub mod io_module;
+pub mod session;
 pub mod soem;
 
 use std::future::Future;

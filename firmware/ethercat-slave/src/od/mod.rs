@@ -71,6 +71,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             free_run_max_cycle_ns: 0,
             input_shift_step_ns: 0,
             input_shift_reserve_ns: 0,
+            input_shift_parameter: None,
             sync_error_at_limit: false,
             sync_error_on_missed_outputs: false,
             sm_event_missed_subindex: 0x0B,
@@ -95,6 +96,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
         },
         sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
         station_alias_parameter: None,
+        station_alias_selector: None,
         emcy: crate::od::EmcyRules::CIA301,
         settings: &[],
     }

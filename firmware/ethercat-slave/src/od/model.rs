@@ -273,6 +273,9 @@ pub struct SyncSupport {
     /// In a DC mode the input shift must be at most the SYNC0 cycle minus this, ns (else
     /// PREOP → SAFEOP is refused with 0x0035).
     pub input_shift_reserve_ns: u32,
+    /// A parameter (index, subindex) that sets 1C33h:03 at power-on, in
+    /// [`Self::input_shift_step_ns`] units (SDV3-E P4.09); the master may still write 1C33h:03.
+    pub input_shift_parameter: Option<(u16, u8)>,
     /// The sync error counter trips when it reaches 10F1h:02 instead of when it exceeds it.
     pub sync_error_at_limit: bool,
     /// In OP in a DC mode, a SYNC0 at which the master has not written the outputs (SM2) since
@@ -473,6 +476,9 @@ pub struct DeviceInfo {
     /// configured station alias 0x0012 at power-on ([`crate::slave::SlaveCore::start`]), in
     /// place of the alias the ESC loaded from SII word 4 (e.g. the GHA-E's Pn-410).
     pub station_alias_parameter: Option<(u16, u8)>,
+    /// The alias parameter applies only while this entry (index, subindex) holds this value
+    /// (SDV3-E P4.02 = 1); `None`: whenever it is not 0.
+    pub station_alias_selector: Option<(u16, u8, u32)>,
     /// How the error register and emergencies are formed (profile section `[emcy]`).
     pub emcy: EmcyRules,
     /// The startup parameters ("settings": profile `setting = true`; SDO information list

@@ -203,14 +203,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             | AlEvent::sm(1)
             | AlEvent::sm(SM_OUTPUTS);
         pdi.write_u32(regs::AL_EVENT_MASK.addr, mask)?;
-        // Profile rule: a parameter sets the station alias at power-on (the ESC loaded SII word
-        // 4 into 0x0012 before; the PDI may overwrite the register).
-        if let Some((index, subindex)) = self.profile.device.station_alias_parameter {
-            let alias = self.dictionary().read_u32(index, subindex).unwrap_or(0);
-            if let Ok(alias @ 1..) = u16::try_from(alias) {
-                pdi.write_u16(regs::STATION_ALIAS.addr, alias)?;
-            }
+        if let Some(alias) = self.alias_from_parameter() {
+            // The ESC loaded SII word 4 into 0x0012 before; the PDI may overwrite the register.
+            pdi.write_u16(regs::STATION_ALIAS.addr, alias)?;
         }
+        self.apply_input_shift_parameter();
         pdi.write_u16(regs::AL_STATUS_CODE.addr, AlStatusCode::NoError.code())?;
         pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())
     }
@@ -365,6 +362,46 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if let Some(e) = od.entry(index, subindex) {
             let n = e.byte_len().min(bytes.len());
             let _ = od.set_value(e, bytes.get(..n).unwrap_or(&[]));
+        }
+    }
+
+    /// Profile rule: the station alias a parameter sets at power-on (GHA-E Pn-410 when not 0,
+    /// SDV3-E P4.01 while P4.02 = 1); `None`: the SII's alias stays. A value outside
+    /// 1..=65535 (a signed parameter's negative value included) is ignored.
+    fn alias_from_parameter(&mut self) -> Option<u16> {
+        let device = &self.profile.device;
+        let (index, subindex) = device.station_alias_parameter?;
+        let selector = device.station_alias_selector;
+        let od = self.dictionary();
+        if let Some((s_index, s_subindex, value)) = selector {
+            if od.read_u32(s_index, s_subindex) != Some(value) {
+                return None;
+            }
+        }
+        let alias = od.read_u32(index, subindex)?;
+        u16::try_from(alias).ok().filter(|a| *a != 0)
+    }
+
+    /// Profile rule: a parameter sets the input shift time 1C33h:03 at power-on, in steps of
+    /// `input_shift_step_ns` (SDV3-E P4.09 × 62500 ns); a value whose shift is outside the
+    /// entry's range is ignored (1C33h:03 keeps its default).
+    fn apply_input_shift_parameter(&mut self) {
+        let sync = self.profile.device.sync;
+        let Some((index, subindex)) = sync.input_shift_parameter else {
+            return;
+        };
+        let mut od = self.dictionary();
+        let Some(steps) = od.read_u32(index, subindex) else {
+            return;
+        };
+        let Some(shift) = steps.checked_mul(sync.input_shift_step_ns) else {
+            return;
+        };
+        if let Some(entry) = od.entry(SM_INPUT_PARAMETER, SUB_SHIFT_TIME) {
+            let bytes = shift.to_le_bytes();
+            if crate::od::value::check_range(entry, &bytes).is_ok() {
+                let _ = od.set_value(entry, &bytes);
+            }
         }
     }
 

@@ -133,6 +133,7 @@ mod tests {
         free_run_max_cycle_ns: 10000000,
         input_shift_step_ns: 0,
         input_shift_reserve_ns: 0,
+        input_shift_parameter: None,
         sync_error_at_limit: false,
         sync_error_on_missed_outputs: false,
         sm_event_missed_subindex: 0x0B,
