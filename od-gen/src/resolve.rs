@@ -453,12 +453,14 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         rx_pdos,
         tx_pdos,
         objects: Vec::new(),
+        storage: StorageRules::default(),
     };
     for o in derived_objects(&profile)? {
         declared.insert(o.index, o);
     }
     profile.objects = declared.into_values().collect();
     profile.units = units(&f.units, &profile)?;
+    profile.storage = crate::storage::resolve(&f.storage, &profile)?;
     crate::validate::check(&profile)?;
     Ok(profile)
 }
@@ -563,21 +565,22 @@ fn factor(v: &toml::Value, p: &Profile, key: &str) -> Result<Factor, Fault> {
 }
 
 /// `"0x6091:1"` → (0x6091, 1); the subindex may be decimal or `0x` hex.
-fn parse_entry_ref(s: &str) -> Option<(u16, u8)> {
+pub(crate) fn parse_entry_ref(s: &str) -> Option<(u16, u8)> {
     let (i, sub) = s.split_once(':')?;
-    let index = u16::from_str_radix(
-        i.trim()
-            .strip_prefix("0x")
-            .or(i.trim().strip_prefix("0X"))?,
-        16,
-    )
-    .ok()?;
+    let index = parse_index(i)?;
     let sub = sub.trim();
     let sub = match sub.strip_prefix("0x") {
         Some(h) => u8::from_str_radix(h, 16).ok()?,
         None => sub.parse().ok()?,
     };
     Some((index, sub))
+}
+
+/// `"0x6091"` → 0x6091 (an object index is always written in hex with `0x`).
+pub(crate) fn parse_index(s: &str) -> Option<u16> {
+    let s = s.trim();
+    let hex = s.strip_prefix("0x").or(s.strip_prefix("0X"))?;
+    u16::from_str_radix(hex, 16).ok()
 }
 
 /// `[[alarm]]` → [`Alarm`]s; `display` must be unique and non-empty.
