@@ -32,6 +32,7 @@ pub(crate) fn resolve(f: &StorageFile, p: &Profile) -> Result<StorageRules, Faul
         }
     }
     rules.not_stored = not_stored;
+    no_command_stored(&rules, p)?;
     rules.groups = groups(f, p)?;
     rules.auto_store = auto_store(f, &rules, p)?;
     rules.write_condition = f
@@ -110,39 +111,55 @@ fn ranges(list: &[String], key: &str, p: &Profile) -> Result<Vec<EntryRange>, Fa
         .collect()
 }
 
-/// Each range of `stored_pdo_mappable` names a PDO-mappable writable RAM entry and no
-/// process-data command.
+/// Each range of `stored_pdo_mappable` names a PDO-mappable writable RAM entry.
 fn stored_pdo_mappable(rules: &StorageRules, p: &Profile) -> Result<(), Fault> {
     for (i, r) in rules.stored_pdo_mappable.iter().enumerate() {
-        let key = format!("storage.stored_pdo_mappable[{i}]");
-        let named: Vec<(&Object, &Entry)> = entries(p)
-            .filter(|(o, e)| r.contains(o.index, e.subindex) && e.pdo != PdoMapping::No)
-            .filter(|(o, e)| rules.stores_without_exclusions(o, e))
-            .collect();
-        if named.is_empty() {
+        let named = entries(p).any(|(o, e)| {
+            r.contains(o.index, e.subindex)
+                && e.pdo != PdoMapping::No
+                && rules.stores_without_exclusions(o, e)
+        });
+        if !named {
             return Err(storage_fault(
-                &key,
+                &format!("storage.stored_pdo_mappable[{i}]"),
                 format!(
                     "`{r}` names no PDO-mappable writable RAM entry (the others are stored anyway)"
                 ),
             ));
         }
-        if let Some((o, e, role)) = named
-            .iter()
-            .find_map(|(o, e)| e.role.filter(|r| r.is_command()).map(|r| (o, e, r)))
-        {
-            return Err(storage_fault(
-                &key,
-                format!(
-                    "{:#06x}:{:02x} is the process-data command `{}`, never a stored parameter",
-                    o.index,
-                    e.subindex,
-                    role.field()
-                ),
-            ));
-        }
     }
     Ok(())
+}
+
+/// No process-data command (an entry with the role controlword, modes of operation or a
+/// target) is stored: a range of `stored_pdo_mappable` that spans one needs it in `not_stored`.
+fn no_command_stored(rules: &StorageRules, p: &Profile) -> Result<(), Fault> {
+    let command = entries(p).find_map(|(o, e)| {
+        e.role
+            .filter(|r| r.is_command() && rules.stores(o, e))
+            .map(|r| (o, e, r))
+    });
+    let Some((o, e, role)) = command else {
+        return Ok(());
+    };
+    let key = match rules
+        .stored_pdo_mappable
+        .iter()
+        .position(|r| r.contains(o.index, e.subindex))
+    {
+        Some(i) => format!("storage.stored_pdo_mappable[{i}]"),
+        // Not PDO-mappable: the default rule stores it.
+        None => format!("object[{:#06x}]", o.index),
+    };
+    Err(storage_fault(
+        &key,
+        format!(
+            "{:#06x}:{:02x} is the process-data command `{}`, never a stored parameter (list it in storage.not_stored)",
+            o.index,
+            e.subindex,
+            role.field()
+        ),
+    ))
 }
 
 /// The subindexes of object `index` from 1 on (empty when it does not exist).
