@@ -460,8 +460,8 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     }
     profile.objects = declared.into_values().collect();
     profile.units = units(&f.units, &profile)?;
-    profile.storage = crate::storage::resolve(&f.storage, &profile)?;
     crate::validate::check(&profile)?;
+    profile.storage = crate::storage::resolve(&f.storage, &profile)?;
     Ok(profile)
 }
 
