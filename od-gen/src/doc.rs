@@ -3,9 +3,9 @@
 //!
 //! Everything on a page is read from the resolved [`Profile`]: identity, mailbox, SMs,
 //! synchronisation, PDOs, the parameter storage (`[storage]`), the modes of 6502h, the homing
-//! methods of 60E3h, the alarm table, the motor-fault mapping, the `[[decision]]`s, the `[[replicate]]` rules and the object count. The
-//! output is deterministic (no dates, no paths): `od-gen/tests/doc.rs` compares the committed
-//! pages with a fresh generation.
+//! methods of 60E3h, the alarm table, the motor-fault mapping, the `[[decision]]`s, the
+//! `[[replicate]]` rules and the object count. The output is deterministic (no dates, no
+//! paths): `od-gen/tests/doc.rs` compares the committed pages with a fresh generation.
 
 use std::fmt::Write as _;
 

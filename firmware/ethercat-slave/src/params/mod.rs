@@ -2,18 +2,18 @@
 //! (CiA 301 §7.5.2.13 and §7.5.2.14) on a power-loss-safe record store over
 //! [`hal::storage::NvStorage`], and the profile's automatic storage of SDO downloads.
 //!
-//! Everything that differs between devices is data of the profile ([`StorageRules`](crate::od::StorageRules), od-gen's
+//! Everything that differs between devices is data of the profile ([`StorageRules`], od-gen's
 //! `[storage]` section, `Profile::storage`); this module executes it and knows no device.
 //!
 //! # Objects
 //!
 //! Both objects are ARRAYs of UNSIGNED32 with sub 0 = highest subindex. The subindex selects a
 //! parameter group ([`Group`]): 1 all parameters; 2 and above the profile's
-//! [`StorageGroup`](crate::od::StorageGroup)s, each a list of entry ranges. Without `[[storage.group]]` od-gen gives
-//! the CiA 301 scopes: 2 communication parameters (1000h–1FFFh), 3 application parameters
-//! (6000h–9FFFh), 4 manufacturer parameters (2000h–5FFFh; CiA 301 leaves sub 4..7Fh to the
-//! manufacturer). A vendor's scopes replace them (e.g. the Σ-V-SD: sub 3 = 23xxh and 6xxxh,
-//! sub 4 = 2000h–22FFh).
+//! [`StorageGroup`](crate::od::StorageGroup)s, each a list of entry ranges. Without
+//! `[[storage.group]]` od-gen gives the CiA 301 scopes: 2 communication parameters
+//! (1000h–1FFFh), 3 application parameters (6000h–9FFFh), 4 manufacturer parameters
+//! (2000h–5FFFh; CiA 301 leaves sub 4..7Fh to the manufacturer). A vendor's scopes replace them
+//! (e.g. the Σ-V-SD: sub 3 = 23xxh and 6xxxh, sub 4 = 2000h–22FFh).
 //!
 //! - Writing the signature `"save"` = 0x6576_6173 to 1010h:n stores the group's current values;
 //!   `"load"` = 0x6461_6F6C to 1011h:n makes the group's defaults apply again from the next
@@ -22,11 +22,12 @@
 //!   storage write completed and was verified.
 //! - Another value: abort 0x0800_0020 "data cannot be stored" (CiA 301 specifies 0800 002xh for a
 //!   wrong signature), nothing is written. A storage failure: abort 0x0606_0000 "hardware error".
-//! - A [`WriteCondition`](crate::od::WriteCondition) of the profile (an entry, a mask, a value, the subindexes it guards)
-//!   that does not hold on the current OD: abort 0x0800_0022 "data cannot be transferred or
-//!   stored because of the present device state", nothing is written (checked before the
-//!   signature). The Σ-V-SD allows sub 1 and sub 4 only in CiA402 Switch On Disabled, i.e.
-//!   statusword 6041h & 004Fh = 0040h; the stack reads the entry, not the state machine.
+//! - A [`WriteCondition`](crate::od::WriteCondition) of the profile (an entry, a mask, a value,
+//!   the subindexes it guards) that does not hold on the current OD: abort 0x0800_0022 "data
+//!   cannot be transferred or stored because of the present device state", nothing is written
+//!   (checked before the signature). The Σ-V-SD allows sub 1 and sub 4 only in CiA402 Switch
+//!   On Disabled, i.e. statusword 6041h & 004Fh = 0040h; the stack reads the entry, not the
+//!   state machine.
 //! - Reading returns the capabilities ([`store_capabilities`]): 1010h bit 0 = saves on command;
 //!   bit 1 = saves autonomously, set on the subindexes whose group holds an entry of an
 //!   auto-store rule (CiA 301: the device saves those parameters itself; bit 1 states that it
@@ -64,11 +65,11 @@
 //! # Automatic storage
 //!
 //! An SDO download (expedited, normal, segmented or complete access; never a PDO write) to an
-//! entry named by an [`AutoStore`](crate::od::AutoStore) rule of the profile is stored at once, unless the rule's
-//! `unless` test holds on the values after the download (e.g. the GHA-E's Pn046 = 1 "do not
-//! save SDO writes": writing Pn046 = 1 is then itself not saved, writing 0 is). The new record
-//! holds the downloaded entries' current values and keeps everything else the newest record
-//! holds, like a group store. The download response is sent after the record was written and
+//! entry named by an [`AutoStore`](crate::od::AutoStore) rule of the profile is stored at once,
+//! unless the rule's `unless` test holds on the values after the download (e.g. the GHA-E's
+//! Pn046 = 1 "do not save SDO writes": writing Pn046 = 1 is then itself not saved, writing 0
+//! is). The new record holds the downloaded entries' current values and keeps everything else
+//! the newest record holds, like a group store. The download response is sent after the record was written and
 //! verified; a storage failure answers 0x0606_0000 (the value stays written in the OD RAM:
 //! the device uses it, it is only not stored). od-gen checks that every auto-stored entry is a
 //! stored parameter. A complete-access download stores the auto-stored entries of the object
