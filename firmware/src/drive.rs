@@ -274,6 +274,14 @@ impl Application for Drive {
         was_enabled
     }
 
+    fn power_on(&mut self, ram: &mut [u8]) {
+        // CiA402 transition 1: initialisation is done at power-on, in any EtherCAT state, so a
+        // master reads Switch On Disabled in PREOP already (and profile rules that test it,
+        // e.g. the Σ-V-SD's 1010h write condition, see the real state).
+        let statusword = self.device.initialised();
+        write_u16(ram, self.vars.statusword, statusword);
+    }
+
     fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]) {
         self.report_fault(
             FaultReport {
@@ -368,6 +376,18 @@ mod tests {
         app.step(&mut ram, 0);
         assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x6F, 0x27);
         assert_eq!(i32::from_le_bytes(ram[10..14].try_into().unwrap()), 1234);
+    }
+
+    #[test]
+    fn power_on_ends_initialisation_in_switch_on_disabled() {
+        // CiA402 transition 1 (automatic): the statusword reads Switch On Disabled
+        // (xxxx xxxx x1xx 0000) before any process-data cycle ran.
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        assert_eq!(app.pds_state(), PdsState::NotReadyToSwitchOn);
+        app.power_on(&mut ram);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x004F, 0x0040);
     }
 
     #[test]

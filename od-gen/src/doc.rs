@@ -2,15 +2,16 @@
 //! built-in profiles (`docs/profiles/README.md`).
 //!
 //! Everything on a page is read from the resolved [`Profile`]: identity, mailbox, SMs,
-//! synchronisation, PDOs, the modes of 6502h, the homing methods of 60E3h, the alarm table, the
-//! motor-fault mapping, the `[[decision]]`s, the `[[replicate]]` rules and the object count. The
-//! output is deterministic (no dates, no paths): `od-gen/tests/doc.rs` compares the committed
-//! pages with a fresh generation.
+//! synchronisation, PDOs, the parameter storage (`[storage]`), the modes of 6502h, the homing
+//! methods of 60E3h, the alarm table, the motor-fault mapping, the `[[decision]]`s, the
+//! `[[replicate]]` rules and the object count. The output is deterministic (no dates, no
+//! paths): `od-gen/tests/doc.rs` compares the committed pages with a fresh generation.
 
 use std::fmt::Write as _;
 
 use crate::model::{
-    DataType, MotorFaultCode, Pdo, Profile, ProfileKind, Sm, Storage, MOTOR_FAULT_NAMES,
+    DataType, EntryRange, EntryTest, MotorFaultCode, Pdo, Profile, ProfileKind, Sm, Storage,
+    ALL_PARAMETERS, MOTOR_FAULT_NAMES, STORE_PARAMETERS,
 };
 use crate::table;
 
@@ -756,6 +757,111 @@ An SDO download of any other value is refused with abort 0x06090030.
     md_table(out, &["entry", "name", "values"], &rows);
 }
 
+/// An entry range in the page's spelling: `2000h–22FFh`, `2300h`, `2310h:01`.
+fn range_text(r: &EntryRange) -> String {
+    match r.subindex {
+        Some(sub) => format!("{:04X}h:{sub:02X}", r.first),
+        None if r.first == r.last => format!("{:04X}h", r.first),
+        None => format!("{:04X}h–{:04X}h", r.first, r.last),
+    }
+}
+
+/// `(index:sub & mask) = value`, the mask left out when it is every bit of the entry.
+fn test_text(p: &Profile, t: &EntryTest) -> String {
+    let hex = |v: u32| u16::try_from(v).map_or_else(|_| hex32(v), hex16);
+    let bits = p.entry(t.index, t.subindex).map_or(0, |e| e.bit_len);
+    let all = u32::MAX >> (u32::BITS - u32::from(bits).min(u32::BITS));
+    let entry = format!("{:04X}h:{:02X}", t.index, t.subindex);
+    if t.mask == all {
+        format!("{entry} = {}", hex(t.value))
+    } else {
+        format!("{entry} & {} = {}", hex(t.mask), hex(t.value))
+    }
+}
+
+fn ranges_text(list: &[EntryRange]) -> String {
+    let items: Vec<String> = list.iter().map(range_text).collect();
+    items.join(", ")
+}
+
+/// `[storage]`: what 1010h stores, its groups, automatic storage and the write condition.
+fn parameter_storage(out: &mut String, p: &Profile) {
+    let Some(store) = p.object(STORE_PARAMETERS) else {
+        return;
+    };
+    let st = &p.storage;
+    let stored = p
+        .objects
+        .iter()
+        .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
+        .filter(|(o, e)| p.is_backup(o, e))
+        .count();
+    out.push_str("## Parameter storage (1010h/1011h)\n\n");
+    let _ = write!(
+        out,
+        "1010h stores every RAM entry writable over SDO that is not PDO-mappable (1010h, 1011h, \
+         1C32h and 1C33h excepted)"
+    );
+    if !st.stored_pdo_mappable.is_empty() {
+        let _ = write!(
+            out,
+            ", and the PDO-mappable entries of {}",
+            ranges_text(&st.stored_pdo_mappable)
+        );
+    }
+    if !st.not_stored.is_empty() {
+        let _ = write!(out, "; never {}", ranges_text(&st.not_stored));
+    }
+    let _ = writeln!(
+        out,
+        ": {stored} entries (ESI `Backup`, SDO information list 4). \"save\" to 1010h:n stores \
+         the group, \"load\" to 1011h:n restores its defaults at the next power-on.\n"
+    );
+    let rows: Vec<Vec<String>> = store
+        .entries
+        .iter()
+        .filter(|e| e.subindex >= ALL_PARAMETERS)
+        .map(|e| {
+            let scope = match st.groups.iter().find(|g| g.subindex == e.subindex) {
+                _ if e.subindex == ALL_PARAMETERS => "every stored entry".to_string(),
+                Some(g) => ranges_text(&g.ranges),
+                None => "—".to_string(),
+            };
+            let condition = st
+                .write_condition
+                .as_ref()
+                .filter(|c| c.subindexes.contains(&e.subindex))
+                .map_or("—".to_string(), |c| {
+                    format!("{}, else abort 0x08000022", test_text(p, &c.test))
+                });
+            vec![
+                e.subindex.to_string(),
+                scope,
+                st.store_capabilities(e.subindex).to_string(),
+                condition,
+            ]
+        })
+        .collect();
+    md_table(
+        out,
+        &["subindex", "group", "1010h reads", "written only while"],
+        &rows,
+    );
+    if !st.auto_store.is_empty() {
+        out.push_str(
+            "Stored at once by an SDO download (never by a PDO write), before the SDO response:\n\n",
+        );
+        for a in &st.auto_store {
+            let _ = write!(out, "- {}", ranges_text(&a.entries));
+            if let Some(t) = &a.unless {
+                let _ = write!(out, ", unless {}", test_text(p, t));
+            }
+            out.push('\n');
+        }
+        out.push('\n');
+    }
+}
+
 fn modes(out: &mut String, p: &Profile) {
     out.push_str("## Supported modes of operation (6502h)\n\n");
     match supported_modes(p) {
@@ -1036,6 +1142,7 @@ pub fn markdown(p: &Profile) -> String {
     process_data(&mut out, p);
     units(&mut out, p);
     value_lists(&mut out, p);
+    parameter_storage(&mut out, p);
     modes(&mut out, p);
     alarms(&mut out, p);
     motor_faults(&mut out, p);

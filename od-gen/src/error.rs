@@ -154,6 +154,9 @@ pub enum Invalid {
     Sync(String),
     /// Inconsistent mailbox / CoE settings.
     Mailbox(String),
+    /// A `[storage]` rule that does not fit the dictionary (unknown entry, a range naming
+    /// nothing, a group subindex 1010h does not have, a stored process-data command, ...).
+    Storage(String),
     /// A `[motor_faults]` key that is not the name of an internal motor fault.
     UnknownMotorFault(String),
     /// Internal motor faults that `[motor_faults]` does not map to an error code.
@@ -234,7 +237,7 @@ impl fmt::Display for Invalid {
             Self::SmControl { sm, control, why } => {
                 write!(f, "{sm} control byte {control:#04x}: {why}")
             }
-            Self::Sync(s) | Self::Mailbox(s) => write!(f, "{s}"),
+            Self::Sync(s) | Self::Mailbox(s) | Self::Storage(s) => write!(f, "{s}"),
             Self::UnknownMotorFault(name) => write!(
                 f,
                 "`{name}` is not an internal motor fault; the names are: {}",

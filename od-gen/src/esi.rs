@@ -124,9 +124,9 @@ fn base_types(p: &Profile) -> BTreeMap<String, u16> {
 }
 
 /// `Flags` in the XSD order `Access, Category, PdoMapping, ..., Backup, Setting`
-/// (esi-sii.md §1.4). Backup: the parameter storage stores the entry ([`Object::is_backup`]);
-/// Setting: a startup parameter (profile `setting = true`).
-fn flags(x: &mut Xml, o: &Object, e: &Entry) {
+/// (esi-sii.md §1.4). Backup: the parameter storage stores the entry (`backup`,
+/// [`Profile::is_backup`]); Setting: a startup parameter (profile `setting = true`).
+fn flags(x: &mut Xml, e: &Entry, backup: bool) {
     x.open("Flags", &[]);
     let (access, restriction) = e.access.esi();
     match restriction {
@@ -136,7 +136,7 @@ fn flags(x: &mut Xml, o: &Object, e: &Entry) {
     if let Some(m) = e.pdo.esi() {
         x.text("PdoMapping", &[], m);
     }
-    if o.is_backup(e) {
+    if backup {
         x.text("Backup", &[], "1");
     }
     if e.setting {
@@ -200,7 +200,15 @@ fn data_types(x: &mut Xml, p: &Profile) {
             x.text("Name", &[], &name);
             x.text("BitSize", &[], &(16 + n * elem_bits).to_string());
             if let Some(s0) = sub0 {
-                sub_item(x, Some(0), &s0.name, "USINT", 8, 0, (o, s0));
+                sub_item(
+                    x,
+                    Some(0),
+                    &s0.name,
+                    "USINT",
+                    8,
+                    0,
+                    (s0, p.is_backup(o, s0)),
+                );
             }
             if let Some(e1) = elems.first() {
                 sub_item(
@@ -210,7 +218,7 @@ fn data_types(x: &mut Xml, p: &Profile) {
                     &format!("{name}ARR"),
                     n * elem_bits,
                     16,
-                    (o, e1),
+                    (e1, p.is_backup(o, e1)),
                 );
             }
             x.close("DataType");
@@ -226,7 +234,7 @@ fn data_types(x: &mut Xml, p: &Profile) {
                     &type_name(e),
                     u32::from(e.bit_len),
                     off,
-                    (o, e),
+                    (e, p.is_backup(o, e)),
                 );
             }
             x.close("DataType");
@@ -242,7 +250,7 @@ fn sub_item(
     ty: &str,
     bits: u32,
     off: u32,
-    flags_of: (&Object, &Entry),
+    flags_of: (&Entry, bool),
 ) {
     x.open("SubItem", &[]);
     if let Some(s) = sub {
@@ -269,7 +277,7 @@ fn objects(x: &mut Xml, p: &Profile) {
                 x.open("Info", &[]);
                 info_values(x, e);
                 x.close("Info");
-                flags(x, o, e);
+                flags(x, e, p.is_backup(o, e));
             }
             _ => {
                 let (_, total) = layout(o);

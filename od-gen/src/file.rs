@@ -46,6 +46,10 @@ pub struct ProfileFile {
     /// `[units]`: how the position and velocity objects convert to the drive's internal units.
     #[serde(default)]
     pub units: UnitsFile,
+    /// `[storage]`: the parameter storage rules (optional: the default rule and the CiA 301
+    /// scopes of 1010h/1011h).
+    #[serde(default)]
+    pub storage: StorageFile,
     /// `[motor_faults]`: the CiA402 error code (603Fh, EMCY) of each internal motor fault, by
     /// fault name ([`crate::model::MOTOR_FAULT_NAMES`]). In a drive profile every fault must be
     /// mapped (an absent table is reported as every name missing); a device profile has none.
@@ -178,6 +182,81 @@ pub struct UnitsFile {
     /// Increments/s per velocity unit.
     #[serde(default)]
     pub velocity: Option<toml::Value>,
+}
+
+/// `[storage]`: what the parameter storage (1010h/1011h) stores beyond the default rule (RAM,
+/// writable, not PDO-mappable), the scopes of the 1010h/1011h subindexes, the entries an SDO
+/// download stores at once and a condition for some 1010h/1011h subindexes. Entries are written
+/// `"0xIIII"` (every entry of an object), `"0xIIII-0xJJJJ"` (of a range of objects) or
+/// `"0xIIII:S"` (one entry).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StorageFile {
+    /// PDO-mappable entries that are stored nonetheless (parameters a master may also map).
+    #[serde(default)]
+    pub stored_pdo_mappable: Vec<String>,
+    /// Writable entries that are not stored (wins over `stored_pdo_mappable`).
+    #[serde(default)]
+    pub not_stored: Vec<String>,
+    /// `[[storage.group]]`: the scopes of 1010h/1011h subindex 2 and above; given, they replace
+    /// the CiA 301 defaults (sub 2 = 1000h–1FFFh, 3 = 6000h–9FFFh, 4 = 2000h–5FFFh).
+    #[serde(default, rename = "group")]
+    pub groups: Vec<StorageGroupFile>,
+    /// `[[storage.auto_store]]`: entries an SDO download stores at once.
+    #[serde(default)]
+    pub auto_store: Vec<AutoStoreFile>,
+    /// `[storage.write_condition]`: some 1010h/1011h subindexes are written only while it holds.
+    #[serde(default)]
+    pub write_condition: Option<WriteConditionFile>,
+}
+
+/// `[[storage.group]]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StorageGroupFile {
+    /// The 1010h/1011h subindex (≥ 2; 1 is always every parameter).
+    pub subindex: u8,
+    /// The entries it stores and restores.
+    pub ranges: Vec<String>,
+}
+
+/// `[[storage.auto_store]]`
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutoStoreFile {
+    /// The entries an SDO download stores at once.
+    pub entries: Vec<String>,
+    /// While this test holds (after the download), the download is not stored.
+    #[serde(default)]
+    pub unless: Option<EntryTestFile>,
+}
+
+/// A test of an entry's value: `{ entry = "0xIIII:S", mask, value }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EntryTestFile {
+    /// The entry read (`"0xIIII:S"`, a readable unsigned entry of at most 32 bits).
+    pub entry: String,
+    /// The bits compared (default: every bit of the entry).
+    #[serde(default)]
+    pub mask: Option<u32>,
+    /// Their expected value.
+    pub value: u32,
+}
+
+/// `[storage.write_condition]`: `{ entry, mask, value, subindexes }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WriteConditionFile {
+    /// The entry read (`"0xIIII:S"`).
+    pub entry: String,
+    /// The bits compared (default: every bit of the entry).
+    #[serde(default)]
+    pub mask: Option<u32>,
+    /// Their expected value.
+    pub value: u32,
+    /// The 1010h/1011h subindexes written only while `(entry & mask) == value`.
+    pub subindexes: Vec<u8>,
 }
 
 /// `[vendor]`

@@ -15,6 +15,7 @@
 //! | `locate` | key path → the file and line that wrote it (error messages) |
 //! | [`file`] | the TOML format (serde types; every key is documented there and in `README.md`) |
 //! | [`resolve`] | file → checked [`Profile`] with the derived objects |
+//! | `storage` | the `[storage]` section: parameter storage rules resolved and checked against the dictionary |
 //! | `validate` | profile-wide checks (SM layout, mailbox, sync, roles, motor-fault codes, EEPROM size) |
 //! | [`model`] | the resolved profile |
 //! | [`rust`] | the generated Rust (`OUT_DIR/profiles.rs` of the firmware) |
@@ -45,6 +46,7 @@ pub mod model;
 pub mod resolve;
 pub mod rust;
 pub mod sii;
+mod storage;
 pub mod table;
 mod validate;
 

@@ -431,6 +431,18 @@ impl Role {
     pub fn parse(s: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|r| r.field() == s)
     }
+    /// Whether the role is a process-data command the master sends every cycle (never a stored
+    /// parameter: a stored controlword or target would act at power-on).
+    pub fn is_command(self) -> bool {
+        matches!(
+            self,
+            Self::Controlword
+                | Self::ModesOfOperation
+                | Self::TargetPosition
+                | Self::TargetVelocity
+                | Self::TargetTorque
+        )
+    }
     /// The data type the role needs.
     pub fn data_type(self) -> DataType {
         match self {
@@ -534,26 +546,182 @@ pub const STACK_MAX_PDO_BYTES: u16 = 256;
 /// declared by a profile in its manual's layout.
 pub const SM_PARAMETER_OBJECTS: [u16; 2] = [0x1C32, 0x1C33];
 
-/// Objects the firmware's parameter storage never stores: 1010h/1011h (store/restore) and the
-/// SM parameters 1C32h/1C33h (the stack overwrites them with the active synchronisation).
+/// Objects the firmware's parameter storage never stores whatever the profile says: 1010h/1011h
+/// (store/restore) and the SM parameters 1C32h/1C33h (the stack overwrites them with the active
+/// synchronisation). The firmware's list is `ethercat_slave::params::NOT_STORED`; the generated
+/// code asserts that both rules select the same entries (`check::backup_agrees`).
 pub const NOT_STORED: [u16; 4] = [0x1010, 0x1011, 0x1C32, 0x1C33];
+
+/// Store parameters (CiA 301 §7.5.2.13): the object whose subindexes select the groups.
+pub const STORE_PARAMETERS: u16 = 0x1010;
+/// Restore default parameters (CiA 301 §7.5.2.14).
+pub const RESTORE_DEFAULTS: u16 = 0x1011;
+/// The 1010h/1011h subindex of every parameter (CiA 301); groups are 2 and above.
+pub const ALL_PARAMETERS: u8 = 1;
+/// The CiA 301 scopes of 1010h/1011h sub 2, 3, 4 when a profile gives no `[[storage.group]]`:
+/// (subindex, first index, last index) — communication 1000h–1FFFh, application 6000h–9FFFh,
+/// manufacturer 2000h–5FFFh.
+pub const DEFAULT_GROUPS: [(u8, u16, u16); 3] = [
+    (2, 0x1000, 0x1FFF),
+    (3, 0x6000, 0x9FFF),
+    (4, 0x2000, 0x5FFF),
+];
+/// 1010h read value bit 0: saves parameters on command (CiA 301 §7.5.2.13).
+pub const SAVES_ON_COMMAND: u32 = 1 << 0;
+/// 1010h read value bit 1: saves parameters autonomously.
+pub const SAVES_AUTONOMOUSLY: u32 = 1 << 1;
+
+/// A set of entries a `[storage]` rule names: every entry of the objects `first..=last`
+/// (`"0x2000-0x22FF"`, `"0x2300"`) or one entry (`"0x2310:1"`, then `first == last`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EntryRange {
+    /// First object index.
+    pub first: u16,
+    /// Last object index (inclusive).
+    pub last: u16,
+    /// The one subindex named; `None`: every entry of the objects.
+    pub subindex: Option<u8>,
+}
+
+impl EntryRange {
+    /// Whether `index:subindex` is in the set.
+    pub fn contains(&self, index: u16, subindex: u8) -> bool {
+        (self.first..=self.last).contains(&index) && self.subindex.is_none_or(|s| s == subindex)
+    }
+    /// Whether an entry address can be in both sets (as `ethercat_slave::od::EntryRange`).
+    pub fn overlaps(&self, other: &Self) -> bool {
+        let objects = self.first <= other.last && other.first <= self.last;
+        match (self.subindex, other.subindex) {
+            (Some(a), Some(b)) => objects && a == b,
+            _ => objects,
+        }
+    }
+}
+
+impl std::fmt::Display for EntryRange {
+    /// The profile spelling.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.subindex {
+            Some(s) => write!(f, "{:#06X}:{s:#04X}", self.first),
+            None if self.first == self.last => write!(f, "{:#06X}", self.first),
+            None => write!(f, "{:#06X}-{:#06X}", self.first, self.last),
+        }
+    }
+}
+
+/// Whether one of `ranges` holds `index:subindex`.
+pub fn any_contains(ranges: &[EntryRange], index: u16, subindex: u8) -> bool {
+    ranges.iter().any(|r| r.contains(index, subindex))
+}
+
+/// `(value of index:subindex & mask) == value` on the current OD (`[storage]` conditions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EntryTest {
+    /// Index of the entry read.
+    pub index: u16,
+    /// Its subindex.
+    pub subindex: u8,
+    /// The bits compared (default: every bit of the entry).
+    pub mask: u32,
+    /// Their expected value.
+    pub value: u32,
+}
+
+/// `[[storage.group]]`: what 1010h/1011h subindex `subindex` stores and restores.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StorageGroup {
+    /// The subindex (≥ 2).
+    pub subindex: u8,
+    /// The entries.
+    pub ranges: Vec<EntryRange>,
+}
+
+/// `[[storage.auto_store]]`: entries an SDO download stores at once.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AutoStore {
+    /// The entries.
+    pub entries: Vec<EntryRange>,
+    /// While it holds (after the download), the download is not stored.
+    pub unless: Option<EntryTest>,
+}
+
+/// `[storage.write_condition]`: 1010h/1011h `subindexes` are written only while `test` holds
+/// (else abort 0x08000022).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WriteCondition {
+    /// What must hold.
+    pub test: EntryTest,
+    /// The guarded subindexes.
+    pub subindexes: Vec<u8>,
+}
+
+/// `[storage]`: the profile's parameter storage rules (the firmware's `od::StorageRules`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StorageRules {
+    /// PDO-mappable entries that are stored.
+    pub stored_pdo_mappable: Vec<EntryRange>,
+    /// Writable entries that are not stored (wins over `stored_pdo_mappable`).
+    pub not_stored: Vec<EntryRange>,
+    /// The groups of 1010h/1011h subindex 2 and above (the profile's, or [`DEFAULT_GROUPS`] for
+    /// the subindexes 1010h has).
+    pub groups: Vec<StorageGroup>,
+    /// Entries an SDO download stores at once.
+    pub auto_store: Vec<AutoStore>,
+    /// The condition on some 1010h/1011h subindexes.
+    pub write_condition: Option<WriteCondition>,
+}
+
+impl StorageRules {
+    /// Whether `e` of `o` is stored by the firmware's parameter storage (1010h) and so is a
+    /// "backup" entry (SDO information list type 4, ObjAccess bit 8, ESI `Flags/Backup`): a RAM
+    /// variable, writable in some state, not in [`NOT_STORED`], not in `not_stored`, and not
+    /// PDO-mappable unless in `stored_pdo_mappable`. The firmware's rule is
+    /// `ethercat_slave::params::is_storable`; the generated code asserts at compile time that
+    /// both agree on every entry (`check::backup_agrees`).
+    pub fn stores(&self, o: &Object, e: &Entry) -> bool {
+        self.stores_without_exclusions(o, e) && !any_contains(&self.not_stored, o.index, e.subindex)
+    }
+
+    /// [`Self::stores`] before `not_stored` is applied.
+    pub fn stores_without_exclusions(&self, o: &Object, e: &Entry) -> bool {
+        let parameter =
+            e.pdo == PdoMapping::No || any_contains(&self.stored_pdo_mappable, o.index, e.subindex);
+        e.storage == Storage::Ram
+            && e.access.writable()
+            && parameter
+            && !NOT_STORED.contains(&o.index)
+    }
+
+    /// What 1010h:`subindex` reads: [`SAVES_ON_COMMAND`], plus [`SAVES_AUTONOMOUSLY`] when the
+    /// subindex's group holds an entry of an auto-store rule (sub 1: when there is any). As
+    /// `ethercat_slave::params::store_capabilities` (asserted in the generated code).
+    pub fn store_capabilities(&self, subindex: u8) -> u32 {
+        let autonomous = if subindex == ALL_PARAMETERS {
+            !self.auto_store.is_empty()
+        } else {
+            self.groups
+                .iter()
+                .filter(|g| g.subindex == subindex)
+                .any(|g| {
+                    self.auto_store.iter().any(|a| {
+                        a.entries
+                            .iter()
+                            .any(|x| g.ranges.iter().any(|r| r.overlaps(x)))
+                    })
+                })
+        };
+        if autonomous {
+            SAVES_ON_COMMAND | SAVES_AUTONOMOUSLY
+        } else {
+            SAVES_ON_COMMAND
+        }
+    }
+}
 
 impl Object {
     /// The entry with this subindex.
     pub fn entry(&self, subindex: u8) -> Option<&Entry> {
         self.entries.iter().find(|e| e.subindex == subindex)
-    }
-
-    /// Whether `e` is stored by the firmware's parameter storage (1010h) and so is a "backup"
-    /// entry (SDO information list type 4, ObjAccess bit 8, ESI `Flags/Backup`): a RAM variable,
-    /// writable in some state, not PDO-mappable, not in [`NOT_STORED`]. The firmware's rule is
-    /// `firmware::params::is_storable`; the generated code asserts at compile time that both
-    /// agree on every entry (`check::backup_agrees`).
-    pub fn is_backup(&self, e: &Entry) -> bool {
-        e.storage == Storage::Ram
-            && e.access.writable()
-            && e.pdo == PdoMapping::No
-            && !NOT_STORED.contains(&self.index)
     }
 }
 
@@ -979,6 +1147,8 @@ pub struct Profile {
     pub decisions: Vec<Decision>,
     /// Object ranges copied to further axes: (first, last, offset) (`[[replicate]]`).
     pub replicate: Vec<(u16, u16, u16)>,
+    /// Parameter storage rules (`[storage]`).
+    pub storage: StorageRules,
     /// RxPDOs, sorted by index.
     pub rx_pdos: Vec<Pdo>,
     /// TxPDOs, sorted by index.
@@ -1112,6 +1282,10 @@ impl Profile {
     /// The entry `index:subindex`.
     pub fn entry(&self, index: u16, subindex: u8) -> Option<&Entry> {
         self.object(index).and_then(|o| o.entry(subindex))
+    }
+    /// Whether `e` of `o` is a stored parameter, a "backup" entry ([`StorageRules::stores`]).
+    pub fn is_backup(&self, o: &Object, e: &Entry) -> bool {
+        self.storage.stores(o, e)
     }
     /// Bits of the default-assigned RxPDOs (SM2 default size × 8).
     pub fn outputs_bits(&self) -> u32 {

@@ -508,6 +508,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         rx_pdos,
         tx_pdos,
         objects: Vec::new(),
+        storage: StorageRules::default(),
     };
     for o in derived_objects(&profile)? {
         // A declared SM parameter object (the manual's layout) replaces the generated one.
@@ -520,6 +521,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     profile.objects = declared.into_values().collect();
     profile.units = units(&f.units, &profile)?;
     crate::validate::check(&profile)?;
+    profile.storage = crate::storage::resolve(&f.storage, &profile)?;
     Ok(profile)
 }
 
@@ -632,21 +634,22 @@ fn entry_ref(s: Option<&str>, key: &str) -> Result<Option<(u16, u8)>, Fault> {
 }
 
 /// `"0x6091:1"` → (0x6091, 1); the subindex may be decimal or `0x` hex.
-fn parse_entry_ref(s: &str) -> Option<(u16, u8)> {
+pub(crate) fn parse_entry_ref(s: &str) -> Option<(u16, u8)> {
     let (i, sub) = s.split_once(':')?;
-    let index = u16::from_str_radix(
-        i.trim()
-            .strip_prefix("0x")
-            .or(i.trim().strip_prefix("0X"))?,
-        16,
-    )
-    .ok()?;
+    let index = parse_index(i)?;
     let sub = sub.trim();
     let sub = match sub.strip_prefix("0x") {
         Some(h) => u8::from_str_radix(h, 16).ok()?,
         None => sub.parse().ok()?,
     };
     Some((index, sub))
+}
+
+/// `"0x6091"` → 0x6091 (an object index is always written in hex with `0x`).
+pub(crate) fn parse_index(s: &str) -> Option<u16> {
+    let s = s.trim();
+    let hex = s.strip_prefix("0x").or(s.strip_prefix("0X"))?;
+    u16::from_str_radix(hex, 16).ok()
 }
 
 /// `[[alarm]]` → [`Alarm`]s; `display` must be unique and non-empty.

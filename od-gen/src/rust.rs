@@ -12,6 +12,7 @@
 //!     pub const OBJECTS: &[Object];      // sorted by index, entries by subindex
 //!     pub const SETTINGS: &[(u16, u8)];  // startup parameters (`setting = true`)
 //!     pub const BACKUP: &[(u16, u8)];    // entries the parameter storage stores
+//!     pub const STORAGE: StorageRules;   // `[storage]`: groups, auto-store, write condition
 //!     pub const MOTOR_FAULTS: [u16; N];  // drive targets: 603Fh/EMCY code per motor fault
 //!     pub static PROFILE: DriveProfile;  // drive targets: { od: Profile, vars, motor_faults }
 //!     pub static PROFILE: Profile;       // device targets: the object dictionary alone
@@ -24,8 +25,10 @@
 //! (`ethercat_slave::od`), `MOTOR_FAULT_NAMES` equals the drive's `motor::MotorFault::ALL`
 //! (names, in code order), the objects and entries are sorted, every RAM variable lies inside
 //! `RAM_SIZE`, the default PDO assignment read back from the generated 1C12h/1C13h and
-//! 16xxh/1Axxh adds up to the SM2/SM3 sizes that the SII and the ESI carry, and `BACKUP`
-//! (od-gen's ESI `Flags/Backup`) is exactly what `ethercat_slave::params::is_storable` stores.
+//! 16xxh/1Axxh adds up to the SM2/SM3 sizes that the SII and the ESI carry, `BACKUP`
+//! (od-gen's ESI `Flags/Backup`) is exactly what `ethercat_slave::params::is_storable` stores
+//! under the profile's `STORAGE` rules, and the defaults of 1010h are the capabilities
+//! `ethercat_slave::params::store_capabilities` writes back.
 //! The code uses only `core` and the types of `ethercat_slave::od` (and of the drive crate's
 //! `profile` module for drive targets).
 
@@ -33,8 +36,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use crate::model::{
-    Access, DataType, Entry, MotorFaultCode, Object, Profile, ProfileKind, Role, Sm, Storage,
-    MOTOR_FAULT_NAMES, STACK_MAX_PDO_BYTES,
+    Access, DataType, Entry, EntryRange, EntryTest, MotorFaultCode, Object, Profile, ProfileKind,
+    Role, Sm, Storage, MOTOR_FAULT_NAMES, STACK_MAX_PDO_BYTES,
 };
 
 /// Where each RAM variable of a profile lives.
@@ -243,8 +246,9 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     let _ = writeln!(
         out,
         "    pub const BACKUP: &[(u16, u8)] = &[{}];",
-        pairs(p, Object::is_backup)
+        pairs(p, |o, e| p.is_backup(o, e))
     );
+    storage(out, p, target);
     if target.drive.is_some() {
         let _ = writeln!(
             out,
@@ -403,6 +407,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     let _ = writeln!(out, "        objects: OBJECTS,");
     let _ = writeln!(out, "        defaults: DEFAULTS,");
     let _ = writeln!(out, "        value_lists: VALUE_LISTS,");
+    let _ = writeln!(out, "        storage: STORAGE,");
     let out = out_outer;
     for line in body.lines() {
         let _ = writeln!(out, "{pad}{line}");
@@ -441,7 +446,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     );
     let _ = writeln!(
         out,
-        "    const _: () = assert!(super::check::backup_agrees(OBJECTS, BACKUP), \"od-gen's backup flags differ from params::is_storable\");"
+        "    const _: () = assert!(super::check::backup_agrees(OBJECTS, &STORAGE, BACKUP), \"od-gen's backup flags differ from params::is_storable\");"
+    );
+    let _ = writeln!(
+        out,
+        "    const _: () = assert!(super::check::capabilities_agree(OBJECTS, DEFAULTS, &STORAGE), \"the defaults of 1010h differ from params::store_capabilities\");"
     );
     let _ = writeln!(out, "}}\n");
 }
@@ -479,6 +488,82 @@ fn factor(p: &Profile, layout: &RamLayout, f: &crate::model::Factor) -> String {
         f.scale.0,
         f.scale.1
     )
+}
+
+/// `STORAGE`: the profile's `[storage]` rules as `od::StorageRules`.
+fn storage(out: &mut String, p: &Profile, target: &Target) {
+    let od = format!("{}::od", target.slave);
+    let ranges = |list: &[EntryRange]| -> String {
+        let items: Vec<String> = list
+            .iter()
+            .map(|r| {
+                format!(
+                    "{od}::EntryRange {{ first: {:#06x}, last: {:#06x}, subindex: {} }}",
+                    r.first,
+                    r.last,
+                    r.subindex
+                        .map_or("None".into(), |s| format!("Some({s:#04x})"))
+                )
+            })
+            .collect();
+        format!("&[{}]", items.join(", "))
+    };
+    let test = |t: &EntryTest| {
+        format!(
+            "{od}::EntryTest {{ index: {:#06x}, subindex: {:#04x}, mask: {:#x}, value: {:#x} }}",
+            t.index, t.subindex, t.mask, t.value
+        )
+    };
+    let st = &p.storage;
+    let groups: Vec<String> = st
+        .groups
+        .iter()
+        .map(|g| {
+            format!(
+                "{od}::StorageGroup {{ subindex: {}, ranges: {} }}",
+                g.subindex,
+                ranges(&g.ranges)
+            )
+        })
+        .collect();
+    let auto: Vec<String> = st
+        .auto_store
+        .iter()
+        .map(|a| {
+            format!(
+                "{od}::AutoStore {{ entries: {}, unless: {} }}",
+                ranges(&a.entries),
+                a.unless
+                    .as_ref()
+                    .map_or("None".into(), |t| format!("Some({})", test(t)))
+            )
+        })
+        .collect();
+    let condition = st.write_condition.as_ref().map_or("None".into(), |c| {
+        format!(
+            "Some({od}::WriteCondition {{ test: {}, subindexes: &{:?} }})",
+            test(&c.test),
+            c.subindexes
+        )
+    });
+    let _ = writeln!(
+        out,
+        "    /// Parameter storage rules (`[storage]`): what 1010h stores besides the default rule, the\n    /// 1010h/1011h groups, automatic storage of SDO downloads, the write condition."
+    );
+    let _ = writeln!(
+        out,
+        "    pub const STORAGE: {od}::StorageRules = {od}::StorageRules {{"
+    );
+    let _ = writeln!(
+        out,
+        "        stored_pdo_mappable: {},",
+        ranges(&st.stored_pdo_mappable)
+    );
+    let _ = writeln!(out, "        not_stored: {},", ranges(&st.not_stored));
+    let _ = writeln!(out, "        groups: &[{}],", groups.join(", "));
+    let _ = writeln!(out, "        auto_store: &[{}],", auto.join(", "));
+    let _ = writeln!(out, "        write_condition: {condition},");
+    let _ = writeln!(out, "    }};");
 }
 
 /// `(index, subindex)` of every entry that `keep` selects, in dictionary order, as Rust tuples.
@@ -573,16 +658,21 @@ mod check {
         0
     }
 
-    /// Whether the entries `crate::params::is_storable` selects are exactly `backup` (the
-    /// ESI `Flags/Backup` od-gen wrote): one rule, checked against the firmware's.
-    pub(super) const fn backup_agrees(o: &[Object], backup: &[(u16, u8)]) -> bool {
+    /// Whether the entries `crate::params::is_storable` selects under `storage` are exactly
+    /// `backup` (the ESI `Flags/Backup` od-gen wrote): one rule, checked against the
+    /// firmware's.
+    pub(super) const fn backup_agrees(
+        o: &[Object],
+        storage: &$SLAVE::od::StorageRules,
+        backup: &[(u16, u8)],
+    ) -> bool {
         let mut n = 0;
         let mut i = 0;
         while i < o.len() {
             let e = o[i].entries;
             let mut j = 0;
             while j < e.len() {
-                let storable = $SLAVE::params::is_storable(&o[i], &e[j]);
+                let storable = $SLAVE::params::is_storable(storage, &o[i], &e[j]);
                 let mut listed = false;
                 let mut k = 0;
                 while k < backup.len() {
@@ -602,6 +692,34 @@ mod check {
             i += 1;
         }
         n == backup.len()
+    }
+
+    /// Whether the defaults of 1010h:n (n ≥ 1) are what the firmware writes back after a
+    /// command (`params::store_capabilities`): od-gen's capability bits agree with the stack's.
+    pub(super) const fn capabilities_agree(
+        o: &[Object],
+        defaults: &[u8],
+        storage: &$SLAVE::od::StorageRules,
+    ) -> bool {
+        let mut i = 0;
+        while i < o.len() {
+            if o[i].index == $SLAVE::params::STORE_PARAMETERS {
+                let e = o[i].entries;
+                let mut j = 0;
+                while j < e.len() {
+                    let sub = e[j].subindex;
+                    if sub >= $SLAVE::params::ALL_PARAMETERS
+                        && value(o, defaults, o[i].index, sub)
+                            != $SLAVE::params::store_capabilities(storage, sub)
+                    {
+                        return false;
+                    }
+                    j += 1;
+                }
+            }
+            i += 1;
+        }
+        true
     }
 
     /// Sum of the mapped bit lengths of the PDOs assigned by default in `assign` (1C12h/1C13h).

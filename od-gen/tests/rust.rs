@@ -57,7 +57,8 @@ fn device_target_has_the_dictionary_only() {
             format!("pub static ALL: [&{slave}::od::Profile; 1] = [&standard::PROFILE];"),
             "pub static PROFILE: Profile = Profile {".to_string(),
             "    ALL.iter().copied().find(|p| p.device.is_profile(name))".to_string(),
-            format!("let storable = {slave}::params::is_storable(&o[i], &e[j]);"),
+            format!("let storable = {slave}::params::is_storable(storage, &o[i], &e[j]);"),
+            format!("pub const STORAGE: {slave}::od::StorageRules = {slave}::od::StorageRules {{"),
             format!("const _: () = assert!({slave}::od::DataType::Bit8.code() == 0x0037"),
         ] {
             assert!(code.contains(&needle), "missing `{needle}`");

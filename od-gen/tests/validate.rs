@@ -534,7 +534,7 @@ fn backup_follows_the_parameter_storage_rule() {
     let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
     let backup = |i: u16, s: u8| {
         let o = p.object(i).unwrap();
-        o.is_backup(o.entry(s).unwrap())
+        p.is_backup(o, o.entry(s).unwrap())
     };
     assert!(backup(0x2F00, 0), "RW RAM parameter");
     assert!(backup(0x1C12, 1), "PDO assignment");

@@ -15,6 +15,8 @@ pub enum Step {
     /// SDO download of a u32 (the entry's length: the value is sent as 4 bytes, so only
     /// 32-bit entries).
     Write(u16, u8, u32),
+    /// SDO download of a u16 (16-bit entries).
+    WriteU16(u16, u8, u16),
     /// SDO upload as a u32.
     Read(u16, u8),
     /// FPRD of a 16-bit ESC register of drive 0.
@@ -51,6 +53,9 @@ pub fn session(segment: Segment, steps: &[Step]) -> (Segment, Vec<Result<u32, Er
         for step in steps {
             out.push(match *step {
                 Step::Write(index, sub, value) => sd.sdo_write(index, sub, value).await.map(|()| 0),
+                Step::WriteU16(index, sub, value) => {
+                    sd.sdo_write(index, sub, value).await.map(|()| 0)
+                }
                 Step::Read(index, sub) => sd.sdo_read::<u32>(index, sub).await,
                 Step::Register(address) => Command::fprd(FIRST_STATION, address)
                     .receive::<u16>(md)

@@ -6,12 +6,12 @@ use ethercrab::ObjectDescriptionListQuery;
 use tests_host::{block_on, master};
 
 /// Indices of the standard profile's objects that satisfy `pred`, in index order.
-fn profile_indices(pred: impl Fn(&od_gen::model::Object) -> bool) -> Vec<u16> {
+fn profile_indices(pred: impl Fn(&od_gen::Profile, &od_gen::model::Object) -> bool) -> Vec<u16> {
     let p = od_gen::builtin("standard").expect("standard profile");
     let mut v: Vec<u16> = p
         .objects
         .iter()
-        .filter(|o| pred(o))
+        .filter(|o| pred(&p, o))
         .map(|o| o.index)
         .collect();
     v.sort_unstable();
@@ -35,13 +35,13 @@ fn ethercrab_sdo_info_lists_match_the_profile() {
 }
 
 fn sdo_info_lists_match_the_profile() {
-    let all = profile_indices(|_| true);
-    let rx = profile_indices(|o| o.entries.iter().any(|e| e.pdo.rx()));
-    let tx = profile_indices(|o| o.entries.iter().any(|e| e.pdo.tx()));
+    let all = profile_indices(|_, _| true);
+    let rx = profile_indices(|_, o| o.entries.iter().any(|e| e.pdo.rx()));
+    let tx = profile_indices(|_, o| o.entries.iter().any(|e| e.pdo.tx()));
     // List 4: what the parameter storage stores (od-gen's copy of params::is_storable, checked
     // against it at compile time); list 5: the profile's `setting = true` entries.
-    let backup = profile_indices(|o| o.entries.iter().any(|e| o.is_backup(e)));
-    let settings = profile_indices(|o| o.entries.iter().any(|e| e.setting));
+    let backup = profile_indices(|p, o| o.entries.iter().any(|e| p.is_backup(o, e)));
+    let settings = profile_indices(|_, o| o.entries.iter().any(|e| e.setting));
     assert!(!backup.is_empty() && !settings.is_empty());
     assert!(
         all.contains(&0x2FF0),

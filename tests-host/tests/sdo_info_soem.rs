@@ -35,7 +35,7 @@ fn u(v: &Value) -> u64 {
     v.as_u64().unwrap_or_else(|| panic!("not a number: {v}"))
 }
 
-fn obj_access(o: &Object, e: &Entry) -> u64 {
+fn obj_access(p: &Profile, o: &Object, e: &Entry) -> u64 {
     let mut bits = u64::from(e.access.0);
     if e.pdo.rx() {
         bits |= RX_PDO;
@@ -43,7 +43,7 @@ fn obj_access(o: &Object, e: &Entry) -> u64 {
     if e.pdo.tx() {
         bits |= TX_PDO;
     }
-    if o.is_backup(e) {
+    if p.is_backup(o, e) {
         bits |= BACKUP;
     }
     if e.setting {
@@ -84,7 +84,7 @@ fn check(p: &Profile, r: &Value) {
             );
             if !o["bit_length"].is_null() {
                 assert_eq!(u(&o["bit_length"]), u64::from(e.bit_len), "{at} bits");
-                assert_eq!(u(&o["obj_access"]), obj_access(po, e), "{at} access");
+                assert_eq!(u(&o["obj_access"]), obj_access(p, po, e), "{at} access");
             }
             continue;
         }
@@ -113,7 +113,7 @@ fn check(p: &Profile, r: &Value) {
                 "{at} type"
             );
             assert_eq!(u(&e["bit_length"]), u64::from(pe.bit_len), "{at} bits");
-            assert_eq!(u(&e["obj_access"]), obj_access(po, pe), "{at} access");
+            assert_eq!(u(&e["obj_access"]), obj_access(p, po, pe), "{at} access");
         }
     }
 }

@@ -13,7 +13,7 @@ use crate::leds::SimLeds;
 use crate::plant::PlantConfig;
 use crate::servo::{axis_config, SimServo, Tuning};
 use crate::storage::SimStorage;
-use firmware::params::{Loaded, ParamError, ParamStore};
+use firmware::params::{max_record_len, Loaded, ParamError, ParamStore};
 
 /// OD RAM size of the simulated firmware: large enough for every built-in profile, so the
 /// profile can be chosen by name at run time.
@@ -71,9 +71,11 @@ fn new_servo() -> SimServo {
 }
 
 impl SimDrive {
-    /// A drive running `profile` with the SII image `sii` in its EEPROM.
+    /// A drive running `profile` with the SII image `sii` in its EEPROM, and erased parameter
+    /// storage sized for the profile's largest record.
     pub fn new(profile: &'static DriveProfile, sii: &[u8]) -> Result<Self, SlaveError> {
-        Self::with_storage(profile, sii, SimStorage::new())
+        let storage = SimStorage::for_record(max_record_len(&profile.od));
+        Self::with_storage(profile, sii, storage)
     }
 
     /// A drive whose parameter storage holds `storage`; the stored parameters are loaded at

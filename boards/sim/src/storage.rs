@@ -11,13 +11,15 @@ use hal::storage::{NvStorage, StorageError};
 pub const ERASED: u8 = 0xFF;
 /// Slots of the simulated storage (the firmware's parameter store uses two).
 pub const SIM_SLOTS: usize = 2;
-/// Size of one slot: one 2 KiB page of the STM32G4 internal flash.
+/// Size of one flash page of the STM32G4 internal flash: the slot of [`SimStorage::new`], and
+/// the unit [`SimStorage::for_record`] sizes its slots in.
 pub const SIM_SLOT_SIZE: usize = 2048;
 
 /// RAM-backed storage that survives [`crate::drive::SimDrive::power_cycle`].
 #[derive(Clone, Debug)]
 pub struct SimStorage {
     slots: Vec<Vec<u8>>,
+    slot_size: usize,
     cut_after: Option<usize>,
     failing: bool,
     writes: u32,
@@ -33,8 +35,20 @@ impl Default for SimStorage {
 impl SimStorage {
     /// Erased storage of [`SIM_SLOTS`] slots of [`SIM_SLOT_SIZE`] bytes.
     pub fn new() -> Self {
+        Self::with_slot_size(SIM_SLOT_SIZE)
+    }
+
+    /// Erased storage whose slots span as many pages as a parameter record of `record_len`
+    /// bytes needs (at least one): what a board that compiles one profile reserves for it (the
+    /// vendor profiles store up to ≈ 4.5 KiB, see `firmware::params::max_record_len`).
+    pub fn for_record(record_len: usize) -> Self {
+        Self::with_slot_size(record_len.div_ceil(SIM_SLOT_SIZE).max(1) * SIM_SLOT_SIZE)
+    }
+
+    fn with_slot_size(slot_size: usize) -> Self {
         Self {
-            slots: vec![vec![ERASED; SIM_SLOT_SIZE]; SIM_SLOTS],
+            slots: vec![vec![ERASED; slot_size]; SIM_SLOTS],
+            slot_size,
             cut_after: None,
             failing: false,
             writes: 0,
@@ -82,7 +96,7 @@ impl NvStorage for SimStorage {
     }
 
     fn slot_size(&self) -> usize {
-        SIM_SLOT_SIZE
+        self.slot_size
     }
 
     fn read(&mut self, slot: usize, buf: &mut [u8]) -> Result<(), StorageError> {
@@ -150,6 +164,18 @@ mod tests {
         // The cut applies to one write only.
         s.write(0, &[1, 2, 3, 4, 5]).unwrap();
         assert_eq!(&s.slot(0).unwrap()[..5], &[1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn slots_for_a_record_are_whole_pages() {
+        assert_eq!(SimStorage::for_record(0).slot_size(), SIM_SLOT_SIZE);
+        assert_eq!(
+            SimStorage::for_record(SIM_SLOT_SIZE).slot_size(),
+            SIM_SLOT_SIZE
+        );
+        let s = SimStorage::for_record(SIM_SLOT_SIZE + 1);
+        assert_eq!(s.slot_size(), 2 * SIM_SLOT_SIZE);
+        assert_eq!(s.slot(1).map(<[u8]>::len), Some(2 * SIM_SLOT_SIZE));
     }
 
     #[test]

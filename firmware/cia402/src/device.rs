@@ -43,6 +43,15 @@ impl Device {
         self.state
     }
 
+    /// The drive's initialisation is done (CiA402 transition 1, automatic: Not Ready to Switch
+    /// On → Switch On Disabled); returns the statusword. Does nothing in any other state.
+    pub fn initialised(&mut self) -> u16 {
+        if self.state == PdsState::NotReadyToSwitchOn {
+            self.state = PdsState::SwitchOnDisabled;
+        }
+        pds::statusword_of(self.state)
+    }
+
     /// The error code of the active fault (603Fh), `None` when there is none.
     pub fn fault_code(&self) -> Option<u16> {
         self.fault

@@ -406,7 +406,7 @@ pub fn esi_lints(p: &Profile, xml: &str, img: &[u8]) {
                 if e.pdo != od_gen::model::PdoMapping::No {
                     want.push("PdoMapping".into());
                 }
-                if o.is_backup(e) {
+                if p.is_backup(o, e) {
                     want.push("Backup".into());
                 }
                 if e.setting {

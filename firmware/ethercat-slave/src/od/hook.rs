@@ -18,6 +18,18 @@ pub trait DownloadHook {
         subindex: u8,
     ) -> Result<(), AbortCode>;
 
+    /// A complete-access download to `index` from `first_subindex` on (ETG.1000.6 §5.6.2.1.1:
+    /// 0 or 1) has been committed: every entry of the object from there was written. Default:
+    /// [`Self::downloaded`] with `first_subindex`.
+    fn downloaded_complete(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        first_subindex: u8,
+    ) -> Result<(), AbortCode> {
+        self.downloaded(od, index, first_subindex)
+    }
+
     /// The board's store of DOMAIN data outside the OD RAM, if the hook carries one (see
     /// [`WithDomains`]); `None`: domains are refused as by [`NoDomains`](super::domain::NoDomains).
     fn domains(&mut self) -> Option<&mut dyn DomainStore> {
@@ -42,6 +54,15 @@ impl<H: DownloadHook + ?Sized> DownloadHook for WithDomains<'_, H> {
         subindex: u8,
     ) -> Result<(), AbortCode> {
         self.hook.downloaded(od, index, subindex)
+    }
+
+    fn downloaded_complete(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        first_subindex: u8,
+    ) -> Result<(), AbortCode> {
+        self.hook.downloaded_complete(od, index, first_subindex)
     }
 
     fn domains(&mut self) -> Option<&mut dyn DomainStore> {

@@ -20,6 +20,7 @@ pub use dirty::DirtyMap;
 pub use domain::{DomainStore, NoDomains, RamDomain};
 pub use hook::{DownloadHook, WithDomains};
 pub use model::*;
+pub use storable::{AutoStore, EntryRange, EntryTest, StorageGroup, StorageRules, WriteCondition};
 pub use store::{Dictionary, StoreError};
 
 /// A device description for unit tests: the standard mailbox layout (SM0 0x1000/256, SM1

@@ -6,6 +6,8 @@
 //! initial content of that array. Multi-byte values are little-endian, exactly as on the wire, so
 //! SDO transfers and PDO copies are plain byte copies.
 
+use super::storable::StorageRules;
+
 /// CoE data types (ETG.1000.6 Table 64 / CiA 301), as used in SDO information and SII PDO entries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -514,6 +516,9 @@ pub struct Profile {
     /// Entries that accept only listed values (profile key `allowed`), sorted by
     /// (index, subindex): an SDO download of another value is refused with 0x06090030.
     pub value_lists: &'static [ValueList],
+    /// What the parameter storage stores, per 1010h/1011h subindex and on SDO download, and
+    /// when (profile section `[storage]`; see [`crate::params`]).
+    pub storage: StorageRules,
 }
 
 /// The values an entry accepts (e.g. the modes of operation a drive supports in 6060h).

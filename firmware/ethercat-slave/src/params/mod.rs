@@ -1,13 +1,19 @@
 //! Parameter storage: 1010h "Store parameters" and 1011h "Restore default parameters"
 //! (CiA 301 §7.5.2.13 and §7.5.2.14) on a power-loss-safe record store over
-//! [`hal::storage::NvStorage`].
+//! [`hal::storage::NvStorage`], and the profile's automatic storage of SDO downloads.
+//!
+//! Everything that differs between devices is data of the profile ([`StorageRules`], od-gen's
+//! `[storage]` section, `Profile::storage`); this module executes it and knows no device.
 //!
 //! # Objects
 //!
-//! Both objects are ARRAYs of UNSIGNED32 with sub 0 = highest subindex (4). The subindex selects
-//! a parameter group ([`Group`]): 1 all parameters, 2 communication parameters (1000h–1FFFh),
-//! 3 application parameters (6000h–9FFFh), 4 manufacturer parameters (2000h–5FFFh; CiA 301
-//! leaves sub 4..7Fh to the manufacturer).
+//! Both objects are ARRAYs of UNSIGNED32 with sub 0 = highest subindex. The subindex selects a
+//! parameter group ([`Group`]): 1 all parameters; 2 and above the profile's
+//! [`StorageGroup`](crate::od::StorageGroup)s, each a list of entry ranges. Without
+//! `[[storage.group]]` od-gen gives the CiA 301 scopes: 2 communication parameters
+//! (1000h–1FFFh), 3 application parameters (6000h–9FFFh), 4 manufacturer parameters
+//! (2000h–5FFFh; CiA 301 leaves sub 4..7Fh to the manufacturer). A vendor's scopes replace them
+//! (e.g. the Σ-V-SD: sub 3 = 23xxh and 6xxxh, sub 4 = 2000h–22FFh).
 //!
 //! - Writing the signature `"save"` = 0x6576_6173 to 1010h:n stores the group's current values;
 //!   `"load"` = 0x6461_6F6C to 1011h:n makes the group's defaults apply again from the next
@@ -16,9 +22,19 @@
 //!   storage write completed and was verified.
 //! - Another value: abort 0x0800_0020 "data cannot be stored" (CiA 301 specifies 0800 002xh for a
 //!   wrong signature), nothing is written. A storage failure: abort 0x0606_0000 "hardware error".
-//! - Reading returns the capabilities: 1010h bit 0 = saves on command, bit 1 = saves
-//!   autonomously (not done: 0); 1011h bit 0 = restores defaults. Both read 1 in every state,
-//!   also after a write (the hook puts the value back).
+//! - A [`WriteCondition`](crate::od::WriteCondition) of the profile (an entry, a mask, a value,
+//!   the subindexes it guards) that does not hold on the current OD: abort 0x0800_0022 "data
+//!   cannot be transferred or stored because of the present device state", nothing is written
+//!   (checked before the signature). The Σ-V-SD allows sub 1 and sub 4 only in CiA402 Switch
+//!   On Disabled, i.e. statusword 6041h & 004Fh = 0040h; the stack reads the entry, not the
+//!   state machine.
+//! - Reading returns the capabilities ([`store_capabilities`]): 1010h bit 0 = saves on command;
+//!   bit 1 = saves autonomously, set on the subindexes whose group holds an entry of an
+//!   auto-store rule (CiA 301: the device saves those parameters itself; bit 1 states that it
+//!   may, so it does not change with the value of an `unless` entry); 1011h bit 0 = restores
+//!   defaults. They read so in every state, also after a write (the hook puts the value back);
+//!   od-gen checks that the profile's defaults of 1010h are these values, and the generated
+//!   dictionary asserts it at compile time.
 //!
 //! The objects are writable in PREOP, SAFEOP and OP (SDOs are not served in INIT). CiA 301 sets
 //! no state restriction; the store runs from the mailbox handler, never from the process-data
@@ -28,15 +44,36 @@
 //! # What is stored
 //!
 //! An entry is stored ([`is_storable`]) if it is an OD RAM variable, writable over SDO in some
-//! state, and not PDO-mappable; objects 1010h/1011h themselves and the SM parameters
-//! 1C32h/1C33h (which the stack overwrites with the active synchronisation) are never stored.
-//! So the PDO mapping (16xxh/1Axxh) and assignment (1C12h/1C13h) ARE stored: CiA 301 counts
-//! them among the communication parameters. They load at power-on in INIT, before the first
-//! PREOP → SAFEOP transition builds the copy plan, i.e. a stored mapping behaves exactly like
-//! the profile's default mapping (checked against SM2/SM3 at that transition; a master that
+//! state, not one of [`NOT_STORED`] (1010h/1011h themselves and the SM parameters
+//! 1C32h/1C33h, which the stack overwrites with the active synchronisation), not named by the
+//! profile's `not_stored`, and either not PDO-mappable or named by the profile's
+//! `stored_pdo_mappable`.
+//!
+//! So by default the PDO mapping (16xxh/1Axxh) and assignment (1C12h/1C13h) ARE stored: CiA 301
+//! counts them among the communication parameters. They load at power-on in INIT, before the
+//! first PREOP → SAFEOP transition builds the copy plan, i.e. a stored mapping behaves exactly
+//! like the profile's default mapping (checked against SM2/SM3 at that transition; a master that
 //! relies on the SII default must write its mapping, as ETG masters do from the ESI).
 //! PDO-mappable entries (controlword, target position, modes of operation, ...) are process
-//! data, not parameters: storing a controlword would re-enable a drive at power-on.
+//! data, not parameters: storing a controlword would re-enable a drive at power-on. A drive
+//! whose parameters are PDO-mappable too (the RSE's tuning objects, the GHA-E's Pn groups)
+//! lists them in `stored_pdo_mappable`, an explicit list of objects and entries; od-gen
+//! refuses one that names an entry with a process-data role (controlword, modes of operation,
+//! target position/velocity/torque). Writable entries that are commands or live values (the
+//! Σ-V-SD's 2300h, 2310h:01, 23E0h, 60C2h) are listed in `not_stored`.
+//!
+//! # Automatic storage
+//!
+//! An SDO download (expedited, normal, segmented or complete access; never a PDO write) to an
+//! entry named by an [`AutoStore`](crate::od::AutoStore) rule of the profile is stored at once,
+//! unless the rule's `unless` test holds on the values after the download (e.g. the GHA-E's
+//! Pn046 = 1 "do not save SDO writes": writing Pn046 = 1 is then itself not saved, writing 0
+//! is). The new record holds the downloaded entries' current values and keeps everything else
+//! the newest record holds, like a group store. The download response is sent after the record was written and
+//! verified; a storage failure answers 0x0606_0000 (the value stays written in the OD RAM:
+//! the device uses it, it is only not stored). od-gen checks that every auto-stored entry is a
+//! stored parameter. A complete-access download stores the auto-stored entries of the object
+//! from its first written subindex on.
 //!
 //! # Power-loss safety
 //!
@@ -54,17 +91,22 @@
 //! then load their defaults. "Restore all" writes an empty, valid record. Erasing the slots
 //! instead would need two writes and a torn state between them ("slot 1 erased, slot 0 still
 //! has the old record" would bring back values older than the newest).
-//! Storing one group likewise copies the other groups' entries from the newest record, so a
-//! group store never loses what an earlier store of another group saved.
+//! Storing one group (or auto-storing one entry) likewise copies the other entries from the
+//! newest record, so a store never loses what an earlier store saved.
 
 pub mod record;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_rules;
+
+use core::ops::RangeInclusive;
 
 use hal::storage::{NvStorage, StorageError};
 
 pub use crate::od::index::{RESTORE_DEFAULTS, STORE_PARAMETERS};
+use crate::od::storable::{any_contains, EntryRange, StorageRules};
 pub use crate::od::storable::{is_storable, NOT_STORED};
 use crate::od::{AbortCode, DownloadHook};
 use crate::od::{Dictionary, Profile, StoreError};
@@ -81,10 +123,10 @@ pub const SIGNATURE_LOAD: u32 = u32::from_le_bytes(*b"load");
 pub const SAVES_ON_COMMAND: u32 = 1 << 0;
 /// 1010h read value bit 1: the device saves parameters autonomously.
 pub const SAVES_AUTONOMOUSLY: u32 = 1 << 1;
-/// What 1010h:n reads: saves on command only.
-pub const STORE_CAPABILITIES: u32 = SAVES_ON_COMMAND;
 /// What 1011h:n reads: bit 0 = the device restores default parameters (CiA 301 §7.5.2.14).
 pub const RESTORE_CAPABILITIES: u32 = 1 << 0;
+/// The subindex of 1010h/1011h that stores/restores every parameter (CiA 301).
+pub const ALL_PARAMETERS: u8 = 1;
 /// The two storage slots the records alternate between.
 pub const SLOTS: [usize; 2] = [0, 1];
 /// Default capacity of one record buffer; [`ParamStore`] holds two. Enough for every built-in
@@ -95,40 +137,58 @@ pub const DEFAULT_RECORD_CAPACITY: usize = 8192;
 /// Sequence number of the first record written to empty storage.
 const FIRST_SEQUENCE: u32 = 1;
 
+/// What 1010h:`subindex` reads (CiA 301 §7.5.2.13): saves on command, and saves autonomously
+/// when the subindex's group holds an entry of one of the profile's auto-store rules (sub 1:
+/// when the profile has any). The default of 1010h:n in the profile equals it (od-gen checks,
+/// the generated dictionary asserts).
+pub const fn store_capabilities(rules: &StorageRules, subindex: u8) -> u32 {
+    let autonomous = if subindex == ALL_PARAMETERS {
+        !rules.auto_store.is_empty()
+    } else {
+        let mut i = 0;
+        let mut found = false;
+        while i < rules.groups.len() {
+            if rules.groups[i].subindex == subindex && rules.auto_stores_in(rules.groups[i].ranges)
+            {
+                found = true;
+            }
+            i += 1;
+        }
+        found
+    };
+    if autonomous {
+        SAVES_ON_COMMAND | SAVES_AUTONOMOUSLY
+    } else {
+        SAVES_ON_COMMAND
+    }
+}
+
 /// A parameter group, selected by the subindex of 1010h/1011h (CiA 301 §7.5.2.13).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Group {
-    /// Sub 1: all storable parameters.
-    All = 1,
-    /// Sub 2: communication parameters, 1000h–1FFFh.
-    Communication = 2,
-    /// Sub 3: application (device profile) parameters, 6000h–9FFFh.
-    Application = 3,
-    /// Sub 4: manufacturer-specific parameters, 2000h–5FFFh (CiA 301: sub 4..7Fh are the
-    /// manufacturer's choice).
-    Manufacturer = 4,
+    /// Sub 1: all stored parameters.
+    All,
+    /// Sub 2 and above: the stored parameters in these ranges (the profile's
+    /// [`StorageGroup`](crate::od::StorageGroup)).
+    Ranges(&'static [EntryRange]),
 }
 
 impl Group {
-    /// The group of a 1010h/1011h subindex.
-    pub const fn from_subindex(subindex: u8) -> Option<Self> {
-        match subindex {
-            1 => Some(Self::All),
-            2 => Some(Self::Communication),
-            3 => Some(Self::Application),
-            4 => Some(Self::Manufacturer),
-            _ => None,
+    /// The group of 1010h/1011h subindex `subindex` under `rules`; `None` for sub 0 and for a
+    /// subindex the profile gives no group.
+    pub fn of(rules: &StorageRules, subindex: u8) -> Option<Self> {
+        if subindex == ALL_PARAMETERS {
+            return Some(Self::All);
         }
+        rules.group(subindex).map(|g| Self::Ranges(g.ranges))
     }
 
-    /// Whether objects of `index` belong to the group.
-    pub const fn contains(self, index: u16) -> bool {
+    /// Whether entry `index:subindex` belongs to the group.
+    pub const fn contains(self, index: u16, subindex: u8) -> bool {
         match self {
             Self::All => true,
-            Self::Communication => matches!(index, 0x1000..=0x1FFF),
-            Self::Application => matches!(index, 0x6000..=0x9FFF),
-            Self::Manufacturer => matches!(index, 0x2000..=0x5FFF),
+            Self::Ranges(ranges) => any_contains(ranges, index, subindex),
         }
     }
 }
@@ -255,7 +315,10 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
         for stored in record.entries() {
             let entry = od
                 .object(stored.index)
-                .and_then(|o| o.entry(stored.subindex).filter(|e| is_storable(o, e)))
+                .and_then(|o| {
+                    o.entry(stored.subindex)
+                        .filter(|e| is_storable(&od.profile().storage, o, e))
+                })
                 .filter(|e| e.byte_len() == stored.value.len());
             match entry.map(|e| od.set_value(e, stored.value)) {
                 Some(Ok(())) => loaded.applied = loaded.applied.saturating_add(1),
@@ -268,7 +331,7 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
     /// Stores the current values of `group` (1010h); other groups keep what the newest record
     /// holds. Returns the new record's sequence number.
     pub fn store(&mut self, od: &Dictionary<'_>, group: Group) -> Result<u32, ParamError> {
-        self.write_record(od, group, Action::Store)
+        self.write_record(od, |i, s| group.contains(i, s), Action::Store)
     }
 
     /// Makes `group` load its defaults from the next power-on (1011h); the current values do not
@@ -278,7 +341,36 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
         od: &Dictionary<'_>,
         group: Group,
     ) -> Result<u32, ParamError> {
-        self.write_record(od, group, Action::Restore)
+        self.write_record(od, |i, s| group.contains(i, s), Action::Restore)
+    }
+
+    /// The automatic storage of an SDO download to `index`, subindexes `subindexes` (one entry,
+    /// or a complete access): stores the current values of those of them an auto-store rule of
+    /// the profile names and does not suspend now (its `unless` test does not hold); everything
+    /// else keeps what the newest record holds. `Ok(None)`: nothing to store, nothing written.
+    pub fn store_downloaded(
+        &mut self,
+        od: &Dictionary<'_>,
+        index: u16,
+        subindexes: RangeInclusive<u8>,
+    ) -> Result<Option<u32>, ParamError> {
+        let rules = &od.profile().storage;
+        let stores_now = |i: u16, s: u8| {
+            i == index
+                && subindexes.contains(&s)
+                && rules
+                    .auto_store_of(i, s)
+                    .is_some_and(|a| !a.unless.is_some_and(|t| t.holds(od)))
+        };
+        let any = od.object(index).is_some_and(|o| {
+            o.entries
+                .iter()
+                .any(|e| stores_now(index, e.subindex) && is_storable(rules, o, e))
+        });
+        if !any {
+            return Ok(None);
+        }
+        self.write_record(od, stores_now, Action::Store).map(Some)
     }
 
     /// The slot and sequence number of the newest valid record; each slot's content is left in
@@ -321,11 +413,12 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
     }
 
     /// Builds the next record and writes it to the slot not holding the newest valid one, then
-    /// reads it back.
+    /// reads it back. `selected` entries get `action`, the others keep the newest record's
+    /// values.
     fn write_record(
         &mut self,
         od: &Dictionary<'_>,
-        group: Group,
+        selected: impl Fn(u16, u8) -> bool,
         action: Action,
     ) -> Result<u32, ParamError> {
         let profile = od.profile();
@@ -340,8 +433,7 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
         let old = newest.and_then(|_| Record::parse(&old_buf[..], &identity).ok());
         let len = build(
             od,
-            profile,
-            group,
+            &selected,
             action,
             old.as_ref(),
             new_buf,
@@ -363,12 +455,11 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
     }
 }
 
-/// Writes the record for `action` on `group` into `buf`; returns its length.
-#[allow(clippy::too_many_arguments)]
+/// Writes the record for `action` on the `selected` entries into `buf` (the other stored
+/// entries from `old`); returns its length.
 fn build(
     od: &Dictionary<'_>,
-    profile: &Profile,
-    group: Group,
+    selected: &dyn Fn(u16, u8) -> bool,
     action: Action,
     old: Option<&Record<'_>>,
     buf: &mut [u8],
@@ -376,10 +467,15 @@ fn build(
     sequence: u32,
 ) -> Result<usize, ParamError> {
     let capacity = |_: RecordError| ParamError::TooLarge;
+    let profile = od.profile();
     let mut writer = Writer::new(buf).map_err(capacity)?;
     for object in profile.objects {
-        for entry in object.entries.iter().filter(|e| is_storable(object, e)) {
-            let value = if group.contains(object.index) {
+        let stored = object
+            .entries
+            .iter()
+            .filter(|e| is_storable(&profile.storage, object, e));
+        for entry in stored {
+            let value = if selected(object.index, entry.subindex) {
                 match action {
                     Action::Store => Some(od.value(entry).map_err(ParamError::Dictionary)?),
                     Action::Restore => None,
@@ -405,7 +501,7 @@ pub fn max_record_len(profile: &Profile) -> usize {
         .objects
         .iter()
         .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
-        .filter(|(o, e)| is_storable(o, e))
+        .filter(|(o, e)| is_storable(&profile.storage, o, e))
         .map(|(_, e)| record::ENTRY_HEAD_LEN + e.byte_len())
         .sum();
     record::HEADER_LEN + payload + record::CRC_LEN
@@ -420,9 +516,8 @@ pub fn identity(profile: &Profile) -> Identity {
     }
 }
 
-/// 1010h/1011h semantics on a committed SDO download (CiA 301 §7.5.2.13/14): puts the
-/// capability value back, checks the signature (0x0800_0020 if wrong), runs the store or
-/// restore (0x0606_0000 if it fails). Downloads to other entries pass.
+/// The 1010h/1011h commands (CiA 301 §7.5.2.13/14) and the automatic storage of the profile on
+/// a committed SDO download (see the module documentation).
 impl<S: NvStorage, const CAP: usize> DownloadHook for ParamStore<S, CAP> {
     fn downloaded(
         &mut self,
@@ -430,14 +525,42 @@ impl<S: NvStorage, const CAP: usize> DownloadHook for ParamStore<S, CAP> {
         index: u16,
         subindex: u8,
     ) -> Result<(), AbortCode> {
-        let (signature, capabilities) = match index {
-            STORE_PARAMETERS => (SIGNATURE_SAVE, STORE_CAPABILITIES),
-            RESTORE_DEFAULTS => (SIGNATURE_LOAD, RESTORE_CAPABILITIES),
-            _ => return Ok(()),
+        match index {
+            STORE_PARAMETERS | RESTORE_DEFAULTS => self.command(od, index, subindex),
+            _ => self.auto_store(od, index, subindex..=subindex),
+        }
+    }
+
+    fn downloaded_complete(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        first_subindex: u8,
+    ) -> Result<(), AbortCode> {
+        match index {
+            STORE_PARAMETERS | RESTORE_DEFAULTS => self.command(od, index, first_subindex),
+            _ => self.auto_store(od, index, first_subindex..=u8::MAX),
+        }
+    }
+}
+
+impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
+    /// A write to 1010h:`subindex` or 1011h:`subindex`: puts the capability value back, checks
+    /// the profile's write condition (0x0800_0022) and the signature (0x0800_0020), runs the
+    /// store or restore (0x0606_0000 if it fails).
+    fn command(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        subindex: u8,
+    ) -> Result<(), AbortCode> {
+        let rules = &od.profile().storage;
+        let (signature, capabilities) = if index == STORE_PARAMETERS {
+            (SIGNATURE_SAVE, store_capabilities(rules, subindex))
+        } else {
+            (SIGNATURE_LOAD, RESTORE_CAPABILITIES)
         };
-        let (Some(group), Some(entry)) =
-            (Group::from_subindex(subindex), od.entry(index, subindex))
-        else {
+        let Some(entry) = od.entry(index, subindex) else {
             return Ok(());
         };
         let written = od
@@ -450,13 +573,38 @@ impl<S: NvStorage, const CAP: usize> DownloadHook for ParamStore<S, CAP> {
             entry,
             cap.get(..entry.byte_len().min(4)).unwrap_or_default(),
         );
+        let refused_now = rules
+            .write_condition
+            .is_some_and(|c| c.applies_to(subindex) && !c.test.holds(od));
+        if refused_now {
+            return Err(AbortCode::DataNotStoredDeviceState);
+        }
+        // A subindex without a group (od-gen gives every one a group) cannot store anything.
+        let group = Group::of(rules, subindex).ok_or(AbortCode::DataNotStored)?;
         if written != Some(signature) {
             return Err(AbortCode::DataNotStored);
         }
-        let result = match index {
-            STORE_PARAMETERS => self.store(od, group),
-            _ => self.restore_defaults(od, group),
+        let result = if index == STORE_PARAMETERS {
+            self.store(od, group)
+        } else {
+            self.restore_defaults(od, group)
         };
         result.map(drop).map_err(|_| AbortCode::HardwareError)
+    }
+
+    /// The automatic storage of a download to `index`, `subindexes` (0x0606_0000 if the store
+    /// fails).
+    fn auto_store(
+        &mut self,
+        od: &Dictionary<'_>,
+        index: u16,
+        subindexes: RangeInclusive<u8>,
+    ) -> Result<(), AbortCode> {
+        if od.profile().storage.auto_store.is_empty() {
+            return Ok(());
+        }
+        self.store_downloaded(od, index, subindexes)
+            .map(drop)
+            .map_err(|_| AbortCode::HardwareError)
     }
 }

@@ -31,15 +31,15 @@ const SLOT_SIZE: usize = 2048;
 /// Two-slot RAM storage; a write can be cut after a number of bytes (the rest of the slot stays
 /// erased, the write reports a device error as the board would never see it return).
 #[derive(Clone)]
-struct TestStorage {
-    slots: Vec<Vec<u8>>,
-    cut_after: Option<usize>,
-    fail: bool,
-    writes: usize,
+pub(super) struct TestStorage {
+    pub(super) slots: Vec<Vec<u8>>,
+    pub(super) cut_after: Option<usize>,
+    pub(super) fail: bool,
+    pub(super) writes: usize,
 }
 
 impl TestStorage {
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Self {
             slots: vec![vec![ERASED; SLOT_SIZE]; 2],
             cut_after: None,
@@ -91,11 +91,11 @@ impl NvStorage for TestStorage {
 // Fixture profile: one storable entry per group plus entries that must never be stored
 // ---------------------------------------------------------------------------------------------
 
-const U8: DataType = DataType::Unsigned8;
-const U16: DataType = DataType::Unsigned16;
-const U32: DataType = DataType::Unsigned32;
+pub(super) const U8: DataType = DataType::Unsigned8;
+pub(super) const U16: DataType = DataType::Unsigned16;
+pub(super) const U32: DataType = DataType::Unsigned32;
 
-const fn entry(
+pub(super) const fn entry(
     subindex: u8,
     data_type: DataType,
     bits: u16,
@@ -116,7 +116,7 @@ const fn entry(
     }
 }
 
-const fn var(index: u16, e: &'static [Entry]) -> Object {
+pub(super) const fn var(index: u16, e: &'static [Entry]) -> Object {
     Object {
         index,
         code: ObjectCode::Var,
@@ -125,7 +125,7 @@ const fn var(index: u16, e: &'static [Entry]) -> Object {
     }
 }
 
-const fn array(index: u16, e: &'static [Entry]) -> Object {
+pub(super) const fn array(index: u16, e: &'static [Entry]) -> Object {
     Object {
         index,
         code: ObjectCode::Array,
@@ -134,14 +134,14 @@ const fn array(index: u16, e: &'static [Entry]) -> Object {
     }
 }
 
-const CMD: [Entry; 5] = [
+pub(super) const CMD: [Entry; 5] = [
     entry(0, U8, 8, Access::RO, Value::Const(&[4])),
     entry(1, U32, 32, Access::RW, Value::Ram(0)),
     entry(2, U32, 32, Access::RW, Value::Ram(4)),
     entry(3, U32, 32, Access::RW, Value::Ram(8)),
     entry(4, U32, 32, Access::RW, Value::Ram(12)),
 ];
-const RESTORE_CMD: [Entry; 5] = [
+pub(super) const RESTORE_CMD: [Entry; 5] = [
     entry(0, U8, 8, Access::RO, Value::Const(&[4])),
     entry(1, U32, 32, Access::RW, Value::Ram(16)),
     entry(2, U32, 32, Access::RW, Value::Ram(20)),
@@ -223,35 +223,44 @@ fn fixture(revision: u32) -> &'static Profile {
     }))
 }
 
+/// The group of 1010h/1011h subindex `subindex` in the standard profile (and the fixture, which
+/// takes its storage rules).
+fn group(subindex: u8) -> Group {
+    Group::of(&profiles::standard::PROFILE.storage, subindex).unwrap()
+}
+
 /// A device: profile + OD RAM at defaults.
-struct Device {
+pub(super) struct Device {
     profile: &'static Profile,
     ram: Vec<u8>,
 }
 
 impl Device {
-    fn new(profile: &'static Profile) -> Self {
+    pub(super) fn new(profile: &'static Profile) -> Self {
         let mut ram = vec![0u8; profile.ram_size()];
         Dictionary::new(profile, &mut ram).load_defaults();
         Self { profile, ram }
     }
-    fn od(&mut self) -> Dictionary<'_> {
+    pub(super) fn od(&mut self) -> Dictionary<'_> {
         Dictionary::new(self.profile, &mut self.ram)
     }
-    fn set(&mut self, index: u16, subindex: u8, value: &[u8]) {
+    pub(super) fn set(&mut self, index: u16, subindex: u8, value: &[u8]) {
         let mut od = self.od();
         let e = od.entry(index, subindex).unwrap();
         od.set_value(e, value).unwrap();
     }
-    fn get(&mut self, index: u16, subindex: u8) -> u32 {
+    pub(super) fn get(&mut self, index: u16, subindex: u8) -> u32 {
         self.od().read_u32(index, subindex).unwrap()
     }
     /// The values of every entry of the profile, in OD order (what a power-on shows).
-    fn snapshot(&mut self) -> Vec<u8> {
+    pub(super) fn snapshot(&mut self) -> Vec<u8> {
         self.ram.clone()
     }
     /// Powers on over `storage`: defaults, then the stored parameters.
-    fn power_on(profile: &'static Profile, storage: &TestStorage) -> (Self, Option<Loaded>) {
+    pub(super) fn power_on(
+        profile: &'static Profile,
+        storage: &TestStorage,
+    ) -> (Self, Option<Loaded>) {
         let mut dev = Self::new(profile);
         let mut store: ParamStore<TestStorage> = ParamStore::new(storage.clone());
         let loaded = store.load(&mut dev.od()).unwrap();
@@ -294,7 +303,7 @@ fn crc32_is_the_ieee_802_3_crc() {
 fn signatures_are_the_cia_301_ascii_values() {
     assert_eq!(SIGNATURE_SAVE, 0x6576_6173);
     assert_eq!(SIGNATURE_LOAD, 0x6461_6F6C);
-    assert_eq!(STORE_CAPABILITIES, 1);
+    assert_eq!(store_capabilities(&StorageRules::NONE, ALL_PARAMETERS), 1);
     assert_eq!(RESTORE_CAPABILITIES, 1);
 }
 
@@ -677,14 +686,17 @@ fn sequence_wraps_around() {
 
 #[test]
 fn group_ranges_follow_cia_301() {
-    assert_eq!(Group::from_subindex(0), None);
-    assert_eq!(Group::from_subindex(5), None);
-    assert!(Group::Communication.contains(0x1000) && Group::Communication.contains(0x1FFF));
-    assert!(!Group::Communication.contains(0x2000));
-    assert!(Group::Manufacturer.contains(0x2000) && Group::Manufacturer.contains(0x5FFF));
-    assert!(Group::Application.contains(0x6000) && Group::Application.contains(0x9FFF));
-    assert!(!Group::Application.contains(0xA000));
-    assert!(Group::All.contains(0xA000));
+    // The standard profile gives no [[storage.group]]: od-gen's CiA 301 scopes.
+    let rules = &profiles::standard::PROFILE.storage;
+    assert_eq!(Group::of(rules, 0), None);
+    assert_eq!(Group::of(rules, 5), None);
+    assert_eq!(Group::of(rules, ALL_PARAMETERS), Some(Group::All));
+    assert!(group(2).contains(0x1000, 1) && group(2).contains(0x1FFF, 0));
+    assert!(!group(2).contains(0x2000, 0));
+    assert!(group(4).contains(0x2000, 0) && group(4).contains(0x5FFF, 0));
+    assert!(group(3).contains(0x6000, 0) && group(3).contains(0x9FFF, 0));
+    assert!(!group(3).contains(0xA000, 0));
+    assert!(Group::All.contains(0xA000, 0));
 }
 
 #[test]
@@ -695,13 +707,13 @@ fn storing_one_group_keeps_the_other_groups_stored_values() {
     set_all(&mut dev, 0x11);
     store.store(&dev.od(), Group::All).unwrap();
     set_all(&mut dev, 0x22);
-    store.store(&dev.od(), Group::Manufacturer).unwrap();
+    store.store(&dev.od(), group(4)).unwrap();
     let (mut after, _) = Device::power_on(profile, store.storage());
     assert_eq!(after.get(0x2000, 0), 0x2222);
     assert_eq!(after.get(0x6065, 0), 0x0011_1100);
     assert_eq!(after.get(0x1600, 1), 0x6040_0011);
-    store.store(&dev.od(), Group::Application).unwrap();
-    store.store(&dev.od(), Group::Communication).unwrap();
+    store.store(&dev.od(), group(3)).unwrap();
+    store.store(&dev.od(), group(2)).unwrap();
     let (mut after, _) = Device::power_on(profile, store.storage());
     assert_eq!(after.snapshot(), expected_after_store(profile, 0x22));
 }
@@ -714,9 +726,7 @@ fn restore_is_effective_at_the_next_power_on_only() {
     set_all(&mut dev, 0x11);
     store.store(&dev.od(), Group::All).unwrap();
     let before = dev.snapshot();
-    store
-        .restore_defaults(&dev.od(), Group::Communication)
-        .unwrap();
+    store.restore_defaults(&dev.od(), group(2)).unwrap();
     assert_eq!(dev.snapshot(), before, "current values unchanged");
     let (mut after, loaded) = Device::power_on(profile, store.storage());
     assert_eq!(loaded.map(|l| l.applied), Some(2));
@@ -794,7 +804,7 @@ fn every_built_in_profile_fits_the_default_record_buffer() {
     let p = &profiles::standard::PROFILE;
     let stored = |index: u16| {
         p.object(index)
-            .is_some_and(|o| o.entries.iter().any(|e| is_storable(o, e)))
+            .is_some_and(|o| o.entries.iter().any(|e| is_storable(&p.storage, o, e)))
     };
     for index in [0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2F00] {
         assert!(stored(index), "{index:#06x}");
@@ -808,7 +818,7 @@ fn every_built_in_profile_fits_the_default_record_buffer() {
 fn standard_profile_objects_have_the_cia_301_layout() {
     let p = &profiles::standard::PROFILE;
     for (index, capabilities) in [
-        (STORE_PARAMETERS, STORE_CAPABILITIES),
+        (STORE_PARAMETERS, SAVES_ON_COMMAND),
         (RESTORE_DEFAULTS, RESTORE_CAPABILITIES),
     ] {
         let o = p.object(index).unwrap();
@@ -828,7 +838,7 @@ fn standard_profile_objects_have_the_cia_301_layout() {
 // ---------------------------------------------------------------------------------------------
 
 /// Writes `value` to `index:subindex` as the SDO server would, then runs the hook.
-fn download(
+pub(super) fn download(
     store: &mut impl DownloadHook,
     dev: &mut Device,
     index: u16,
@@ -871,7 +881,7 @@ fn save_and_load_signatures_store_and_restore() {
         download(&mut store, &mut dev, STORE_PARAMETERS, 1, SIGNATURE_SAVE),
         Ok(())
     );
-    assert_eq!(dev.get(STORE_PARAMETERS, 1), STORE_CAPABILITIES);
+    assert_eq!(dev.get(STORE_PARAMETERS, 1), SAVES_ON_COMMAND);
     let (mut after, _) = Device::power_on(profile, store.storage());
     assert_eq!(after.snapshot(), expected_after_store(profile, 0x42));
     assert_eq!(

@@ -294,6 +294,7 @@ mod tests {
         objects: &OBJECTS,
         defaults: &DEFAULTS,
         value_lists: &[],
+        storage: crate::od::StorageRules::NONE,
     };
 
     fn od_with(ram: &mut [u8; 31], mapping: &[u32]) {

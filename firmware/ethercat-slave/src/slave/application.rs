@@ -42,6 +42,13 @@ pub trait Application {
     /// error clears, announces it with `report.emcy_code` (`AppEvent::ErrorCleared`); the slave
     /// sends the raising EMCY itself.
     fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]);
+
+    /// Power-on, after the stored parameters were loaded (`SlaveCore::start`): the
+    /// application's own initialisation (a drive: CiA402 transition 1 to Switch On Disabled,
+    /// which does not wait for the bus). Default: nothing.
+    fn power_on(&mut self, ram: &mut [u8]) {
+        let _ = ram;
+    }
 }
 
 /// A slave without an application: process data are copied to and from the OD and nothing else

@@ -208,6 +208,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             pdi.write_u16(regs::STATION_ALIAS.addr, alias)?;
         }
         self.apply_input_shift_parameter();
+        self.app.power_on(&mut self.ram);
         pdi.write_u16(regs::AL_STATUS_CODE.addr, AlStatusCode::NoError.code())?;
         pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())
     }

@@ -225,9 +225,10 @@ impl CoeServer {
     }
 
     /// [`Self::handle`], then, if the request committed a download, lets `hook` act on the
-    /// written entry before the response goes out; a hook error replaces the download response
-    /// by an SDO abort with that code (e.g. 1010h/1011h: wrong signature 0x08000020, storage
-    /// failure 0x06060000, CiA 301 §7.5.2.13/14). The entry stays in [`Self::last_write`].
+    /// written entry before the response goes out ([`DownloadHook::downloaded_complete`] after a
+    /// complete-access download); a hook error replaces the download response by an SDO abort
+    /// with that code (e.g. 1010h/1011h: wrong signature 0x08000020, storage failure
+    /// 0x06060000, CiA 301 §7.5.2.13/14). The entry stays in [`Self::last_write`].
     pub fn handle_with<H: DownloadHook + ?Sized>(
         &mut self,
         od: &mut Dictionary<'_>,
@@ -243,7 +244,12 @@ impl CoeServer {
         let Some((index, subindex)) = self.last_write().filter(|_| n > 0) else {
             return Ok(n);
         };
-        match hook.downloaded(od, index, subindex) {
+        let done = if self.sdo.last_write_complete() {
+            hook.downloaded_complete(od, index, subindex)
+        } else {
+            hook.downloaded(od, index, subindex)
+        };
+        match done {
             Ok(()) => Ok(n),
             Err(code) => Ok(write_abort_response(response, index, subindex, code)),
         }

@@ -217,6 +217,9 @@ pub(super) struct SdoServer {
     transfer: Transfer,
     buffer: [u8; SEGMENT_BUFFER_CAPACITY],
     last_write: Option<(u16, u8)>,
+    /// Whether [`Self::last_write`] was a complete-access download (of the object from its
+    /// subindex on).
+    last_write_complete: bool,
 }
 
 impl SdoServer {
@@ -231,6 +234,7 @@ impl SdoServer {
             transfer: Transfer::Idle,
             buffer: [0; SEGMENT_BUFFER_CAPACITY],
             last_write: None,
+            last_write_complete: false,
         }
     }
 
@@ -238,11 +242,17 @@ impl SdoServer {
     pub(super) fn reset(&mut self) {
         self.transfer = Transfer::Idle;
         self.last_write = None;
+        self.last_write_complete = false;
     }
 
     /// The entry written by the last [`Self::handle`], if it committed one.
     pub(super) fn last_write(&self) -> Option<(u16, u8)> {
         self.last_write
+    }
+
+    /// Whether [`Self::last_write`] was a complete-access download.
+    pub(super) fn last_write_complete(&self) -> bool {
+        self.last_write_complete
     }
 
     /// Handles one SDO request `req` (after the CoE header), writes the SDO response to `resp`
@@ -257,6 +267,7 @@ impl SdoServer {
         domains: &mut dyn DomainStore,
     ) -> Result<usize, CoeError> {
         self.last_write = None;
+        self.last_write_complete = false;
         let Some(&[cmd, index_lo, index_hi, subindex, ..]) = req.first_chunk::<SDO_FRAME_LEN>()
         else {
             return Err(CoeError::SizeTooShort);
@@ -370,6 +381,7 @@ impl SdoServer {
             Some(stream) => {
                 complete_access::download(od, state, object, rq.subindex, stream)?;
                 self.last_write = Some((rq.index, rq.subindex));
+                self.last_write_complete = true;
                 Ok(())
             }
             None => self.start_download(rq.index, rq.subindex, size, data, true),
@@ -583,6 +595,7 @@ impl SdoServer {
             write_entry(od, state, index, subindex, data)?;
         }
         self.last_write = Some((index, subindex));
+        self.last_write_complete = complete;
         Ok(())
     }
 

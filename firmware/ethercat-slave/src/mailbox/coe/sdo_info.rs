@@ -378,7 +378,10 @@ fn in_list(profile: &Profile, o: &Object, list_type: u16) -> bool {
         list::ALL => true,
         list::RX_MAPPABLE => any(PdoMappable::rx),
         list::TX_MAPPABLE => any(PdoMappable::tx),
-        list::BACKUP => o.entries.iter().any(|e| is_storable(o, e)),
+        list::BACKUP => o
+            .entries
+            .iter()
+            .any(|e| is_storable(&profile.storage, o, e)),
         list::STARTUP => o
             .entries
             .iter()
@@ -443,7 +446,10 @@ fn entry_access(profile: &Profile, index: u16, e: &Entry) -> u16 {
     if e.pdo.tx() {
         access |= obj_access::TX_PDO;
     }
-    if profile.object(index).is_some_and(|o| is_storable(o, e)) {
+    if profile
+        .object(index)
+        .is_some_and(|o| is_storable(&profile.storage, o, e))
+    {
         access |= obj_access::BACKUP;
     }
     if profile.device.is_setting(index, e.subindex) {

@@ -298,6 +298,7 @@ static PROFILE: Profile = Profile {
     objects: &OBJECTS,
     defaults: &DEFAULTS,
     value_lists: &[],
+    storage: crate::od::StorageRules::NONE,
 };
 
 // ---------------------------------------------------------------------------------------------

@@ -108,7 +108,12 @@ fn od_list_type_0_answers_the_count_of_each_list_type() {
     let all = profile().objects.len() as u16;
     let rx = indices(|o| o.entries.iter().any(|e| e.pdo.rx())).len() as u16;
     let tx = indices(|o| o.entries.iter().any(|e| e.pdo.tx())).len() as u16;
-    let backup = indices(|o| o.entries.iter().any(|e| is_storable(o, e))).len() as u16;
+    let backup = indices(|o| {
+        o.entries
+            .iter()
+            .any(|e| is_storable(&profile().storage, o, e))
+    })
+    .len() as u16;
     let settings = profile().device.settings.len() as u16;
     assert!(backup > 0 && settings > 0);
     let expected = cat(&[
@@ -145,7 +150,10 @@ fn od_list_type_4_lists_the_objects_the_parameter_storage_stores() {
         0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2100, 0x2F00, 0x6076,
     ];
     assert_eq!(
-        indices(|o| o.entries.iter().any(|e| is_storable(o, e))),
+        indices(|o| o
+            .entries
+            .iter()
+            .any(|e| is_storable(&profile().storage, o, e))),
         backup
     );
     let expected = cat(&[&INFO, &[0x02, 0, 0, 0], &le16(4), &words(&backup)]);

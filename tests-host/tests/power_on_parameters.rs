@@ -1,0 +1,119 @@
+//! Parameters that act at power-on (ethercrab in process; the simulated drive keeps its
+//! parameter storage across a power cycle):
+//!
+//! - SDV3-E §3.7: P4.02 = 1 makes the drive write P4.01 into the configured station alias
+//!   0x0012 at start-up; with P4.02 = 0 the alias comes from SII word 4.
+//! - SDV3-E §3.5.1: P4.09 sets the input shift time 1C33h:03 = P4.09 × 62500 ns at power-on.
+
+use board_sim::Segment;
+use tests_host::session::{power_cycle, session, Step};
+
+/// SDV3-E parameter group 4 (3003h, sub = P4.yy): P4.01 node ID, P4.02 node ID setting,
+/// P4.09 input shift time setting (§2.4, Table 6-3).
+const GROUP4: u16 = 0x3003;
+const P4_01: u8 = 1;
+const P4_02: u8 = 2;
+const P4_09: u8 = 9;
+/// 1010h:01 "save" (CiA 301 §7.5.2.13).
+const STORE: u16 = 0x1010;
+const SIGNATURE_SAVE: u32 = u32::from_le_bytes(*b"save");
+/// ESC configured station alias register (ETG.1000.4).
+const STATION_ALIAS: u16 = 0x0012;
+/// 1C33h:03 input shift time.
+const SM_INPUT_PARAMETER: u16 = 0x1C33;
+const SHIFT_TIME: u8 = 3;
+/// §3.5.1: one P4.09 step.
+const SHIFT_STEP_NS: u32 = 62_500;
+
+fn value(r: &Result<u32, ethercrab::error::Error>) -> u32 {
+    *r.as_ref().unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+#[test]
+fn sdv3e_p4_02_selects_p4_01_as_station_alias_after_a_power_cycle() {
+    let p = od_gen::builtin("sdv3-e").expect("profile");
+    assert_eq!(p.eeprom.station_alias, 0, "SII word 4");
+    let segment = Segment::new("sdv3-e", 1).expect("profile");
+    let (mut segment, out) = session(
+        segment,
+        &[
+            Step::Register(STATION_ALIAS),
+            Step::Write(GROUP4, P4_01, 0x1234),
+            Step::Write(GROUP4, P4_02, 1),
+            Step::Register(STATION_ALIAS),
+            Step::Write(STORE, 1, SIGNATURE_SAVE),
+        ],
+    );
+    assert_eq!(value(&out[0]), 0, "the SII's alias at first power-on");
+    assert!(
+        out[1].is_ok() && out[2].is_ok() && out[4].is_ok(),
+        "{out:?}"
+    );
+    assert_eq!(value(&out[3]), 0, "takes effect only after a power cycle");
+    power_cycle(&mut segment);
+    let (mut segment, out) = session(
+        segment,
+        &[
+            Step::Register(STATION_ALIAS),
+            Step::Write(GROUP4, P4_02, 0),
+            Step::Write(STORE, 1, SIGNATURE_SAVE),
+        ],
+    );
+    assert_eq!(value(&out[0]), 0x1234, "P4.02 = 1: the alias is P4.01");
+    power_cycle(&mut segment);
+    let (_, out) = session(segment, &[Step::Register(STATION_ALIAS)]);
+    assert_eq!(
+        value(&out[0]),
+        0,
+        "P4.02 = 0: the alias of SII word 4 again"
+    );
+}
+
+#[test]
+fn sdv3e_p4_09_sets_the_input_shift_at_power_on() {
+    let segment = Segment::new("sdv3-e", 1).expect("profile");
+    let (mut segment, out) = session(
+        segment,
+        &[
+            Step::Read(SM_INPUT_PARAMETER, SHIFT_TIME),
+            Step::Write(GROUP4, P4_09, 3),
+            Step::Write(STORE, 1, SIGNATURE_SAVE),
+        ],
+    );
+    assert_eq!(value(&out[0]), 0, "default");
+    assert!(out[1].is_ok() && out[2].is_ok(), "{out:?}");
+    power_cycle(&mut segment);
+    let (_, out) = session(segment, &[Step::Read(SM_INPUT_PARAMETER, SHIFT_TIME)]);
+    assert_eq!(
+        value(&out[0]),
+        3 * SHIFT_STEP_NS,
+        "1C33h:03 = P4.09 × 62500 ns"
+    );
+}
+
+/// GHA-E Pn-410 "driver slave alias" (§2.2.1: 2004h:0Bh, effective after power-on).
+const PN_410: (u16, u8) = (0x2004, 0x0B);
+
+#[test]
+fn gha_e_pn_410_is_the_station_alias_after_a_power_cycle() {
+    let segment = Segment::new("gha-e", 1).expect("profile");
+    // An SDO download to a Pn parameter is saved at once (§4.2, Pn-046 = 0): no 1010h needed.
+    let (mut segment, out) = session(
+        segment,
+        &[
+            Step::Register(STATION_ALIAS),
+            Step::WriteU16(PN_410.0, PN_410.1, 0x0042),
+            Step::Register(STATION_ALIAS),
+        ],
+    );
+    assert_eq!(value(&out[0]), 0, "SII word 4");
+    assert!(out[1].is_ok(), "{out:?}");
+    assert_eq!(value(&out[2]), 0, "effective after power-on only");
+    power_cycle(&mut segment);
+    let (_, out) = session(segment, &[Step::Register(STATION_ALIAS)]);
+    assert_eq!(
+        value(&out[0]),
+        0x0042,
+        "Pn-410 loaded into 0x0012 at power-on"
+    );
+}
