@@ -104,11 +104,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let Some(missed) = self.sync_supervisor.missed_update() else {
             return Ok(());
         };
-        self.write_od(
-            SM_OUTPUT_PARAMETER,
-            self.profile.device.sync.sm_event_missed_subindex,
-            &missed.to_le_bytes(),
-        );
+        // 0: the profile's 1C32h has no missed-event counter (counted, not published).
+        let counter = self.profile.device.sync.sm_event_missed_subindex;
+        if counter != 0 {
+            self.write_od(SM_OUTPUT_PARAMETER, counter, &missed.to_le_bytes());
+        }
         let limit = self
             .dictionary()
             .read_u32(ERROR_SETTINGS, SUB_SYNC_ERROR_LIMIT)
