@@ -480,7 +480,8 @@ pub struct SyncFile {
     /// missed event (default false: only SYNC0 events that did not come).
     #[serde(default)]
     pub sync_error_on_missed_outputs: bool,
-    /// The 1C32h subindex that counts missed events (default 0x0B, ETG.1020).
+    /// The 1C32h subindex that counts missed events (default 0x0B, ETG.1020); 0: none (a
+    /// declared 1C32h without a counter).
     #[serde(default = "sm_event_missed_subindex")]
     pub sm_event_missed_subindex: u8,
 }

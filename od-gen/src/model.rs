@@ -861,7 +861,7 @@ pub struct Sync {
     pub sync_error_at_limit: bool,
     /// A SYNC0 without new outputs counts as a missed event (in OP, DC modes).
     pub sync_error_on_missed_outputs: bool,
-    /// The 1C32h subindex that counts missed events.
+    /// The 1C32h subindex that counts missed events; 0: none (a declared 1C32h without one).
     pub sm_event_missed_subindex: u8,
 }
 

@@ -496,24 +496,35 @@ fn integer_parameter(p: &Profile, (index, subindex): (u16, u8), key: &str) -> Re
 
 /// A declared 1C32h/1C33h (the manual's layout instead of the generated one) must carry what
 /// the stack reads and writes, consistent with `[sync]`: :01 sync type (UINT in RAM, writable
-/// exactly when `sync_mode_writable`), :02 cycle time (UDINT in RAM, writable exactly when
-/// `cycle_time_writable`, then with a range that holds the DC and free-run cycles), 1C33h:03
-/// writable exactly when `input_shift` is given (then a UDINT in RAM), 1C32h:03 read-only. The
+/// exactly when `sync_mode_writable`, default `default_sync_mode`), :02 cycle time (UDINT in
+/// RAM, writable exactly when `cycle_time_writable`, then with a range that holds the DC and
+/// free-run cycles; default `default_cycle_ns`), 1C33h:03 writable exactly when `input_shift` is
+/// given (then a UDINT in RAM), 1C32h:03 read-only; where present, :04 advertises the modes
+/// `[sync]` supports (bits 0..4; higher bits are the manual's) and :05 holds `min_cycle_ns`. The
 /// stack refreshes the other RAM entries it knows (:03, :05, :06, :09, :0A, :0B, :0C, :20) and
 /// leaves constant ones (the manual's fixed values) as declared.
 fn sm_parameters(p: &Profile) -> Result<(), Fault> {
     let y = &p.sync;
-    // The missed-event counter lives at ETG's 0x0B unless a declared 1C32h puts it elsewhere.
-    let counter = p
-        .entry(0x1C32, y.sm_event_missed_subindex)
-        .filter(|e| e.storage == Storage::Ram && !e.access.writable());
-    if counter.is_none() {
+    // The missed-event counter lives at ETG's 0x0B unless a declared 1C32h puts it elsewhere,
+    // or has none (0: the manual's layout lists no counter).
+    let declared_1c32 = p.object(0x1C32).is_some_and(|o| !o.derived);
+    let counter_ok = if y.sm_event_missed_subindex == 0 {
+        declared_1c32
+    } else {
+        p.entry(0x1C32, y.sm_event_missed_subindex)
+            .is_some_and(|e| e.storage == Storage::Ram && !e.access.writable())
+    };
+    if !counter_ok {
         return Err(fault(
             "sync.sm_event_missed_subindex",
-            Invalid::Sync(format!(
-                "1C32h:{:02X} must be a read-only entry in RAM",
-                y.sm_event_missed_subindex
-            )),
+            Invalid::Sync(if y.sm_event_missed_subindex == 0 {
+                "0 (no missed-event counter) needs a declared 1C32h".into()
+            } else {
+                format!(
+                    "1C32h:{:02X} must be a read-only entry in RAM",
+                    y.sm_event_missed_subindex
+                )
+            }),
         ));
     }
     for o in p
@@ -527,6 +538,12 @@ fn sm_parameters(p: &Profile) -> Result<(), Fault> {
                 &key(sub),
                 Invalid::Sync(format!("{:#06x}:{sub:02X}: {what}", o.index)),
             ))
+        };
+        let le = |b: &[u8]| {
+            let mut a = [0u8; 4];
+            let n = b.len().min(4);
+            a[..n].copy_from_slice(&b[..n]);
+            u32::from_le_bytes(a)
         };
         let ram_of = |sub: u8, t: DataType| {
             o.entry(sub)
@@ -551,12 +568,6 @@ fn sm_parameters(p: &Profile) -> Result<(), Fault> {
             return bad(2, "writable exactly when sync.cycle_time_writable");
         }
         if cycle.access.writable() {
-            let le = |b: &[u8]| {
-                let mut a = [0u8; 4];
-                let n = b.len().min(4);
-                a[..n].copy_from_slice(&b[..n]);
-                u32::from_le_bytes(a)
-            };
             let lowest = y.min_cycle_ns.min(y.free_run_min_cycle_ns);
             let highest = y.max_cycle_ns.max(y.free_run_max_cycle_ns);
             if cycle.min.is_empty()
@@ -568,6 +579,34 @@ fn sm_parameters(p: &Profile) -> Result<(), Fault> {
                     2,
                     "a writable cycle time needs min/max holding the DC and free-run cycles",
                 );
+            }
+        }
+        // 1C33h follows 1C32h; its SM-synchronous value is 0x22 (synchronous with SM2).
+        let mode_default = match (o.index, y.default_sync_mode) {
+            (0x1C33, 1) => 0x22,
+            (_, m) => m,
+        };
+        if le(&mode.initial_bytes()) != u32::from(mode_default) {
+            return bad(1, "the default must be sync.default_sync_mode");
+        }
+        if le(&cycle.initial_bytes()) != y.default_cycle_ns {
+            return bad(2, "the default must be sync.default_cycle_ns");
+        }
+        if let Some(e) = o.entry(4) {
+            let advertised = le(&e.initial_bytes()) & 0x1F;
+            if e.data_type != DataType::Uint || advertised != u32::from(y.modes_supported()) {
+                return bad(
+                    4,
+                    &format!(
+                        "a UINT whose bits 0..4 are the modes [sync] supports ({:#06x})",
+                        y.modes_supported()
+                    ),
+                );
+            }
+        }
+        if let Some(e) = o.entry(5) {
+            if e.data_type != DataType::Udint || le(&e.initial_bytes()) != y.min_cycle_ns {
+                return bad(5, "a UDINT holding sync.min_cycle_ns");
             }
         }
         let shift = o.entry(3);

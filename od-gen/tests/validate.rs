@@ -1071,3 +1071,70 @@ fn declared_sm_parameters_replace_the_generated_ones_and_are_checked_against_syn
     ));
     assert_eq!(key, "object[0x1c12]");
 }
+
+#[test]
+fn declared_sm_parameters_agree_with_sync_on_defaults_modes_minimum_and_counter() {
+    let declared = |sync_extra: &str, entries: &str| {
+        with(
+            "cycle_step_ns = 31_250",
+            &format!(
+                "cycle_step_ns = 31_250\n{sync_extra}\n\n[[object]]\nindex = 0x1C32\nname = \"SM output parameter\"\ncode = \"record\"\nentry = [\n{entries}\n]\n\n[sync.dummy_never_used]",
+            ),
+        )
+        .replace("\n\n[sync.dummy_never_used]", "")
+    };
+    // standard.toml: default sync mode free run (0), default cycle 1 ms, modes 0x0007 (free run,
+    // SM-synchronous, DC SYNC0), minimum cycle 31250 ns.
+    let ok_entries = "{ sub = 1, name = \"Sync mode\", type = \"UINT\", access = \"rw_preop\", storage = \"ram\", default = 0 },\n\
+        { sub = 2, name = \"Cycle time\", type = \"UDINT\", access = \"rw_preop\", storage = \"ram\", default = 1_000_000, min = 31_250, max = 10_000_000 },\n\
+        { sub = 4, name = \"Sync modes supported\", type = \"UINT\", access = \"ro\", storage = \"const\", default = 0x4007 },\n\
+        { sub = 5, name = \"Minimum cycle time\", type = \"UDINT\", access = \"ro\", storage = \"const\", default = 31_250 },\n\
+        { sub = 11, name = \"SM event missed\", type = \"UINT\", access = \"ro\", storage = \"ram\", default = 0 },";
+    assert!(od_gen::parse(&declared("", ok_entries), "p.toml").is_ok());
+
+    // :01 default other than the default sync mode.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replacen("default = 0 }", "default = 2 }", 1),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[1]");
+    // :02 default other than default_cycle_ns.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replace("default = 1_000_000", "default = 2_000_000"),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[2]");
+    // :04 advertising SYNC1, which [sync] does not support (bits above 4 are free).
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replace("default = 0x4007", "default = 0x400F"),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[4]");
+    // :05 other than min_cycle_ns.
+    let (key, _) = invalid(&declared(
+        "",
+        &ok_entries.replace("default = 31_250 }", "default = 0 }"),
+    ));
+    assert_eq!(key, "object[0x1c32].entry[5]");
+
+    // A layout without a missed-event counter says so with sm_event_missed_subindex = 0 ...
+    let no_counter = ok_entries.replace(
+        "\n{ sub = 11, name = \"SM event missed\", type = \"UINT\", access = \"ro\", storage = \"ram\", default = 0 },",
+        "",
+    );
+    assert_ne!(no_counter, ok_entries, "test setup");
+    let (key, _) = invalid(&declared("", &no_counter));
+    assert_eq!(key, "sync.sm_event_missed_subindex");
+    let p = od_gen::parse(
+        &declared("sm_event_missed_subindex = 0", &no_counter),
+        "p.toml",
+    )
+    .expect("no counter");
+    assert!(p.entry(0x1C32, 0x0B).is_none());
+    // ... which the generated layout (it has :0B) does not take.
+    let (key, _) = invalid(&with(
+        "cycle_step_ns = 31_250",
+        "cycle_step_ns = 31_250\nsm_event_missed_subindex = 0",
+    ));
+    assert_eq!(key, "sync.sm_event_missed_subindex");
+}

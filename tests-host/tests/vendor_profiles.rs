@@ -2,7 +2,8 @@
 //! under a real master, ethercrab in process: the identity and name the manual gives, every
 //! object read over SDO equal to its default from the profile file, and the default PDO mapping
 //! in OP at the profile's shortest and longest DC cycle; a cycle outside the profile's range is
-//! refused at SAFE-OP with AL status code 0x0035.
+//! refused at SAFE-OP with AL status code 0x0035; 1C32h/1C33h in the manual's own layout where a
+//! profile declares them.
 //!
 //! The expectations come from the profile files (od-gen's model of the manual), read
 //! independently of the firmware's generated dictionary.
@@ -141,6 +142,22 @@ async fn run_dc_assigned(
     cycle_ns: u64,
     assignment: Option<(&[u16], &[u16])>,
 ) -> Result<(usize, usize), (u16, u16)> {
+    run_dc_reading(p, cycle_ns, assignment, &[])
+        .await
+        .map(|(sizes, _)| sizes)
+}
+
+/// What an SDO upload in OP answered: the bytes, or the abort code.
+type Upload = Result<Vec<u8>, u32>;
+
+/// [`run_dc_assigned`], uploading each of `reads` (index, subindex) by SDO while in OP; returns
+/// the answers in the same order with the process image sizes.
+async fn run_dc_reading(
+    p: &Profile,
+    cycle_ns: u64,
+    assignment: Option<(&[u16], &[u16])>,
+    reads: &[(u16, u8)],
+) -> Result<((usize, usize), Vec<Upload>), (u16, u16)> {
     let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
@@ -211,18 +228,36 @@ async fn run_dc_assigned(
     // 1C32h:20 in sync without error: FALSE (ETG.1020 "sync error"), TRUE where the profile
     // defines the flag the other way round (RSE); absent where the manual's layout has none
     // (Σ-V-SD).
-    if p.entry(0x1C32, 0x20).is_some() {
-        let flag: u8 = sd.sdo_read(0x1C32, 0x20).await.expect("1C32h:20");
-        assert_eq!(
-            flag,
-            u8::from(p.sync.sync_flag_in_sync),
-            "{}: 1C32h:20",
-            p.name
-        );
+    for index in [0x1C32u16, 0x1C33] {
+        if p.entry(index, 0x20).is_some() {
+            let flag: u8 = sd.sdo_read(index, 0x20).await.expect(":20");
+            assert_eq!(
+                flag,
+                u8::from(p.sync.sync_flag_in_sync),
+                "{}: {index:#06x}:20",
+                p.name
+            );
+        }
+    }
+    // One upload per cycle, between the process data exchanges (a master's mailbox traffic in
+    // its cyclic task): the drive stays synchronised while it answers.
+    let mut uploads = Vec::new();
+    for (index, subindex) in reads {
+        let since = m.shared.clock().now();
+        let r = group.tx_rx_dc(md).await.expect("tx/rx");
+        assert!(r.all_op(), "{}: left OP during the SDO reads", p.name);
+        let r = sd
+            .sdo_read::<heapless08::Vec<u8, 64>>(*index, *subindex)
+            .await
+            .map(|v| v.to_vec())
+            .map_err(abort_code);
+        uploads.push(r);
+        let spent = m.shared.clock().now() - since;
+        m.shared.advance(cycle_ns.saturating_sub(spent));
     }
     let sizes = (sd.outputs_raw().len(), sd.inputs_raw().len());
     let _ = group.into_safe_op(md).await.expect("OP -> SAFE-OP");
-    Ok(sizes)
+    Ok((sizes, uploads))
 }
 
 /// The shortest cycle the profile accepts: `min_cycle_ns` rounded up to the control step.
@@ -580,8 +615,8 @@ fn values_outside_an_entrys_list_are_refused_with_0x06090030() {
 }
 
 /// 1C32h:01/:02 (the sync mode and cycle the master asks for) are read-only where the manual
-/// says so (RSE: both; SDV3-E: the mode, chosen by the drive at PREOP -> SAFEOP): a download is
-/// refused with 0x06010002; elsewhere it is served in PREOP.
+/// says so (RSE and Σ-V-SD: both; SDV3-E: the mode, chosen by the drive at PREOP -> SAFEOP;
+/// GHA-E: the cycle): a download is refused with 0x06010002; elsewhere it is served in PREOP.
 #[test]
 fn sync_mode_and_cycle_time_are_writable_as_the_profile_says() {
     const READ_ONLY: u32 = 0x0601_0002;
@@ -607,6 +642,169 @@ fn sync_mode_and_cycle_time_are_writable_as_the_profile_says() {
                 (false, Err(e)) => assert_eq!(abort_code(e), READ_ONLY, "{}", p.name),
                 (w, r) => panic!("{}: 1C32h:02 writable {w}, download {r:?}", p.name),
             }
+            // :0A (Sync0 cycle time, where the layout has one) is the stack's copy of the
+            // SYNC0 cycle: read-only, also where the GHA-E manual prints RW (decision "1C32h:0A
+            // SYNC0 cycle time read-only").
+            if p.entry(0x1C32, 0x0A).is_some() {
+                let e = sd
+                    .sdo_write(0x1C32, 0x0A, cycle)
+                    .await
+                    .expect_err("1C32h:0A written");
+                assert_eq!(abort_code(e), READ_ONLY, "{}: 1C32h:0A", p.name);
+            }
         });
+    }
+}
+
+/// SDO abort "subindex does not exist" (ETG.1000.6 Table 41).
+const ABORT_NO_SUBINDEX: u32 = 0x0609_0011;
+
+/// The upload of a little-endian unsigned value.
+fn uint(r: &Upload) -> u64 {
+    let bytes = r
+        .as_ref()
+        .unwrap_or_else(|code| panic!("aborted {code:#010x}"));
+    let mut b = [0u8; 8];
+    b[..bytes.len()].copy_from_slice(bytes);
+    u64::from_le_bytes(b)
+}
+
+/// Every profile that declares 1C32h/1C33h in its manual's layout, in OP with DC SYNC0 at a
+/// cycle other than its default: an SDO upload of every subindex 0..=0x20 of both objects finds
+/// sub 0 and the constants as the profile declares them, :01 = 2 (DC SYNC0), :02 and :0A (where
+/// present) = the SYNC0 cycle, RAM entries with their type's length, and every subindex the
+/// layout lacks answered with abort 0x06090011. The manuals' key facts are asserted literally
+/// too, so a transcription error in a profile fails here.
+#[test]
+fn declared_sm_parameters_read_in_op_as_the_manual_prints_them() {
+    let declared: Vec<Profile> = profiles()
+        .into_iter()
+        .filter(|p| {
+            [0x1C32, 0x1C33]
+                .iter()
+                .any(|i| p.object(*i).is_some_and(|o| !o.derived))
+        })
+        .collect();
+    let names: Vec<&str> = declared.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "gha-e",
+            "osd-g-e",
+            "rse",
+            "sdv3-e",
+            "sigma-v-sd",
+            "sigma-v-sd-2axis"
+        ]
+    );
+    for p in &declared {
+        let cycle = longest(p);
+        assert_ne!(cycle, u64::from(p.sync.default_cycle_ns), "{}", p.name);
+        let reads: Vec<(u16, u8)> = [0x1C32u16, 0x1C33]
+            .into_iter()
+            .flat_map(|i| (0..=0x20u8).map(move |s| (i, s)))
+            .collect();
+        let (_, uploads) = block_on(run_dc_reading(p, cycle, None, &reads))
+            .unwrap_or_else(|s| panic!("{}: SAFE-OP refused at {cycle} ns: {s:?}", p.name));
+        let got = |index: u16, sub: u8| -> &Upload {
+            let at = reads.iter().position(|r| *r == (index, sub)).expect("read");
+            &uploads[at]
+        };
+
+        // From the profile file.
+        for index in [0x1C32u16, 0x1C33] {
+            let o = p.object(index).expect("SM parameter object");
+            for sub in 0..=0x20u8 {
+                let at = format!("{} {index:#06x}:{sub:02x}", p.name);
+                let r = got(index, sub);
+                let Some(e) = o.entry(sub) else {
+                    assert_eq!(r, &Err(ABORT_NO_SUBINDEX), "{at}: not in the layout");
+                    continue;
+                };
+                match (sub, e.storage) {
+                    (0, _) => {
+                        let highest = o.entries.last().expect("entries").subindex;
+                        assert_eq!(r, &Ok(vec![highest]), "{at}: highest subindex");
+                    }
+                    (_, Storage::Const) => assert_eq!(r, &Ok(e.initial_bytes()), "{at}"),
+                    (1, _) => assert_eq!(r, &Ok(vec![2, 0]), "{at}: DC SYNC0"),
+                    (2 | 0x0A, _) => assert_eq!(uint(r), cycle, "{at}: the SYNC0 cycle"),
+                    _ => assert_eq!(
+                        r.as_ref().map(Vec::len),
+                        Ok(e.byte_len()),
+                        "{at}: kept by the stack"
+                    ),
+                }
+            }
+        }
+
+        // From the manuals, literally.
+        let sub0 = |index| uint(got(index, 0));
+        let absent = |index, sub| got(index, sub) == &Err(ABORT_NO_SUBINDEX);
+        match p.name.as_str() {
+            // SDV3-E Table 6-1 (OSD-G-E Table 6-1, word for word): sub 0 = 32, :07 Minimum
+            // Delay Time, :08 Get Cycle Time u16, :0A Sync0 Cycle Time, no :0B/:0C; :04 = 5;
+            // :05 printed 0, 250 µs by decision.
+            "sdv3-e" | "osd-g-e" => {
+                for index in [0x1C32, 0x1C33] {
+                    assert_eq!(sub0(index), 32, "{}", p.name);
+                    assert_eq!(got(index, 7), &Ok(vec![0; 4]), "{}", p.name);
+                    assert_eq!(got(index, 8), &Ok(vec![0; 2]), "{}", p.name);
+                    assert_eq!(uint(got(index, 0x0A)), cycle, "{}", p.name);
+                    assert!(absent(index, 0x0B) && absent(index, 0x0C), "{}", p.name);
+                    assert_eq!(uint(got(index, 4)), 5, "{}", p.name);
+                    assert_eq!(uint(got(index, 5)), 250_000, "{}", p.name);
+                    assert_eq!(
+                        got(index, 0x20),
+                        &Ok(vec![0]),
+                        "{}: Sync Error FALSE",
+                        p.name
+                    );
+                }
+            }
+            // GHA-E §4.1: sub 0 = 32, no :03/:08; :04 = 0004h, :05 = 125000, :06 = 10000,
+            // :09 = 0; :0A SYNC0 cycle time; :0B/:0C UINT16 counters.
+            "gha-e" => {
+                for index in [0x1C32, 0x1C33] {
+                    assert_eq!(sub0(index), 32);
+                    assert!(absent(index, 3) && absent(index, 8));
+                    assert_eq!(uint(got(index, 4)), 0x0004);
+                    assert_eq!(uint(got(index, 5)), 125_000);
+                    assert_eq!(uint(got(index, 6)), 10_000);
+                    assert_eq!(uint(got(index, 9)), 0);
+                    assert_eq!(uint(got(index, 0x0A)), cycle);
+                    assert_eq!(got(index, 0x0B).as_ref().map(Vec::len), Ok(2));
+                    assert_eq!(got(index, 0x0C).as_ref().map(Vec::len), Ok(2));
+                }
+            }
+            // RSE 7.2: sub 0 = 32, subindexes 1, 2, 4, 5, 6, 9, 20h only; 1C33h:06 printed 1;
+            // :20 TRUE while synchronised (the RSE's polarity).
+            "rse" => {
+                for index in [0x1C32, 0x1C33] {
+                    assert_eq!(sub0(index), 32);
+                    for sub in [3, 7, 8, 0x0A, 0x0B, 0x0C] {
+                        assert!(absent(index, sub), "rse {index:#06x}:{sub:02x}");
+                    }
+                    assert_eq!(uint(got(index, 9)), 0);
+                }
+                assert_eq!(uint(got(0x1C32, 6)), 0);
+                assert_eq!(uint(got(0x1C33, 6)), 1);
+                assert_eq!(got(0x1C32, 0x20), &Ok(vec![1]), "in sync");
+            }
+            // Σ-V-SD §4.4 (3): sub 0 = 12 / 10; 1C32h:03 = 125000 fixed, :06 = 62500,
+            // :09 = 125000; 1C32h:0C SM2 event miss count (UDINT); 1C33h:04 = 0x0025; no :20.
+            "sigma-v-sd" | "sigma-v-sd-2axis" => {
+                assert_eq!((sub0(0x1C32), sub0(0x1C33)), (12, 10), "{}", p.name);
+                assert_eq!(uint(got(0x1C32, 3)), 125_000, "{}", p.name);
+                assert_eq!(uint(got(0x1C32, 6)), 62_500, "{}", p.name);
+                assert_eq!(uint(got(0x1C32, 9)), 125_000, "{}", p.name);
+                // The count itself depends on the master's frame timing (sync_rules.rs tests it).
+                let count = got(0x1C32, 0x0C).as_ref().map(Vec::len);
+                assert_eq!(count, Ok(4), "{}: 1C32h:0C a UDINT", p.name);
+                assert_eq!(uint(got(0x1C33, 4)), 0x0025, "{}", p.name);
+                assert!(absent(0x1C32, 0x20) && absent(0x1C33, 0x0B), "{}", p.name);
+            }
+            other => panic!("{other}: no manual facts asserted"),
+        }
     }
 }

@@ -286,7 +286,8 @@ pub struct SyncSupport {
     /// did not come are counted.
     pub sync_error_on_missed_outputs: bool,
     /// The 1C32h subindex that counts missed events (ETG.1020: 0x0B "SM-event missed counter";
-    /// the Σ-V-SD has it at 0x0C).
+    /// the Σ-V-SD has it at 0x0C); 0: the profile's 1C32h has none (the counting still feeds the
+    /// sync error counter).
     pub sm_event_missed_subindex: u8,
 }
 

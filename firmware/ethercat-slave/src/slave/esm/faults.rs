@@ -104,11 +104,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let Some(missed) = self.sync_supervisor.missed_update() else {
             return Ok(());
         };
-        self.write_od(
-            SM_OUTPUT_PARAMETER,
-            self.profile.device.sync.sm_event_missed_subindex,
-            &missed.to_le_bytes(),
-        );
+        // 0: the profile's 1C32h has no missed-event counter (counted, not published).
+        let counter = self.profile.device.sync.sm_event_missed_subindex;
+        if counter != 0 {
+            self.write_od(SM_OUTPUT_PARAMETER, counter, &missed.to_le_bytes());
+        }
         let limit = self
             .dictionary()
             .read_u32(ERROR_SETTINGS, SUB_SYNC_ERROR_LIMIT)
@@ -116,7 +116,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let at_limit = self.profile.device.sync.sync_error_at_limit;
         if self.sync_supervisor.tripped(limit, at_limit) && !self.status.error {
             let flag = self.profile.device.sync.sync_error_flag(true, true);
-            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[flag]);
+            self.publish_sync_error_flag(flag);
             self.sync_supervisor.reset();
             // ETG.1000.6 Table 11 (OP → SAFEOP + error): pulses missed while the SYNC unit still
             // runs are a synchronization error (0x001A); a SYNC unit the master switched off

@@ -231,13 +231,21 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if from == AlState::PreOp && to == AlState::SafeOp {
             let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
             let flag = self.profile.device.sync.sync_error_flag(false, dc);
-            self.write_od(SM_OUTPUT_PARAMETER, SUB_SYNC_ERROR, &[flag]);
+            self.publish_sync_error_flag(flag);
             self.publish_sync_parameters();
             // Inputs are valid from SAFEOP on: write them once before the master reads SM3.
             self.run_application(self.now_ns);
             self.write_inputs(pdi)?;
         }
         Ok(())
+    }
+
+    /// Writes the sync error flag (:20) of both SM parameter objects (ETG.1020 has it in each;
+    /// a profile's layout may lack it in either).
+    pub(in crate::slave) fn publish_sync_error_flag(&mut self, flag: u8) {
+        for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
+            self.write_od(index, SUB_SYNC_ERROR, &[flag]);
+        }
     }
 
     /// Mirrors the active synchronisation into 1C32h/1C33h (:01 sync type, :02 cycle time, and
