@@ -510,6 +510,17 @@ fn synchronisation(out: &mut String, p: &Profile) {
             },
         ],
         vec![
+            "AL status code of a sync error (counter)".into(),
+            hex16(e.sync_error_al_code),
+        ],
+        vec![
+            "SYNC0 lock timeout in SAFEOP".into(),
+            match e.sync_lock_timeout_ms {
+                Some(ms) => format!("{ms} ms, then PREOP with 0x002D"),
+                None => "none (only a SAFEOP → OP request waits)".into(),
+            },
+        ],
+        vec![
             "Error register 1001h".into(),
             if p.emcy.register_mask == 0xFF {
                 "CiA 301 class bits".into()

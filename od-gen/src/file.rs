@@ -526,6 +526,15 @@ pub struct EsmFile {
     /// Operation Enabled; absent: the drive is only disabled.
     #[serde(default)]
     pub op_exit_while_enabled_error: Option<MotorFaultFile>,
+    /// The AL status code of a sync error the counter detects: 0x001A (default, ETG.1000.6
+    /// "synchronization error") or 0x002C ("fatal sync error", the SDV3-E's cS).
+    #[serde(default = "sync_error_al_code")]
+    pub sync_error_al_code: u16,
+    /// In SAFEOP with a DC mode configured, SYNC0 must start within this many ms, else the
+    /// slave drops to PREOP with 0x002D (the SDV3-E's PLF); absent: only a SAFEOP → OP request
+    /// waits for it (`safeop_op_timeout_ms`).
+    #[serde(default)]
+    pub sync_lock_timeout_ms: Option<u32>,
     /// AL errors the stack raises by itself (sync error, watchdog, PLL, refused cycle time, ...)
     /// that the drive also reports as one of its errors (603Fh, EMCY in place of the ESM
     /// transition emergency).
@@ -576,6 +585,15 @@ pub struct AlErrorAlarmFile {
     pub error: MotorFaultFile,
 }
 
+/// ETG.1000.6 AL status code 0x001A "synchronization error".
+pub const AL_SYNC_ERROR: u16 = 0x001A;
+/// ETG.1000.6 AL status code 0x002C "fatal sync error".
+pub const AL_FATAL_SYNC_ERROR: u16 = 0x002C;
+
+fn sync_error_al_code() -> u16 {
+    AL_SYNC_ERROR
+}
+
 /// The ETG default SafeopOpTimeout of the ESI (ms).
 pub const DEFAULT_SAFEOP_OP_TIMEOUT_MS: u32 = 9000;
 
@@ -589,6 +607,8 @@ impl Default for EsmFile {
             op_requires_outputs: true,
             safeop_op_timeout_ms: DEFAULT_SAFEOP_OP_TIMEOUT_MS,
             op_exit_while_enabled_error: None,
+            sync_error_al_code: AL_SYNC_ERROR,
+            sync_lock_timeout_ms: None,
             al_error_alarms: Vec::new(),
         }
     }

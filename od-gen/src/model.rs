@@ -1043,6 +1043,10 @@ pub struct EsmRules {
     /// AL errors of the stack that the drive also reports as one of its errors, by AL status
     /// code (ascending, unique).
     pub al_error_alarms: Vec<(u16, MotorFaultCode)>,
+    /// AL status code of a counted sync error (0x001A or 0x002C).
+    pub sync_error_al_code: u16,
+    /// SYNC0 must start this long after SAFEOP was entered (ms), else PREOP + 0x002D.
+    pub sync_lock_timeout_ms: Option<u32>,
 }
 
 /// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP/OP.

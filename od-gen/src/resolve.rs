@@ -221,6 +221,24 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .map(|r| fault_report(r, &alarms, "esm.op_exit_while_enabled_error"))
             .transpose()?,
         al_error_alarms: al_error_alarms(&f.esm.al_error_alarms, &alarms)?,
+        sync_error_al_code: match f.esm.sync_error_al_code {
+            c @ (crate::file::AL_SYNC_ERROR | crate::file::AL_FATAL_SYNC_ERROR) => c,
+            other => {
+                return Err(fault(
+                    "esm.sync_error_al_code",
+                    Invalid::Value(format!("{other:#06x} is not 0x001A or 0x002C")),
+                ))
+            }
+        },
+        sync_lock_timeout_ms: match f.esm.sync_lock_timeout_ms {
+            Some(0) => {
+                return Err(fault(
+                    "esm.sync_lock_timeout_ms",
+                    Invalid::Value("must be at least 1".into()),
+                ))
+            }
+            t => t,
+        },
     };
     let emcy = EmcyRules {
         register_mask: match f.emcy.error_register.as_str() {

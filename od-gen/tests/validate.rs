@@ -451,7 +451,7 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
     );
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[] },"
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], sync_error_al_code: 0x001a, sync_lock_timeout_ms: None },"
     ));
 
     // Without [esm] and the new keys: the documented defaults.
@@ -1137,4 +1137,30 @@ fn declared_sm_parameters_agree_with_sync_on_defaults_modes_minimum_and_counter(
         "cycle_step_ns = 31_250\nsm_event_missed_subindex = 0",
     ));
     assert_eq!(key, "sync.sm_event_missed_subindex");
+}
+
+#[test]
+fn sync_error_code_and_lock_timeout_are_checked() {
+    let esm = |extra: &str| {
+        with(
+            "safeop_op_timeout_ms = 9000",
+            &format!("safeop_op_timeout_ms = 9000\n{extra}"),
+        )
+    };
+    let p = od_gen::parse(
+        &esm("sync_error_al_code = 0x002C\nsync_lock_timeout_ms = 2000"),
+        "p.toml",
+    )
+    .unwrap();
+    assert_eq!(
+        (p.esm.sync_error_al_code, p.esm.sync_lock_timeout_ms),
+        (0x002C, Some(2000))
+    );
+    let (key, _) = invalid(&esm("sync_error_al_code = 0x001B"));
+    assert_eq!(key, "esm.sync_error_al_code");
+    let (key, _) = invalid(&esm("sync_lock_timeout_ms = 0"));
+    assert_eq!(key, "esm.sync_lock_timeout_ms");
+    let sdv3e = od_gen::builtin("sdv3-e").unwrap();
+    assert_eq!(sdv3e.esm.sync_error_al_code, 0x002C, "§5.2 5) cS");
+    assert_eq!(sdv3e.esm.sync_lock_timeout_ms, Some(2000), "§5.2 7) PLF");
 }

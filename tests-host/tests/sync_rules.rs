@@ -31,6 +31,8 @@ const AL_ERROR: u16 = 0x10;
 const SYNC_ERROR: u16 = 0x001A;
 const INVALID_SYNC_CYCLE_TIME: u16 = 0x0035;
 const SYNC0_CYCLE_TIME: u16 = 0x0036;
+const FATAL_SYNC_ERROR: u16 = 0x002C;
+const NO_SYNC_ERROR: u16 = 0x002D;
 /// SDO abort "value range of parameter exceeded" (ETG.1000.6 Table 41).
 const ABORT_VALUE_RANGE: u32 = 0x0609_0030;
 /// 1C32h (SM output parameter) / 1C33h (SM input parameter), ETG.1020 §5.1.
@@ -436,6 +438,108 @@ fn sigma_v_sd_sm_watchdog_is_an_ff00h_emergency_with_the_generic_bit_only() {
             u16::from_le_bytes([coe[6], coe[7]]),
             SM_WATCHDOG,
             "the AL status code where the alarm code goes"
+        );
+    });
+}
+
+#[test]
+fn sdv3e_missed_sync0_is_cs_with_al_status_0x2c() {
+    // §5.2 5): cS "SYNC signal out of step" → SafeOP, AL status 0x002C, alarm cS.
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("sdv3-e");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "cS")
+        .expect("alarm cS");
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("request OP");
+        for _ in 0..100 {
+            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
+                break;
+            }
+            m.shared.advance(CYCLE_NS);
+        }
+        m.shared.advance(CYCLE_NS);
+        assert_eq!(al_status(md).await, (OP, 0));
+        // SYNC0 at twice the configured period: every other event is missed.
+        Command::fpwr(FIRST_STATION, DC_SYNC0_CYCLE)
+            .send(md, 2 * CYCLE_NS as u32)
+            .await
+            .expect("0x09A0");
+        for _ in 0..20 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(al_status(md).await, (SAFEOP | AL_ERROR, FATAL_SYNC_ERROR));
+        let coe = emergency(&m, md, p.sm.mailbox_in.start, CYCLE_NS).await;
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code"
+        );
+        assert_eq!(
+            &coe[5..10],
+            &alarm.emcy.data,
+            "error No. 34h, auxiliary code 801Bh"
+        );
+    });
+}
+
+#[test]
+fn sdv3e_sync0_not_locked_within_2_s_of_safeop_is_plf_in_preop() {
+    // §5.2 7): PLF "PLL phase-locking failure": no lock within 2 s in SafeOP → PreOP, 0x002D.
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("sdv3-e");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "PLF")
+        .expect("alarm PLF");
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let mut group = init(&m).await;
+        for mut sd in group.iter_mut(md) {
+            sd.set_dc_sync(DcSync::Sync0);
+        }
+        let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+        for _ in 0..100 {
+            group.tx_rx_sync_system_time(md).await.expect("time sync");
+            m.shared.advance(CYCLE_NS);
+        }
+        // The SYNC unit is activated with its first pulse 3 s away: no lock for 3 s.
+        let group = group
+            .configure_dc_sync(
+                md,
+                DcConfiguration {
+                    start_delay: Duration::from_secs(3),
+                    sync0_period: Duration::from_nanos(CYCLE_NS),
+                    sync0_shift: Duration::ZERO,
+                },
+            )
+            .await
+            .expect("DC configuration");
+        let _group = group.into_safe_op(md).await.expect("SAFE-OP");
+        m.shared.advance(1_900_000_000);
+        assert_eq!(
+            al_status(md).await,
+            (SAFEOP, 0),
+            "still waiting after 1.9 s"
+        );
+        m.shared.advance(200_000_000);
+        assert_eq!(al_status(md).await, (PREOP | AL_ERROR, NO_SYNC_ERROR));
+        let coe = emergency(&m, md, p.sm.mailbox_in.start, CYCLE_NS).await;
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code"
         );
     });
 }

@@ -94,6 +94,8 @@ pub(crate) const fn test_device() -> DeviceInfo {
             safeop_op_timeout_ms: 9000,
             op_exit_while_enabled_error: None,
             al_error_alarms: &[],
+            sync_error_al_code: 0x001A,
+            sync_lock_timeout_ms: None,
         },
         sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
         station_alias_parameter: None,

@@ -328,6 +328,14 @@ pub struct EsmRules {
     /// report (603Fh, PDS Fault) and its EMCY goes out in place of the ESM transition emergency.
     /// Sorted by AL status code.
     pub al_error_alarms: &'static [AlErrorAlarm],
+    /// The AL status code of a sync error the counter detects while the SYNC unit runs:
+    /// 0x001A (ETG.1000.6 "synchronization error") or 0x002C ("fatal sync error", e.g. the
+    /// SDV3-E's cS).
+    pub sync_error_al_code: u16,
+    /// In SAFEOP with a DC mode configured, SYNC0 must start within this many ms of entering
+    /// SAFEOP, else the slave drops to PREOP with 0x002D (the SDV3-E's PLF, §5.2 7); `None`:
+    /// only a SAFEOP → OP request waits for SYNC0 (`safeop_op_timeout_ms`).
+    pub sync_lock_timeout_ms: Option<u32>,
 }
 
 /// How a profile forms the error register 1001h and the stack's own emergencies (`[emcy]`).
@@ -388,6 +396,12 @@ impl EsmRules {
     /// [`Self::safeop_op_timeout_ms`] in ns.
     pub const fn safeop_op_timeout_ns(&self) -> u64 {
         self.safeop_op_timeout_ms as u64 * 1_000_000
+    }
+
+    /// [`Self::sync_lock_timeout_ms`] in ns.
+    pub fn sync_lock_timeout_ns(&self) -> Option<u64> {
+        self.sync_lock_timeout_ms
+            .map(|ms| u64::from(ms) * 1_000_000)
     }
 
     /// The drive error the profile reports with AL status code `code`, if any.

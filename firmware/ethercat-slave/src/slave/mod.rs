@@ -98,6 +98,9 @@ pub struct SlaveCore<const RAM: usize, A: Application = NoApplication> {
     error_indication: ErrorIndication,
     /// Start of the running process-data cycle (board clock, ns).
     cycle_started_ns: u64,
+    /// When SAFEOP was entered from PREOP or the master changed the synchronisation in SAFEOP
+    /// (board clock, ns): the start of the profile's SYNC0 lock timeout.
+    sync_lock_since_ns: u64,
     /// Longest process-data cycle since SAFEOP was entered (1C32h/1C33h:06), ns.
     calc_and_copy_max_ns: u32,
     /// Cycles that did not fit into the SYNC0 cycle (1C32h:0C).
@@ -181,6 +184,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             outputs_received: false,
             error_indication: ErrorIndication::None,
             cycle_started_ns: 0,
+            sync_lock_since_ns: 0,
             calc_and_copy_max_ns: 0,
             cycle_too_small: 0,
             errors: ActiveErrors::new(),
@@ -331,6 +335,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             let sync = self.read_sync(pdi)?;
             if sync != self.sync {
                 self.sync_supervisor.reset();
+                self.sync_lock_since_ns = now_ns;
             }
             self.sync = sync;
             self.publish_sync_parameters();

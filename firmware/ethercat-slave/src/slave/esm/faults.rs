@@ -89,6 +89,21 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if !dc || !matches!(self.status.state, AlState::SafeOp | AlState::Op) {
             return Ok(());
         }
+        if let Some(timeout) = self.profile.device.esm.sync_lock_timeout_ns() {
+            // Profile rule: SYNC0 must start within the lock timeout of entering SAFEOP or of the
+            // master's last change of the synchronisation (ETG.1000.6 Table 11: 0x002D "no sync
+            // error"; the SDV3-E falls back to PREOP).
+            let waited = now_ns.saturating_sub(self.sync_lock_since_ns);
+            let waiting = self.status.state == AlState::SafeOp && !self.sync_supervisor.running();
+            if waiting && waited > timeout && !self.status.error {
+                return self.raise_fault(
+                    pdi,
+                    AlState::PreOp,
+                    AlStatusCode::NoSyncError,
+                    ErrorIndication::LocalError,
+                );
+            }
+        }
         if self.sync_supervisor.pll_lost() && !self.status.error {
             // The control loop phase-locks to SYNC0; a SYNC0 at another period than the one
             // configured for SAFEOP cannot be followed (ETG.1000.6 Table 11: 0x0032 PLL error).
@@ -121,8 +136,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             // ETG.1000.6 Table 11 (OP → SAFEOP + error): pulses missed while the SYNC unit still
             // runs are a synchronization error (0x001A); a SYNC unit the master switched off
             // (0x0981) will not bring SYNC0 back: fatal sync error (0x002C).
+            // A profile may report the counted error as fatal too (`[esm] sync_error_al_code`).
             let unit = DcActivation(pdi.read_u8(regs::DC_ACTIVATION.addr)?);
-            let code = if unit.sync0_active() {
+            let counted_as_fatal =
+                self.profile.device.esm.sync_error_al_code == AlStatusCode::FatalSyncError.code();
+            let code = if unit.sync0_active() && !counted_as_fatal {
                 AlStatusCode::SyncError
             } else {
                 AlStatusCode::FatalSyncError

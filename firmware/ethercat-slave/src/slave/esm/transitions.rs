@@ -229,6 +229,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             self.calc_and_copy_max_ns = 0;
         }
         if from == AlState::PreOp && to == AlState::SafeOp {
+            self.sync_lock_since_ns = self.now_ns;
             let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
             let flag = self.profile.device.sync.sync_error_flag(false, dc);
             self.publish_sync_error_flag(flag);
