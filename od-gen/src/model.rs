@@ -552,6 +552,11 @@ pub const SM_PARAMETER_OBJECTS: [u16; 2] = [0x1C32, 0x1C33];
 /// code asserts that both rules select the same entries (`check::backup_agrees`).
 pub const NOT_STORED: [u16; 4] = [0x1010, 0x1011, 0x1C32, 0x1C33];
 
+/// The one SM parameter entry that is a stored parameter where the master may write it: the
+/// input shift time 1C33h:03 (`[sync] input_shift`), which the stack never overwrites (the
+/// Σ-V-SD keeps it in EEPROM, §4.4 (3)). As `ethercat_slave::params::STORED_SM_PARAMETER`.
+pub const STORED_SM_PARAMETER: (u16, u8) = (0x1C33, 0x03);
+
 /// Store parameters (CiA 301 §7.5.2.13): the object whose subindexes select the groups.
 pub const STORE_PARAMETERS: u16 = 0x1010;
 /// Restore default parameters (CiA 301 §7.5.2.14).
@@ -689,7 +694,7 @@ impl StorageRules {
         e.storage == Storage::Ram
             && e.access.writable()
             && parameter
-            && !NOT_STORED.contains(&o.index)
+            && (!NOT_STORED.contains(&o.index) || (o.index, e.subindex) == STORED_SM_PARAMETER)
     }
 
     /// What 1010h:`subindex` reads: [`SAVES_ON_COMMAND`], plus [`SAVES_AUTONOMOUSLY`] when the

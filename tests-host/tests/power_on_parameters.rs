@@ -117,3 +117,27 @@ fn gha_e_pn_410_is_the_station_alias_after_a_power_cycle() {
         "Pn-410 loaded into 0x0012 at power-on"
     );
 }
+
+#[test]
+fn the_input_shift_is_stored_on_the_sigma_v_sd_but_not_on_the_sdv3e() {
+    // Σ-V-SD §4.4 (3): 1C33h:03 is kept in EEPROM (PnCCA). SDV3-E: P4.09 is the stored form.
+    for (profile, kept) in [("sigma-v-sd", true), ("sdv3-e", false)] {
+        let segment = Segment::new(profile, 1).expect("profile");
+        let (mut segment, out) = session(
+            segment,
+            &[
+                Step::Write(SM_INPUT_PARAMETER, SHIFT_TIME, 250_000),
+                Step::Write(STORE, 1, SIGNATURE_SAVE),
+            ],
+        );
+        assert!(out.iter().all(Result::is_ok), "{profile}: {out:?}");
+        power_cycle(&mut segment);
+        let (_, out) = session(segment, &[Step::Read(SM_INPUT_PARAMETER, SHIFT_TIME)]);
+        let expected = if kept { 250_000 } else { 0 };
+        assert_eq!(
+            value(&out[0]),
+            expected,
+            "{profile}: 1C33h:03 after a power cycle"
+        );
+    }
+}

@@ -9,6 +9,7 @@
 //! 1010h/1011h subindex selects, the entries an SDO download stores at once and a condition on
 //! the device state for some 1010h/1011h subindexes.
 
+use super::index::sm_parameter::SUB_SHIFT_TIME;
 use super::index::{RESTORE_DEFAULTS, SM_INPUT_PARAMETER, SM_OUTPUT_PARAMETER, STORE_PARAMETERS};
 use super::model::{Entry, Object, PdoMappable, Value};
 use super::store::Dictionary;
@@ -21,6 +22,11 @@ pub const NOT_STORED: [u16; 4] = [
     SM_OUTPUT_PARAMETER,
     SM_INPUT_PARAMETER,
 ];
+
+/// The one SM parameter entry that is a stored parameter where the master may write it: the
+/// input shift time 1C33h:03 (a profile's `[sync] input_shift`), which the stack never
+/// overwrites (the Σ-V-SD keeps it in EEPROM, §4.4 (3)).
+pub const STORED_SM_PARAMETER: (u16, u8) = (SM_INPUT_PARAMETER, SUB_SHIFT_TIME);
 
 /// A set of entries a storage rule names: every entry of the objects `first..=last`, or, with
 /// `subindex`, that one entry of object `first` (od-gen writes `first == last` then). Profile
@@ -237,8 +243,13 @@ pub const fn is_storable(rules: &StorageRules, object: &Object, entry: &Entry) -
     matches!(entry.value, Value::Ram(_))
         && entry.access.writable()
         && parameter
-        && !is_not_stored(index)
+        && (!is_not_stored(index) || is_stored_sm_parameter(index, subindex))
         && !any_contains(rules.not_stored, index, subindex)
+}
+
+/// Whether `index:subindex` is [`STORED_SM_PARAMETER`].
+const fn is_stored_sm_parameter(index: u16, subindex: u8) -> bool {
+    index == STORED_SM_PARAMETER.0 && subindex == STORED_SM_PARAMETER.1
 }
 
 /// Whether `index` is one of [`NOT_STORED`].

@@ -45,7 +45,8 @@
 //!
 //! An entry is stored ([`is_storable`]) if it is an OD RAM variable, writable over SDO in some
 //! state, not one of [`NOT_STORED`] (1010h/1011h themselves and the SM parameters
-//! 1C32h/1C33h, which the stack overwrites with the active synchronisation), not named by the
+//! 1C32h/1C33h, which the stack overwrites with the active synchronisation; except
+//! [`STORED_SM_PARAMETER`], a writable input shift time), not named by the
 //! profile's `not_stored`, and either not PDO-mappable or named by the profile's
 //! `stored_pdo_mappable`.
 //!
@@ -107,7 +108,7 @@ use hal::storage::{NvStorage, StorageError};
 
 pub use crate::od::index::{RESTORE_DEFAULTS, STORE_PARAMETERS};
 use crate::od::storable::{any_contains, EntryRange, StorageRules};
-pub use crate::od::storable::{is_storable, NOT_STORED};
+pub use crate::od::storable::{is_storable, NOT_STORED, STORED_SM_PARAMETER};
 use crate::od::{AbortCode, DownloadHook};
 use crate::od::{Dictionary, Profile, StoreError};
 
