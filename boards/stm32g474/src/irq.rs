@@ -302,7 +302,9 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
     /// ISR: ESC SYNC0, EXTI4 at P1.
     /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free run at 1C32h:02.
     /// - Budget: `on_sync0` ≤ 2,000 instructions (DESIGN.md §6) ≈ 12 µs at 170 MHz, plus the
-    ///   PDI bus time: (3 + n_out) + (2 + n_in) bytes × 376 ns, e.g. 2 × 32 B of PDO ≈ 26 µs.
+    ///   PDI bus time: (3 + n_out) + (2 + n_in) bytes × 376 ns, e.g. 2 × 32 B of PDO ≈ 26 µs,
+    ///   plus 6 bytes (≈ 2.3 µs) for the AL event read of a profile that supervises the outputs
+    ///   at each SYNC0 (`sync_error_on_missed_outputs`).
     ///   Everything (lock wait included) must end before the next SYNC0, less the FOC load.
     /// - Measured: not yet on hardware. Each run's cycles (DWT, lock wait included) go to
     ///   `CYCLE_STATS.max_cycles`, logged every second by `tasks::report`; instruction counts of
