@@ -545,6 +545,48 @@ fn sdv3e_sync0_not_locked_within_2_s_of_safeop_is_plf_in_preop() {
 }
 
 #[test]
+fn gha_e_counts_missed_events_in_both_sm_parameter_objects() {
+    // GHA-E §4.1: 1C32h and 1C33h both have :0B "SM event missed counter".
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("gha-e");
+    assert!(p.entry(0x1C32, 0x0B).is_some() && p.entry(0x1C33, 0x0B).is_some());
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("request OP");
+        for _ in 0..100 {
+            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
+                break;
+            }
+            m.shared.advance(CYCLE_NS);
+        }
+        m.shared.advance(CYCLE_NS);
+        Command::fpwr(FIRST_STATION, DC_SYNC0_CYCLE)
+            .send(md, 2 * CYCLE_NS as u32)
+            .await
+            .expect("0x09A0");
+        for _ in 0..20 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        let sd = group.subdevice(md, 0).expect("drive");
+        let outputs: u16 = sd
+            .sdo_read(SM_OUTPUT_PARAMETER, 0x0B)
+            .await
+            .expect("1C32h:0B");
+        let inputs: u16 = sd
+            .sdo_read(SM_INPUT_PARAMETER, 0x0B)
+            .await
+            .expect("1C33h:0B");
+        assert!(outputs > 0, "SYNC0 events were missed");
+        assert_eq!(inputs, outputs, "the same SYNC0 drives both SMs");
+    });
+}
+
+#[test]
 fn gha_e_sync0_period_outside_the_allowed_set_is_alarm_co03() {
     let p = profile("gha-e");
     let alarm = p

@@ -140,7 +140,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if self.sync.cycle_ns != 0 && elapsed > self.sync.cycle_ns && !counter_at_0c {
             self.cycle_too_small = self.cycle_too_small.saturating_add(1);
             let count = self.cycle_too_small.to_le_bytes();
-            self.write_od(SM_OUTPUT_PARAMETER, SUB_CYCLE_TIME_TOO_SMALL, &count);
+            // Both SMs run on the same cycle: the count goes to each object that has it.
+            for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
+                self.write_od(index, SUB_CYCLE_TIME_TOO_SMALL, &count);
+            }
         }
     }
 }

@@ -122,7 +122,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         // 0: the profile's 1C32h has no missed-event counter (counted, not published).
         let counter = self.profile.device.sync.sm_event_missed_subindex;
         if counter != 0 {
-            self.write_od(SM_OUTPUT_PARAMETER, counter, &missed.to_le_bytes());
+            // Both SMs are synchronised to the same SYNC0: each object that has the counter.
+            for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
+                self.write_od(index, counter, &missed.to_le_bytes());
+            }
         }
         let limit = self
             .dictionary()
