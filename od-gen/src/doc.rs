@@ -510,6 +510,13 @@ fn synchronisation(out: &mut String, p: &Profile) {
             },
         ],
         vec![
+            "Input port link lost (PREOP and above)".into(),
+            match e.link_loss_error {
+                Some(c) => format!("INIT, AL status code 0x0000; fault, {}", error_report(&c)),
+                None => "not supervised".into(),
+            },
+        ],
+        vec![
             "AL status code of a sync error (counter)".into(),
             hex16(e.sync_error_al_code),
         ],

@@ -526,6 +526,11 @@ pub struct EsmFile {
     /// Operation Enabled; absent: the drive is only disabled.
     #[serde(default)]
     pub op_exit_while_enabled_error: Option<MotorFaultFile>,
+    /// Link loss on the input port (port 0) in PREOP, SAFEOP or OP: the slave goes to INIT with
+    /// AL status code 0x0000 and the drive raises this error (a CiA402 code or an `[[alarm]]`
+    /// display; the SDV3-E's LL); absent: no link supervision.
+    #[serde(default)]
+    pub link_loss_error: Option<MotorFaultFile>,
     /// The AL status code of a sync error the counter detects: 0x001A (default, ETG.1000.6
     /// "synchronization error") or 0x002C ("fatal sync error", the SDV3-E's cS).
     #[serde(default = "sync_error_al_code")]
@@ -607,6 +612,7 @@ impl Default for EsmFile {
             op_requires_outputs: true,
             safeop_op_timeout_ms: DEFAULT_SAFEOP_OP_TIMEOUT_MS,
             op_exit_while_enabled_error: None,
+            link_loss_error: None,
             sync_error_al_code: AL_SYNC_ERROR,
             sync_lock_timeout_ms: None,
             al_error_alarms: Vec::new(),

@@ -1048,6 +1048,8 @@ pub struct EsmRules {
     /// AL errors of the stack that the drive also reports as one of its errors, by AL status
     /// code (ascending, unique).
     pub al_error_alarms: Vec<(u16, MotorFaultCode)>,
+    /// The drive error raised when the input port's link is lost (INIT, AL status code 0).
+    pub link_loss_error: Option<MotorFaultCode>,
     /// AL status code of a counted sync error (0x001A or 0x002C).
     pub sync_error_al_code: u16,
     /// SYNC0 must start this long after SAFEOP was entered (ms), else PREOP + 0x002D.

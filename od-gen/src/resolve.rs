@@ -221,6 +221,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .map(|r| fault_report(r, &alarms, "esm.op_exit_while_enabled_error"))
             .transpose()?,
         al_error_alarms: al_error_alarms(&f.esm.al_error_alarms, &alarms)?,
+        link_loss_error: f
+            .esm
+            .link_loss_error
+            .as_ref()
+            .map(|r| fault_report(r, &alarms, "esm.link_loss_error"))
+            .transpose()?,
         sync_error_al_code: match f.esm.sync_error_al_code {
             c @ (crate::file::AL_SYNC_ERROR | crate::file::AL_FATAL_SYNC_ERROR) => c,
             other => {

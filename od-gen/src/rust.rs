@@ -374,13 +374,16 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         .collect();
     let _ = writeln!(
         out,
-        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}], sync_error_al_code: {:#06x}, sync_lock_timeout_ms: {:?} }},",
+        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}], link_loss_error: {}, sync_error_al_code: {:#06x}, sync_lock_timeout_ms: {:?} }},",
         m.op_requires_outputs,
         m.safeop_op_timeout_ms,
         m.op_exit_while_enabled_error
             .as_ref()
             .map_or("None".into(), |c| format!("Some({})", report(c))),
         al_error_alarms.join(", "),
+        m.link_loss_error
+            .as_ref()
+            .map_or("None".into(), |c| format!("Some({})", report(c))),
         m.sync_error_al_code,
         m.sync_lock_timeout_ms
     );

@@ -651,6 +651,12 @@ fn esm(p: &Profile) -> Result<(), Fault> {
             Invalid::Value("must be at least 1".into()),
         ));
     }
+    if p.esm.link_loss_error.map(|r| r.error_code) == Some(0) {
+        return Err(fault(
+            "esm.link_loss_error",
+            Invalid::Value("0 is \"no error\" (603Fh)".into()),
+        ));
+    }
     if p.esm.op_exit_while_enabled_error.map(|r| r.error_code) == Some(0) {
         return Err(fault(
             "esm.op_exit_while_enabled_error",

@@ -451,7 +451,7 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
     );
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], sync_error_al_code: 0x001a, sync_lock_timeout_ms: None },"
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], link_loss_error: None, sync_error_al_code: 0x001a, sync_lock_timeout_ms: None },"
     ));
 
     // Without [esm] and the new keys: the documented defaults.
@@ -1160,7 +1160,16 @@ fn sync_error_code_and_lock_timeout_are_checked() {
     assert_eq!(key, "esm.sync_error_al_code");
     let (key, _) = invalid(&esm("sync_lock_timeout_ms = 0"));
     assert_eq!(key, "esm.sync_lock_timeout_ms");
+    let (key, _) = invalid(&esm("link_loss_error = \"no-such-alarm\""));
+    assert_eq!(key, "esm.link_loss_error");
+    let (key, _) = invalid(&esm("link_loss_error = 0"));
+    assert_eq!(key, "esm.link_loss_error");
     let sdv3e = od_gen::builtin("sdv3-e").unwrap();
+    assert_eq!(
+        sdv3e.esm.link_loss_error.map(|r| r.error_code),
+        Some(0x8502),
+        "§5.2 3) LL"
+    );
     assert_eq!(sdv3e.esm.sync_error_al_code, 0x002C, "§5.2 5) cS");
     assert_eq!(sdv3e.esm.sync_lock_timeout_ms, Some(2000), "§5.2 7) PLF");
 }

@@ -19,12 +19,14 @@ pub enum Step {
     WriteU16(u16, u8, u16),
     /// SDO upload as a u32.
     Read(u16, u8),
+    /// SDO upload of a 16-bit entry.
+    ReadU16(u16, u8),
     /// FPRD of a 16-bit ESC register of drive 0.
     Register(u16),
 }
 
 /// Takes the segment away from a master (which is then done with it).
-fn take_segment(m: &InProcess) -> Segment {
+pub fn take_segment(m: &InProcess) -> Segment {
     let empty = Segment::new("standard", 0).expect("empty segment");
     std::mem::replace(&mut *m.shared.segment(), empty)
 }
@@ -57,6 +59,7 @@ pub fn session(segment: Segment, steps: &[Step]) -> (Segment, Vec<Result<u32, Er
                     sd.sdo_write(index, sub, value).await.map(|()| 0)
                 }
                 Step::Read(index, sub) => sd.sdo_read::<u32>(index, sub).await,
+                Step::ReadU16(index, sub) => sd.sdo_read::<u16>(index, sub).await.map(u32::from),
                 Step::Register(address) => Command::fprd(FIRST_STATION, address)
                     .receive::<u16>(md)
                     .await

@@ -17,6 +17,7 @@ use board_sim::Segment;
 use ethercrab::subdevice_group::{DcConfiguration, PreOp};
 use ethercrab::{Command, DcSync, DefaultLock, MainDevice, SubDeviceGroup};
 use od_gen::model::Profile;
+use tests_host::session::{session, take_segment, Step};
 use tests_host::{al_status, block_on, master_for, FIRST_STATION};
 
 const MAX_SUBDEVICES: usize = 4;
@@ -55,6 +56,7 @@ const ERROR_SETTINGS: u16 = 0x10F1;
 const SIGMA_EMCY_CODE: u16 = 0xFF00;
 /// AL status OP (ETG.1000.6 Table 9); SM watchdog AL status code (Table 11).
 const OP: u16 = 0x08;
+const INIT: u16 = 0x01;
 const SM_WATCHDOG: u16 = 0x001B;
 /// ESC SYNC0 cycle time register (ETG.1000.4 Table 60).
 const DC_SYNC0_CYCLE: u16 = 0x09A0;
@@ -542,6 +544,53 @@ fn sdv3e_sync0_not_locked_within_2_s_of_safeop_is_plf_in_preop() {
             "EMCY code"
         );
     });
+}
+
+#[test]
+fn sdv3e_input_link_lost_in_op_is_ll_in_init() {
+    // §5.2 3): LL "link disconnection": the input port's link lost in PreOP/SafeOP/OP → Init,
+    // AL status code 0x0000; the drive holds alarm LL (603Fh 8502h) until a fault reset.
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("sdv3-e");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "LL")
+        .expect("alarm LL");
+    let segment = block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        let transport = tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = init(&m).await;
+        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("request OP");
+        for _ in 0..100 {
+            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
+                break;
+            }
+            m.shared.advance(CYCLE_NS);
+        }
+        m.shared.advance(CYCLE_NS);
+        assert_eq!(al_status(md).await, (OP, 0));
+        // The cable is pulled for 30 ms, then plugged again.
+        m.shared.segment().set_master_cable(false);
+        m.shared.advance(30 * CYCLE_NS);
+        m.shared.segment().set_master_cable(true);
+        assert_eq!(
+            al_status(md).await,
+            (INIT, 0),
+            "Init, AL status code 0x0000"
+        );
+        drop(group);
+        transport.abort();
+        take_segment(&m)
+    });
+    let (_, out) = session(segment, &[Step::ReadU16(ERROR_CODE, 0)]);
+    assert_eq!(
+        out[0].as_ref().ok().copied(),
+        Some(u32::from(alarm.error_code)),
+        "603Fh = LL"
+    );
 }
 
 #[test]

@@ -159,6 +159,14 @@ impl<D: SimDevice> Segment<D> {
         &self.drives
     }
 
+    /// Plugs or pulls the cable between the master and the first drive (its port 0): while it is
+    /// pulled no frame passes and the drive sees no link on its input port (DL status 0x0110).
+    pub fn set_master_cable(&mut self, connected: bool) {
+        if let Some(d) = self.drives.first_mut() {
+            d.esc_mut().set_port_connected(0, connected);
+        }
+    }
+
     /// The drives in ring order, mutable (for fault injection in tests).
     pub fn drives_mut(&mut self) -> &mut [D] {
         &mut self.drives
@@ -171,6 +179,14 @@ impl<D: SimDevice> Segment<D> {
     pub fn process_frame(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
         let t = self.now_ns + wire_time_ns(frame.len());
         self.advance_to(t);
+        if self
+            .drives
+            .first()
+            .is_some_and(|d| !d.esc().port0_connected())
+        {
+            // The cable to the master is pulled: the frame reaches no drive and none comes back.
+            return None;
+        }
         let mut reply = frame.to_vec();
         esc::process_frame(&mut reply, self.drives.iter_mut().map(|d| d.esc_mut())).ok()?;
         for d in &mut self.drives {

@@ -78,6 +78,8 @@ pub struct Et1100 {
     now: u64,
     /// Port 1 connects to a next ESC.
     port1_connected: bool,
+    /// Whether the cable towards the master (port 0) has a link (fault injection: false).
+    port0_connected: bool,
     /// The local clock was set by `set_clock` or got its ring-position default.
     clock_configured: bool,
     /// The PDI came up (SII checksum good).
@@ -110,6 +112,7 @@ impl Et1100 {
             eeprom: eeprom::EepromUnit::default(),
             now: 0,
             port1_connected: false,
+            port0_connected: true,
             clock_configured: false,
             pdi_operational: false,
             sync0_edge: false,
@@ -190,14 +193,24 @@ impl Et1100 {
         self.now
     }
 
-    /// Connects or disconnects physical port `port` (0..3). Port 0 faces the master and is always
-    /// connected; port 1 faces the next ESC. [`process_frame`] sets port 1 from the ring order.
-    /// Updates the link, loop and communication bits of DL status 0x0110.
+    /// Connects or disconnects physical port `port` (0..3). Port 0 faces the master (connected
+    /// unless a test pulls its cable); port 1 faces the next ESC ([`process_frame`] sets it from
+    /// the ring order). Updates the link, loop and communication bits of DL status 0x0110.
     pub fn set_port_connected(&mut self, port: u8, connected: bool) {
-        if port == 1 && self.port1_connected != connected {
-            self.port1_connected = connected;
+        let link = match port {
+            0 => &mut self.port0_connected,
+            1 => &mut self.port1_connected,
+            _ => return,
+        };
+        if *link != connected {
+            *link = connected;
             self.update_dl_status();
         }
+    }
+
+    /// Whether port 0 (towards the master) has a link.
+    pub fn port0_connected(&self) -> bool {
+        self.port0_connected
     }
 
     /// Sets the local clock: local time `local_ns` at the current global time and a drift of
@@ -371,7 +384,7 @@ impl Et1100 {
         }
         for port in 0..regs::ET1100_PORTS {
             let connected = match port {
-                0 => true,
+                0 => self.port0_connected,
                 1 => self.port1_connected,
                 _ => false,
             };

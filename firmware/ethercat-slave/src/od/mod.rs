@@ -94,6 +94,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             safeop_op_timeout_ms: 9000,
             op_exit_while_enabled_error: None,
             al_error_alarms: &[],
+            link_loss_error: None,
             sync_error_al_code: 0x001A,
             sync_lock_timeout_ms: None,
         },

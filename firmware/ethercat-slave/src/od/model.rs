@@ -328,6 +328,10 @@ pub struct EsmRules {
     /// report (603Fh, PDS Fault) and its EMCY goes out in place of the ESM transition emergency.
     /// Sorted by AL status code.
     pub al_error_alarms: &'static [AlErrorAlarm],
+    /// Link supervision of the input port (port 0): when its link is lost in PREOP, SAFEOP or
+    /// OP the slave goes to INIT with AL status code 0x0000 and the application raises this
+    /// error (the SDV3-E's LL, §5.2 3); `None`: the link is not supervised.
+    pub link_loss_error: Option<ErrorReport>,
     /// The AL status code of a sync error the counter detects while the SYNC unit runs:
     /// 0x001A (ETG.1000.6 "synchronization error") or 0x002C ("fatal sync error", e.g. the
     /// SDV3-E's cS).

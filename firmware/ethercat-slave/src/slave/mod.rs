@@ -308,6 +308,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if events.any(AlEvent::WATCHDOG_PD) {
             self.check_watchdog(pdi)?;
         }
+        self.supervise_link(pdi)?;
         self.supervise_sync(pdi, now_ns)?;
         Ok(EventJob {
             events,

@@ -2,6 +2,10 @@
 //! supervision; each drops the state with its AL status code (ETG.1000.6 Table 11).
 
 use super::super::*;
+use hal::esc::DlStatus;
+
+/// The ESC port that faces the master (ETG.1000.4: frames enter at port 0).
+const INPUT_PORT: u8 = 0;
 
 impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// SM activation changed: the master rewrote an SM. In PREOP and above the mailbox SMs must
@@ -55,6 +59,39 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             AlState::PreOp
         };
         self.raise_fault(pdi, fallback, code, ErrorIndication::InvalidConfiguration)
+    }
+
+    /// Profile rule (`[esm] link_loss_error`): the input port (port 0, DL status 0x0110) lost
+    /// its link in PREOP or above: the application raises the profile's error (603Fh; its EMCY
+    /// cannot reach the master) and the slave goes to INIT with AL status code 0x0000.
+    pub(in crate::slave) fn supervise_link<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<(), P::Error> {
+        let Some(report) = self.profile.device.esm.link_loss_error else {
+            return Ok(());
+        };
+        let from = self.status.state;
+        if from == AlState::Init {
+            return Ok(());
+        }
+        let dl_status = pdi.read_u16(regs::DL_STATUS.addr)?;
+        if dl_status & DlStatus::link(INPUT_PORT) != 0 {
+            return Ok(());
+        }
+        self.app.raise_error(report, &mut self.ram);
+        // The error stays in 1001h until the drive's fault reset; the EMCY is dropped with the
+        // mailbox in INIT (nobody could receive it).
+        let _ = self.report_error(
+            report.emcy_code,
+            emcy::register::DEVICE_PROFILE,
+            report.emcy_data,
+            None,
+            self.now_ns,
+        );
+        self.pending_op = None;
+        self.error_indication = ErrorIndication::InvalidConfiguration;
+        self.apply(pdi, from, esm::link_lost(self.status))
     }
 
     /// Process-data watchdog (0x0440 bit 0 cleared by the ESC when SM2 was not written within

@@ -141,6 +141,20 @@ pub fn decide(
     }
 }
 
+/// The input port lost its link (a profile's link supervision): INIT without error indication
+/// and AL status code 0x0000 (nothing for the master to acknowledge: it could not see the
+/// transition); from INIT nothing changes.
+pub fn link_lost(current: AlStatus) -> Outcome {
+    if current.state == AlState::Init {
+        Outcome {
+            status: current,
+            code: AlStatusCode::NoError,
+        }
+    } else {
+        Outcome::ok(AlState::Init)
+    }
+}
+
 /// Outcome of an asynchronous error (watchdog, sync loss, mailbox SM deactivated) detected in
 /// `current`: the state drops to `fallback` if that is lower, with the error flag and `code`.
 pub fn fault(current: AlState, fallback: AlState, code: AlStatusCode) -> Outcome {
@@ -166,6 +180,19 @@ pub const fn state_rank(state: AlState) -> u8 {
 mod tests {
     use super::*;
     use AlState::*;
+
+    #[test]
+    fn link_loss_drops_to_init_without_error() {
+        for from in [PreOp, SafeOp, Op] {
+            let o = link_lost(st(from));
+            assert_eq!(
+                (o.status.state, o.status.error, o.code),
+                (Init, false, AlStatusCode::NoError)
+            );
+        }
+        let o = link_lost(st(Init));
+        assert_eq!(o.status.state, Init);
+    }
 
     fn st(state: AlState) -> AlStatus {
         AlStatus {
