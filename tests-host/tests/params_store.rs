@@ -10,6 +10,7 @@ use board_sim::Segment;
 use ethercrab::error::{CoeAbortCode, Error, MailboxError};
 use ethercrab::{MainDeviceConfig, Timeouts};
 use tests_host::block_on;
+use tests_host::session::{power_cycle, take_segment};
 
 /// The tunable parameter of the standard profile used here (manufacturer range, UDINT).
 const USER_PARAMETER: u16 = 0x2F00;
@@ -39,19 +40,6 @@ fn connect(segment: Segment) -> (InProcess, InMemoryTxRx) {
         },
         MainDeviceConfig::default(),
     )
-}
-
-/// Takes the segment away from a master (which is then done with it).
-fn take_segment(m: &InProcess) -> Segment {
-    let empty = Segment::new("standard", 0).expect("empty segment");
-    std::mem::replace(&mut *m.shared.segment(), empty)
-}
-
-/// Switches drive 0 off and on; its storage stays.
-fn power_cycle(segment: &mut Segment) {
-    let drive = &mut segment.drives_mut()[0];
-    drive.power_cycle().expect("power cycle");
-    assert!(drive.loaded.is_ok(), "storage readable: {:?}", drive.loaded);
 }
 
 /// What one master session does with drive 0 in PRE-OP.

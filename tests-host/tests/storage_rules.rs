@@ -12,11 +12,11 @@
 
 use std::time::Duration;
 
-use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::error::{Error, MailboxError};
 use ethercrab::subdevice_group::DcConfiguration;
 use ethercrab::DcSync;
+use tests_host::session::{power_cycle, take_segment};
 use tests_host::{al_status, block_on, master_for};
 
 const STORE: u16 = 0x1010;
@@ -77,19 +77,6 @@ fn abort_of(e: Error) -> u32 {
 
 fn segment(profile: &str) -> Segment {
     Segment::new(profile, 1).expect("built-in profile")
-}
-
-/// Takes the segment away from a master that is done with it.
-fn take_segment(m: &InProcess) -> Segment {
-    let empty = Segment::new("standard", 0).expect("empty segment");
-    std::mem::replace(&mut *m.shared.segment(), empty)
-}
-
-/// Switches the drive off and on; its parameter storage stays.
-fn power_cycle(segment: &mut Segment) {
-    let drive = &mut segment.drives_mut()[0];
-    drive.power_cycle().expect("power cycle");
-    assert!(drive.loaded.is_ok(), "storage readable: {:?}", drive.loaded);
 }
 
 /// Writes of the parameter storage so far.
