@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
-use ethercrab::subdevice_group::{DcConfiguration, PreOp};
+use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op, PreOp};
 use ethercrab::{Command, DcSync, DefaultLock, MainDevice, SubDeviceGroup};
 use od_gen::model::Profile;
 use tests_host::session::{session, take_segment, Step};
@@ -23,6 +23,7 @@ use tests_host::{al_status, block_on, master_for, FIRST_STATION};
 const MAX_SUBDEVICES: usize = 4;
 const MAX_PDI: usize = 512;
 type Group = SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>;
+type OpGroup = SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, Op, HasDc>;
 
 /// AL status values (ETG.1000.6 Table 9): state | 0x10 error indication.
 const PREOP: u16 = 0x02;
@@ -118,13 +119,7 @@ async fn dc_safe_op(
     group: Group,
     cycle_ns: u64,
 ) -> Result<
-    SubDeviceGroup<
-        MAX_SUBDEVICES,
-        MAX_PDI,
-        DefaultLock,
-        ethercrab::subdevice_group::SafeOp,
-        ethercrab::subdevice_group::HasDc,
-    >,
+    SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, ethercrab::subdevice_group::SafeOp, HasDc>,
     (u16, u16),
 > {
     let mut group = group;
@@ -151,6 +146,22 @@ async fn dc_safe_op(
         Ok(g) => Ok(g),
         Err(_) => Err(al_status(md).await),
     }
+}
+
+/// PREOP → OP with DC SYNC0 at `cycle_ns` ([`dc_safe_op`], then cycling until every drive is in
+/// OP; the cycle that reached OP is completed).
+async fn into_dc_op(m: &InProcess, md: &MainDevice<'_>, cycle_ns: u64) -> OpGroup {
+    let group = init(m).await;
+    let group = dc_safe_op(m, md, group, cycle_ns).await.expect("SAFE-OP");
+    let group = group.request_into_op(md).await.expect("request OP");
+    for _ in 0..100 {
+        let r = group.tx_rx_dc(md).await.expect("tx/rx");
+        m.shared.advance(cycle_ns);
+        if r.all_op() {
+            return group;
+        }
+    }
+    panic!("no OP: {:?}", al_status(md).await);
 }
 
 /// Advances simulated time to one `cycle_ns` after `since` (the frames of the cycle take wire
@@ -275,19 +286,7 @@ fn sigma_v_sd_sync_error(slow_sync0: bool, missed_cycle: fn(usize) -> bool) {
         let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = init(&m).await;
-        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("request OP");
-        let mut in_op = false;
-        for _ in 0..100 {
-            let r = group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-            if r.all_op() {
-                in_op = true;
-                break;
-            }
-        }
-        assert!(in_op, "OP: {:?}", al_status(md).await);
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
         for _ in 0..5 {
             group.tx_rx_dc(md).await.expect("tx/rx");
             m.shared.advance(CYCLE_NS);
@@ -351,16 +350,7 @@ fn sigma_v_sd_a_single_missing_frame_does_not_trip() {
         let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = init(&m).await;
-        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("request OP");
-        for _ in 0..100 {
-            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
-                break;
-            }
-            m.shared.advance(CYCLE_NS);
-        }
-        m.shared.advance(CYCLE_NS);
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
         for k in 0..100 {
             let since = m.shared.clock().now();
             if k % 10 != 0 {
@@ -458,16 +448,7 @@ fn sdv3e_missed_sync0_is_cs_with_al_status_0x2c() {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = init(&m).await;
-        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("request OP");
-        for _ in 0..100 {
-            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
-                break;
-            }
-            m.shared.advance(CYCLE_NS);
-        }
-        m.shared.advance(CYCLE_NS);
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
         assert_eq!(al_status(md).await, (OP, 0));
         // SYNC0 at twice the configured period: every other event is missed.
         Command::fpwr(FIRST_STATION, DC_SYNC0_CYCLE)
@@ -561,16 +542,7 @@ fn sdv3e_input_link_lost_in_op_is_ll_in_init() {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         let transport = tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = init(&m).await;
-        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("request OP");
-        for _ in 0..100 {
-            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
-                break;
-            }
-            m.shared.advance(CYCLE_NS);
-        }
-        m.shared.advance(CYCLE_NS);
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
         assert_eq!(al_status(md).await, (OP, 0));
         // The cable is pulled for 30 ms, then plugged again.
         m.shared.segment().set_master_cable(false);
@@ -603,16 +575,7 @@ fn gha_e_counts_missed_events_in_both_sm_parameter_objects() {
         let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = init(&m).await;
-        let group = dc_safe_op(&m, md, group, CYCLE_NS).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("request OP");
-        for _ in 0..100 {
-            if group.tx_rx_dc(md).await.expect("tx/rx").all_op() {
-                break;
-            }
-            m.shared.advance(CYCLE_NS);
-        }
-        m.shared.advance(CYCLE_NS);
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
         Command::fpwr(FIRST_STATION, DC_SYNC0_CYCLE)
             .send(md, 2 * CYCLE_NS as u32)
             .await
