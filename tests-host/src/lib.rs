@@ -10,7 +10,10 @@ use std::time::Duration;
 
 use board_sim::inproc::{InMemoryTxRx, InProcess};
 use board_sim::{Segment, SimDevice};
-use ethercrab::{Command, MainDevice, MainDeviceConfig, Timeouts};
+use ethercrab::subdevice_group::{DcConfiguration, HasDc, PreOp, SafeOp};
+use ethercrab::{
+    Command, DcSync, DefaultLock, MainDevice, MainDeviceConfig, SubDeviceGroup, Timeouts,
+};
 use hal::esc::regs;
 
 /// Station address ethercrab gives the first drive.
@@ -110,4 +113,38 @@ fn device_name(sii: &[u8]) -> String {
         .get(order_idx.wrapping_sub(1))
         .cloned()
         .unwrap_or_default()
+}
+
+/// PREOP → SAFEOP with DC SYNC0 at `cycle_ns` for every drive of `group`, as a DC master does
+/// it: PDI in PREOP, 100 cycles of system-time synchronisation, SYNC0 starting 10 cycles later;
+/// `Err` is the first drive's AL status and code when SAFEOP is refused.
+pub async fn dc_safe_op<const N: usize, const P: usize>(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    mut group: SubDeviceGroup<N, P, DefaultLock, PreOp>,
+    cycle_ns: u64,
+) -> Result<SubDeviceGroup<N, P, DefaultLock, SafeOp, HasDc>, (u16, u16)> {
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+    for _ in 0..100 {
+        group.tx_rx_sync_system_time(md).await.expect("time sync");
+        m.shared.advance(cycle_ns);
+    }
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_nanos(cycle_ns * 10),
+                sync0_period: Duration::from_nanos(cycle_ns),
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .expect("DC configuration");
+    match group.into_safe_op(md).await {
+        Ok(g) => Ok(g),
+        Err(_) => Err(al_status(md).await),
+    }
 }

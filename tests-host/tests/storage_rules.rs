@@ -10,12 +10,8 @@
 //! - GHA-E: an SDO download to 607Dh or to a Pn entry survives a power cycle without any 1010h
 //!   write; with Pn-046 = 1 a Pn download does not; a PDO write to 607Dh is never stored.
 
-use std::time::Duration;
-
 use board_sim::Segment;
 use ethercrab::error::{Error, MailboxError};
-use ethercrab::subdevice_group::DcConfiguration;
-use ethercrab::DcSync;
 use tests_host::session::{power_cycle, take_segment};
 use tests_host::{al_status, block_on, master_for};
 
@@ -403,7 +399,7 @@ fn gha_e_a_pdo_write_to_607dh_is_never_stored() {
         let (m, transport) = master_for(segment("gha-e"));
         let transport = tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
-        let mut group = md
+        let group = md
             .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(m.shared.clock().now_fn())
             .await
             .expect("init to PRE-OP");
@@ -428,26 +424,9 @@ fn gha_e_a_pdo_write_to_607dh_is_never_stored() {
             sd.sdo_write(RX_ASSIGN, 0, 1u8).await.expect("1C12h:00 = 1");
         }
         let writes_after_mapping = storage_writes(&m.shared.segment());
-        for mut sd in group.iter_mut(md) {
-            sd.set_dc_sync(DcSync::Sync0);
-        }
-        let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
-        for _ in 0..100 {
-            group.tx_rx_sync_system_time(md).await.expect("time sync");
-            m.shared.advance(CYCLE_NS);
-        }
-        let group = group
-            .configure_dc_sync(
-                md,
-                DcConfiguration {
-                    start_delay: Duration::from_nanos(CYCLE_NS * 10),
-                    sync0_period: Duration::from_nanos(CYCLE_NS),
-                    sync0_shift: Duration::ZERO,
-                },
-            )
+        let group = tests_host::dc_safe_op(&m, md, group, CYCLE_NS)
             .await
-            .expect("DC configuration");
-        let group = group.into_safe_op(md).await.expect("SAFE-OP");
+            .expect("SAFE-OP");
         let group = group.request_into_op(md).await.expect("request OP");
         let mut in_op = false;
         for _ in 0..1000 {

@@ -18,7 +18,7 @@ use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op, PreOp};
 use ethercrab::{Command, DcSync, DefaultLock, MainDevice, SubDeviceGroup};
 use od_gen::model::Profile;
 use tests_host::session::{session, take_segment, Step};
-use tests_host::{al_status, block_on, master_for, FIRST_STATION};
+use tests_host::{al_status, block_on, dc_safe_op, master_for, FIRST_STATION};
 
 const MAX_SUBDEVICES: usize = 4;
 const MAX_PDI: usize = 512;
@@ -110,42 +110,6 @@ async fn emergency(m: &InProcess, md: &MainDevice<'_>, sm1_start: u16, step_ns: 
         m.shared.advance(step_ns);
     }
     panic!("no emergency in SM1");
-}
-
-/// PREOP → SAFEOP with DC SYNC0 at `cycle_ns` (the default mapping); `Err` = AL status.
-async fn dc_safe_op(
-    m: &InProcess,
-    md: &MainDevice<'_>,
-    group: Group,
-    cycle_ns: u64,
-) -> Result<
-    SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, ethercrab::subdevice_group::SafeOp, HasDc>,
-    (u16, u16),
-> {
-    let mut group = group;
-    for mut sd in group.iter_mut(md) {
-        sd.set_dc_sync(DcSync::Sync0);
-    }
-    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
-    for _ in 0..100 {
-        group.tx_rx_sync_system_time(md).await.expect("time sync");
-        m.shared.advance(cycle_ns);
-    }
-    let group = group
-        .configure_dc_sync(
-            md,
-            DcConfiguration {
-                start_delay: Duration::from_nanos(cycle_ns * 10),
-                sync0_period: Duration::from_nanos(cycle_ns),
-                sync0_shift: Duration::ZERO,
-            },
-        )
-        .await
-        .expect("DC configuration");
-    match group.into_safe_op(md).await {
-        Ok(g) => Ok(g),
-        Err(_) => Err(al_status(md).await),
-    }
 }
 
 /// PREOP → OP with DC SYNC0 at `cycle_ns` ([`dc_safe_op`], then cycling until every drive is in

@@ -8,13 +8,11 @@
 //! The expectations come from the profile files (od-gen's model of the manual), read
 //! independently of the firmware's generated dictionary.
 
-use std::time::Duration;
-
 use board_sim::Segment;
-use ethercrab::subdevice_group::{DcConfiguration, PreOp};
-use ethercrab::{DcSync, DefaultLock, MainDevice, SubDeviceGroup};
+use ethercrab::subdevice_group::PreOp;
+use ethercrab::{DefaultLock, MainDevice, SubDeviceGroup};
 use od_gen::model::{DataType, Entry, Object, Profile, Role, Storage};
-use tests_host::{al_status, block_on, master_for};
+use tests_host::{al_status, block_on, dc_safe_op, master_for};
 
 /// Largest process image of any profile's default mapping, with room (bytes).
 const MAX_PDI: usize = 512;
@@ -161,7 +159,7 @@ async fn run_dc_reading(
     let (m, transport) = master_for(Segment::new(&p.name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
-    let mut group = init(&m).await;
+    let group = init(&m).await;
     if let Some((rx, tx)) = assignment {
         let sd = group.subdevice(md, 0).expect("drive");
         for (assign, pdos) in [(0x1C12u16, rx), (0x1C13, tx)] {
@@ -178,29 +176,7 @@ async fn run_dc_reading(
                 .expect("assignment :00 = n");
         }
     }
-    for mut sd in group.iter_mut(md) {
-        sd.set_dc_sync(DcSync::Sync0);
-    }
-    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
-    for _ in 0..100 {
-        group.tx_rx_sync_system_time(md).await.expect("time sync");
-        m.shared.advance(cycle_ns);
-    }
-    let group = group
-        .configure_dc_sync(
-            md,
-            DcConfiguration {
-                start_delay: Duration::from_nanos(cycle_ns * 10),
-                sync0_period: Duration::from_nanos(cycle_ns),
-                sync0_shift: Duration::ZERO,
-            },
-        )
-        .await
-        .expect("DC configuration");
-    let group = match group.into_safe_op(md).await {
-        Ok(g) => g,
-        Err(_) => return Err(al_status(md).await),
-    };
+    let group = dc_safe_op(&m, md, group, cycle_ns).await?;
     let group = group.request_into_op(md).await.expect("request OP");
     let mut in_op = false;
     for _ in 0..1000 {
