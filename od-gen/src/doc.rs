@@ -517,6 +517,32 @@ fn synchronisation(out: &mut String, p: &Profile) {
             },
         ],
         vec![
+            "PDI error (ESC counter 0x030D)".into(),
+            match e.pdi_error {
+                Some(c) => format!(
+                    "INIT, AL status code 0x0000, ERR LED on; fault, {}",
+                    error_report(&c)
+                ),
+                None => "not supervised".into(),
+            },
+        ],
+        vec![
+            "Outputs lost in a row".into(),
+            match &e.lost_outputs {
+                Some(l) => format!(
+                    "while {:04X}h:{:02X}h is one of {:?}: the count in {:04X}h:{:02X}h (0 = off, read at power-on), then SAFEOP with {}; fault, {}",
+                    l.while_entry.0,
+                    l.while_entry.1,
+                    l.while_values,
+                    l.limit_parameter.0,
+                    l.limit_parameter.1,
+                    hex16(l.al_status_code),
+                    error_report(&l.error)
+                ),
+                None => "not supervised".into(),
+            },
+        ],
+        vec![
             "AL status code of a sync error (counter)".into(),
             hex16(e.sync_error_al_code),
         ],

@@ -545,6 +545,35 @@ pub struct EsmFile {
     /// transition emergency).
     #[serde(default)]
     pub al_error_alarms: Vec<AlErrorAlarmFile>,
+    /// The ESC's PDI error counter (0x030D) counted an error: the slave goes to INIT with AL
+    /// status code 0x0000, ERR LED on, and the drive raises this error (the SDV3-E's Hr);
+    /// absent: the PDI is not supervised.
+    #[serde(default)]
+    pub pdi_error: Option<MotorFaultFile>,
+    /// Outputs lost in a row in the cyclic synchronous modes (the SDV3-E's cSD); absent: not
+    /// supervised.
+    #[serde(default)]
+    pub lost_outputs: Option<LostOutputsFile>,
+}
+
+/// `[esm] lost_outputs`: in OP with DC synchronisation, while `while_entry` holds one of
+/// `while_values`, `limit_parameter` SYNC0 events in a row without new outputs (no SM2 event
+/// since the previous one) drop the slave to SAFEOP with `al_status_code` and raise `error`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LostOutputsFile {
+    /// `"0xIIII:S"`: the parameter with the number of lost cycles in a row that trips (0 = no
+    /// supervision), read at power-on.
+    pub limit_parameter: String,
+    /// `"0xIIII:S"`: the entry that selects when the outputs are supervised (6061h).
+    pub while_entry: String,
+    /// The values of `while_entry` under which they are (the cyclic synchronous modes).
+    pub while_values: Vec<i64>,
+    /// 0x001A (default) or 0x002C.
+    #[serde(default = "sync_error_al_code")]
+    pub al_status_code: u16,
+    /// The drive error: a CiA402 error code or an `[[alarm]]` display.
+    pub error: MotorFaultFile,
 }
 
 /// `[emcy]`.
@@ -616,6 +645,8 @@ impl Default for EsmFile {
             sync_error_al_code: AL_SYNC_ERROR,
             sync_lock_timeout_ms: None,
             al_error_alarms: Vec::new(),
+            pdi_error: None,
+            lost_outputs: None,
         }
     }
 }

@@ -1054,6 +1054,51 @@ pub struct EsmRules {
     pub sync_error_al_code: u16,
     /// SYNC0 must start this long after SAFEOP was entered (ms), else PREOP + 0x002D.
     pub sync_lock_timeout_ms: Option<u32>,
+    /// The drive error raised when the ESC counts a PDI error (INIT, AL status code 0).
+    pub pdi_error: Option<MotorFaultCode>,
+    /// Outputs lost in a row in the cyclic synchronous modes.
+    pub lost_outputs: Option<LostOutputs>,
+}
+
+impl LostOutputs {
+    /// [`Self::while_values`] as the stack reads the entry (`data_type`, at most 32 bits):
+    /// little-endian bytes zero-extended to a u32 (a SINT −1 reads 0xFF). `None` if a value
+    /// does not fit the type.
+    pub fn raw_values(&self, data_type: DataType) -> Option<Vec<u32>> {
+        let (min, max) = data_type.int_range()?;
+        let bits = data_type.fixed_bits()?;
+        if bits > 32 {
+            return None;
+        }
+        let mask = if bits == 32 {
+            u32::MAX
+        } else {
+            (1u32 << bits) - 1
+        };
+        self.while_values
+            .iter()
+            .map(|&v| {
+                let v = i128::from(v);
+                // Two's complement truncated to the entry's width.
+                ((min..=max).contains(&v)).then_some((v as i64 as u32) & mask)
+            })
+            .collect()
+    }
+}
+
+/// `[esm] lost_outputs`, resolved.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LostOutputs {
+    /// The parameter with the limit (lost cycles in a row; 0 = off), read at power-on.
+    pub limit_parameter: (u16, u8),
+    /// The entry that selects when the outputs are supervised.
+    pub while_entry: (u16, u8),
+    /// Its values under which they are, as written in the file.
+    pub while_values: Vec<i64>,
+    /// 0x001A or 0x002C.
+    pub al_status_code: u16,
+    /// The drive error.
+    pub error: MotorFaultCode,
 }
 
 /// What an SDO download to an entry mapped in the active RxPDO mapping does in SAFEOP/OP.

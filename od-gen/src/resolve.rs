@@ -245,6 +245,18 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             }
             t => t,
         },
+        pdi_error: f
+            .esm
+            .pdi_error
+            .as_ref()
+            .map(|r| fault_report(r, &alarms, "esm.pdi_error"))
+            .transpose()?,
+        lost_outputs: f
+            .esm
+            .lost_outputs
+            .as_ref()
+            .map(|l| lost_outputs(l, &alarms))
+            .transpose()?,
     };
     let emcy = EmcyRules {
         register_mask: match f.emcy.error_register.as_str() {
@@ -765,6 +777,36 @@ fn fault_report(r: &MotorFaultFile, alarms: &[Alarm], key: &str) -> Result<Motor
             })
         }
     }
+}
+
+/// `[esm] lost_outputs`: the entry references parse, the AL status code is one of the two sync
+/// error codes, there is at least one value.
+fn lost_outputs(l: &crate::file::LostOutputsFile, alarms: &[Alarm]) -> Result<LostOutputs, Fault> {
+    let entry = |s: &str, key: &str| {
+        entry_ref(Some(s), key)?.ok_or_else(|| fault(key, Invalid::Value("missing".into())))
+    };
+    if !matches!(
+        l.al_status_code,
+        crate::file::AL_SYNC_ERROR | crate::file::AL_FATAL_SYNC_ERROR
+    ) {
+        return Err(fault(
+            "esm.lost_outputs.al_status_code",
+            Invalid::Value(format!("{:#06x} is not 0x001A or 0x002C", l.al_status_code)),
+        ));
+    }
+    if l.while_values.is_empty() {
+        return Err(fault(
+            "esm.lost_outputs.while_values",
+            Invalid::Value("needs at least one value".into()),
+        ));
+    }
+    Ok(LostOutputs {
+        limit_parameter: entry(&l.limit_parameter, "esm.lost_outputs.limit_parameter")?,
+        while_entry: entry(&l.while_entry, "esm.lost_outputs.while_entry")?,
+        while_values: l.while_values.clone(),
+        al_status_code: l.al_status_code,
+        error: fault_report(&l.error, alarms, "esm.lost_outputs.error")?,
+    })
 }
 
 /// `[esm] al_error_alarms`: AL status codes (non-zero, each once) with the drive error each

@@ -374,7 +374,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         .collect();
     let _ = writeln!(
         out,
-        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}], link_loss_error: {}, sync_error_al_code: {:#06x}, sync_lock_timeout_ms: {:?} }},",
+        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}], link_loss_error: {}, sync_error_al_code: {:#06x}, sync_lock_timeout_ms: {:?}, pdi_error: {}, lost_outputs: {} }},",
         m.op_requires_outputs,
         m.safeop_op_timeout_ms,
         m.op_exit_while_enabled_error
@@ -385,7 +385,26 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             .as_ref()
             .map_or("None".into(), |c| format!("Some({})", report(c))),
         m.sync_error_al_code,
-        m.sync_lock_timeout_ms
+        m.sync_lock_timeout_ms,
+        m.pdi_error
+            .as_ref()
+            .map_or("None".into(), |c| format!("Some({})", report(c))),
+        m.lost_outputs.as_ref().map_or("None".into(), |l| {
+            // validate checked that the entry exists and every value fits its type.
+            let raw = p
+                .entry(l.while_entry.0, l.while_entry.1)
+                .and_then(|e| l.raw_values(e.data_type))
+                .unwrap_or_default();
+            format!(
+                "Some({}::od::LostOutputsRule {{ limit_parameter: {:?}, while_entry: {:?}, while_values: &{:?}, al_status_code: {:#06x}, error: {} }})",
+                target.slave,
+                l.limit_parameter,
+                l.while_entry,
+                raw,
+                l.al_status_code,
+                report(&l.error)
+            )
+        })
     );
     let _ = writeln!(
         out,

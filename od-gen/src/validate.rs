@@ -657,6 +657,36 @@ fn esm(p: &Profile) -> Result<(), Fault> {
             Invalid::Value("0 is \"no error\" (603Fh)".into()),
         ));
     }
+    if p.esm.pdi_error.map(|r| r.error_code) == Some(0) {
+        return Err(fault(
+            "esm.pdi_error",
+            Invalid::Value("0 is \"no error\" (603Fh)".into()),
+        ));
+    }
+    if let Some(l) = &p.esm.lost_outputs {
+        integer_parameter(p, l.limit_parameter, "esm.lost_outputs.limit_parameter")?;
+        let (index, subindex) = l.while_entry;
+        let e = p.entry(index, subindex).ok_or_else(|| {
+            fault(
+                "esm.lost_outputs.while_entry",
+                Invalid::PdoEntryMissing { index, subindex },
+            )
+        })?;
+        if e.storage != Storage::Ram || l.raw_values(e.data_type).is_none() {
+            return Err(fault(
+                "esm.lost_outputs.while_values",
+                Invalid::Value(format!(
+                    "{index:#06x}:{subindex} must be an integer entry of at most 32 bits in RAM holding every value"
+                )),
+            ));
+        }
+        if l.error.error_code == 0 {
+            return Err(fault(
+                "esm.lost_outputs.error",
+                Invalid::Value("0 is \"no error\" (603Fh)".into()),
+            ));
+        }
+    }
     if p.esm.op_exit_while_enabled_error.map(|r| r.error_code) == Some(0) {
         return Err(fault(
             "esm.op_exit_while_enabled_error",

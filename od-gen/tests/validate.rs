@@ -451,7 +451,7 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
     );
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], link_loss_error: None, sync_error_al_code: 0x001a, sync_lock_timeout_ms: None },"
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], link_loss_error: None, sync_error_al_code: 0x001a, sync_lock_timeout_ms: None, pdi_error: None, lost_outputs: None },"
     ));
 
     // Without [esm] and the new keys: the documented defaults.
@@ -482,6 +482,69 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
         "sdo_write_to_rx_mapped = \"sometimes\"",
     ));
     assert_eq!(key, "pdo.sdo_write_to_rx_mapped");
+}
+
+#[test]
+fn pdi_error_and_lost_outputs_rules_are_checked() {
+    // A lost-outputs rule as the SDV3-E has it, on the standard profile's entries: the limit in
+    // a writable integer parameter, 6061h (SINT) the selector; -1 is stored as 0xFF.
+    let rule = |fields: &str| {
+        with(
+            "safeop_op_timeout_ms = 9000",
+            &format!(
+                "safeop_op_timeout_ms = 9000\npdi_error = 0x8500\nlost_outputs = {{ {fields} }}"
+            ),
+        )
+    };
+    let good = "limit_parameter = \"0x6060:0\", while_entry = \"0x6061:0\", while_values = [8, 9, 10, -1], al_status_code = 0x002C, error = 0x8102";
+    let p = od_gen::parse(&rule(good), "standard.toml").unwrap();
+    let l = p.esm.lost_outputs.clone().expect("rule");
+    assert_eq!(
+        (l.limit_parameter, l.while_entry),
+        ((0x6060, 0), (0x6061, 0))
+    );
+    assert_eq!(l.al_status_code, 0x002C);
+    assert_eq!(p.esm.pdi_error.map(|r| r.error_code), Some(0x8500));
+    let rust = od_gen::rust::generate(&[p]);
+    assert!(
+        rust.contains("while_values: &[8, 9, 10, 255], al_status_code: 0x002c"),
+        "raw SINT values"
+    );
+    assert!(rust.contains("pdi_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8500"));
+
+    let cases = [
+        (
+            good.replace("0x002C", "0x001B"),
+            "esm.lost_outputs.al_status_code",
+        ),
+        (
+            good.replace("[8, 9, 10, -1]", "[]"),
+            "esm.lost_outputs.while_values",
+        ),
+        (good.replace("-1]", "200]"), "esm.lost_outputs.while_values"),
+        (
+            good.replace("\"0x6061:0\"", "\"6061\""),
+            "esm.lost_outputs.while_entry",
+        ),
+        (
+            good.replace("\"0x6061:0\"", "\"0x2FFF:0\""),
+            "esm.lost_outputs.while_entry",
+        ),
+        (
+            good.replace("\"0x6060:0\"", "\"0x6061:0\""),
+            "esm.lost_outputs.limit_parameter",
+        ),
+        (good.replace("0x8102", "0"), "esm.lost_outputs.error"),
+    ];
+    for (fields, expected) in cases {
+        let (key, _) = invalid(&rule(&fields));
+        assert_eq!(key, expected, "{fields}");
+    }
+    let (key, _) = invalid(&with(
+        "safeop_op_timeout_ms = 9000",
+        "safeop_op_timeout_ms = 9000\npdi_error = 0",
+    ));
+    assert_eq!(key, "esm.pdi_error");
 }
 
 #[test]

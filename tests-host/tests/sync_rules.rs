@@ -9,15 +9,18 @@
 //!   did not come, −1 per good one) trips when it reaches 10F1h:02 and raises alarm A.A12
 //!   (603Fh 0A12h, EMCY FF00h) with ESM → SAFEOP.
 //! - GHA-E §6.1: a SYNC0 period outside the allowed set is alarm Co03.
+//! - SDV3-E §5.2: the EtherCAT-layer alarms LL (link lost), Hr (PDI error) and cSD (outputs
+//!   lost P4.03 times in a row in a cyclic synchronous mode), with their ESM state, AL status
+//!   code and ERR LED.
 
 use std::time::Duration;
 
 use board_sim::inproc::InProcess;
-use board_sim::Segment;
+use board_sim::{Segment, SimDevice};
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op, PreOp};
 use ethercrab::{Command, DcSync, DefaultLock, MainDevice, SubDeviceGroup};
 use od_gen::model::Profile;
-use tests_host::session::{session, take_segment, Step};
+use tests_host::session::{power_cycle, session, take_segment, Step};
 use tests_host::{al_status, block_on, dc_safe_op, master_for, FIRST_STATION};
 
 const MAX_SUBDEVICES: usize = 4;
@@ -59,11 +62,24 @@ const SIGMA_EMCY_CODE: u16 = 0xFF00;
 const OP: u16 = 0x08;
 const INIT: u16 = 0x01;
 const SM_WATCHDOG: u16 = 0x001B;
+/// AL control register (ETG.1000.4 Table 33).
+const AL_CONTROL: u16 = 0x0120;
 /// ESC SYNC0 cycle time register (ETG.1000.4 Table 60).
 const DC_SYNC0_CYCLE: u16 = 0x09A0;
 /// SM1 status register (SM n at 0x0800 + 8n, status at +5), bit 3 "mailbox full".
 const SM1_STATUS: u16 = 0x080D;
 const MAILBOX_FULL: u8 = 0x08;
+/// SDV3-E P4.03 "data synchronization detection setting" (3003h:03, §2.4) and the byte of
+/// 6060h "modes of operation" in the default RxPDO1 (1600h: 6040h, 607Ah, 60FFh, 6071h, 6060h).
+const GROUP4: u16 = 0x3003;
+const P4_03: u8 = 3;
+const MODE_BYTE: usize = 2 + 4 + 4 + 2;
+/// CiA402 modes of operation: profile position, cyclic synchronous position.
+const MODE_PP: u8 = 1;
+const MODE_CSP: u8 = 8;
+/// 1010h:01 "save" (CiA 301 §7.5.2.13).
+const STORE: u16 = 0x1010;
+const SIGNATURE_SAVE: u32 = u32::from_le_bytes(*b"save");
 /// Mailbox header (6 bytes), type 3 = CoE; CoE service 1 = emergency.
 const MAILBOX_HEADER: usize = 6;
 const TYPE_COE: u8 = 3;
@@ -527,6 +543,164 @@ fn sdv3e_input_link_lost_in_op_is_ll_in_init() {
         Some(u32::from(alarm.error_code)),
         "603Fh = LL"
     );
+}
+
+#[test]
+fn sdv3e_link_loss_shows_the_err_led_blinking_until_the_next_request() {
+    // §5.2 3): LL, ERR LED "Blinking" although the AL status carries no error flag.
+    const CYCLE_NS: u64 = 1_000_000;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let _group = into_dc_op(&m, md, CYCLE_NS).await;
+        m.shared.segment().set_master_cable(false);
+        m.shared.advance(30 * CYCLE_NS);
+        m.shared.segment().set_master_cable(true);
+        assert_eq!(al_status(md).await, (INIT, 0));
+        let (on, off) = err_led_over(&m, 2_000);
+        assert!(on >= 4 && off >= 4, "blinking: {on} on, {off} off");
+        // The master asks for PREOP: the error it could not see is history.
+        Command::fpwr(FIRST_STATION, AL_CONTROL)
+            .send(md, PREOP)
+            .await
+            .expect("AL control");
+        m.shared.advance(10 * CYCLE_NS);
+        assert_eq!(al_status(md).await, (PREOP, 0));
+        let (on, _) = err_led_over(&m, 1_000);
+        assert_eq!(on, 0, "ERR LED off");
+    });
+}
+
+#[test]
+fn sdv3e_pdi_error_is_hr_in_init_with_the_err_led_on() {
+    // §5.2 1): Hr "ECAT hardware error; PDI interface access error", detected in every state:
+    // ESM → Init, AL status code 0x0000, ERR LED on; 603Fh = Hr (8500h).
+    const CYCLE_NS: u64 = 1_000_000;
+    let p = profile("sdv3-e");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "Hr")
+        .expect("alarm Hr");
+    let segment = block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        let transport = tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
+        for _ in 0..5 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(al_status(md).await, (OP, 0));
+        m.shared.segment().drives_mut()[0]
+            .esc_mut()
+            .inject_pdi_error();
+        m.shared.advance(20 * CYCLE_NS);
+        assert_eq!(
+            al_status(md).await,
+            (INIT, 0),
+            "Init, AL status code 0x0000"
+        );
+        let (on, off) = err_led_over(&m, 2_000);
+        assert_eq!((on, off), (20, 0), "ERR LED on, steady");
+        drop(group);
+        transport.abort();
+        take_segment(&m)
+    });
+    let (_, out) = session(segment, &[Step::ReadU16(ERROR_CODE, 0)]);
+    assert_eq!(
+        out[0].as_ref().ok().copied(),
+        Some(u32::from(alarm.error_code)),
+        "603Fh = Hr"
+    );
+}
+
+/// Samples the first drive's ERR LED every 100 ms for `ms` of simulated time: (on, off) counts.
+fn err_led_over(m: &InProcess, ms: u64) -> (u32, u32) {
+    const SAMPLE_NS: u64 = 100_000_000;
+    let (mut on, mut off) = (0, 0);
+    for _ in 0..ms * 1_000_000 / SAMPLE_NS {
+        // Half a blink period (200 ms on, 200 ms off) plus a little: samples land on both.
+        m.shared.advance(SAMPLE_NS + 3_000_000);
+        if m.shared.segment().drives_mut()[0].leds.err.on {
+            on += 1;
+        } else {
+            off += 1;
+        }
+    }
+    (on, off)
+}
+
+#[test]
+fn sdv3e_outputs_lost_p4_03_times_in_a_row_in_csp_are_csd() {
+    // §5.2 6) / §2.4: cSD when the data of a cyclic synchronous mode is lost P4.03 times in a
+    // row (P4.03 acts after a power cycle); OP, DC: ESM → SafeOP, AL status 0x002C, alarm cSD
+    // (8102h, error No. 35h, aux 801Bh), not cS, which shares the AL status code.
+    const CYCLE_NS: u64 = 1_000_000;
+    const LIMIT: u32 = 3;
+    let p = profile("sdv3-e");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "cSD")
+        .expect("alarm cSD");
+    let (mut segment, out) = session(
+        Segment::new("sdv3-e", 1).expect("profile"),
+        &[
+            Step::Write(GROUP4, P4_03, LIMIT),
+            Step::Write(STORE, 1, SIGNATURE_SAVE),
+        ],
+    );
+    assert!(out.iter().all(Result::is_ok), "{out:?}");
+    power_cycle(&mut segment);
+    block_on(async {
+        let (m, transport) = master_for(segment);
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = into_dc_op(&m, md, CYCLE_NS).await;
+        // `lost[k]`: the master's frame of cycle k does not come; otherwise it writes `mode`.
+        let run = |mode: u8, lost: &'static [bool]| {
+            let group = &group;
+            let m = &m;
+            async move {
+                for &skip in lost {
+                    let since = m.shared.clock().now();
+                    if !skip {
+                        let sd = group.subdevice(md, 0).expect("drive");
+                        sd.outputs_raw_mut()[MODE_BYTE] = mode;
+                        group.tx_rx_dc(md).await.expect("tx/rx");
+                    }
+                    finish_cycle(m, since, CYCLE_NS);
+                }
+            }
+        };
+        const GOOD: &[bool] = &[false; 5];
+        const LOST_TEN: &[bool] = &[true; 10];
+        const LOST_TWICE_THEN_GOOD: &[bool] = &[true, true, false, true, true, false, false];
+        const LOST_LIMIT: &[bool] = &[true, true, true];
+        // Profile position is not a cyclic synchronous mode: not supervised.
+        run(MODE_PP, GOOD).await;
+        run(MODE_PP, LOST_TEN).await;
+        run(MODE_PP, GOOD).await;
+        assert_eq!(al_status(md).await, (OP, 0), "PP: no cSD");
+        // CSP: two lost in a row are below P4.03 = 3.
+        run(MODE_CSP, GOOD).await;
+        run(MODE_CSP, LOST_TWICE_THEN_GOOD).await;
+        assert_eq!(al_status(md).await, (OP, 0), "CSP, two lost in a row");
+        run(MODE_CSP, LOST_LIMIT).await;
+        assert_eq!(al_status(md).await, (SAFEOP | AL_ERROR, FATAL_SYNC_ERROR));
+        let coe = emergency(&m, md, p.sm.mailbox_in.start, CYCLE_NS).await;
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY code 8102h"
+        );
+        assert_eq!(&coe[5..10], &alarm.emcy.data, "error No. 35h, aux 801Bh");
+        let sd = group.subdevice(md, 0).expect("drive");
+        let code: u16 = sd.sdo_read(ERROR_CODE, 0).await.expect("603Fh");
+        assert_eq!(code, alarm.error_code, "603Fh = cSD");
+    });
 }
 
 #[test]

@@ -58,6 +58,8 @@ pub enum ErrorIndication {
     WatchdogTimeout,
     /// Booting error (BOOT state, invalid firmware).
     BootingError,
+    /// Application controller failure (e.g. the PDI failed: the SDV3-E's Hr).
+    ApplicationControllerFailure,
 }
 
 /// RUN LED pattern for an EtherCAT state (ETG.1300 Table 3).
@@ -79,6 +81,7 @@ pub fn err_pattern(error: ErrorIndication) -> Pattern {
         ErrorIndication::LocalError => Pattern::SingleFlash,
         ErrorIndication::WatchdogTimeout => Pattern::DoubleFlash,
         ErrorIndication::BootingError => Pattern::Flickering,
+        ErrorIndication::ApplicationControllerFailure => Pattern::On,
     }
 }
 
@@ -93,6 +96,31 @@ mod tests {
         assert_eq!(run_pattern(AlState::SafeOp), Pattern::SingleFlash);
         assert_eq!(run_pattern(AlState::Op), Pattern::On);
         assert_eq!(run_pattern(AlState::Boot), Pattern::Flickering);
+    }
+
+    #[test]
+    fn err_led_follows_etg1300_table_4() {
+        assert_eq!(err_pattern(ErrorIndication::None), Pattern::Off);
+        assert_eq!(
+            err_pattern(ErrorIndication::InvalidConfiguration),
+            Pattern::Blinking
+        );
+        assert_eq!(
+            err_pattern(ErrorIndication::LocalError),
+            Pattern::SingleFlash
+        );
+        assert_eq!(
+            err_pattern(ErrorIndication::WatchdogTimeout),
+            Pattern::DoubleFlash
+        );
+        assert_eq!(
+            err_pattern(ErrorIndication::BootingError),
+            Pattern::Flickering
+        );
+        assert_eq!(
+            err_pattern(ErrorIndication::ApplicationControllerFailure),
+            Pattern::On
+        );
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! semantics). An access beyond 0x2FFF is `OutOfRange`; while the PDI is down (bad SII checksum)
 //! every access fails with `NotOperational` (on silicon the SPI would not answer).
 
-use hal::esc::AlEvent;
+use hal::esc::{regs, AlEvent};
 use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
 
 use super::access::{Effects, Side};
@@ -106,5 +106,16 @@ impl EscPdi for Et1100 {
         self.write_range(Side::Pdi, u32::from(addr), data, None, &mut fx);
         self.finish_write(Side::Pdi, &mut fx);
         Ok(ev)
+    }
+}
+
+impl Et1100 {
+    /// Fault injection: the MCU made a malformed PDI access (on the SPI PDI e.g. a frame whose
+    /// clock count is not a whole number of bytes). The ET1100 counts it in the PDI error
+    /// counter 0x030D (saturating at 0xFF; cleared by an ECAT write to the error counters);
+    /// the access itself has no effect.
+    pub fn inject_pdi_error(&mut self) {
+        let count = self.u8_at(regs::PDI_ERROR_COUNTER.addr);
+        self.set_u8(regs::PDI_ERROR_COUNTER.addr, count.saturating_add(1));
     }
 }

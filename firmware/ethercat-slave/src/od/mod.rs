@@ -97,6 +97,8 @@ pub(crate) const fn test_device() -> DeviceInfo {
             link_loss_error: None,
             sync_error_al_code: 0x001A,
             sync_lock_timeout_ms: None,
+            pdi_error: None,
+            lost_outputs: None,
         },
         sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
         station_alias_parameter: None,

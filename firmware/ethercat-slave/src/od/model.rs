@@ -340,6 +340,35 @@ pub struct EsmRules {
     /// SAFEOP, else the slave drops to PREOP with 0x002D (the SDV3-E's PLF, §5.2 7); `None`:
     /// only a SAFEOP → OP request waits for SYNC0 (`safeop_op_timeout_ms`).
     pub sync_lock_timeout_ms: Option<u32>,
+    /// PDI supervision: when the ESC's PDI error counter (0x030D) counts an error, the slave
+    /// goes to INIT with AL status code 0x0000, the ERR LED on (ETG.1300 "application
+    /// controller failure"), and the application raises this error (the SDV3-E's Hr, §5.2 1);
+    /// `None`: not supervised.
+    pub pdi_error: Option<ErrorReport>,
+    /// Supervision of the outputs in the cyclic synchronous modes (the SDV3-E's cSD, §5.2 6);
+    /// `None`: not supervised.
+    pub lost_outputs: Option<LostOutputsRule>,
+}
+
+/// `[esm] lost_outputs`: in OP with DC synchronisation, while an entry holds one of the given
+/// values (the drive's cyclic synchronous modes in 6061h), a SYNC0 without new outputs (no SM2
+/// event since the previous SYNC0) counts one lost cycle, a SYNC0 with new outputs restarts
+/// the count; when it reaches the limit the slave drops to SAFEOP with the given AL status code
+/// and the application raises the error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LostOutputsRule {
+    /// The parameter holding the number of consecutive lost cycles that trips (0: no
+    /// supervision); read at power-on (the SDV3-E's P4.03 takes effect after a power cycle).
+    pub limit_parameter: (u16, u8),
+    /// The entry whose value decides whether the outputs are supervised (6061h).
+    pub while_entry: (u16, u8),
+    /// The values of [`Self::while_entry`] (as read, zero-extended) under which they are.
+    pub while_values: &'static [u32],
+    /// The AL status code of the error: 0x001A "synchronization error" or 0x002C "fatal sync
+    /// error" (ETG.1000.6 Table 11; the SDV3-E's cSD is 0x002C).
+    pub al_status_code: u16,
+    /// The error the application raises.
+    pub error: ErrorReport,
 }
 
 /// How a profile forms the error register 1001h and the stack's own emergencies (`[emcy]`).

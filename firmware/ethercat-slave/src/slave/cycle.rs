@@ -5,6 +5,7 @@
 //! [`SlaveCore::cycle_end`], then [`SlaveCore::cycle_finished`] with the time the cycle ended.
 
 use super::*;
+use crate::od::LostOutputsRule;
 
 impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// Runs one process-data cycle: [`Self::cycle_begin`], the application, [`Self::cycle_end`].
@@ -25,24 +26,16 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         pdi: &mut P,
         now_ns: u64,
     ) -> Result<Option<u32>, P::Error> {
-        let state = self.status.state;
-        if state != AlState::SafeOp && state != AlState::Op {
+        if !matches!(self.status.state, AlState::SafeOp | AlState::Op) {
             return Ok(None);
         }
         self.cycle_started_ns = now_ns;
-        let device = &self.profile.device;
         if matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1) {
-            // Profile rule: in OP, were the outputs written since the last SYNC0? The SM2 event
-            // stays pending until the buffer is read below.
-            let outputs = if device.sync.sync_error_on_missed_outputs && state == AlState::Op {
-                let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
-                Some(events.any(AlEvent::sm(SM_OUTPUTS)))
-            } else {
-                None
-            };
-            self.sync_supervisor
-                .on_sync0(now_ns, self.sync.cycle_ns, outputs);
+            self.supervise_outputs(pdi, now_ns)?;
         }
+        // The supervision may have left OP.
+        let state = self.status.state;
+        let device = &self.profile.device;
         let rx_len = self.rx_plan.byte_len();
         if rx_len > 0 {
             if let Some(image) = self.rx_image.get_mut(..rx_len) {
@@ -53,6 +46,47 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             }
         }
         Ok(Some(self.sync.cycle_ns))
+    }
+
+    /// A SYNC0 in a DC mode: the sync supervision counts it, and in OP the profile's rules on
+    /// outputs the master did not write since the previous SYNC0 (the SM2 event stays pending
+    /// until the buffer is read): as a missed event (`[sync] sync_error_on_missed_outputs`), as
+    /// a lost cycle in a row (`[esm] lost_outputs`, which trips here, in the cycle that
+    /// reached the limit).
+    fn supervise_outputs<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {
+        let device = self.profile.device;
+        let op = self.status.state == AlState::Op;
+        let lost_rule = device
+            .esm
+            .lost_outputs
+            .filter(|rule| op && self.lost_outputs.enabled() && self.rule_holds(rule));
+        let fresh = if op && (device.sync.sync_error_on_missed_outputs || lost_rule.is_some()) {
+            let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
+            Some(events.any(AlEvent::sm(SM_OUTPUTS)))
+        } else {
+            None
+        };
+        let counted = fresh.filter(|_| device.sync.sync_error_on_missed_outputs);
+        self.sync_supervisor
+            .on_sync0(now_ns, self.sync.cycle_ns, counted);
+        let (Some(rule), Some(fresh)) = (lost_rule, fresh) else {
+            // Not supervised now (another mode, not OP): the count starts afresh.
+            self.lost_outputs.restart();
+            return Ok(());
+        };
+        self.lost_outputs.on_sync0(fresh);
+        if self.lost_outputs.tripped() {
+            self.trip_lost_outputs(pdi, rule)?;
+        }
+        Ok(())
+    }
+
+    /// Whether the entry a [`LostOutputsRule`] watches holds one of its values.
+    fn rule_holds(&mut self, rule: &LostOutputsRule) -> bool {
+        let (index, subindex) = rule.while_entry;
+        self.dictionary()
+            .read_u32(index, subindex)
+            .is_some_and(|v| rule.while_values.contains(&v))
     }
 
     /// Last part of a process-data cycle, after the application ran on the OD RAM: what it

@@ -111,7 +111,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// An AL status code the profile lists in `[esm] al_error_alarms` is also one of the
     /// drive's errors: the application raises it (603Fh, PDS Fault) and its emergency (code and
     /// manufacturer bytes from the profile) goes out instead of the ESM transition emergency;
-    /// the 10F3h message is the same. The application's fault reset clears it.
+    /// the 10F3h message is the same. The application's fault reset clears it. A fault that
+    /// named its own error (`fault_error`, e.g. the SDV3-E's cSD under 0x002C) reports that one.
     pub(super) fn track_al_error(
         &mut self,
         from: AlState,
@@ -129,7 +130,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 .with(DiagParam::U8(f))
                 .with(DiagParam::U8(t));
             let now = self.now_ns;
-            let _ = match self.profile.device.esm.al_error_alarm(al) {
+            let alarm = self
+                .fault_error
+                .take()
+                .or_else(|| self.profile.device.esm.al_error_alarm(al));
+            let _ = match alarm {
                 Some(report) => {
                     self.app.raise_error(report, &mut self.ram);
                     self.report_error(

@@ -31,11 +31,11 @@ use crate::mailbox::emcy::EMCY_QUEUE_LEN;
 use crate::mailbox::emcy::{self, ActiveErrors, Emergency};
 use crate::od::dirty::MAX_TRACKED_RAM;
 use crate::od::index::{ERROR_SETTINGS, SM_INPUT_PARAMETER, SM_OUTPUT_PARAMETER};
-use crate::od::{Dictionary, Profile};
+use crate::od::{Dictionary, ErrorReport, Profile};
 use crate::params::{Loaded, ParamError, ParamStore};
 use crate::pdo::{Direction, PdoPlan, MAX_IMAGE};
 use crate::slave::esm::sm_check;
-use crate::slave::esm::supervision::{SyncSupervisor, DEFAULT_COUNTER_LIMIT};
+use crate::slave::esm::supervision::{LostOutputsCounter, SyncSupervisor, DEFAULT_COUNTER_LIMIT};
 pub use crate::slave::esm::sync::SyncMode;
 use esm::Outcome;
 use heapless::Deque;
@@ -96,6 +96,18 @@ pub struct SlaveCore<const RAM: usize, A: Application = NoApplication> {
     outputs_received: bool,
     /// What the ERR LED shows.
     error_indication: ErrorIndication,
+    /// The ERR LED shows [`Self::error_indication`] although the AL status has no error flag
+    /// (a profile's fault that drops to INIT with AL status code 0x0000, e.g. the SDV3-E's LL
+    /// and Hr), until the master's next state request.
+    error_without_flag: bool,
+    /// Consecutive cycles without new outputs (`[esm] lost_outputs`).
+    lost_outputs: LostOutputsCounter,
+    /// The ESC's PDI error counter (0x030D) when last read (`[esm] pdi_error`).
+    pdi_errors_seen: u8,
+    /// The drive error that the next AL error reports instead of the profile's alarm for its
+    /// AL status code (a fault whose code several causes share, e.g. the SDV3-E's cS and cSD
+    /// both 0x002C).
+    fault_error: Option<ErrorReport>,
     /// Start of the running process-data cycle (board clock, ns).
     cycle_started_ns: u64,
     /// When SAFEOP was entered from PREOP or the master changed the synchronisation in SAFEOP
@@ -183,6 +195,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             pending_op: None,
             outputs_received: false,
             error_indication: ErrorIndication::None,
+            error_without_flag: false,
+            lost_outputs: LostOutputsCounter::default(),
+            pdi_errors_seen: 0,
+            fault_error: None,
             cycle_started_ns: 0,
             sync_lock_since_ns: 0,
             calc_and_copy_max_ns: 0,
@@ -212,6 +228,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             pdi.write_u16(regs::STATION_ALIAS.addr, alias)?;
         }
         self.apply_input_shift_parameter();
+        self.apply_lost_outputs_parameter();
+        if self.profile.device.esm.pdi_error.is_some() {
+            // Errors counted before the firmware ran (the ESC counts from its reset) are not
+            // this run's PDI failures.
+            self.pdi_errors_seen = pdi.read_u8(regs::PDI_ERROR_COUNTER.addr)?;
+        }
         self.app.power_on(&mut self.ram);
         pdi.write_u16(regs::AL_STATUS_CODE.addr, AlStatusCode::NoError.code())?;
         pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())
@@ -298,6 +320,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             // Reading AL control clears the event; a new request replaces a waiting one.
             let control = AlControl::from_bits(pdi.read_u16(regs::AL_CONTROL.addr)?);
             self.pending_op = None;
+            // The master acts again: an error it could not see in the AL status is history.
+            self.error_without_flag = false;
             self.handle_al_control(pdi, control, now_ns)?;
         } else if let Some((control, _)) = self.pending_op {
             self.handle_al_control(pdi, control, now_ns)?;
@@ -309,6 +333,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             self.check_watchdog(pdi)?;
         }
         self.supervise_link(pdi)?;
+        self.supervise_pdi(pdi)?;
         self.supervise_sync(pdi, now_ns)?;
         Ok(EventJob {
             events,
@@ -352,7 +377,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     pub fn leds(&self, now_ns: u64) -> (bool, bool) {
         const NS_PER_MS: u64 = 1_000_000;
         let t_ms = now_ns / NS_PER_MS;
-        let error = if self.status.error {
+        let error = if self.status.error || self.error_without_flag {
             self.error_indication
         } else {
             ErrorIndication::None
@@ -410,6 +435,19 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 let _ = od.set_value(entry, &bytes);
             }
         }
+    }
+
+    /// Profile rule (`[esm] lost_outputs`): the number of lost cycles in a row that trips is a
+    /// parameter read at power-on (the SDV3-E's P4.03 takes effect after a power cycle); a
+    /// value that does not fit 16 bits is the largest count.
+    fn apply_lost_outputs_parameter(&mut self) {
+        let Some(rule) = self.profile.device.esm.lost_outputs else {
+            return;
+        };
+        let (index, subindex) = rule.limit_parameter;
+        let limit = self.dictionary().read_u32(index, subindex).unwrap_or(0);
+        self.lost_outputs
+            .set_limit(u16::try_from(limit).unwrap_or(u16::MAX));
     }
 
     /// The synchronisation the master configured: DC registers, 1C32h:01 and (free run)

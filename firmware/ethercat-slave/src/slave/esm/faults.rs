@@ -2,6 +2,7 @@
 //! supervision; each drops the state with its AL status code (ETG.1000.6 Table 11).
 
 use super::super::*;
+use crate::od::LostOutputsRule;
 use hal::esc::DlStatus;
 
 /// The ESC port that faces the master (ETG.1000.4: frames enter at port 0).
@@ -91,7 +92,64 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         );
         self.pending_op = None;
         self.error_indication = ErrorIndication::InvalidConfiguration;
-        self.apply(pdi, from, esm::link_lost(self.status))
+        self.error_without_flag = true;
+        self.apply(pdi, from, esm::dropped_to_init(self.status))
+    }
+
+    /// Profile rule (`[esm] pdi_error`): the ESC counted a PDI access error (0x030D, e.g. an SPI
+    /// frame with a wrong number of clocks): the application raises the profile's error, the
+    /// slave goes to INIT with AL status code 0x0000 and the ERR LED on (the SDV3-E's Hr, §5.2
+    /// 1: "ECAT hardware error; PDI interface access error", in every state). The master may
+    /// clear the counter (a write to the error counters); only an increase counts.
+    pub(in crate::slave) fn supervise_pdi<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<(), P::Error> {
+        let Some(report) = self.profile.device.esm.pdi_error else {
+            return Ok(());
+        };
+        let count = pdi.read_u8(regs::PDI_ERROR_COUNTER.addr)?;
+        let seen = core::mem::replace(&mut self.pdi_errors_seen, count);
+        // The counter saturates at 0xFF and is cleared by the master: any rise is a new error.
+        if count <= seen {
+            return Ok(());
+        }
+        self.app.raise_error(report, &mut self.ram);
+        let from = self.status.state;
+        // In INIT the EMCY cannot be sent (no mailbox); 603Fh and 1001h hold the error.
+        let _ = self.report_error(
+            report.emcy_code,
+            emcy::register::DEVICE_PROFILE,
+            report.emcy_data,
+            None,
+            self.now_ns,
+        );
+        self.pending_op = None;
+        self.error_indication = ErrorIndication::ApplicationControllerFailure;
+        self.error_without_flag = true;
+        self.apply(pdi, from, esm::dropped_to_init(self.status))
+    }
+
+    /// Profile rule (`[esm] lost_outputs`): the cycle counted the limit of SYNC0 events in a row
+    /// without new outputs while the supervised entry held one of its values: SAFEOP with the
+    /// rule's AL status code, reported as the rule's error (the SDV3-E's cSD, 0x002C).
+    pub(in crate::slave) fn trip_lost_outputs<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        rule: LostOutputsRule,
+    ) -> Result<(), P::Error> {
+        self.lost_outputs.restart();
+        if self.status.error {
+            return Ok(());
+        }
+        self.fault_error = Some(rule.error);
+        // od-gen allows the two sync error codes of ETG.1000.6 Table 11.
+        let code = if rule.al_status_code == AlStatusCode::FatalSyncError.code() {
+            AlStatusCode::FatalSyncError
+        } else {
+            AlStatusCode::SyncError
+        };
+        self.raise_fault(pdi, AlState::SafeOp, code, ErrorIndication::LocalError)
     }
 
     /// Process-data watchdog (0x0440 bit 0 cleared by the ESC when SM2 was not written within

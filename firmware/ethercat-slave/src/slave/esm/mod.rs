@@ -141,10 +141,10 @@ pub fn decide(
     }
 }
 
-/// The input port lost its link (a profile's link supervision): INIT without error indication
-/// and AL status code 0x0000 (nothing for the master to acknowledge: it could not see the
-/// transition); from INIT nothing changes.
-pub fn link_lost(current: AlStatus) -> Outcome {
+/// A profile's fault that drops to INIT without error indication and AL status code 0x0000
+/// (the input port lost its link, the PDI failed: nothing for the master to acknowledge, it
+/// could not see the transition); from INIT nothing changes.
+pub fn dropped_to_init(current: AlStatus) -> Outcome {
     if current.state == AlState::Init {
         Outcome {
             status: current,
@@ -184,13 +184,13 @@ mod tests {
     #[test]
     fn link_loss_drops_to_init_without_error() {
         for from in [PreOp, SafeOp, Op] {
-            let o = link_lost(st(from));
+            let o = dropped_to_init(st(from));
             assert_eq!(
                 (o.status.state, o.status.error, o.code),
                 (Init, false, AlStatusCode::NoError)
             );
         }
-        let o = link_lost(st(Init));
+        let o = dropped_to_init(st(Init));
         assert_eq!(o.status.state, Init);
     }
 

@@ -124,6 +124,45 @@ impl SyncSupervisor {
     }
 }
 
+/// Consecutive SYNC0 events without new outputs, for a profile's `[esm] lost_outputs` rule
+/// (the SDV3-E's cSD: "valid data not received within the specified time in cycle
+/// synchronization mode", P4.03 times in a row).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LostOutputsCounter {
+    /// Lost cycles in a row that trip; 0 = not supervised.
+    limit: u16,
+    /// Lost cycles in a row so far.
+    run: u16,
+}
+
+impl LostOutputsCounter {
+    /// Sets the limit (read from the profile's parameter at power-on); 0 switches it off.
+    pub fn set_limit(&mut self, limit: u16) {
+        self.limit = limit;
+        self.run = 0;
+    }
+
+    /// Whether the outputs are supervised at all.
+    pub fn enabled(&self) -> bool {
+        self.limit != 0
+    }
+
+    /// A supervised SYNC0: `fresh` = the master wrote the outputs since the previous one.
+    pub fn on_sync0(&mut self, fresh: bool) {
+        self.run = if fresh { 0 } else { self.run.saturating_add(1) };
+    }
+
+    /// Starts the count afresh (OP entered, supervision paused, after a trip).
+    pub fn restart(&mut self) {
+        self.run = 0;
+    }
+
+    /// Whether the limit was reached.
+    pub fn tripped(&self) -> bool {
+        self.limit != 0 && self.run >= self.limit
+    }
+}
+
 /// Whether `interval` is a whole number (≥ 1) of `cycle`s within the PLL tolerance (missed
 /// pulses are the sync error counter's business, not a period change).
 fn on_period(interval: u64, cycle: u64) -> bool {
@@ -139,6 +178,31 @@ mod tests {
     use super::*;
 
     const CYCLE: u32 = 1_000_000;
+
+    #[test]
+    fn lost_outputs_trip_only_after_the_limit_in_a_row() {
+        let mut c = LostOutputsCounter::default();
+        c.set_limit(3);
+        // Two lost, one fresh, two lost: never three in a row.
+        for fresh in [false, false, true, false, false] {
+            c.on_sync0(fresh);
+            assert!(!c.tripped());
+        }
+        c.on_sync0(false);
+        assert!(c.tripped(), "third lost cycle in a row");
+        c.restart();
+        assert!(!c.tripped());
+    }
+
+    #[test]
+    fn lost_outputs_limit_zero_is_no_supervision() {
+        let mut c = LostOutputsCounter::default();
+        assert!(!c.enabled());
+        for _ in 0..1000 {
+            c.on_sync0(false);
+        }
+        assert!(!c.tripped());
+    }
 
     #[test]
     fn nothing_is_missed_before_the_first_sync0() {
