@@ -8,6 +8,10 @@
 //! - without one (a board with no power stage, the benchmarks): an ideal axis whose position
 //!   actual value follows the target position while operation is enabled.
 //!
+//! A profile's adjusting services ([`crate::adjust`], e.g. the Σ-V-SD's 2310h) take their
+//! requests from SDO downloads ([`Application::downloaded`]) and are timed in the background
+//! ([`Application::background`]), in every EtherCAT state; the adjustments act on the axis.
+//!
 //! Units at this boundary come from [`cia402::units`]: positions in increments (the 32-bit
 //! objects wrap; the axis works on 64-bit positions), velocities in increments/s, torques in ‰
 //! of the motor rated torque 6076h (mN·m).
@@ -20,8 +24,29 @@ use cia402::units;
 use ethercat_slave::od::ErrorReport;
 use ethercat_slave::slave::{AppEvent, Application};
 
-use crate::motor::axis::{AxisCommand, AxisLink, AxisState, ControlMode, MotorModel};
+use crate::adjust::service::{Progress, Refusal};
+use crate::adjust::{Action, AdjustingService};
+use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::profile::{self, AppVars, DriveProfile, MOTOR_FAULT_COUNT};
+
+/// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
+pub const MAX_ADJUSTING_SERVICES: usize = 2;
+
+/// The motor counts as running above this speed, rpm: the Σ-V rotation detection level
+/// (Pn502, /TGON) default; the adjusting service's "while the servomotor is running" gives no
+/// figure.
+const RUNNING_RPM: f32 = 20.0;
+const SECONDS_PER_MINUTE: f32 = 60.0;
+const NS_PER_MS: u64 = 1_000_000;
+
+/// An adjustment running on the axis: which service started it and the axis counters then.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct RunningAdjustment {
+    service: usize,
+    action: Action,
+    offset_calibrations: u32,
+    trips: u32,
+}
 
 /// The connection to a motor's control interrupt.
 struct AxisPort {
@@ -48,17 +73,30 @@ pub struct Drive {
     fault_emcy: (u16, [u8; 5]),
     device: Device,
     axis: Option<AxisPort>,
+    /// The profile's adjusting services (`None` past its list).
+    adjusting: [Option<AdjustingService>; MAX_ADJUSTING_SERVICES],
+    /// The adjustment running on the axis, if any.
+    adjustment: Option<RunningAdjustment>,
 }
 
 impl Drive {
     /// The application of `profile` at power-on, without a motor.
     pub const fn new(profile: &'static DriveProfile) -> Self {
+        let mut adjusting = [None; MAX_ADJUSTING_SERVICES];
+        let mut i = 0;
+        // od-gen allows at most MAX_ADJUSTING_SERVICES.
+        while i < profile.adjusting.len() && i < MAX_ADJUSTING_SERVICES {
+            adjusting[i] = Some(AdjustingService::new(&profile.adjusting[i]));
+            i += 1;
+        }
         Self {
             vars: &profile.vars,
             fault_codes: profile.motor_faults,
             fault_emcy: (0, [0; 5]),
             device: Device::new(),
             axis: None,
+            adjusting,
+            adjustment: None,
         }
     }
 
@@ -204,6 +242,7 @@ impl Drive {
             enable: self.device.operation_enabled(),
             fault_reset: cw & controlword::FAULT_RESET != 0,
             identify: identifying,
+            calibrate_offsets: self.calibrating_offsets(),
             mode: match set_point.control {
                 modes::Loop::Position => ControlMode::Position,
                 modes::Loop::Velocity => ControlMode::Velocity,
@@ -245,7 +284,91 @@ impl Drive {
         if let Some(port) = &self.axis {
             port.link.publish(AxisCommand {
                 enable: false,
+                calibrate_offsets: self.calibrating_offsets(),
                 bus_cycle_ns: cycle_ns,
+                ..AxisCommand::default()
+            });
+        }
+    }
+
+    /// Whether the axis is asked to measure its current offsets (an adjustment runs).
+    fn calibrating_offsets(&self) -> bool {
+        self.adjustment
+            .is_some_and(|a| a.action == Action::CurrentOffsetCalibration)
+    }
+
+    /// Whether adjustment `action` may run on `axis` now (§4.5 (8) "Execution Conditions").
+    fn adjustment_allowed(&self, axis: u8, action: Action) -> Result<AxisFeedback, Refusal> {
+        let Some(port) = self.axis.as_ref().filter(|_| axis == 1) else {
+            return Err(Refusal::NoAxis);
+        };
+        let feedback = port.link.feedback();
+        match action {
+            Action::CurrentOffsetCalibration => {
+                let gates_off =
+                    matches!(feedback.state, AxisState::Disabled | AxisState::Identified);
+                let running_counts_per_s =
+                    RUNNING_RPM / SECONDS_PER_MINUTE * port.counts_per_rev as f32;
+                if feedback.state == AxisState::Faulted {
+                    Err(Refusal::Alarm)
+                } else if self.device.operation_enabled() || !gates_off {
+                    Err(Refusal::ServoOn)
+                } else if !feedback.main_power {
+                    Err(Refusal::MainPowerOff)
+                } else if feedback.velocity.abs() > running_counts_per_s {
+                    Err(Refusal::MotorRunning)
+                } else {
+                    Ok(feedback)
+                }
+            }
+            // See the Σ-V-SD profile's decision "2310h adjustments": the encoder interface
+            // has no multi-turn commands yet.
+            Action::MultiTurnReset | Action::MultiTurnLimitSetting => Err(Refusal::NotSupported),
+        }
+    }
+
+    /// Starts `action` of service `service` on the axis (its conditions were checked).
+    fn start_adjustment(&mut self, service: usize, action: Action, feedback: AxisFeedback) {
+        self.adjustment = Some(RunningAdjustment {
+            service,
+            action,
+            offset_calibrations: feedback.offset_calibrations,
+            trips: feedback.trips,
+        });
+        self.publish_adjustment();
+    }
+
+    /// How the adjustment of service `service` stands.
+    fn adjustment_progress(&self, service: usize) -> Progress {
+        let (Some(a), Some(port)) = (self.adjustment, self.axis.as_ref()) else {
+            return Progress::Failed;
+        };
+        if a.service != service {
+            return Progress::Failed;
+        }
+        let feedback = port.link.feedback();
+        match a.action {
+            Action::CurrentOffsetCalibration => {
+                if feedback.trips != a.trips || feedback.state == AxisState::Faulted {
+                    Progress::Failed
+                } else if feedback.offset_calibrations != a.offset_calibrations {
+                    Progress::Done
+                } else {
+                    Progress::Running
+                }
+            }
+            Action::MultiTurnReset | Action::MultiTurnLimitSetting => Progress::Failed,
+        }
+    }
+
+    /// Tells the axis what the running adjustment needs, outside the cycle (in PREOP no cycle
+    /// runs; in SAFEOP/OP the cycle repeats it). The slave's entry points never overlap, so
+    /// the link keeps a single writer.
+    fn publish_adjustment(&self) {
+        if let Some(port) = &self.axis {
+            port.link.publish(AxisCommand {
+                enable: false,
+                calibrate_offsets: self.calibrating_offsets(),
                 ..AxisCommand::default()
             });
         }
@@ -291,6 +414,48 @@ impl Application for Drive {
             },
             ram,
         );
+    }
+
+    fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
+        let now_ms = now_ns / NS_PER_MS;
+        for i in 0..MAX_ADJUSTING_SERVICES {
+            let Some(mut service) = self.adjusting[i].filter(|s| s.is_request(index, subindex))
+            else {
+                continue;
+            };
+            let axis = service.spec().axis;
+            let mut allowed = None;
+            let start = service.on_request(ram, now_ms, |action| {
+                if self.adjustment.is_some() {
+                    return Err(Refusal::Busy);
+                }
+                let feedback = self.adjustment_allowed(axis, action)?;
+                allowed = Some(feedback);
+                Ok(())
+            });
+            self.adjusting[i] = Some(service);
+            if let (Some(action), Some(feedback)) = (start, allowed) {
+                self.start_adjustment(i, action, feedback);
+            }
+        }
+    }
+
+    fn background(&mut self, ram: &mut [u8], now_ns: u64) {
+        let now_ms = now_ns / NS_PER_MS;
+        for i in 0..MAX_ADJUSTING_SERVICES {
+            let Some(mut service) = self.adjusting[i] else {
+                continue;
+            };
+            let progress = self.adjustment_progress(i);
+            service.on_time(ram, now_ms, progress);
+            self.adjusting[i] = Some(service);
+            let ours = self.adjustment.is_some_and(|a| a.service == i);
+            if ours && service.running().is_none() {
+                // Ended, timed out or aborted: the axis request falls.
+                self.adjustment = None;
+                self.publish_adjustment();
+            }
+        }
     }
 }
 

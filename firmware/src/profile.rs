@@ -7,6 +7,7 @@ use cia402::units::Ratio;
 use ethercat_slave::mailbox::emcy;
 use ethercat_slave::od::Profile;
 
+use crate::adjust::ServiceSpec;
 use crate::motor::MotorFault;
 
 /// OD RAM offsets of the variables the generic application reads and writes, by role. A role the
@@ -153,6 +154,9 @@ pub struct DriveProfile {
     /// indexed by `MotorFault::code() - 1` (profile table `[motor_faults]`); read it with
     /// [`Self::motor_fault_code`].
     pub motor_faults: &'static [FaultReport; MOTOR_FAULT_COUNT],
+    /// The profile's adjusting-service objects (`[[adjusting]]`; at most
+    /// [`crate::drive::MAX_ADJUSTING_SERVICES`]).
+    pub adjusting: &'static [ServiceSpec],
 }
 
 /// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].

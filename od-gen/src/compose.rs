@@ -43,7 +43,8 @@ pub struct Composed {
 
 /// The array-of-tables keys that merge element by element, and the key that identifies an
 /// element. `decision` is appended; every other array is replaced as a whole.
-const MERGE_BY: [(&str, &str); 5] = [
+const MERGE_BY: [(&str, &str); 6] = [
+    ("adjusting", "object"),
     ("object", "index"),
     ("rxpdo", "index"),
     ("txpdo", "index"),

@@ -1035,6 +1035,52 @@ fn motor_faults(out: &mut String, p: &Profile) {
     );
 }
 
+/// `[[adjusting]]`: the adjusting-service objects and their adjustments.
+fn adjusting(out: &mut String, p: &Profile) {
+    if p.adjusting.is_empty() {
+        return;
+    }
+    out.push_str("## Adjusting services\n\n");
+    out.push_str(
+        "Request/reply objects for maintenance adjustments (firmware `adjust`): write the request \
+         to :01 (step 1 CADDRESS 2000h = request code; step 2 2001h = 0002h prepare; step 3 \
+         2001h = 0001h execute; 2000h = 0000h aborts), read the status at :02 (1 accepted or \
+         done, 2 refused or failed, 255 executing) and the reply at :03.\n\n",
+    );
+    let rows: Vec<Vec<String>> = p
+        .adjusting
+        .iter()
+        .flat_map(|a| {
+            a.commands.iter().map(move |c| {
+                vec![
+                    format!("{:04X}h", a.object),
+                    a.axis.to_string(),
+                    format!("{:04X}H", c.code),
+                    format!("`{}`", c.action.name()),
+                    yes(c.preparation).into(),
+                    format!(
+                        "{} s / {} s",
+                        a.time_limit_ms / 1000,
+                        a.abort_after_ms / 1000
+                    ),
+                ]
+            })
+        })
+        .collect();
+    md_table(
+        out,
+        &[
+            "object",
+            "axis",
+            "request code",
+            "action",
+            "preparation",
+            "time limit / abort after",
+        ],
+        &rows,
+    );
+}
+
 fn decisions(out: &mut String, p: &Profile) {
     out.push_str("## Decisions: deviations from the manual and why\n\n");
     if p.decisions.is_empty() {
@@ -1190,6 +1236,7 @@ pub fn markdown(p: &Profile) -> String {
     modes(&mut out, p);
     alarms(&mut out, p);
     motor_faults(&mut out, p);
+    adjusting(&mut out, p);
     decisions(&mut out, p);
     replicate(&mut out, p);
     object_count(&mut out, p);

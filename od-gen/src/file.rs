@@ -74,6 +74,44 @@ pub struct ProfileFile {
     /// The declared objects.
     #[serde(default, rename = "object")]
     pub objects: Vec<ObjectFile>,
+    /// `[[adjusting]]`: adjusting-service objects (a vendor's maintenance request/reply
+    /// channel, the Σ-V-SD's 2310h).
+    #[serde(default)]
+    pub adjusting: Vec<AdjustingFile>,
+}
+
+/// `[[adjusting]]`: one adjusting-service object.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdjustingFile {
+    /// The RECORD: :01 command STRING(16) RW, :02 status USINT RO, :03 reply STRING(16) RO.
+    pub object: u16,
+    /// The axis it adjusts (default 1).
+    #[serde(default = "first_axis")]
+    pub axis: u8,
+    /// A selection with no further request for this long is aborted, ms.
+    pub abort_after_ms: u32,
+    /// An execution that has not ended after this long ends in error, ms.
+    pub time_limit_ms: u32,
+    /// The adjustments.
+    pub commands: Vec<AdjustingCommandFile>,
+}
+
+fn first_axis() -> u8 {
+    1
+}
+
+/// One adjustment: `{ code = 0x100E, action = "current_offset_calibration", preparation = false }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdjustingCommandFile {
+    /// Request code (CDATA of the selection step), not 0.
+    pub code: u16,
+    /// `current_offset_calibration`, `multi_turn_reset` or `multi_turn_limit_setting`.
+    pub action: String,
+    /// Needs the preparation step before execution (default false).
+    #[serde(default)]
+    pub preparation: bool,
 }
 
 /// A `[motor_faults]` value: a CiA402 error code, or the `display` name of an `[[alarm]]`

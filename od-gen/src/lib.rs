@@ -16,6 +16,7 @@
 //! | [`file`] | the TOML format (serde types; every key is documented there and in `README.md`) |
 //! | [`resolve`] | file → checked [`Profile`] with the derived objects |
 //! | `storage` | the `[storage]` section: parameter storage rules resolved and checked against the dictionary |
+//! | `adjusting` | the `[[adjusting]]` section: adjusting-service objects checked against the dictionary |
 //! | `validate` | profile-wide checks (SM layout, mailbox, sync, roles, motor-fault codes, EEPROM size) |
 //! | [`model`] | the resolved profile |
 //! | [`rust`] | the generated Rust (`OUT_DIR/profiles.rs` of the firmware) |
@@ -35,6 +36,7 @@
 //! assert!(code.contains("pub mod standard"));
 //! ```
 
+mod adjusting;
 pub mod cli;
 pub mod compose;
 pub mod doc;

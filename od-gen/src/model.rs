@@ -1205,6 +1205,8 @@ pub struct Profile {
     pub replicate: Vec<(u16, u16, u16)>,
     /// Parameter storage rules (`[storage]`).
     pub storage: StorageRules,
+    /// `[[adjusting]]`: adjusting-service objects.
+    pub adjusting: Vec<Adjusting>,
     /// RxPDOs, sorted by index.
     pub rx_pdos: Vec<Pdo>,
     /// TxPDOs, sorted by index.
@@ -1358,5 +1360,79 @@ impl Profile {
             .filter(|p| p.assigned)
             .map(Pdo::bits)
             .sum()
+    }
+}
+
+/// One `[[adjusting]]` service: a maintenance request/reply object (Σ-V-SD 2310h).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Adjusting {
+    /// The RECORD (:01 command, :02 status, :03 reply).
+    pub object: u16,
+    /// The axis it adjusts (1 or 2).
+    pub axis: u8,
+    /// A selection with no further request for this long is aborted, ms.
+    pub abort_after_ms: u32,
+    /// An execution that has not ended after this long ends in error, ms.
+    pub time_limit_ms: u32,
+    /// The adjustments.
+    pub commands: Vec<AdjustingCommand>,
+}
+
+/// One adjustment of an [`Adjusting`] service.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AdjustingCommand {
+    /// Request code.
+    pub code: u16,
+    /// What it does.
+    pub action: AdjustAction,
+    /// Needs the preparation step.
+    pub preparation: bool,
+}
+
+/// What an adjustment does (`firmware::adjust::Action`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdjustAction {
+    /// Measure the current-sensor offsets again.
+    CurrentOffsetCalibration,
+    /// Clear the absolute encoder's multi-turn data.
+    MultiTurnReset,
+    /// Write the multi-turn limit into the encoder.
+    MultiTurnLimitSetting,
+}
+
+impl AdjustAction {
+    /// The profile-file spellings, in declaration order.
+    pub const NAMES: [&'static str; 3] = [
+        "current_offset_calibration",
+        "multi_turn_reset",
+        "multi_turn_limit_setting",
+    ];
+
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "current_offset_calibration" => Some(Self::CurrentOffsetCalibration),
+            "multi_turn_reset" => Some(Self::MultiTurnReset),
+            "multi_turn_limit_setting" => Some(Self::MultiTurnLimitSetting),
+            _ => None,
+        }
+    }
+
+    /// The firmware's variant name.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::CurrentOffsetCalibration => "CurrentOffsetCalibration",
+            Self::MultiTurnReset => "MultiTurnReset",
+            Self::MultiTurnLimitSetting => "MultiTurnLimitSetting",
+        }
+    }
+
+    /// The profile-file spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::CurrentOffsetCalibration => Self::NAMES[0],
+            Self::MultiTurnReset => Self::NAMES[1],
+            Self::MultiTurnLimitSetting => Self::NAMES[2],
+        }
     }
 }

@@ -545,6 +545,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         tx_pdos,
         objects: Vec::new(),
         storage: StorageRules::default(),
+        adjusting: Vec::new(),
     };
     for o in derived_objects(&profile)? {
         // A declared SM parameter object (the manual's layout) replaces the generated one.
@@ -558,6 +559,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     profile.units = units(&f.units, &profile)?;
     crate::validate::check(&profile)?;
     profile.storage = crate::storage::resolve(&f.storage, &profile)?;
+    profile.adjusting = crate::adjusting::resolve(&f.adjusting, &profile)?;
     Ok(profile)
 }
 

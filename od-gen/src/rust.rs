@@ -454,6 +454,39 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         );
         let _ = writeln!(out, "        }},");
         let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
+        let drive = target.drive.unwrap_or("crate");
+        let services: Vec<String> = p
+            .adjusting
+            .iter()
+            .map(|a| {
+                // The adjusting module checked that the three entries are RAM variables.
+                let at = |sub: u8| layout.offsets.get(&(a.object, sub)).copied().unwrap_or(0);
+                let commands: Vec<String> = a
+                    .commands
+                    .iter()
+                    .map(|c| {
+                        format!(
+                            "{drive}::adjust::CommandSpec {{ code: {:#06x}, action: {drive}::adjust::Action::{}, preparation: {} }}",
+                            c.code,
+                            c.action.rust_variant(),
+                            c.preparation
+                        )
+                    })
+                    .collect();
+                format!(
+                    "{drive}::adjust::ServiceSpec {{ object: {:#06x}, axis: {}, command_at: {}, status_at: {}, reply_at: {}, abort_after_ms: {}, time_limit_ms: {}, commands: &[{}] }}",
+                    a.object,
+                    a.axis,
+                    at(1),
+                    at(2),
+                    at(3),
+                    a.abort_after_ms,
+                    a.time_limit_ms,
+                    commands.join(", ")
+                )
+            })
+            .collect();
+        let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
     }
     let _ = writeln!(out, "    }};\n");
     let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");

@@ -1236,3 +1236,83 @@ fn sync_error_code_and_lock_timeout_are_checked() {
     assert_eq!(sdv3e.esm.sync_error_al_code, 0x002C, "§5.2 5) cS");
     assert_eq!(sdv3e.esm.sync_lock_timeout_ms, Some(2000), "§5.2 7) PLF");
 }
+
+/// A 2310h-like adjusting record (Σ-V-SD §4.5 (8)) with `status_type` at :02, plus `service`.
+fn with_adjusting(status_type: &str, service: &str) -> String {
+    appended(&format!(
+        "[[object]]\nindex = 0x2310\nname = \"Adjusting\"\ncode = \"record\"\n\
+         [[object.entry]]\nsub = 1\nname = \"Command\"\ntype = \"STRING\"\nbits = 128\naccess = \"rw\"\ndefault = \"\"\n\
+         [[object.entry]]\nsub = 2\nname = \"Status\"\ntype = \"{status_type}\"\naccess = \"ro\"\nstorage = \"ram\"\ndefault = 0\n\
+         [[object.entry]]\nsub = 3\nname = \"Reply\"\ntype = \"STRING\"\nbits = 128\naccess = \"ro\"\nstorage = \"ram\"\ndefault = \"\"\n\
+         {service}"
+    ))
+}
+
+const SERVICE: &str = "[[adjusting]]\nobject = 0x2310\nabort_after_ms = 10_000\ntime_limit_ms = 5_000\n\
+    commands = [{ code = 0x100E, action = \"current_offset_calibration\" }, { code = 0x1008, action = \"multi_turn_reset\", preparation = true }]\n";
+
+#[test]
+fn adjusting_services_are_resolved_and_checked() {
+    let p = od_gen::parse(&with_adjusting("USINT", SERVICE), "ok").unwrap();
+    assert_eq!(p.adjusting.len(), 1);
+    let a = &p.adjusting[0];
+    assert_eq!(
+        (a.object, a.axis, a.abort_after_ms, a.time_limit_ms),
+        (0x2310, 1, 10_000, 5_000)
+    );
+    assert_eq!(
+        a.commands
+            .iter()
+            .map(|c| (c.code, c.action.name(), c.preparation))
+            .collect::<Vec<_>>(),
+        [
+            (0x100E, "current_offset_calibration", false),
+            (0x1008, "multi_turn_reset", true)
+        ]
+    );
+    let rust = od_gen::rust::generate(&[p]);
+    assert!(rust.contains("adjusting: &[crate::adjust::ServiceSpec { object: 0x2310, axis: 1,"));
+    assert!(rust
+        .contains("action: crate::adjust::Action::CurrentOffsetCalibration, preparation: false"));
+
+    let cases = [
+        (with_adjusting("UINT", SERVICE), "adjusting[0].object"),
+        (
+            with_adjusting("USINT", &SERVICE.replace("0x2310", "0x2311")),
+            "adjusting[0].object",
+        ),
+        (
+            with_adjusting("USINT", &SERVICE.replace("multi_turn_reset", "format_disk")),
+            "adjusting[0].commands[1].action",
+        ),
+        (
+            with_adjusting("USINT", &SERVICE.replace("0x1008", "0x100E")),
+            "adjusting[0].commands[1].code",
+        ),
+        (
+            with_adjusting("USINT", &SERVICE.replace("0x1008", "0")),
+            "adjusting[0].commands[1].code",
+        ),
+        (
+            with_adjusting(
+                "USINT",
+                &SERVICE.replace("time_limit_ms = 5_000", "time_limit_ms = 0"),
+            ),
+            "adjusting[0].time_limit_ms",
+        ),
+        (
+            with_adjusting(
+                "USINT",
+                &SERVICE.replace("object = 0x2310", "object = 0x2310\naxis = 3"),
+            ),
+            "adjusting[0].axis",
+        ),
+        (
+            with_adjusting("USINT", &format!("{SERVICE}{SERVICE}")),
+            "adjusting[1].object",
+        ),
+    ];
+    for (text, key) in cases {
+        assert_eq!(invalid(&text).0, key);
+    }
+}

@@ -1,7 +1,9 @@
 //! Shared helpers of the end-to-end tests: a single-threaded runtime for the in-process
-//! ethercrab master, the expected identity from the profile, and the SOEM (pysoem) harness.
+//! ethercrab master, the expected identity from the profile, the SOEM (pysoem) harness and a raw
+//! mailbox SDO client for downloads longer than ethercrab's 4 bytes.
 
 pub mod io_module;
+pub mod raw_sdo;
 pub mod session;
 pub mod soem;
 

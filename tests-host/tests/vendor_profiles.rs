@@ -57,11 +57,11 @@ fn default_image(p: &Profile) -> (usize, usize) {
 }
 
 /// What an SDO upload of the entry's default returns: the bytes, except that a VISIBLE_STRING
-/// variable ends at its first NUL (CiA 301 §7.1.6.3: a visible string may be shorter than its
-/// object; the stack sends the text, not the padding).
+/// variable the master writes ends at its first NUL (CiA 301 §7.1.6.3: a visible string may be
+/// shorter than its object; the stack sends the text, not the padding).
 fn upload_of(e: &Entry) -> Vec<u8> {
     let mut bytes = e.initial_bytes();
-    if e.data_type == DataType::VisibleString && e.storage == Storage::Ram {
+    if e.data_type == DataType::VisibleString && e.storage == Storage::Ram && e.access.writable() {
         if let Some(nul) = bytes.iter().position(|b| *b == 0) {
             bytes.truncate(nul);
         }

@@ -2,7 +2,8 @@
 //! on the plant (with its dead time, device drops, ADC offsets, noise and quantisation, and
 //! friction), the results match the plant's true values, the gains computed from them match the
 //! bandwidth rules applied to the true values, and an open winding ends in
-//! `MotorFault::Identification` with the gates off.
+//! `MotorFault::Identification` with the gates off. The current-sensor offsets can be measured
+//! on request with the drive disabled (an adjusting service's "automatic offset adjustment").
 
 // The shared helpers re-export more than this file uses.
 #[allow(unused_imports)]
@@ -189,4 +190,57 @@ fn an_open_winding_fails_the_identification() {
     let fb = servo.feedback();
     assert_eq!(fb.fault, Some(MotorFault::Identification));
     assert_eq!(fb.identified, None);
+}
+
+#[test]
+fn offsets_are_measured_on_request_with_the_gates_off_and_the_axis_stays_disabled() {
+    let plant = PlantConfig::servo_400w();
+    let true_offsets = plant.sensing.offset_a;
+    let cfg = axis_config(&plant, &Tuning::default());
+    let mut servo = SimServo::new(plant, cfg).expect("valid configuration");
+    // Before: nothing measured (the axis has not been enabled).
+    let before = servo.axis.current_offsets();
+    assert_eq!((before.a, before.b, before.c), (0.0, 0.0, 0.0));
+    assert_eq!(servo.feedback().offset_calibrations, 0);
+    let request = AxisCommand {
+        calibrate_offsets: true,
+        ..Default::default()
+    };
+    let mut states = vec![servo.axis.state()];
+    for _ in 0..200 {
+        servo.publish(request);
+        for _ in 0..PERIODS_PER_CYCLE {
+            servo.period();
+            assert!(!servo.latched().gates, "gates on while calibrating");
+            let s = servo.axis.state();
+            if states.last() != Some(&s) {
+                states.push(s);
+            }
+        }
+    }
+    assert_eq!(
+        states,
+        [
+            AxisState::Disabled,
+            AxisState::CalibratingOffsets,
+            AxisState::Disabled
+        ],
+        "one calibration, back to Disabled without an enable"
+    );
+    assert_eq!(servo.feedback().offset_calibrations, 1);
+    assert!(servo.feedback().main_power, "48 V bus");
+    let got = servo.axis.current_offsets();
+    // The plant's ADC offsets, within the noise averaged over the calibration samples and
+    // one ADC count.
+    let tolerance = 0.01;
+    for (g, t) in [got.a, got.b, got.c].into_iter().zip(true_offsets) {
+        assert!((f64::from(g) - t).abs() < tolerance, "offset {g} vs {t}");
+    }
+    // Holding the request does not repeat it; a new rising edge does.
+    servo.publish(AxisCommand::default());
+    servo.run_periods(PERIODS_PER_CYCLE);
+    servo.publish(request);
+    servo.run_periods(200 * PERIODS_PER_CYCLE);
+    assert_eq!(servo.feedback().offset_calibrations, 2);
+    assert_eq!(servo.axis.state(), AxisState::Disabled);
 }

@@ -145,6 +145,10 @@ pub struct AxisCommand {
     pub fault_reset: bool,
     /// Run the identification (commissioning) instead of the cascade when enabled.
     pub identify: bool,
+    /// While disabled: a rising edge measures the current-sensor offsets again (gates off)
+    /// and keeps them; the axis returns to Disabled (an adjusting service's "automatic offset
+    /// adjustment of the motor current detection signals"). Falling before the end cancels it.
+    pub calibrate_offsets: bool,
     /// Mode.
     pub mode: ControlMode,
     /// Target position, increments.
@@ -201,6 +205,11 @@ pub struct AxisFeedback {
     /// Faults latched so far (wrapping): a change tells the SYNC0 side that a new fault
     /// occurred, even when a reset and a new trip of the same fault fall between two reads.
     pub trips: u32,
+    /// Current-sensor offset calibrations completed so far (wrapping), at enable or on request
+    /// ([`AxisCommand::calibrate_offsets`]).
+    pub offset_calibrations: u32,
+    /// The main circuit is powered: the bus voltage is at or above the under-voltage level.
+    pub main_power: bool,
 }
 
 /// Results of a commissioning run.
@@ -321,6 +330,7 @@ impl AxisLink {
                     enable: false,
                     fault_reset: false,
                     identify: false,
+                    calibrate_offsets: false,
                     mode: ControlMode::Torque,
                     position: 0,
                     velocity: 0.0,
@@ -339,6 +349,8 @@ impl AxisLink {
                     following_error: 0,
                     identified: None,
                     trips: 0,
+                    offset_calibrations: 0,
+                    main_power: false,
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -421,6 +433,12 @@ pub struct Axis {
     model: MotorModel,
     /// Faults latched so far (wrapping).
     trips: u32,
+    /// The velocity observer follows the position (seeded with a valid one).
+    velocity_observed: bool,
+    /// The previous loop tick's [`AxisCommand::calibrate_offsets`] (edge detection).
+    previous_calibrate: bool,
+    /// Offset calibrations completed (wrapping).
+    offset_calibrations: u32,
 }
 
 impl Axis {
@@ -504,6 +522,9 @@ impl Axis {
             last_velocity: 0.0,
             injection: (0.0, 0.0),
             trips: 0,
+            velocity_observed: false,
+            previous_calibrate: false,
+            offset_calibrations: 0,
             bus_cycle_ns: (cfg.bus_cycle_s * 1e9) as u32,
             model_seq: 0,
             model: MotorModel {
@@ -597,6 +618,11 @@ impl Axis {
         }
     }
 
+    /// The current-sensor offsets in use (from the last calibration), A.
+    pub fn current_offsets(&self) -> PhaseCurrents {
+        self.offsets
+    }
+
     /// Measured d and q currents of the last period, A.
     pub fn currents_dq(&self) -> (f32, f32) {
         (self.last_id, self.last_iq)
@@ -644,7 +670,8 @@ impl Axis {
         }
         let output = match self.state {
             AxisState::Disabled => {
-                if self.command.enable && self.fault.is_none() {
+                let calibrate = self.command.calibrate_offsets && !self.previous_calibrate;
+                if (self.command.enable || calibrate) && self.fault.is_none() {
                     self.offset_calibration.restart();
                     self.state = AxisState::CalibratingOffsets;
                 }
@@ -667,7 +694,14 @@ impl Axis {
             AxisState::IdentifyingInertia => self.identify_inertia(&currents, loop_tick),
         };
         self.previous_fault_reset = self.command.fault_reset;
-        if !self.command.enable && !matches!(self.state, AxisState::Faulted | AxisState::Disabled) {
+        self.previous_calibrate = self.command.calibrate_offsets;
+        // Measuring the offsets on request needs no enable.
+        let calibrating_on_request =
+            self.state == AxisState::CalibratingOffsets && self.command.calibrate_offsets;
+        if !self.command.enable
+            && !calibrating_on_request
+            && !matches!(self.state, AxisState::Faulted | AxisState::Disabled)
+        {
             self.electrical_ident = None;
             self.inertia_ident = None;
             self.state = AxisState::Disabled;
@@ -675,6 +709,26 @@ impl Axis {
         }
         if loop_tick {
             let enabled = output.gates;
+            if matches!(
+                self.state,
+                AxisState::Disabled
+                    | AxisState::Faulted
+                    | AxisState::Identified
+                    | AxisState::CalibratingOffsets
+            ) {
+                // Gates off: the velocity is still observed (a motor turned by its load or by
+                // hand shows in 606Ch; a drive must know whether the motor is running). The
+                // observer starts from the first valid position (an absolute encoder's
+                // power-on position is anywhere: no jump from 0).
+                if !self.position_valid {
+                    self.last_velocity = 0.0;
+                } else if self.velocity_observed {
+                    self.last_velocity = self.velocity.update(self.position);
+                } else {
+                    self.velocity.reset(self.position);
+                    self.velocity_observed = true;
+                }
+            }
             let fault = self.protections.check(&ProtectionInputs {
                 id: self.last_id,
                 iq: self.last_iq,
@@ -721,6 +775,8 @@ impl Axis {
             following_error: self.position_loop.following_error(),
             identified: self.identified,
             trips: self.trips,
+            offset_calibrations: self.offset_calibrations,
+            main_power: self.vbus >= self.cfg.protection.bus_under_voltage_v,
         });
     }
 
@@ -775,8 +831,12 @@ impl Axis {
             }
             Some(Ok(offsets)) => {
                 self.offsets = offsets;
+                self.offset_calibrations = self.offset_calibrations.wrapping_add(1);
                 self.current_loop.reset();
-                if self.command.identify {
+                if !self.command.enable {
+                    // A calibration on request: done, gates stay off.
+                    self.state = AxisState::Disabled;
+                } else if self.command.identify {
                     self.start_identification();
                 } else if self.cfg.motor.commutation_offset.is_none() {
                     self.alignment.restart();
@@ -804,6 +864,7 @@ impl Axis {
     fn start_running(&mut self) {
         self.speed_loop.reset();
         self.velocity.reset(self.position);
+        self.velocity_observed = true;
         self.interpolator.reset(self.position);
         self.position_loop.reset();
         self.state = AxisState::Running;
@@ -1121,6 +1182,52 @@ mod tests {
         fn is_enabled(&self) -> bool {
             self.enabled
         }
+    }
+
+    /// The 400 W servo's axis at rest on `position`, gates off, `ticks` loop ticks with
+    /// `command`; the feedback at the end.
+    fn at_rest(position: i64, command: AxisCommand, ticks: u32) -> (Axis, AxisFeedback) {
+        use crate::servo::{axis_config, Tuning, SERVO_400W};
+        let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
+        let mut axis = Axis::new(cfg).unwrap();
+        // SAFETY: one thread calls both sides, one after the other.
+        let link = unsafe { AxisLink::new() };
+        let sample = Sample {
+            currents: PhaseCurrents::default(),
+            bus_voltage: 48.0,
+            temperature: 25.0,
+            motor_overtemp: false,
+            position: Ok(position),
+        };
+        for _ in 0..ticks {
+            link.publish(command);
+            for _ in 0..cfg.loop_divider {
+                axis.control_step(&sample, &link);
+            }
+        }
+        let fb = link.feedback();
+        (axis, fb)
+    }
+
+    #[test]
+    fn a_motor_at_rest_far_from_zero_is_at_rest_while_disabled_and_when_enabled() {
+        // An absolute encoder's power-on position is anywhere: the gates-off velocity
+        // observation starts there, not at 0 (which would be a huge speed: over-speed).
+        let far = 0x7_0012_3456;
+        let (_, fb) = at_rest(far, AxisCommand::default(), 200);
+        assert_eq!(
+            (fb.state, fb.fault, fb.velocity),
+            (AxisState::Disabled, None, 0.0)
+        );
+        assert!(fb.main_power);
+        let enable = AxisCommand {
+            enable: true,
+            mode: ControlMode::Position,
+            position: far,
+            ..AxisCommand::default()
+        };
+        let (axis, fb) = at_rest(far, enable, 2_000);
+        assert_eq!((axis.state(), fb.fault), (AxisState::Running, None));
     }
 
     #[test]

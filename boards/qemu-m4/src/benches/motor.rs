@@ -187,6 +187,7 @@ const COMMAND: AxisCommand = AxisCommand {
     enable: true,
     fault_reset: false,
     identify: false,
+    calibrate_offsets: false,
     mode: ControlMode::Position,
     position: POSITION,
     velocity: 0.0,

@@ -49,6 +49,24 @@ pub trait Application {
     fn power_on(&mut self, ram: &mut [u8]) {
         let _ = ram;
     }
+
+    /// An SDO download to `index:subindex` was committed to the OD RAM (`ram` holds the new
+    /// value; a complete-access download names its first subindex), at board time `now_ns`.
+    /// Runs in the ESC-event context when the mailbox round hands its writes back, before the
+    /// next mailbox request is served, in PREOP, SAFEOP and OP: for objects whose writes are
+    /// commands (a service request), not values. Must be short (bounded, no I/O). Default:
+    /// nothing.
+    fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
+        let _ = (ram, index, subindex, now_ns);
+    }
+
+    /// Called at the start of every ESC-event round, in every EtherCAT state (on a board at
+    /// least every few ms, also without bus traffic): work that is not tied to the
+    /// process-data cycle, e.g. a service that runs across several mailbox requests. Must be
+    /// short (bounded, no I/O). Default: nothing.
+    fn background(&mut self, ram: &mut [u8], now_ns: u64) {
+        let _ = (ram, now_ns);
+    }
 }
 
 /// A slave without an application: process data are copied to and from the OD and nothing else

@@ -15,15 +15,23 @@
 //!
 //! An entry that both an SDO download and the cycle write in the same round ends with the SDO
 //! value, as if the download came last. Values the cycle writes (statusword, actual values) are
-//! uploaded as they were at step 1.
+//! uploaded as they were at step 1. The committed downloads of the round are handed to the
+//! application in step 3 too ([`Application::downloaded`]), after their values are in place.
 
 use hal::esc::AlState;
 use hal::pdi::EscPdi;
 
 use super::{EventJob, SlaveCore};
 use crate::mailbox::Mailbox;
-use crate::od::{Dictionary, DirtyMap, DownloadHook, Profile};
+use heapless::Vec;
+
+use crate::od::{AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Profile};
 use crate::slave::Application;
+
+/// Committed downloads one round can record: a round serves one mailbox request, which
+/// commits at most one download (one entry, or one object by complete access); the margin
+/// covers a repeated request served in the same round.
+const DOWNLOADS_PER_ROUND: usize = 4;
 
 /// The mailbox with its CoE server and the working copy of the OD RAM.
 pub struct MailboxSide<const RAM: usize> {
@@ -31,6 +39,8 @@ pub struct MailboxSide<const RAM: usize> {
     mailbox: Mailbox,
     ram: [u8; RAM],
     dirty: DirtyMap,
+    /// Downloads committed in this round (index, subindex), for the application.
+    downloads: Vec<(u16, u8), DOWNLOADS_PER_ROUND>,
 }
 
 impl<const RAM: usize> MailboxSide<RAM> {
@@ -41,6 +51,7 @@ impl<const RAM: usize> MailboxSide<RAM> {
             mailbox: Mailbox::new(),
             ram: [0; RAM],
             dirty: DirtyMap::new(),
+            downloads: Vec::new(),
         }
     }
 
@@ -59,6 +70,7 @@ impl<const RAM: usize> MailboxSide<RAM> {
         }
         self.ram = core.ram;
         self.dirty.clear();
+        self.downloads.clear();
     }
 
     /// Step 2 (no lock): serves the mailbox in `job.state` (nothing in INIT and BOOT): repeat
@@ -75,20 +87,29 @@ impl<const RAM: usize> MailboxSide<RAM> {
             return Ok(());
         }
         let mut od = Dictionary::tracked(self.profile, &mut self.ram, &mut self.dirty);
+        let mut recording = Recording {
+            hook,
+            downloads: &mut self.downloads,
+        };
         self.mailbox.service_with(
             pdi,
             &self.profile.device,
             &mut od,
             job.state,
             job.events,
-            hook,
+            &mut recording,
         )
     }
 
     /// Step 3 (bounded, with the core): the entries the SDO services wrote go back to the core's
-    /// OD RAM.
+    /// OD RAM, then the application learns which downloads were committed.
     pub fn store<A: Application>(&mut self, core: &mut SlaveCore<RAM, A>) {
         self.dirty.copy_marked(&self.ram, &mut core.ram);
+        for (index, subindex) in self.downloads.iter().copied() {
+            core.app
+                .downloaded(&mut core.ram, index, subindex, core.now_ns);
+        }
+        self.downloads.clear();
     }
 
     /// Emergencies queued in the mailbox, waiting for SM1.
@@ -100,5 +121,54 @@ impl<const RAM: usize> MailboxSide<RAM> {
     /// spans mailbox rounds right now.
     pub fn transfer_in_progress(&self) -> bool {
         self.mailbox.transfer_in_progress()
+    }
+}
+
+/// The board's download hook, recording each download it accepted for
+/// [`Application::downloaded`].
+struct Recording<'a, H: ?Sized> {
+    hook: &'a mut H,
+    downloads: &'a mut Vec<(u16, u8), DOWNLOADS_PER_ROUND>,
+}
+
+impl<H: DownloadHook + ?Sized> Recording<'_, H> {
+    fn record(
+        &mut self,
+        done: Result<(), AbortCode>,
+        index: u16,
+        subindex: u8,
+    ) -> Result<(), AbortCode> {
+        if done.is_ok() {
+            // Cannot overflow (one request per round, see DOWNLOADS_PER_ROUND); were it full,
+            // the value is written all the same and only the notification is dropped.
+            let _ = self.downloads.push((index, subindex));
+        }
+        done
+    }
+}
+
+impl<H: DownloadHook + ?Sized> DownloadHook for Recording<'_, H> {
+    fn downloaded(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        subindex: u8,
+    ) -> Result<(), AbortCode> {
+        let done = self.hook.downloaded(od, index, subindex);
+        self.record(done, index, subindex)
+    }
+
+    fn downloaded_complete(
+        &mut self,
+        od: &mut Dictionary<'_>,
+        index: u16,
+        first_subindex: u8,
+    ) -> Result<(), AbortCode> {
+        let done = self.hook.downloaded_complete(od, index, first_subindex);
+        self.record(done, index, first_subindex)
+    }
+
+    fn domains(&mut self) -> Option<&mut dyn DomainStore> {
+        self.hook.domains()
     }
 }

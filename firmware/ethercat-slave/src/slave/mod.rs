@@ -335,6 +335,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         self.supervise_link(pdi)?;
         self.supervise_pdi(pdi)?;
         self.supervise_sync(pdi, now_ns)?;
+        self.app.background(&mut self.ram, now_ns);
         Ok(EventJob {
             events,
             state: self.status.state,

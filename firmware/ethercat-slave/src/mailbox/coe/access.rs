@@ -166,15 +166,19 @@ pub(crate) fn store_abort(e: StoreError) -> AbortCode {
     }
 }
 
-/// The bytes an upload sends: a RAM VISIBLE_STRING up to its first NUL, anything else whole.
+/// The bytes an upload sends: a VISIBLE_STRING variable the master writes up to its first NUL
+/// (CiA 301 §7.1.6.3: a visible string may be shorter than its object; the master's text comes
+/// back, not the padding), anything else whole (a string the device fills may carry bytes
+/// after a NUL: the Σ-V-SD's 2310h:03 reply frame is a "STRING[16]" of binary fields).
 pub(crate) fn upload_value<'a>(
     od: &'a Dictionary<'_>,
     entry: &Entry,
 ) -> Result<&'a [u8], AbortCode> {
     let bytes = od.value(entry).map_err(store_abort)?;
-    let is_ram_string =
-        entry.data_type == DataType::VisibleString && matches!(entry.value, Value::Ram(_));
-    if !is_ram_string {
+    let is_written_text = entry.data_type == DataType::VisibleString
+        && matches!(entry.value, Value::Ram(_))
+        && entry.access.writable();
+    if !is_written_text {
         return Ok(bytes);
     }
     let len = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
