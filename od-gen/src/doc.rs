@@ -575,9 +575,16 @@ fn synchronisation(out: &mut String, p: &Profile) {
         let rows: Vec<Vec<String>> = e
             .al_error_alarms
             .iter()
-            .map(|(code, c)| vec![hex16(*code), error_report(c)])
+            .map(|(code, c)| {
+                let led = e
+                    .al_error_leds
+                    .iter()
+                    .find(|(l, _)| l == code)
+                    .map_or("ETG.1300".into(), |(_, led)| led.text().to_string());
+                vec![hex16(*code), error_report(c), led]
+            })
             .collect();
-        md_table(out, &["AL status code", "drive error"], &rows);
+        md_table(out, &["AL status code", "drive error", "ERR LED"], &rows);
     }
 }
 

@@ -655,6 +655,10 @@ pub struct AlErrorAlarmFile {
     pub al_status_code: u16,
     /// The drive error: a CiA402 error code or an `[[alarm]]` display.
     pub error: MotorFaultFile,
+    /// The ERR LED pattern the manual gives this error where it differs from ETG.1300's:
+    /// `blinking`, `single_flash`, `double_flash` or `on`.
+    #[serde(default)]
+    pub err_led: Option<String>,
 }
 
 /// ETG.1000.6 AL status code 0x001A "synchronization error".

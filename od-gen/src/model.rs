@@ -1048,6 +1048,8 @@ pub struct EsmRules {
     /// AL errors of the stack that the drive also reports as one of its errors, by AL status
     /// code (ascending, unique).
     pub al_error_alarms: Vec<(u16, MotorFaultCode)>,
+    /// AL status codes with the manual's ERR LED pattern (ascending, unique).
+    pub al_error_leds: Vec<(u16, ErrLed)>,
     /// The drive error raised when the input port's link is lost (INIT, AL status code 0).
     pub link_loss_error: Option<MotorFaultCode>,
     /// AL status code of a counted sync error (0x001A or 0x002C).
@@ -1433,6 +1435,52 @@ impl AdjustAction {
             Self::CurrentOffsetCalibration => Self::NAMES[0],
             Self::MultiTurnReset => Self::NAMES[1],
             Self::MultiTurnLimitSetting => Self::NAMES[2],
+        }
+    }
+}
+
+/// An ERR LED pattern (ETG.1300 Table 4) a manual gives an AL error (`firmware::od::ErrLed`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrLed {
+    /// Blinking.
+    Blinking,
+    /// Single flash.
+    SingleFlash,
+    /// Double flash.
+    DoubleFlash,
+    /// On.
+    On,
+}
+
+impl ErrLed {
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "blinking" => Some(Self::Blinking),
+            "single_flash" => Some(Self::SingleFlash),
+            "double_flash" => Some(Self::DoubleFlash),
+            "on" => Some(Self::On),
+            _ => None,
+        }
+    }
+
+    /// The firmware's variant name.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::Blinking => "Blinking",
+            Self::SingleFlash => "SingleFlash",
+            Self::DoubleFlash => "DoubleFlash",
+            Self::On => "On",
+        }
+    }
+
+    /// Human text.
+    pub fn text(self) -> &'static str {
+        match self {
+            Self::Blinking => "blinking",
+            Self::SingleFlash => "single flash",
+            Self::DoubleFlash => "double flash",
+            Self::On => "on",
         }
     }
 }

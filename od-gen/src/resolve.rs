@@ -221,6 +221,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .map(|r| fault_report(r, &alarms, "esm.op_exit_while_enabled_error"))
             .transpose()?,
         al_error_alarms: al_error_alarms(&f.esm.al_error_alarms, &alarms)?,
+        al_error_leds: al_error_leds(&f.esm.al_error_alarms)?,
         link_loss_error: f
             .esm
             .link_loss_error
@@ -809,6 +810,28 @@ fn lost_outputs(l: &crate::file::LostOutputsFile, alarms: &[Alarm]) -> Result<Lo
         al_status_code: l.al_status_code,
         error: fault_report(&l.error, alarms, "esm.lost_outputs.error")?,
     })
+}
+
+/// `[esm] al_error_alarms[].err_led`: the rows that give their own ERR LED pattern, sorted by
+/// code (the codes were checked by [`al_error_alarms`]).
+fn al_error_leds(rows: &[AlErrorAlarmFile]) -> Result<Vec<(u16, ErrLed)>, Fault> {
+    let mut out = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let Some(s) = row.err_led.as_deref() else {
+            continue;
+        };
+        let led = ErrLed::parse(s).ok_or_else(|| {
+            fault(
+                &format!("esm.al_error_alarms[{i}].err_led"),
+                Invalid::Value(format!(
+                    "`{s}` is not blinking, single_flash, double_flash or on"
+                )),
+            )
+        })?;
+        out.push((row.al_status_code, led));
+    }
+    out.sort_by_key(|(c, _)| *c);
+    Ok(out)
 }
 
 /// `[esm] al_error_alarms`: AL status codes (non-zero, each once) with the drive error each

@@ -374,7 +374,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         .collect();
     let _ = writeln!(
         out,
-        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}], link_loss_error: {}, sync_error_al_code: {:#06x}, sync_lock_timeout_ms: {:?}, pdi_error: {}, lost_outputs: {} }},",
+        "            esm: EsmRules {{ op_requires_outputs: {}, safeop_op_timeout_ms: {}, op_exit_while_enabled_error: {}, al_error_alarms: &[{}], link_loss_error: {}, sync_error_al_code: {:#06x}, sync_lock_timeout_ms: {:?}, pdi_error: {}, lost_outputs: {}, al_error_leds: &[{}] }},",
         m.op_requires_outputs,
         m.safeop_op_timeout_ms,
         m.op_exit_while_enabled_error
@@ -404,7 +404,16 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                 l.al_status_code,
                 report(&l.error)
             )
-        })
+        }),
+        m.al_error_leds
+            .iter()
+            .map(|(code, led)| format!(
+                "({code:#06x}, {}::od::ErrLed::{})",
+                target.slave,
+                led.rust_variant()
+            ))
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     let _ = writeln!(
         out,

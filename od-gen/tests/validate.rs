@@ -451,7 +451,7 @@ fn esm_rules_parse_with_defaults_and_are_checked() {
     );
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], link_loss_error: None, sync_error_al_code: 0x001a, sync_lock_timeout_ms: None, pdi_error: None, lost_outputs: None },"
+        "esm: EsmRules { op_requires_outputs: false, safeop_op_timeout_ms: 2500, op_exit_while_enabled_error: Some(::ethercat_slave::od::ErrorReport { error_code: 0x8700, emcy_code: 0x8700, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }), al_error_alarms: &[], link_loss_error: None, sync_error_al_code: 0x001a, sync_lock_timeout_ms: None, pdi_error: None, lost_outputs: None, al_error_leds: &[] },"
     ));
 
     // Without [esm] and the new keys: the documented defaults.
@@ -1042,6 +1042,26 @@ fn free_run_range_input_shift_and_al_error_alarms() {
     assert_eq!(key, "esm.al_error_alarms[0].al_status_code");
     let (key, _) = invalid(&esm("{ al_status_code = 0x001A, error = 0 }"));
     assert_eq!(key, "esm.al_error_alarms[0].error");
+    // err_led: the manual's ERR LED pattern, generated sorted by code; an unknown pattern.
+    let leds = od_gen::parse(
+        &esm("{ al_status_code = 0x001B, error = 0x8100, err_led = \"single_flash\" }, { al_status_code = 0x001A, error = 0x8700, err_led = \"on\" }"),
+        "p.toml",
+    )
+    .unwrap();
+    assert_eq!(
+        leds.esm.al_error_leds,
+        [
+            (0x001A, od_gen::model::ErrLed::On),
+            (0x001B, od_gen::model::ErrLed::SingleFlash)
+        ]
+    );
+    let rust = od_gen::rust::generate(&[leds]);
+    assert!(rust.contains("al_error_leds: &[(0x001a, ::ethercat_slave::od::ErrLed::On), (0x001b, ::ethercat_slave::od::ErrLed::SingleFlash)] }"));
+    assert!(ok.esm.al_error_leds.is_empty());
+    let (key, _) = invalid(&esm(
+        "{ al_status_code = 0x001A, error = 0x8700, err_led = \"disco\" }",
+    ));
+    assert_eq!(key, "esm.al_error_alarms[0].err_led");
 }
 
 #[test]

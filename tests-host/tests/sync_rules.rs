@@ -9,9 +9,9 @@
 //!   did not come, −1 per good one) trips when it reaches 10F1h:02 and raises alarm A.A12
 //!   (603Fh 0A12h, EMCY FF00h) with ESM → SAFEOP.
 //! - GHA-E §6.1: a SYNC0 period outside the allowed set is alarm Co03.
-//! - SDV3-E §5.2: the EtherCAT-layer alarms LL (link lost), Hr (PDI error) and cSD (outputs
-//!   lost P4.03 times in a row in a cyclic synchronous mode), with their ESM state, AL status
-//!   code and ERR LED.
+//! - SDV3-E §5.2: the EtherCAT-layer alarms LL (link lost), Hr (PDI error), Pto (PDO watchdog)
+//!   and cSD (outputs lost P4.03 times in a row in a cyclic synchronous mode), with their ESM
+//!   state, AL status code and ERR LED.
 
 use std::time::Duration;
 
@@ -614,6 +614,44 @@ fn sdv3e_pdi_error_is_hr_in_init_with_the_err_led_on() {
         Some(u32::from(alarm.error_code)),
         "603Fh = Hr"
     );
+}
+
+#[test]
+fn sdv3e_pdo_watchdog_timeout_is_pto_with_the_err_led_flashing_once() {
+    // §5.2 4): Pto "PDO watchdog timeout" → SafeOP, AL 0x001B, ERR LED "single flashing" (one
+    // 200 ms flash per 1.2 s; ETG.1300 gives the watchdog a double flash).
+    const CYCLE_NS: u64 = 1_000_000;
+    const SAMPLE_NS: u64 = 10_000_000;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let _group = into_dc_op(&m, md, CYCLE_NS).await;
+        // The master stops: no process data for longer than the SM watchdog (100 ms).
+        m.shared.advance(300 * CYCLE_NS);
+        assert_eq!(al_status(md).await, (SAFEOP | AL_ERROR, SM_WATCHDOG));
+        // 10 ms samples over two periods and a half: the lengths of the on and off runs.
+        let lit: Vec<bool> = (0..300)
+            .map(|_| {
+                m.shared.advance(SAMPLE_NS);
+                m.shared.segment().drives_mut()[0].leds.err.on
+            })
+            .collect();
+        let mut runs: Vec<(bool, usize)> = Vec::new();
+        for on in lit {
+            match runs.last_mut() {
+                Some((state, n)) if *state == on => *n += 1,
+                _ => runs.push((on, 1)),
+            }
+        }
+        // Whole runs only (not the first and the last, cut by the sampling window).
+        let inner = &runs[1..runs.len() - 1];
+        assert!(inner.len() >= 3, "{runs:?}");
+        for &(on, n) in inner {
+            let expected = if on { 20 } else { 100 };
+            assert!(n.abs_diff(expected) <= 1, "single flash 200 ms / 1000 ms: {runs:?}");
+        }
+    });
 }
 
 /// Samples the first drive's ERR LED every 100 ms for `ms` of simulated time: (on, off) counts.

@@ -62,6 +62,20 @@ pub enum ErrorIndication {
     ApplicationControllerFailure,
 }
 
+impl ErrorIndication {
+    /// The indication whose ETG.1300 ERR LED pattern is `led` (a profile's pattern for an AL
+    /// error, `EsmRules::al_error_leds`).
+    pub fn showing(led: crate::od::ErrLed) -> Self {
+        use crate::od::ErrLed;
+        match led {
+            ErrLed::Blinking => Self::InvalidConfiguration,
+            ErrLed::SingleFlash => Self::LocalError,
+            ErrLed::DoubleFlash => Self::WatchdogTimeout,
+            ErrLed::On => Self::ApplicationControllerFailure,
+        }
+    }
+}
+
 /// RUN LED pattern for an EtherCAT state (ETG.1300 Table 3).
 pub fn run_pattern(state: AlState) -> Pattern {
     match state {
@@ -121,6 +135,19 @@ mod tests {
             err_pattern(ErrorIndication::ApplicationControllerFailure),
             Pattern::On
         );
+    }
+
+    #[test]
+    fn a_profiles_err_led_shows_its_own_pattern() {
+        use crate::od::ErrLed;
+        for (led, pattern) in [
+            (ErrLed::Blinking, Pattern::Blinking),
+            (ErrLed::SingleFlash, Pattern::SingleFlash),
+            (ErrLed::DoubleFlash, Pattern::DoubleFlash),
+            (ErrLed::On, Pattern::On),
+        ] {
+            assert_eq!(err_pattern(ErrorIndication::showing(led)), pattern);
+        }
     }
 
     #[test]

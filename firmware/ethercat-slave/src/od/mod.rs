@@ -99,6 +99,7 @@ pub(crate) const fn test_device() -> DeviceInfo {
             sync_lock_timeout_ms: None,
             pdi_error: None,
             lost_outputs: None,
+            al_error_leds: &[],
         },
         sdo_write_to_rx_mapped: RxMappedWrite::Allowed,
         station_alias_parameter: None,

@@ -348,6 +348,23 @@ pub struct EsmRules {
     /// Supervision of the outputs in the cyclic synchronous modes (the SDV3-E's cSD, §5.2 6);
     /// `None`: not supervised.
     pub lost_outputs: Option<LostOutputsRule>,
+    /// AL status codes whose ERR LED pattern the profile gives in place of ETG.1300's (the
+    /// SDV3-E flashes once for its PDO watchdog timeout Pto, §5.2 4, where ETG.1300 flashes
+    /// twice). Sorted by code.
+    pub al_error_leds: &'static [(u16, ErrLed)],
+}
+
+/// An ERR LED pattern a manual gives an AL error (ETG.1300 Table 4 patterns).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrLed {
+    /// 200 ms on, 200 ms off (ETG.1300: invalid configuration).
+    Blinking,
+    /// One 200 ms flash per 1.2 s (ETG.1300: local error).
+    SingleFlash,
+    /// Two 200 ms flashes per 1.6 s (ETG.1300: process-data watchdog timeout).
+    DoubleFlash,
+    /// Steady on (ETG.1300: application controller failure).
+    On,
 }
 
 /// `[esm] lost_outputs`: in OP with DC synchronisation, while an entry holds one of the given
@@ -435,6 +452,15 @@ impl EsmRules {
     pub fn sync_lock_timeout_ns(&self) -> Option<u64> {
         self.sync_lock_timeout_ms
             .map(|ms| u64::from(ms) * 1_000_000)
+    }
+
+    /// The ERR LED pattern the profile gives AL status code `code`, if it differs from ETG's.
+    pub fn al_error_led(&self, code: u16) -> Option<ErrLed> {
+        self.al_error_leds
+            .binary_search_by_key(&code, |(c, _)| *c)
+            .ok()
+            .and_then(|i| self.al_error_leds.get(i))
+            .map(|(_, led)| *led)
     }
 
     /// The drive error the profile reports with AL status code `code`, if any.

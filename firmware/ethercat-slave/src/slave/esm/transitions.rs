@@ -164,6 +164,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             pdi.write_u16(regs::AL_STATUS_CODE.addr, code_register)?;
             pdi.write_u16(regs::AL_STATUS.addr, outcome.status.bits())?;
         }
+        if outcome.status.error {
+            // Profile rule: the manual's ERR LED pattern for this AL error.
+            if let Some(led) = self.profile.device.esm.al_error_led(outcome.code.code()) {
+                self.error_indication = ErrorIndication::showing(led);
+            }
+        }
         let previous = (self.status, self.code);
         self.status = outcome.status;
         self.code = outcome.code;
