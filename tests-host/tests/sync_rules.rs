@@ -649,7 +649,10 @@ fn sdv3e_pdo_watchdog_timeout_is_pto_with_the_err_led_flashing_once() {
         assert!(inner.len() >= 3, "{runs:?}");
         for &(on, n) in inner {
             let expected = if on { 20 } else { 100 };
-            assert!(n.abs_diff(expected) <= 1, "single flash 200 ms / 1000 ms: {runs:?}");
+            assert!(
+                n.abs_diff(expected) <= 1,
+                "single flash 200 ms / 1000 ms: {runs:?}"
+            );
         }
     });
 }
