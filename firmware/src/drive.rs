@@ -16,10 +16,11 @@
 //! objects wrap; the axis works on 64-bit positions), velocities in increments/s, torques in ‰
 //! of the motor rated torque 6076h (mN·m).
 
-use cia402::device::Device;
+use cia402::device::{Device, Motion};
 use cia402::faults::FaultReport;
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, PdsState};
+use cia402::stop::{Deceleration, OptionCodes};
 use cia402::units;
 use ethercat_slave::od::ErrorReport;
 use ethercat_slave::slave::{AppEvent, Application};
@@ -32,10 +33,10 @@ use crate::profile::{self, AppVars, DriveProfile, MOTOR_FAULT_COUNT};
 /// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
 pub const MAX_ADJUSTING_SERVICES: usize = 2;
 
-/// The motor counts as running above this speed, rpm: the Σ-V rotation detection level
-/// (Pn502, /TGON) default; the adjusting service's "while the servomotor is running" gives no
-/// figure.
-const RUNNING_RPM: f32 = 20.0;
+/// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
+/// rotation detection level (Pn502, /TGON) default. Neither the adjusting service's "while the
+/// servomotor is running" nor CiA402's "standstill" after a stop gives a figure.
+const STANDSTILL_RPM: f32 = 20.0;
 const SECONDS_PER_MINUTE: f32 = 60.0;
 const NS_PER_MS: u64 = 1_000_000;
 
@@ -146,11 +147,19 @@ impl Drive {
         write_u16(ram, self.vars.statusword, statusword);
     }
 
-    /// One cycle: the CiA402 device on the controlword, the mode display, the axis exchange.
+    /// One cycle: the CiA402 device on the controlword and the option codes, the mode
+    /// display, the axis exchange.
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
         let vars = self.vars;
         let cw = read_u16(ram, vars.controlword).unwrap_or(0);
-        let step = self.device.step(cw);
+        let options = OptionCodes {
+            quick_stop: read_i16(ram, vars.quick_stop_option_code),
+            shutdown: read_i16(ram, vars.shutdown_option_code),
+            disable_operation: read_i16(ram, vars.disable_operation_option_code),
+            halt: read_i16(ram, vars.halt_option_code),
+            fault_reaction: read_i16(ram, vars.fault_reaction_option_code),
+        };
+        let step = self.device.step(cw, options, self.at_rest());
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);
         }
@@ -161,17 +170,34 @@ impl Drive {
         }
         if self.axis.is_some() {
             let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
-            self.exchange_with_axis(ram, cw, mode, cycle_ns);
-        } else if self.device.operation_enabled() {
+            self.exchange_with_axis(ram, cw, mode, step.motion, cycle_ns);
+        } else if step.motion == Motion::Run {
             if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
                 write_bytes(ram, vars.position_actual_value, target);
             }
         }
     }
 
-    /// Raises a new motor fault, hands the set-points of this cycle to the axis, and writes its
-    /// actual values.
-    fn exchange_with_axis(&mut self, ram: &mut [u8], cw: u16, mode: Mode, cycle_ns: u32) {
+    /// Whether the motor is at rest: no stop ramp under way and the velocity at or below
+    /// [`STANDSTILL_RPM`] (always without a motor).
+    fn at_rest(&self) -> bool {
+        self.axis.as_ref().is_none_or(|port| {
+            let feedback = port.link.feedback();
+            !feedback.stopping
+                && feedback.velocity.abs() <= standstill_counts_per_s(port.counts_per_rev)
+        })
+    }
+
+    /// Raises a new motor fault, hands the set-points of this cycle (or the stop `motion`
+    /// asks for) to the axis, and writes its actual values.
+    fn exchange_with_axis(
+        &mut self,
+        ram: &mut [u8],
+        cw: u16,
+        mode: Mode,
+        motion: Motion,
+        cycle_ns: u32,
+    ) {
         // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
         let Some(mut port) = self.axis.take() else {
             return;
@@ -194,6 +220,8 @@ impl Drive {
             ) {
                 self.report_fault(report, ram);
             }
+            // The axis tripped with its gates off: no fault reaction ramp can run.
+            self.device.power_stage_lost();
         }
         let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
         sync_motor_model(&mut port, vars, ram);
@@ -238,19 +266,42 @@ impl Drive {
             ),
         };
         let set_point = modes::set_point(mode, targets, feedback.position);
+        let loop_mode = match set_point.control {
+            modes::Loop::Position => ControlMode::Position,
+            modes::Loop::Velocity => ControlMode::Velocity,
+            modes::Loop::Torque => ControlMode::Torque,
+        };
+        // A stop reaction replaces the mode's set-point; the axis runs the ramp.
+        let (enable, control_mode, deceleration) = match motion {
+            Motion::Run => (true, loop_mode, 0.0),
+            Motion::Stop(d) => {
+                let ramp = |at| {
+                    read_u32(ram, at).map_or(0.0, |a| velocity_ratio.velocity_to_internal(a as f32))
+                };
+                let deceleration = match d {
+                    Deceleration::ProfileRamp => ramp(vars.profile_deceleration),
+                    Deceleration::QuickStopRamp => ramp(vars.quick_stop_deceleration),
+                    // At once: the speed loop brakes at the current limit. The DC link is not
+                    // regulated by its own (no braking chopper model), so the voltage-limit stop
+                    // is the current-limit stop, guarded by the bus over-voltage protection.
+                    Deceleration::CurrentLimit
+                    | Deceleration::VoltageLimit
+                    | Deceleration::Coast => 0.0,
+                };
+                (true, ControlMode::Stop, deceleration)
+            }
+            Motion::Off => (false, loop_mode, 0.0),
+        };
         link.publish(AxisCommand {
-            enable: self.device.operation_enabled(),
+            enable,
             fault_reset: cw & controlword::FAULT_RESET != 0,
-            identify: identifying,
+            identify: identifying && motion == Motion::Run,
             calibrate_offsets: self.calibrating_offsets(),
-            mode: match set_point.control {
-                modes::Loop::Position => ControlMode::Position,
-                modes::Loop::Velocity => ControlMode::Velocity,
-                modes::Loop::Torque => ControlMode::Torque,
-            },
+            mode: control_mode,
             position: set_point.position,
             velocity: set_point.velocity,
             torque: set_point.torque,
+            deceleration,
             bus_cycle_ns: cycle_ns,
         });
         write_bytes(
@@ -307,8 +358,7 @@ impl Drive {
             Action::CurrentOffsetCalibration => {
                 let gates_off =
                     matches!(feedback.state, AxisState::Disabled | AxisState::Identified);
-                let running_counts_per_s =
-                    RUNNING_RPM / SECONDS_PER_MINUTE * port.counts_per_rev as f32;
+                let running_counts_per_s = standstill_counts_per_s(port.counts_per_rev);
                 if feedback.state == AxisState::Faulted {
                     Err(Refusal::Alarm)
                 } else if self.device.operation_enabled() || !gates_off {
@@ -392,7 +442,12 @@ impl Application for Drive {
     }
 
     fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool {
-        let was_enabled = self.device.operation_enabled();
+        // Active under the master's control: Operation Enabled, or a quick stop under way or
+        // holding (the SDV3-E's ESr names both, §5.2 10).
+        let was_enabled = matches!(
+            self.device.state(),
+            PdsState::OperationEnabled | PdsState::QuickStopActive
+        );
         self.safe_outputs(ram, cycle_ns);
         was_enabled
     }
@@ -496,6 +551,15 @@ fn read_i32(ram: &[u8], at: Option<u16>) -> Option<i32> {
 
 fn read_u32(ram: &[u8], at: Option<u16>) -> Option<u32> {
     read_bytes::<4>(ram, at).map(u32::from_le_bytes)
+}
+
+fn read_i16(ram: &[u8], at: Option<u16>) -> Option<i16> {
+    read_bytes(ram, at).map(i16::from_le_bytes)
+}
+
+/// [`STANDSTILL_RPM`] in increments/s for an encoder of `counts_per_rev`.
+fn standstill_counts_per_s(counts_per_rev: u32) -> f32 {
+    STANDSTILL_RPM / SECONDS_PER_MINUTE * counts_per_rev as f32
 }
 
 fn read_u16(ram: &[u8], at: Option<u16>) -> Option<u16> {

@@ -46,6 +46,20 @@ pub struct AppVars {
     pub motor_lq: Option<u16>,
     /// Commissioned rotor + load inertia (u32, g·mm²; 0 = not commissioned).
     pub motor_inertia: Option<u16>,
+    /// 605Ah quick stop option code (i16).
+    pub quick_stop_option_code: Option<u16>,
+    /// 605Bh shutdown option code (i16).
+    pub shutdown_option_code: Option<u16>,
+    /// 605Ch disable operation option code (i16).
+    pub disable_operation_option_code: Option<u16>,
+    /// 605Dh halt option code (i16).
+    pub halt_option_code: Option<u16>,
+    /// 605Eh fault reaction option code (i16).
+    pub fault_reaction_option_code: Option<u16>,
+    /// 6084h profile deceleration (u32, acceleration units).
+    pub profile_deceleration: Option<u16>,
+    /// 6085h quick stop deceleration (u32, acceleration units).
+    pub quick_stop_deceleration: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -138,6 +152,13 @@ impl AppVars {
         motor_ld: None,
         motor_lq: None,
         motor_inertia: None,
+        quick_stop_option_code: None,
+        shutdown_option_code: None,
+        disable_operation_option_code: None,
+        halt_option_code: None,
+        fault_reaction_option_code: None,
+        profile_deceleration: None,
+        quick_stop_deceleration: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
     };

@@ -384,11 +384,25 @@ pub enum Role {
     MotorLq,
     /// Commissioned rotor + load inertia (UDINT, g·mm²; 0 = use the board's value).
     MotorInertia,
+    /// 605Ah quick stop option code (INT).
+    QuickStopOptionCode,
+    /// 605Bh shutdown option code (INT).
+    ShutdownOptionCode,
+    /// 605Ch disable operation option code (INT).
+    DisableOperationOptionCode,
+    /// 605Dh halt option code (INT).
+    HaltOptionCode,
+    /// 605Eh fault reaction option code (INT).
+    FaultReactionOptionCode,
+    /// 6084h profile deceleration (UDINT, acceleration units): the slow-down ramp.
+    ProfileDeceleration,
+    /// 6085h quick stop deceleration (UDINT, acceleration units): the quick-stop ramp.
+    QuickStopDeceleration,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 16] = [
+    pub const ALL: [Role; 23] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -405,6 +419,13 @@ impl Role {
         Self::MotorLd,
         Self::MotorLq,
         Self::MotorInertia,
+        Self::QuickStopOptionCode,
+        Self::ShutdownOptionCode,
+        Self::DisableOperationOptionCode,
+        Self::HaltOptionCode,
+        Self::FaultReactionOptionCode,
+        Self::ProfileDeceleration,
+        Self::QuickStopDeceleration,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -425,6 +446,13 @@ impl Role {
             Self::MotorLd => "motor_ld",
             Self::MotorLq => "motor_lq",
             Self::MotorInertia => "motor_inertia",
+            Self::QuickStopOptionCode => "quick_stop_option_code",
+            Self::ShutdownOptionCode => "shutdown_option_code",
+            Self::DisableOperationOptionCode => "disable_operation_option_code",
+            Self::HaltOptionCode => "halt_option_code",
+            Self::FaultReactionOptionCode => "fault_reaction_option_code",
+            Self::ProfileDeceleration => "profile_deceleration",
+            Self::QuickStopDeceleration => "quick_stop_deceleration",
         }
     }
     /// Parses the profile-file spelling.
@@ -457,7 +485,14 @@ impl Role {
             | Self::MotorResistance
             | Self::MotorLd
             | Self::MotorLq
-            | Self::MotorInertia => DataType::Udint,
+            | Self::MotorInertia
+            | Self::ProfileDeceleration
+            | Self::QuickStopDeceleration => DataType::Udint,
+            Self::QuickStopOptionCode
+            | Self::ShutdownOptionCode
+            | Self::DisableOperationOptionCode
+            | Self::HaltOptionCode
+            | Self::FaultReactionOptionCode => DataType::Int,
         }
     }
 }

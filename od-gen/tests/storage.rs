@@ -32,7 +32,17 @@ fn profile(text: &str) -> Profile {
     od_gen::parse(text, "s.toml").unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// `base` with its own `[storage]` section (the standard profile's) replaced by `storage`.
 fn with_storage(base: &str, storage: &str) -> String {
+    let base = match base.find("\n[storage]\n") {
+        Some(start) => {
+            let end = base[start + 1..]
+                .find("\n\n")
+                .map_or(base.len(), |e| start + 1 + e);
+            format!("{}{}", &base[..start], &base[end..])
+        }
+        None => base.to_string(),
+    };
     format!("{base}\n{MAPPABLE}\n{storage}\n")
 }
 

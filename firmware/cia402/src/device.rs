@@ -1,9 +1,34 @@
 //! One cycle of the CiA402 device behind controlword and statusword: the PDS state machine
-//! ([`crate::pds`]) with edge detection, the active fault (603Fh) and its reset.
+//! ([`crate::pds`]) with edge detection, the stop reactions of the option codes
+//! ([`crate::stop`]) that make some transitions wait for the motor to come to rest, the active
+//! fault (603Fh) and its reset.
 //!
-//! Works on values, not on objects: the drive application reads 6040h and writes 6041h/603Fh.
+//! Works on values, not on objects: the drive application reads 6040h and 605Ah–605Eh, tells
+//! whether the motor is at rest, writes 6041h/603Fh and moves the axis as [`Motion`] says.
+//!
+//! | transition | what waits for rest |
+//! |---|---|
+//! | 5 disable operation, 8 shutdown (Operation Enabled) | with a ramp in 605Ch / 605Bh the state stays Operation Enabled while the motor decelerates, then changes |
+//! | 11 → 12 quick stop | Quick Stop Active while the motor decelerates per 605Ah; then Switch On Disabled (codes 0–4) or holding at rest (5–8, left by enable operation: 16, or disable voltage) |
+//! | 13 → 14 fault | Fault Reaction Active while the motor decelerates per 605Eh; then Fault |
+//! | halt (bit 8) | Operation Enabled, decelerating per 605Dh and holding at rest while bit 8 is set |
+//!
+//! Disable voltage (transition 9) and a coast reaction disable the drive function at once.
 
-use crate::pds::{self, PdsState};
+use crate::pds::{self, controlword, PdsState};
+use crate::stop::{After, Cause, Deceleration, OptionCodes, Reaction};
+
+/// What the axis does this cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Motion {
+    /// The mode's set-point (Operation Enabled, running).
+    Run,
+    /// Decelerate to rest with this deceleration, then hold at rest (powered).
+    Stop(Deceleration),
+    /// The drive function is disabled: power stage off, the motor coasts.
+    Off,
+}
 
 /// State of the CiA402 device.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -11,6 +36,12 @@ pub struct Device {
     state: PdsState,
     previous_controlword: u16,
     fault: Option<u16>,
+    /// The stop under way (Operation Enabled waiting for transition 5 or 8, Quick Stop Active,
+    /// Fault Reaction Active) and the state Operation Enabled leaves to at rest.
+    stop: Option<Reaction>,
+    leave_to: Option<PdsState>,
+    /// The option codes of the last cycle (a fault raised between cycles reacts with them).
+    options: OptionCodes,
 }
 
 /// The result of one [`Device::step`].
@@ -20,6 +51,8 @@ pub struct Step {
     pub statusword: u16,
     /// The fault with this error code was reset in this step (603Fh goes to 0).
     pub fault_cleared: Option<u16>,
+    /// What the axis does.
+    pub motion: Motion,
 }
 
 impl Default for Device {
@@ -35,6 +68,15 @@ impl Device {
             state: PdsState::NotReadyToSwitchOn,
             previous_controlword: 0,
             fault: None,
+            stop: None,
+            leave_to: None,
+            options: OptionCodes {
+                quick_stop: None,
+                shutdown: None,
+                disable_operation: None,
+                halt: None,
+                fault_reaction: None,
+            },
         }
     }
 
@@ -62,12 +104,80 @@ impl Device {
         self.state == PdsState::OperationEnabled
     }
 
-    /// One cycle with controlword `cw` (6040h).
-    pub fn step(&mut self, cw: u16) -> Step {
-        self.state = pds::next(self.state, cw, self.previous_controlword);
+    /// Whether the drive function is enabled (the power stage may be on: Operation Enabled,
+    /// Quick Stop Active, Fault Reaction Active).
+    pub fn drive_function_enabled(&self) -> bool {
+        matches!(
+            self.state,
+            PdsState::OperationEnabled | PdsState::QuickStopActive | PdsState::FaultReactionActive
+        )
+    }
+
+    /// One cycle with controlword `cw` (6040h), the option codes `options` and whether the
+    /// motor is at rest (`at_rest`: the previous cycle's stop has ended and the velocity is
+    /// below the standstill threshold).
+    pub fn step(&mut self, cw: u16, options: OptionCodes, at_rest: bool) -> Step {
+        self.options = options;
+        let requested = pds::next(self.state, cw, self.previous_controlword);
         self.previous_controlword = cw;
+        self.state = match (self.state, requested) {
+            // 5 / 8: stop per 605Ch / 605Bh first (a new request replaces a waiting one).
+            (
+                PdsState::OperationEnabled,
+                to @ (PdsState::SwitchedOn | PdsState::ReadyToSwitchOn),
+            ) => {
+                let cause = if to == PdsState::SwitchedOn {
+                    Cause::DisableOperation
+                } else {
+                    Cause::Shutdown
+                };
+                let reaction = options.reaction(cause).unwrap_or(Reaction::COAST);
+                self.stop = Some(reaction);
+                self.leave_to = Some(to);
+                PdsState::OperationEnabled
+            }
+            (PdsState::OperationEnabled, PdsState::OperationEnabled) => {
+                // Enable operation again cancels a waiting 5 / 8.
+                if self.leave_to.is_some() && requested_enable(cw) {
+                    self.stop = None;
+                    self.leave_to = None;
+                }
+                PdsState::OperationEnabled
+            }
+            (PdsState::OperationEnabled, PdsState::QuickStopActive) => {
+                self.leave_to = None;
+                self.stop = Some(
+                    options
+                        .reaction(Cause::QuickStop)
+                        .unwrap_or(Reaction::COAST),
+                );
+                PdsState::QuickStopActive
+            }
+            // 16 only after a quick stop that holds the motor has brought it to rest.
+            (PdsState::QuickStopActive, PdsState::OperationEnabled) => {
+                if self.stop.is_some_and(|r| r.after == After::Hold) && at_rest {
+                    self.stop = None;
+                    PdsState::OperationEnabled
+                } else {
+                    PdsState::QuickStopActive
+                }
+            }
+            (_, to) => {
+                if !matches!(
+                    to,
+                    PdsState::QuickStopActive | PdsState::FaultReactionActive
+                ) {
+                    self.stop = None;
+                    self.leave_to = None;
+                }
+                to
+            }
+        };
+        self.complete_stops(at_rest);
         let fault_cleared = match self.fault {
-            Some(code) if self.state != PdsState::Fault => {
+            Some(code)
+                if self.state != PdsState::Fault && self.state != PdsState::FaultReactionActive =>
+            {
                 self.fault = None;
                 Some(code)
             }
@@ -76,18 +186,91 @@ impl Device {
         Step {
             statusword: pds::statusword_of(self.state),
             fault_cleared,
+            motion: self.motion(cw),
         }
     }
 
-    /// Raises fault `code`: Fault Reaction Active, completed at once into Fault (the reaction
-    /// disables the drive; with no motion to stop there is nothing to wait for). The controlword
-    /// counts as 0 from here, so that a fault reset needs a new rising edge of bit 7. Returns the
-    /// statusword.
+    /// The automatic transitions at rest: a waiting 5 / 8, 12 and 14; at once for a coast
+    /// reaction.
+    fn complete_stops(&mut self, at_rest: bool) {
+        let Some(reaction) = self.stop else {
+            return;
+        };
+        let done = at_rest || reaction.deceleration == Deceleration::Coast;
+        if !done {
+            return;
+        }
+        match self.state {
+            PdsState::OperationEnabled => {
+                if let Some(to) = self.leave_to.take() {
+                    self.state = to;
+                    self.stop = None;
+                }
+            }
+            PdsState::QuickStopActive if reaction.after == After::Disable => {
+                self.state = PdsState::SwitchOnDisabled;
+                self.stop = None;
+            }
+            PdsState::FaultReactionActive => {
+                self.state = PdsState::Fault;
+                self.stop = None;
+            }
+            _ => {}
+        }
+    }
+
+    /// What the axis does in the current state.
+    fn motion(&self, cw: u16) -> Motion {
+        let stopping = |r: Reaction| match r.deceleration {
+            Deceleration::Coast => Motion::Off,
+            d => Motion::Stop(d),
+        };
+        match (self.state, self.stop) {
+            (PdsState::OperationEnabled, Some(r)) => stopping(r),
+            (PdsState::OperationEnabled, None) => {
+                let halt = cw & controlword::HALT != 0;
+                match self.options.reaction(Cause::Halt) {
+                    Some(r) if halt => Motion::Stop(r.deceleration),
+                    _ => Motion::Run,
+                }
+            }
+            (PdsState::QuickStopActive | PdsState::FaultReactionActive, Some(r)) => stopping(r),
+            _ => Motion::Off,
+        }
+    }
+
+    /// Raises fault `code`: Fault Reaction Active with the fault reaction of 605Eh (the last
+    /// option codes seen), completed into Fault at once for a coast reaction (then, with no
+    /// motion to stop, there is nothing to wait for), else by a later [`Self::step`] when the
+    /// motor has come to rest. The controlword counts as 0 from here, so that a fault reset
+    /// needs a new rising edge of bit 7. Returns the statusword.
     pub fn fault(&mut self, code: u16) -> u16 {
         self.previous_controlword = 0;
-        self.state = pds::next(pds::fault(self.state), 0, 0);
+        let was_powered = self.drive_function_enabled();
+        self.state = pds::fault(self.state);
+        self.leave_to = None;
+        self.stop = if self.state == PdsState::FaultReactionActive && was_powered {
+            Some(
+                self.options
+                    .reaction(Cause::Fault)
+                    .unwrap_or(Reaction::COAST),
+            )
+        } else {
+            // Nothing is moving under power: the reaction has nothing to stop.
+            Some(Reaction::COAST)
+        };
+        self.complete_stops(false);
         self.fault = Some(code);
         pds::statusword_of(self.state)
+    }
+
+    /// The motor cannot be decelerated any more (the power stage tripped): a stop under way
+    /// ends as a coast stop (Quick Stop Active and Fault Reaction Active complete at once).
+    pub fn power_stage_lost(&mut self) {
+        if self.stop.is_some() {
+            self.stop = Some(Reaction::COAST);
+            self.complete_stops(false);
+        }
     }
 
     /// The master's outputs are gone (EtherCAT left OP): the controlword counts as 0 (disable
@@ -95,8 +278,21 @@ impl Device {
     pub fn outputs_lost(&mut self) -> u16 {
         self.state = pds::next(self.state, 0, self.previous_controlword);
         self.previous_controlword = 0;
+        if self.state != PdsState::FaultReactionActive {
+            self.stop = None;
+            self.leave_to = None;
+        } else {
+            self.power_stage_lost();
+        }
         pds::statusword_of(self.state)
     }
+}
+
+/// Whether `cw` is the enable operation command (bits 0–3 set, no fault reset).
+fn requested_enable(cw: u16) -> bool {
+    use controlword::*;
+    let bits = SWITCH_ON | ENABLE_VOLTAGE | QUICK_STOP | ENABLE_OPERATION;
+    cw & bits == bits && cw & FAULT_RESET == 0
 }
 
 #[cfg(test)]
@@ -104,10 +300,28 @@ mod tests {
     use super::*;
     use crate::pds::{controlword as cw, statusword as sw};
 
-    fn enabled() -> Device {
+    /// The standard profile's codes: 605Ah 2, 605Bh 1, 605Ch 1, 605Dh 1, 605Eh 2.
+    const RAMPS: OptionCodes = OptionCodes {
+        quick_stop: Some(2),
+        shutdown: Some(1),
+        disable_operation: Some(1),
+        halt: Some(1),
+        fault_reaction: Some(2),
+    };
+    const NO_OBJECTS: OptionCodes = OptionCodes {
+        quick_stop: None,
+        shutdown: None,
+        disable_operation: None,
+        halt: None,
+        fault_reaction: None,
+    };
+    const ENABLE: u16 = 0x0F;
+    const QUICK_STOP: u16 = 0x02;
+
+    fn enabled(options: OptionCodes) -> Device {
         let mut d = Device::new();
-        for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, 0x0F] {
-            d.step(c);
+        for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
+            d.step(c, options, true);
         }
         assert!(d.operation_enabled());
         d
@@ -115,17 +329,17 @@ mod tests {
 
     #[test]
     fn fault_holds_until_a_rising_edge_of_fault_reset() {
-        let mut d = enabled();
+        let mut d = enabled(NO_OBJECTS);
         let status = d.fault(0x8700);
-        assert_eq!(d.state(), PdsState::Fault);
+        assert_eq!(d.state(), PdsState::Fault, "coast reaction: at once");
         assert_ne!(status & sw::FAULT, 0);
         assert_eq!(d.fault_code(), Some(0x8700));
         assert_eq!(
-            d.step(0x0F).fault_cleared,
+            d.step(ENABLE, NO_OBJECTS, true).fault_cleared,
             None,
             "enable is ignored in Fault"
         );
-        let step = d.step(cw::FAULT_RESET);
+        let step = d.step(cw::FAULT_RESET, NO_OBJECTS, true);
         assert_eq!(step.fault_cleared, Some(0x8700));
         assert_eq!(d.state(), PdsState::SwitchOnDisabled);
         assert_eq!(d.fault_code(), None);
@@ -134,19 +348,199 @@ mod tests {
 
     #[test]
     fn fault_reset_held_high_through_the_fault_does_not_reset() {
-        let mut d = enabled();
-        d.step(cw::FAULT_RESET | 0x0F);
+        let mut d = enabled(NO_OBJECTS);
+        d.step(cw::FAULT_RESET | ENABLE, NO_OBJECTS, true);
         d.fault(0x2320);
         // Bit 7 was high before the fault; the fault counts the controlword as 0, so the next
         // cycle with bit 7 high is a rising edge.
-        assert_eq!(d.step(cw::FAULT_RESET).fault_cleared, Some(0x2320));
+        assert_eq!(
+            d.step(cw::FAULT_RESET, NO_OBJECTS, true).fault_cleared,
+            Some(0x2320)
+        );
     }
 
     #[test]
     fn lost_outputs_disable_the_drive() {
-        let mut d = enabled();
+        let mut d = enabled(RAMPS);
         let status = d.outputs_lost();
         assert_eq!(d.state(), PdsState::SwitchOnDisabled);
         assert_ne!(status & sw::SWITCH_ON_DISABLED, 0);
+    }
+
+    #[test]
+    fn quick_stop_on_the_ramp_stays_in_quick_stop_active_until_rest_then_disables() {
+        let mut d = enabled(RAMPS);
+        let step = d.step(QUICK_STOP, RAMPS, false);
+        assert_eq!(d.state(), PdsState::QuickStopActive);
+        assert_eq!(
+            step.statusword & 0x6F,
+            0x07,
+            "CiA402 Table 30: quick stop active"
+        );
+        assert_eq!(step.motion, Motion::Stop(Deceleration::QuickStopRamp));
+        // Still moving: stays, whatever the controlword says but disable voltage.
+        for c in [QUICK_STOP, ENABLE, 0x06] {
+            assert_eq!(
+                d.step(c, RAMPS, false).motion,
+                Motion::Stop(Deceleration::QuickStopRamp)
+            );
+            assert_eq!(d.state(), PdsState::QuickStopActive);
+        }
+        // At rest: transition 12 (605Ah = 2).
+        let step = d.step(QUICK_STOP, RAMPS, true);
+        assert_eq!(
+            (d.state(), step.motion),
+            (PdsState::SwitchOnDisabled, Motion::Off)
+        );
+    }
+
+    #[test]
+    fn quick_stop_codes_5_to_8_hold_at_rest_until_enable_operation() {
+        let hold = OptionCodes {
+            quick_stop: Some(6),
+            ..RAMPS
+        };
+        let mut d = enabled(hold);
+        d.step(QUICK_STOP, hold, false);
+        assert_eq!(
+            d.step(ENABLE, hold, false).motion,
+            Motion::Stop(Deceleration::QuickStopRamp)
+        );
+        assert_eq!(d.state(), PdsState::QuickStopActive, "16 only at rest");
+        let step = d.step(QUICK_STOP, hold, true);
+        assert_eq!(
+            (d.state(), step.motion),
+            (
+                PdsState::QuickStopActive,
+                Motion::Stop(Deceleration::QuickStopRamp)
+            ),
+            "holding"
+        );
+        let step = d.step(ENABLE, hold, true);
+        assert_eq!(
+            (d.state(), step.motion),
+            (PdsState::OperationEnabled, Motion::Run),
+            "transition 16"
+        );
+        d.step(QUICK_STOP, hold, true);
+        d.step(0x00, hold, true);
+        assert_eq!(
+            d.state(),
+            PdsState::SwitchOnDisabled,
+            "disable voltage leaves it (12)"
+        );
+    }
+
+    #[test]
+    fn quick_stop_code_0_disables_at_once() {
+        let coast = OptionCodes {
+            quick_stop: Some(0),
+            ..RAMPS
+        };
+        let mut d = enabled(coast);
+        let step = d.step(QUICK_STOP, coast, false);
+        assert_eq!(
+            (d.state(), step.motion),
+            (PdsState::SwitchOnDisabled, Motion::Off)
+        );
+    }
+
+    #[test]
+    fn shutdown_and_disable_operation_ramp_down_in_operation_enabled_first() {
+        for (c, to) in [
+            (0x06, PdsState::ReadyToSwitchOn),
+            (0x07, PdsState::SwitchedOn),
+        ] {
+            let mut d = enabled(RAMPS);
+            let step = d.step(c, RAMPS, false);
+            assert_eq!(d.state(), PdsState::OperationEnabled, "decelerating");
+            assert_eq!(step.motion, Motion::Stop(Deceleration::ProfileRamp));
+            assert_eq!(step.statusword & 0x6F, 0x27);
+            let step = d.step(c, RAMPS, true);
+            assert_eq!((d.state(), step.motion), (to, Motion::Off));
+        }
+        // Code 0: at once.
+        let coast = OptionCodes {
+            shutdown: Some(0),
+            ..RAMPS
+        };
+        let mut d = enabled(coast);
+        assert_eq!(d.step(0x06, coast, false).motion, Motion::Off);
+        assert_eq!(d.state(), PdsState::ReadyToSwitchOn);
+    }
+
+    #[test]
+    fn enable_operation_cancels_a_waiting_shutdown_and_quick_stop_overrides_it() {
+        let mut d = enabled(RAMPS);
+        d.step(0x06, RAMPS, false);
+        assert_eq!(d.step(ENABLE, RAMPS, false).motion, Motion::Run);
+        assert_eq!(d.state(), PdsState::OperationEnabled);
+        d.step(0x06, RAMPS, false);
+        let step = d.step(QUICK_STOP, RAMPS, false);
+        assert_eq!(
+            (d.state(), step.motion),
+            (
+                PdsState::QuickStopActive,
+                Motion::Stop(Deceleration::QuickStopRamp)
+            )
+        );
+        d.step(0x06, RAMPS, false);
+        d.step(0x00, RAMPS, false);
+        assert_eq!(
+            d.state(),
+            PdsState::SwitchOnDisabled,
+            "disable voltage: at once (9)"
+        );
+    }
+
+    #[test]
+    fn halt_stops_on_605dh_and_resumes_when_released() {
+        let mut d = enabled(RAMPS);
+        let step = d.step(ENABLE | cw::HALT, RAMPS, false);
+        assert_eq!(
+            (d.state(), step.motion),
+            (
+                PdsState::OperationEnabled,
+                Motion::Stop(Deceleration::ProfileRamp)
+            )
+        );
+        assert_eq!(
+            d.step(ENABLE | cw::HALT, RAMPS, true).motion,
+            Motion::Stop(Deceleration::ProfileRamp),
+            "holds at rest"
+        );
+        assert_eq!(d.step(ENABLE, RAMPS, true).motion, Motion::Run);
+        // Without 605Dh halt is not supported: bit 8 is ignored.
+        let mut d = enabled(NO_OBJECTS);
+        assert_eq!(
+            d.step(ENABLE | cw::HALT, NO_OBJECTS, false).motion,
+            Motion::Run
+        );
+    }
+
+    #[test]
+    fn a_fault_under_power_ramps_per_605eh_in_fault_reaction_active() {
+        let mut d = enabled(RAMPS);
+        let status = d.fault(0x8611);
+        assert_eq!(d.state(), PdsState::FaultReactionActive);
+        assert_eq!(
+            status & 0x4F,
+            0x0F,
+            "CiA402 Table 30: fault reaction active"
+        );
+        let step = d.step(cw::FAULT_RESET, RAMPS, false);
+        assert_eq!(step.motion, Motion::Stop(Deceleration::QuickStopRamp));
+        assert_eq!(
+            (d.state(), step.fault_cleared),
+            (PdsState::FaultReactionActive, None),
+            "no reset before Fault"
+        );
+        let step = d.step(0, RAMPS, true);
+        assert_eq!((d.state(), step.motion), (PdsState::Fault, Motion::Off));
+        // The power stage tripped: no ramp possible.
+        let mut d = enabled(RAMPS);
+        d.fault(0x2320);
+        d.power_stage_lost();
+        assert_eq!(d.state(), PdsState::Fault);
     }
 }

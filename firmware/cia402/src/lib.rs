@@ -7,6 +7,7 @@
 //! |---|---|
 //! | [`pds`] | the PDS state machine as a pure decision on the controlword; statusword bits |
 //! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
+//! | [`stop`] | stop reactions of the option codes 605Ah–605Eh and the deceleration ramp |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
 //! | [`units`] | conversions between object units (‰ of rated torque, 32-bit positions, µΩ, nH, g·mm²) and SI |
 //! | [`faults`] | the profile's error code for each internal fault |
@@ -19,4 +20,5 @@ pub mod device;
 pub mod faults;
 pub mod modes;
 pub mod pds;
+pub mod stop;
 pub mod units;

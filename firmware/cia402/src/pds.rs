@@ -36,6 +36,8 @@ pub mod controlword {
     pub const ENABLE_OPERATION: u16 = 1 << 3;
     /// Bit 7: fault reset (rising edge).
     pub const FAULT_RESET: u16 = 1 << 7;
+    /// Bit 8: halt (stop per 605Dh while set).
+    pub const HALT: u16 = 1 << 8;
 }
 
 /// Statusword bits (CiA402 6041h).
@@ -92,13 +94,17 @@ fn command(cw: u16, previous_cw: u16) -> Command {
     }
 }
 
-/// Next PDS state for controlword `cw` (with the previous controlword for edge detection).
+/// Next PDS state for controlword `cw` (with the previous controlword for edge detection): the
+/// transition the command asks for. Quick Stop Active and Fault Reaction Active are left by
+/// the device when the motor has come to rest (transitions 12 and 14, [`crate::device`]);
+/// here only disable voltage leaves Quick Stop Active (12) and enable operation asks for
+/// transition 16, which the device allows only after a quick stop that holds the motor.
 pub fn next(state: PdsState, cw: u16, previous_cw: u16) -> PdsState {
     use Command as C;
     use PdsState as S;
     match (state, command(cw, previous_cw)) {
         (S::NotReadyToSwitchOn, _) => S::SwitchOnDisabled,
-        (S::FaultReactionActive, _) => S::Fault,
+        (S::FaultReactionActive, _) => S::FaultReactionActive,
         (S::Fault, C::FaultReset) => S::SwitchOnDisabled,
         (S::Fault, _) => S::Fault,
         (S::SwitchOnDisabled, C::Shutdown) => S::ReadyToSwitchOn,
@@ -110,7 +116,8 @@ pub fn next(state: PdsState, cw: u16, previous_cw: u16) -> PdsState {
         (S::OperationEnabled, C::Shutdown) => S::ReadyToSwitchOn,
         (S::OperationEnabled, C::QuickStop) => S::QuickStopActive,
         (S::QuickStopActive, C::DisableVoltage) => S::SwitchOnDisabled,
-        (S::QuickStopActive, _) => S::SwitchOnDisabled, // quick stop completes at once (no motion yet)
+        (S::QuickStopActive, C::EnableOperation) => S::OperationEnabled,
+        (S::QuickStopActive, _) => S::QuickStopActive,
         (
             S::ReadyToSwitchOn | S::SwitchedOn | S::OperationEnabled,
             C::DisableVoltage | C::QuickStop,
@@ -120,8 +127,8 @@ pub fn next(state: PdsState, cw: u16, previous_cw: u16) -> PdsState {
 }
 
 /// The state a fault puts the drive in (CiA402 transition 13: any state → Fault Reaction
-/// Active; a drive already in Fault stays there). [`next`] then completes the reaction
-/// (transition 14 → Fault).
+/// Active; a drive already in Fault stays there). The device completes the reaction
+/// (transition 14 → Fault) when the motor has come to rest.
 pub fn fault(state: PdsState) -> PdsState {
     match state {
         PdsState::Fault => PdsState::Fault,
@@ -194,10 +201,22 @@ mod tests {
             QuickStopActive,
         ] {
             assert_eq!(fault(s), FaultReactionActive);
-            assert_eq!(next(fault(s), 0, 0), Fault);
+            assert_eq!(
+                next(fault(s), 0x80, 0),
+                FaultReactionActive,
+                "no reset in FRA"
+            );
         }
         assert_eq!(fault(Fault), Fault);
         assert_ne!(statusword_of(Fault) & statusword::FAULT, 0);
+    }
+
+    #[test]
+    fn quick_stop_active_is_left_by_disable_voltage_or_asks_for_16() {
+        assert_eq!(next(OperationEnabled, 0x02, 0x0F), QuickStopActive);
+        assert_eq!(next(QuickStopActive, 0x02, 0x02), QuickStopActive);
+        assert_eq!(next(QuickStopActive, 0x00, 0x02), SwitchOnDisabled);
+        assert_eq!(next(QuickStopActive, 0x0F, 0x02), OperationEnabled);
     }
 
     #[test]

@@ -34,6 +34,7 @@ use super::interpolate::Interpolator;
 use super::math::{self, TAU};
 use super::position::PositionLoop;
 use super::protection::{ProtectionConfig, ProtectionInputs, Protections};
+use super::ramp::StopRamp;
 use super::speed::{self, SpeedLoop, SpeedLoopConfig};
 use super::svpwm;
 use super::velocity::VelocityEstimator;
@@ -134,6 +135,9 @@ pub enum ControlMode {
     Velocity,
     /// Position set-point (CSP).
     Position,
+    /// Decelerate from the present velocity to rest along a ramp
+    /// ([`AxisCommand::deceleration`]) and hold zero speed: a CiA402 stop reaction.
+    Stop,
 }
 
 /// What the SYNC0 side asks for, once per bus cycle.
@@ -157,6 +161,9 @@ pub struct AxisCommand {
     pub velocity: f32,
     /// Target torque (CST) or torque offset (CSP/CSV), N·m.
     pub torque: f32,
+    /// [`ControlMode::Stop`]: the ramp's deceleration, increments/s² (0: at once, the speed
+    /// loop brakes at the current limit). Taken when the stop starts.
+    pub deceleration: f32,
     /// The bus cycle the set-points come at, ns (0: unchanged). A change re-times the
     /// interpolator (a configuration-time computation, once per change).
     pub bus_cycle_ns: u32,
@@ -210,6 +217,8 @@ pub struct AxisFeedback {
     pub offset_calibrations: u32,
     /// The main circuit is powered: the bus voltage is at or above the under-voltage level.
     pub main_power: bool,
+    /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
+    pub stopping: bool,
 }
 
 /// Results of a commissioning run.
@@ -335,6 +344,7 @@ impl AxisLink {
                     position: 0,
                     velocity: 0.0,
                     torque: 0.0,
+                    deceleration: 0.0,
                     bus_cycle_ns: 0,
                 })
             },
@@ -351,6 +361,7 @@ impl AxisLink {
                     trips: 0,
                     offset_calibrations: 0,
                     main_power: false,
+                    stopping: false,
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -439,6 +450,8 @@ pub struct Axis {
     previous_calibrate: bool,
     /// Offset calibrations completed (wrapping).
     offset_calibrations: u32,
+    /// The deceleration ramp of [`ControlMode::Stop`].
+    stop_ramp: StopRamp,
 }
 
 impl Axis {
@@ -525,6 +538,7 @@ impl Axis {
             velocity_observed: false,
             previous_calibrate: false,
             offset_calibrations: 0,
+            stop_ramp: StopRamp::default(),
             bus_cycle_ns: (cfg.bus_cycle_s * 1e9) as u32,
             model_seq: 0,
             model: MotorModel {
@@ -777,6 +791,9 @@ impl Axis {
             trips: self.trips,
             offset_calibrations: self.offset_calibrations,
             main_power: self.vbus >= self.cfg.protection.bus_under_voltage_v,
+            stopping: self.state == AxisState::Running
+                && self.command.mode == ControlMode::Stop
+                && !self.stop_ramp.done(),
         });
     }
 
@@ -791,14 +808,30 @@ impl Axis {
     fn take_command(&mut self, link: &AxisLink) {
         if let Some((command, seq)) = link.commands.read_if_new(self.command_seq) {
             self.command_seq = seq;
+            let previous = self.command.mode;
             self.command = command;
             if command.bus_cycle_ns != 0 && command.bus_cycle_ns != self.bus_cycle_ns {
                 self.retime_interpolator(command.bus_cycle_ns);
             }
             if self.state == AxisState::Running {
+                let stop = ControlMode::Stop;
+                if command.mode == stop && previous != stop {
+                    self.start_stop_ramp(self.last_velocity);
+                } else if previous == stop && command.mode != stop {
+                    // The stop ends (halt released, quick stop left by enable operation): the
+                    // set-points resume from where the motor is.
+                    self.interpolator.reset(self.position);
+                    self.position_loop.reset();
+                }
                 self.push_setpoint();
             }
         }
+    }
+
+    /// Starts the deceleration ramp of a stop from `velocity` (increments/s).
+    fn start_stop_ramp(&mut self, velocity: f32) {
+        let loop_dt = self.cfg.loop_divider as f32 / self.cfg.pwm_hz;
+        self.stop_ramp = StopRamp::new(velocity, self.command.deceleration, loop_dt);
     }
 
     /// Rebuilds the interpolator for set-points every `bus_cycle_ns` (a cycle it cannot serve
@@ -819,6 +852,8 @@ impl Axis {
             ControlMode::Position => self.interpolator.push_position(c.position, None),
             ControlMode::Velocity => self.interpolator.push_velocity(c.velocity),
             ControlMode::Torque => self.interpolator.push_torque(c.torque),
+            // The ramp, not the master, sets the velocity.
+            ControlMode::Stop => {}
         }
     }
 
@@ -865,6 +900,8 @@ impl Axis {
         self.speed_loop.reset();
         self.velocity.reset(self.position);
         self.velocity_observed = true;
+        // Enabled in a stop (e.g. halt set): nothing to decelerate.
+        self.start_stop_ramp(0.0);
         self.interpolator.reset(self.position);
         self.position_loop.reset();
         self.state = AxisState::Running;
@@ -899,11 +936,18 @@ impl Axis {
     fn run(&mut self, currents: &PhaseCurrents, loop_tick: bool) -> Output {
         if loop_tick {
             let set = self.interpolator.tick();
+            // In a stop the ramp, not the master's set-points, commands the motion.
+            let (stop_velocity, acceleration) = if self.command.mode == ControlMode::Stop {
+                let v = self.stop_ramp.tick();
+                (v, self.stop_ramp.acceleration())
+            } else {
+                (0.0, set.acceleration)
+            };
             // The observer is told the commanded acceleration, so it tracks set-point ramps
             // without its 2a/ω lag; disturbances are what its integrator has left to find.
             let velocity = self
                 .velocity
-                .update_with_acceleration(self.position, set.acceleration);
+                .update_with_acceleration(self.position, acceleration);
             self.last_velocity = velocity;
             self.omega_e = velocity * self.omega_e_per_velocity;
             let torque = match self.command.mode {
@@ -921,6 +965,10 @@ impl Axis {
                     self.command.torque,
                 ),
                 ControlMode::Torque => set.torque,
+                ControlMode::Stop => {
+                    self.speed_loop
+                        .step(stop_velocity, velocity, acceleration, 0.0)
+                }
             };
             let limit = self.cfg.current_limit_a;
             self.iq_ref = math::clamp_symmetric(torque * self.iq_per_nm, limit);

@@ -32,6 +32,7 @@
 //! | [`velocity`] | velocity estimate from encoder increments |
 //! | [`speed`], [`position`] | the speed and position loops |
 //! | [`interpolate`] | set-points between SYNC0 events at the control-loop rate |
+//! | [`ramp`] | the deceleration ramp of a stop |
 //! | [`handoff`] | lock-free set-point/feedback exchange between SYNC0 and the control interrupt |
 //! | [`protection`] | over-current, I²t, bus voltage, over-speed, encoder and temperature faults |
 //! | [`calibration`] | phase-current offsets, commutation-angle alignment |
@@ -52,6 +53,7 @@ pub mod math;
 pub mod pi;
 pub mod position;
 pub mod protection;
+pub mod ramp;
 pub mod servo;
 pub mod speed;
 pub mod svpwm;

@@ -192,6 +192,7 @@ const COMMAND: AxisCommand = AxisCommand {
     position: POSITION,
     velocity: 0.0,
     torque: 0.0,
+    deceleration: 0.0,
     // Unchanged: the interpolator keeps the bus cycle of the configuration.
     bus_cycle_ns: 0,
 };

@@ -320,7 +320,8 @@ pub struct EsmRules {
     /// it is refused, in ms (ESI `Info/StateMachine/Timeout/SafeopOpTimeout`).
     pub safeop_op_timeout_ms: u32,
     /// The error the application raises (a drive: 603Fh, PDS Fault; and its EMCY) when the
-    /// EtherCAT state leaves OP while the application was active (a drive: Operation Enabled);
+    /// EtherCAT state leaves OP while the application was active (a drive: Operation Enabled or
+    /// Quick Stop Active);
     /// `None`: the application only puts its outputs into their safe state.
     pub op_exit_while_enabled_error: Option<ErrorReport>,
     /// AL errors the stack raises by itself (sync error, SM watchdog, PLL, a refused cycle

@@ -144,10 +144,12 @@ fn od_list_types_1_to_3_list_the_matching_objects_in_index_order() {
 fn od_list_type_4_lists_the_objects_the_parameter_storage_stores() {
     let mut b = Bench::new();
     // The storable objects of the standard profile (params::is_storable): 10F1h, 10F3h, the PDO
-    // mapping and assignment, 2100h (commissioned motor data), 2F00h, 6076h (motor rated
-    // torque); not 1010h/1011h, 1C32h/1C33h or process data.
+    // mapping and assignment, 2100h (commissioned motor data), 2F00h, the stop option codes
+    // 605Ah-605Eh, 6076h (motor rated torque) and the ramps 6084h/6085h (PDO-mappable, listed
+    // in the profile's stored_pdo_mappable); not 1010h/1011h, 1C32h/1C33h or process data.
     let backup = [
-        0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2100, 0x2F00, 0x6076,
+        0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2100, 0x2F00, 0x605A, 0x605B, 0x605C,
+        0x605D, 0x605E, 0x6076, 0x6084, 0x6085,
     ];
     assert_eq!(
         indices(|o| o

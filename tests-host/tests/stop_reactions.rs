@@ -1,0 +1,331 @@
+//! CiA402 stop reactions (IEC 61800-7-201 §6.3.4–6.3.8) on the simulated servo, commanded by
+//! ethercrab over the standard profile's default PDOs (6040h, 607Ah, 6060h / 6041h, 6064h,
+//! 6061h) in CSP, the option codes and ramps set by SDO:
+//!
+//! - quick stop with 605Ah = 2: Quick Stop Active while the motor decelerates along the
+//!   quick-stop ramp 6085h, then Switch On Disabled; with 605Ah = 0 it coasts instead;
+//! - 605Ah = 6: Quick Stop Active holds the motor at rest until enable operation (16);
+//! - disable operation with 605Ch = 1: Operation Enabled while decelerating on 6084h, then
+//!   Switched On;
+//! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled and resumes.
+//!
+//! Decelerations are checked on the plant's true speed against the ramp the objects set.
+
+use std::f64::consts::TAU;
+
+use ethercrab::MainDevice;
+use tests_host::{block_on, master};
+
+/// Simulated time per cycle (free run).
+const CYCLE_NS: u64 = 1_000_000;
+const CYCLE_S: f64 = 1e-3;
+/// Increments per revolution of the simulated servo's encoder.
+const CPR: f64 = (1u64 << 20) as f64;
+/// CiA402 controlwords (Table 5), the halt bit, statusword state patterns (Table 30).
+const SHUTDOWN: u16 = 0x06;
+const SWITCH_ON: u16 = 0x07;
+const ENABLE_OPERATION: u16 = 0x0F;
+const QUICK_STOP: u16 = 0x02;
+const HALT: u16 = 0x0100;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const SWITCHED_ON: u16 = 0x23;
+const QUICK_STOP_ACTIVE: u16 = 0x07;
+const SWITCH_ON_DISABLED_MASK: u16 = 0x4F;
+const SWITCH_ON_DISABLED: u16 = 0x40;
+/// Modes of operation 6060h: cyclic synchronous position.
+const MODE_CSP: u8 = 8;
+/// Option codes and ramps (CiA402).
+const QUICK_STOP_OPTION: u16 = 0x605A;
+const HALT_OPTION: u16 = 0x605D;
+const PROFILE_DECELERATION: u16 = 0x6084;
+const QUICK_STOP_DECELERATION: u16 = 0x6085;
+/// The speed the tests move at: 1000 rpm, in increments per cycle.
+const SPEED_RPM: f64 = 1000.0;
+/// The drive's standstill level (firmware `STANDSTILL_RPM`).
+const STANDSTILL_RPM: f64 = 20.0;
+
+fn speed_counts_per_s(rpm: f64) -> f64 {
+    rpm / 60.0 * CPR
+}
+
+/// One cycle with controlword `cw`, target `target`; evaluates to (statusword, position actual,
+/// the plant's true speed in rpm).
+macro_rules! cycle {
+    ($m:expr, $md:expr, $group:expr, $cw:expr, $target:expr) => {{
+        let sd = $group.subdevice($md, 0).expect("drive");
+        {
+            let mut out = sd.outputs_raw_mut();
+            out[0..2].copy_from_slice(&($cw as u16).to_le_bytes());
+            out[2..6].copy_from_slice(&($target as i32).to_le_bytes());
+            out[6] = MODE_CSP;
+        }
+        // One frame per drive cycle: the frame's wire time is part of the cycle, so that the
+        // master's cycle stays in phase with the drive's free-run timer (a drifting master
+        // would now and then send no new target in a cycle: a CSP hold).
+        let since = $m.shared.clock().now();
+        $group.tx_rx($md).await.expect("tx/rx");
+        let spent = $m.shared.clock().now() - since;
+        $m.shared.advance(CYCLE_NS.saturating_sub(spent));
+        let inp = sd.inputs_raw();
+        let rpm = $m.shared.segment().drives()[0]
+            .servo
+            .plant
+            .mech_speed_rad_s()
+            / TAU
+            * 60.0;
+        (
+            u16::from_le_bytes([inp[0], inp[1]]),
+            i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
+            rpm,
+        )
+    }};
+}
+
+/// INIT → OP (free run), enable in CSP and move at [`SPEED_RPM`] for 0.3 s. Evaluates to
+/// (group, the target position reached).
+macro_rules! moving {
+    ($m:expr, $md:expr, $writes:expr) => {{
+        let group = $md
+            .init_single_group::<4, 64>($m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice($md, 0).expect("drive");
+            for &(index, value) in $writes {
+                let value: u32 = value;
+                if index == PROFILE_DECELERATION || index == QUICK_STOP_DECELERATION {
+                    sd.sdo_write(index, 0, value).await.expect("SDO");
+                } else {
+                    sd.sdo_write(index, 0, value as i16).await.expect("SDO");
+                }
+            }
+        }
+        let group = group
+            .into_safe_op($md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op($md)
+            .await
+            .expect("request OP");
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 40])
+        {
+            (sw, _, _) = cycle!($m, $md, group, cw, 0);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "enabled");
+        let step = speed_counts_per_s(SPEED_RPM) * CYCLE_S;
+        let mut target = 0.0;
+        let mut rpm = 0.0;
+        for _ in 0..300 {
+            target += step;
+            (_, _, rpm) = cycle!($m, $md, group, ENABLE_OPERATION, target as i32);
+        }
+        assert!((rpm - SPEED_RPM).abs() < 20.0, "moving at {rpm:.0} rpm");
+        (group, target)
+    }};
+}
+
+/// Runs cycles with controlword `cw` (target held at `target`) until the state pattern leaves
+/// `while_state` (or `max` cycles); returns the speeds seen (rpm, one per cycle) and the last
+/// statusword.
+macro_rules! while_state {
+    ($m:expr, $md:expr, $group:expr, $cw:expr, $target:expr, $mask:expr, $while_state:expr, $max:expr) => {{
+        let mut speeds = Vec::new();
+        let mut sw = 0;
+        let mut entered = false;
+        for k in 0..$max {
+            let rpm;
+            (sw, _, rpm) = cycle!($m, $md, $group, $cw, $target as i32);
+            let inside = sw & $mask == $while_state;
+            // The command's effect shows in the next frame's statusword.
+            if !inside && (entered || k >= 2) {
+                break;
+            }
+            entered |= inside;
+            if entered {
+                speeds.push(rpm);
+            }
+        }
+        (speeds, sw)
+    }};
+}
+
+/// The deceleration (rpm/s) that takes the motor from [`SPEED_RPM`] to standstill in
+/// `cycles` cycles.
+fn deceleration_rpm_per_s(counts_per_s2: f64) -> f64 {
+    counts_per_s2 / CPR * 60.0
+}
+
+#[test]
+fn quick_stop_decelerates_on_6085h_in_quick_stop_active_then_disables() {
+    // 605Ah = 2 (the standard profile's default): quick-stop ramp, then Switch On Disabled.
+    const RAMP: u32 = 104_857_600; // 6000 rpm/s: 1000 rpm in 1/6 s
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(m, md, &[(QUICK_STOP_DECELERATION, RAMP)]);
+        let (speeds, sw) = while_state!(
+            m,
+            md,
+            group,
+            QUICK_STOP,
+            target,
+            STATE_MASK,
+            QUICK_STOP_ACTIVE,
+            1_000
+        );
+        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(RAMP));
+        let took_s = speeds.len() as f64 * CYCLE_S;
+        assert!(
+            (took_s - expected_s).abs() < 0.03,
+            "Quick Stop Active for {took_s:.3} s, the ramp takes {expected_s:.3} s"
+        );
+        // Along the ramp: half-way in time, half the speed.
+        let mid = speeds[speeds.len() / 2];
+        assert!(
+            (mid - SPEED_RPM / 2.0).abs() < 100.0,
+            "{mid:.0} rpm half-way: {speeds:?}"
+        );
+        assert_eq!(
+            sw & SWITCH_ON_DISABLED_MASK,
+            SWITCH_ON_DISABLED,
+            "then Switch On Disabled"
+        );
+        let last = *speeds.last().expect("speeds");
+        assert!(last.abs() <= STANDSTILL_RPM, "at rest: {last:.1} rpm");
+        let gates = m.shared.segment().drives()[0].servo.latched().gates;
+        assert!(!gates, "power stage off");
+    });
+}
+
+#[test]
+fn quick_stop_with_605ah_0_disables_at_once_and_the_motor_coasts() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(m, md, &[(QUICK_STOP_OPTION, 0)]);
+        // The statusword of the cycle that took the command is the next frame's.
+        let mut sw = 0;
+        for _ in 0..2 {
+            (sw, _, _) = cycle!(m, md, group, QUICK_STOP, target as i32);
+        }
+        assert_eq!(sw & SWITCH_ON_DISABLED_MASK, SWITCH_ON_DISABLED, "at once");
+        let gates = m.shared.segment().drives()[0].servo.latched().gates;
+        assert!(!gates, "power stage off");
+        let mut rpm = 0.0;
+        for _ in 0..100 {
+            (_, _, rpm) = cycle!(m, md, group, QUICK_STOP, target as i32);
+        }
+        // No braking: after 0.1 s the motor still turns, slowed by friction only; the
+        // standard profile's quick-stop ramp (6085h, 30000 rpm/s) would have stopped it
+        // after 1/30 s.
+        assert!(rpm > 0.3 * SPEED_RPM, "coasting at {rpm:.0} rpm");
+    });
+}
+
+#[test]
+fn quick_stop_with_605ah_6_holds_at_rest_until_enable_operation() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(m, md, &[(QUICK_STOP_OPTION, 6)]);
+        let mut sw = 0;
+        let mut rpm = 0.0;
+        for _ in 0..500 {
+            (sw, _, rpm) = cycle!(m, md, group, QUICK_STOP, target as i32);
+        }
+        assert_eq!(
+            sw & STATE_MASK,
+            QUICK_STOP_ACTIVE,
+            "stays in Quick Stop Active"
+        );
+        assert!(rpm.abs() <= STANDSTILL_RPM, "at rest: {rpm:.1} rpm");
+        let gates = m.shared.segment().drives()[0].servo.latched().gates;
+        assert!(gates, "holding: the power stage stays on");
+        // Transition 16 back to Operation Enabled, at the position it holds.
+        let (_, actual, _) = cycle!(m, md, group, QUICK_STOP, target as i32);
+        for _ in 0..2 {
+            (sw, _, _) = cycle!(m, md, group, ENABLE_OPERATION, actual);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "transition 16");
+    });
+}
+
+#[test]
+fn disable_operation_decelerates_on_6084h_in_operation_enabled_then_switches_off() {
+    // The standard profile's 605Ch = 1: slow-down ramp 6084h, then transition 5.
+    const RAMP: u32 = 52_428_800; // 3000 rpm/s: 1000 rpm in 1/3 s
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(m, md, &[(PROFILE_DECELERATION, RAMP)]);
+        let (speeds, sw) = while_state!(
+            m,
+            md,
+            group,
+            SWITCH_ON,
+            target,
+            STATE_MASK,
+            OPERATION_ENABLED,
+            1_000
+        );
+        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(RAMP));
+        let took_s = speeds.len() as f64 * CYCLE_S;
+        assert!(
+            (took_s - expected_s).abs() < 0.04,
+            "Operation Enabled for {took_s:.3} s while stopping, the ramp takes {expected_s:.3} s"
+        );
+        assert_eq!(sw & STATE_MASK, SWITCHED_ON, "then Switched On");
+    });
+}
+
+#[test]
+fn halt_decelerates_on_605dh_and_resumes_when_released() {
+    // 605Dh = 1 (default): slow-down ramp 6084h, Operation Enabled throughout.
+    const RAMP: u32 = 52_428_800; // 3000 rpm/s
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(m, md, &[(PROFILE_DECELERATION, RAMP), (HALT_OPTION, 1)]);
+        let mut sw = 0;
+        let mut rpm = 0.0;
+        let mut actual = 0;
+        let ramp_cycles = (SPEED_RPM / deceleration_rpm_per_s(f64::from(RAMP)) / CYCLE_S) as usize;
+        for k in 0..ramp_cycles + 100 {
+            (sw, actual, rpm) = cycle!(m, md, group, ENABLE_OPERATION | HALT, target as i32);
+            assert_eq!(
+                sw & STATE_MASK,
+                OPERATION_ENABLED,
+                "halt keeps Operation Enabled"
+            );
+            if k == ramp_cycles / 2 {
+                assert!(
+                    (rpm - SPEED_RPM / 2.0).abs() < 100.0,
+                    "half the speed half-way: {rpm:.0} rpm"
+                );
+            }
+        }
+        assert!(rpm.abs() <= STANDSTILL_RPM, "halted: {rpm:.1} rpm");
+        // Released with the target at the halted position: the drive follows the master again.
+        let step = speed_counts_per_s(SPEED_RPM) * CYCLE_S;
+        let mut target = f64::from(actual);
+        for _ in 0..300 {
+            target += step;
+            (sw, _, rpm) = cycle!(m, md, group, ENABLE_OPERATION, target as i32);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        assert!(
+            (rpm - SPEED_RPM).abs() < 20.0,
+            "moving again at {rpm:.0} rpm"
+        );
+    });
+}
