@@ -7,7 +7,8 @@
 //! - 605Ah = 6: Quick Stop Active holds the motor at rest until enable operation (16);
 //! - disable operation with 605Ch = 1: Operation Enabled while decelerating on 6084h, then
 //!   Switched On;
-//! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled and resumes.
+//! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled (statusword bit 10
+//!   "target reached" once at rest) and resumes.
 //!
 //! Decelerations are checked on the plant's true speed against the ramp the objects set.
 
@@ -27,6 +28,7 @@ const SWITCH_ON: u16 = 0x07;
 const ENABLE_OPERATION: u16 = 0x0F;
 const QUICK_STOP: u16 = 0x02;
 const HALT: u16 = 0x0100;
+const TARGET_REACHED: u16 = 0x0400;
 const STATE_MASK: u16 = 0x6F;
 const OPERATION_ENABLED: u16 = 0x27;
 const SWITCHED_ON: u16 = 0x23;
@@ -307,6 +309,9 @@ fn halt_decelerates_on_605dh_and_resumes_when_released() {
                 OPERATION_ENABLED,
                 "halt keeps Operation Enabled"
             );
+            if k > 1 && k < ramp_cycles / 2 {
+                assert_eq!(sw & TARGET_REACHED, 0, "bit 10 clear while decelerating");
+            }
             if k == ramp_cycles / 2 {
                 assert!(
                     (rpm - SPEED_RPM / 2.0).abs() < 100.0,
@@ -315,6 +320,11 @@ fn halt_decelerates_on_605dh_and_resumes_when_released() {
             }
         }
         assert!(rpm.abs() <= STANDSTILL_RPM, "halted: {rpm:.1} rpm");
+        assert_ne!(
+            sw & TARGET_REACHED,
+            0,
+            "statusword bit 10 with halt: at rest"
+        );
         // Released with the target at the halted position: the drive follows the master again.
         let step = speed_counts_per_s(SPEED_RPM) * CYCLE_S;
         let mut target = f64::from(actual);

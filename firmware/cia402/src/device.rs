@@ -183,10 +183,19 @@ impl Device {
             }
             _ => None,
         };
+        let motion = self.motion(cw);
+        let mut statusword = pds::statusword_of(self.state);
+        let halted = self.state == PdsState::OperationEnabled
+            && self.stop.is_none()
+            && matches!(motion, Motion::Stop(_));
+        if halted && at_rest {
+            // CiA402 bit 10 with halt set: the motor has stopped.
+            statusword |= pds::statusword::TARGET_REACHED;
+        }
         Step {
-            statusword: pds::statusword_of(self.state),
+            statusword,
             fault_cleared,
-            motion: self.motion(cw),
+            motion,
         }
     }
 
@@ -505,11 +514,20 @@ mod tests {
             )
         );
         assert_eq!(
-            d.step(ENABLE | cw::HALT, RAMPS, true).motion,
+            step.statusword & sw::TARGET_REACHED,
+            0,
+            "bit 10 clear while decelerating"
+        );
+        let step = d.step(ENABLE | cw::HALT, RAMPS, true);
+        assert_eq!(
+            step.motion,
             Motion::Stop(Deceleration::ProfileRamp),
             "holds at rest"
         );
-        assert_eq!(d.step(ENABLE, RAMPS, true).motion, Motion::Run);
+        assert_ne!(step.statusword & sw::TARGET_REACHED, 0, "bit 10: halted");
+        let step = d.step(ENABLE, RAMPS, true);
+        assert_eq!(step.motion, Motion::Run);
+        assert_eq!(step.statusword & sw::TARGET_REACHED, 0, "released");
         // Without 605Dh halt is not supported: bit 8 is ignored.
         let mut d = enabled(NO_OBJECTS);
         assert_eq!(

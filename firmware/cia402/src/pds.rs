@@ -58,6 +58,8 @@ pub mod statusword {
     pub const SWITCH_ON_DISABLED: u16 = 1 << 6;
     /// Bit 9: remote (controlword is processed).
     pub const REMOTE: u16 = 1 << 9;
+    /// Bit 10: target reached (operation-mode specific; with halt set: the motor is at rest).
+    pub const TARGET_REACHED: u16 = 1 << 10;
 }
 
 /// The device-control commands encoded in controlword bits 0..3 and 7 (CiA402 Table 5).
