@@ -28,7 +28,7 @@ use ethercat_slave::slave::{AppEvent, Application};
 use crate::adjust::service::{Progress, Refusal};
 use crate::adjust::{Action, AdjustingService};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
-use crate::profile::{self, AppVars, DriveProfile, MOTOR_FAULT_COUNT};
+use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, MOTOR_FAULT_COUNT};
 
 /// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
 pub const MAX_ADJUSTING_SERVICES: usize = 2;
@@ -69,6 +69,8 @@ pub struct Drive {
     vars: &'static AppVars,
     /// 603Fh code and EMCY per motor fault (the profile's `[motor_faults]`).
     fault_codes: &'static [FaultReport; MOTOR_FAULT_COUNT],
+    /// The profile's CiA402 rules.
+    rules: &'static Cia402Rules,
     /// The EMCY code and manufacturer field of the fault the device holds (a motor fault's come
     /// from the profile's alarm; an error the stack raises has its code and no data).
     fault_emcy: (u16, [u8; 5]),
@@ -93,6 +95,7 @@ impl Drive {
         Self {
             vars: &profile.vars,
             fault_codes: profile.motor_faults,
+            rules: &profile.cia402,
             fault_emcy: (0, [0; 5]),
             device: Device::new(),
             axis: None,
@@ -159,12 +162,20 @@ impl Drive {
             halt: read_i16(ram, vars.halt_option_code),
             fault_reaction: read_i16(ram, vars.fault_reaction_option_code),
         };
+        let mode = read_bytes::<1>(ram, vars.modes_of_operation);
+        if let Some(report) = self.rules.enable_without_mode_error {
+            // Profile rule: enable operation with no mode selected is refused as an error.
+            let no_mode = mode.is_none_or(|[m]| m == 0);
+            if no_mode && self.device.requested(cw) == PdsState::OperationEnabled {
+                self.report_fault(report, ram);
+            }
+        }
+        let cw = read_u16(ram, vars.controlword).unwrap_or(0);
         let step = self.device.step(cw, options, self.at_rest());
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);
         }
         write_u16(ram, vars.statusword, step.statusword);
-        let mode = read_bytes::<1>(ram, vars.modes_of_operation);
         if let Some(mode) = mode {
             write_bytes(ram, vars.modes_of_operation_display, mode);
         }

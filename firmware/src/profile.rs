@@ -178,6 +178,17 @@ pub struct DriveProfile {
     /// The profile's adjusting-service objects (`[[adjusting]]`; at most
     /// [`crate::drive::MAX_ADJUSTING_SERVICES`]).
     pub adjusting: &'static [ServiceSpec],
+    /// CiA402 behaviour the manual adds (`[cia402]`).
+    pub cia402: Cia402Rules,
+}
+
+/// CiA402 behaviour a manual adds to the standard (profile section `[cia402]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cia402Rules {
+    /// Enable operation requested while no mode of operation is selected (6060h = 0): the
+    /// drive refuses and raises this error (the SDV3-E's oPE, §5.2 9); `None`: it enables and
+    /// holds the position.
+    pub enable_without_mode_error: Option<FaultReport>,
 }
 
 /// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].

@@ -1042,6 +1042,19 @@ fn motor_faults(out: &mut String, p: &Profile) {
     );
 }
 
+/// `[cia402]`: the CiA402 behaviour the manual adds.
+fn cia402_rules(out: &mut String, p: &Profile) {
+    let Some(c) = &p.cia402.enable_without_mode_error else {
+        return;
+    };
+    out.push_str("## CiA402 rules\n\n");
+    let _ = writeln!(
+        out,
+        "- Enable operation with no mode of operation selected (6060h = 0) is refused: Fault, {}.\n",
+        error_report(c)
+    );
+}
+
 /// `[[adjusting]]`: the adjusting-service objects and their adjustments.
 fn adjusting(out: &mut String, p: &Profile) {
     if p.adjusting.is_empty() {
@@ -1244,6 +1257,7 @@ pub fn markdown(p: &Profile) -> String {
     alarms(&mut out, p);
     motor_faults(&mut out, p);
     adjusting(&mut out, p);
+    cia402_rules(&mut out, p);
     decisions(&mut out, p);
     replicate(&mut out, p);
     object_count(&mut out, p);

@@ -43,6 +43,9 @@ pub struct ProfileFile {
     /// `[emcy]`: how 1001h and the stack's own emergencies are formed (optional).
     #[serde(default)]
     pub emcy: EmcyFile,
+    /// `[cia402]`: the profile's CiA402 behaviour rules (optional: CiA402 as written).
+    #[serde(default)]
+    pub cia402: Cia402File,
     /// `[units]`: how the position and velocity objects convert to the drive's internal units.
     #[serde(default)]
     pub units: UnitsFile,
@@ -964,3 +967,14 @@ macro_rules! attrs_of {
 }
 attrs_of!(ObjectFile);
 attrs_of!(EntryFile);
+
+/// `[cia402]`: CiA402 behaviour a manual adds to the standard.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cia402File {
+    /// Enable operation (transition 4) requested while no mode of operation is selected
+    /// (6061h = 0): the drive refuses and raises this error (a CiA402 code or an `[[alarm]]`
+    /// display; the SDV3-E's oPE); absent: the drive enables and holds the position.
+    #[serde(default)]
+    pub enable_without_mode_error: Option<MotorFaultFile>,
+}

@@ -1244,6 +1244,8 @@ pub struct Profile {
     pub storage: StorageRules,
     /// `[[adjusting]]`: adjusting-service objects.
     pub adjusting: Vec<Adjusting>,
+    /// `[cia402]`: CiA402 behaviour rules.
+    pub cia402: Cia402Rules,
     /// RxPDOs, sorted by index.
     pub rx_pdos: Vec<Pdo>,
     /// TxPDOs, sorted by index.
@@ -1518,4 +1520,11 @@ impl ErrLed {
             Self::On => "on",
         }
     }
+}
+
+/// CiA402 behaviour a manual adds to the standard (`[cia402]`).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Cia402Rules {
+    /// The error raised when enable operation is requested with no mode selected.
+    pub enable_without_mode_error: Option<MotorFaultCode>,
 }

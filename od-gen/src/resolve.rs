@@ -499,6 +499,14 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         inputs: pd(&f.sm.inputs, "sm.inputs", in_len)?,
     };
 
+    let cia402 = Cia402Rules {
+        enable_without_mode_error: f
+            .cia402
+            .enable_without_mode_error
+            .as_ref()
+            .map(|r| fault_report(r, &alarms, "cia402.enable_without_mode_error"))
+            .transpose()?,
+    };
     let mut profile = Profile {
         name: f.name.clone(),
         source: source.to_string(),
@@ -547,6 +555,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         objects: Vec::new(),
         storage: StorageRules::default(),
         adjusting: Vec::new(),
+        cia402,
     };
     for o in derived_objects(&profile)? {
         // A declared SM parameter object (the manual's layout) replaces the generated one.

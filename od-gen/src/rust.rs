@@ -496,6 +496,17 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             })
             .collect();
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
+        let _ = writeln!(
+            out,
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {} }},",
+            p.cia402
+                .enable_without_mode_error
+                .as_ref()
+                .map_or("None".into(), |c| format!(
+                    "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
+                    c.error_code, c.emcy.code, c.emcy.data
+                ))
+        );
     }
     let _ = writeln!(out, "    }};\n");
     let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");

@@ -657,6 +657,21 @@ fn esm(p: &Profile) -> Result<(), Fault> {
             Invalid::Value("0 is \"no error\" (603Fh)".into()),
         ));
     }
+    if let Some(r) = p.cia402.enable_without_mode_error {
+        let has_mode = p
+            .objects
+            .iter()
+            .flat_map(|o| &o.entries)
+            .any(|e| e.role == Some(Role::ModesOfOperation));
+        if r.error_code == 0 || !has_mode {
+            return Err(fault(
+                "cia402.enable_without_mode_error",
+                Invalid::Value(
+                    "needs an error code other than 0 and a modes_of_operation entry".into(),
+                ),
+            ));
+        }
+    }
     if p.esm.pdi_error.map(|r| r.error_code) == Some(0) {
         return Err(fault(
             "esm.pdi_error",

@@ -1336,3 +1336,26 @@ fn adjusting_services_are_resolved_and_checked() {
         assert_eq!(invalid(&text).0, key);
     }
 }
+
+#[test]
+fn cia402_rules_are_resolved_and_checked() {
+    let p = od_gen::parse(
+        &appended("[cia402]\nenable_without_mode_error = 0x8800"),
+        "ok",
+    )
+    .unwrap();
+    assert_eq!(
+        p.cia402.enable_without_mode_error.map(|r| r.error_code),
+        Some(0x8800)
+    );
+    let rust = od_gen::rust::generate(&[p]);
+    assert!(rust.contains("cia402: crate::profile::Cia402Rules { enable_without_mode_error: Some(FaultReport { error_code: 0x8800"));
+    let p = od_gen::parse(STANDARD, "ok").unwrap();
+    assert_eq!(p.cia402.enable_without_mode_error, None);
+    let (key, _) = invalid(&appended("[cia402]\nenable_without_mode_error = 0"));
+    assert_eq!(key, "cia402.enable_without_mode_error");
+    let (key, _) = invalid(&appended("[cia402]\nenable_without_mode_error = \"A.99\""));
+    assert_eq!(key, "cia402.enable_without_mode_error");
+    let (key, _) = invalid(&appended("[cia402]\nenable_with_mode_error = 1"));
+    assert!(key.starts_with("cia402"), "{key}");
+}

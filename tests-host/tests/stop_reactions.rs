@@ -8,7 +8,8 @@
 //! - disable operation with 605Ch = 1: Operation Enabled while decelerating on 6084h, then
 //!   Switched On;
 //! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled (statusword bit 10
-//!   "target reached" once at rest) and resumes.
+//!   "target reached" once at rest) and resumes;
+//! - a profile precondition: the SDV3-E refuses enable operation with no mode (oPE).
 //!
 //! Decelerations are checked on the plant's true speed against the ramp the objects set.
 
@@ -337,5 +338,78 @@ fn halt_decelerates_on_605dh_and_resumes_when_released() {
             (rpm - SPEED_RPM).abs() < 20.0,
             "moving again at {rpm:.0} rpm"
         );
+    });
+}
+
+#[test]
+fn sdv3e_enable_operation_without_a_mode_is_ope() {
+    // SDV3-E §5.2 9): switching to Operation Enabled while 6061h = 0 raises oPE (8800h); the
+    // ESM stays in OP with AL status code 0. With a mode (8) the same sequence enables.
+    // RxPDO1 (1600h): 6040h, 607Ah, 60FFh, 6071h, 6060h at byte 12; TxPDO1 starts with 6041h.
+    const MODE_BYTE: usize = 12;
+    const FAULT_RESET: u16 = 0x80;
+    const FAULT_BIT: u16 = 0x08;
+    let p = od_gen::builtin("sdv3-e").expect("profile");
+    let ope = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "oPE")
+        .expect("alarm oPE");
+    block_on(async {
+        let (m, transport) =
+            tests_host::master_for(board_sim::Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let run = |cws: Vec<u16>, mode: u8| {
+            let group = &group;
+            let m = &m;
+            async move {
+                let mut sw = 0;
+                for cw in cws {
+                    let sd = group.subdevice(md, 0).expect("drive");
+                    {
+                        let mut out = sd.outputs_raw_mut();
+                        out[0..2].copy_from_slice(&cw.to_le_bytes());
+                        out[MODE_BYTE] = mode;
+                    }
+                    group.tx_rx(md).await.expect("tx/rx");
+                    m.shared.advance(CYCLE_NS);
+                    let inp = sd.inputs_raw();
+                    sw = u16::from_le_bytes([inp[0], inp[1]]);
+                }
+                sw
+            }
+        };
+        let enable = || {
+            [SHUTDOWN; 5]
+                .into_iter()
+                .chain([SWITCH_ON; 5])
+                .chain([ENABLE_OPERATION; 20])
+                .collect::<Vec<u16>>()
+        };
+        let sw = run(enable(), 0).await;
+        assert_ne!(sw & FAULT_BIT, 0, "Fault, not Operation Enabled: {sw:#06x}");
+        let sd = group.subdevice(md, 0).expect("drive");
+        let code: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
+        assert_eq!(code, ope.error_code, "603Fh = oPE");
+        assert_eq!(
+            tests_host::al_status(md).await,
+            (0x08, 0),
+            "ESM stays in OP, AL status code 0"
+        );
+        // Fault reset, then with CSP selected the drive enables.
+        run(vec![0, FAULT_RESET, FAULT_RESET, 0], 8).await;
+        let sw = run(enable(), 8).await;
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "{sw:#06x}");
     });
 }

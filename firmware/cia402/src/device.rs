@@ -99,6 +99,12 @@ impl Device {
         self.fault
     }
 
+    /// The state controlword `cw` asks for now (before the stop reactions), without changing
+    /// anything: a profile checks its preconditions on it.
+    pub fn requested(&self, cw: u16) -> PdsState {
+        pds::next(self.state, cw, self.previous_controlword)
+    }
+
     /// Whether the drive is in Operation Enabled (the axis may run).
     pub fn operation_enabled(&self) -> bool {
         self.state == PdsState::OperationEnabled
