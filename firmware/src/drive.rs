@@ -97,7 +97,7 @@ impl Drive {
             fault_codes: profile.motor_faults,
             rules: &profile.cia402,
             fault_emcy: (0, [0; 5]),
-            device: Device::new(),
+            device: Device::with_rules(profile.cia402.stops_end_switched_off),
             axis: None,
             adjusting,
             adjustment: None,

@@ -1044,15 +1044,22 @@ fn motor_faults(out: &mut String, p: &Profile) {
 
 /// `[cia402]`: the CiA402 behaviour the manual adds.
 fn cia402_rules(out: &mut String, p: &Profile) {
-    let Some(c) = &p.cia402.enable_without_mode_error else {
+    let r = &p.cia402;
+    if r.enable_without_mode_error.is_none() && !r.stops_end_switched_off {
         return;
-    };
+    }
     out.push_str("## CiA402 rules\n\n");
-    let _ = writeln!(
-        out,
-        "- Enable operation with no mode of operation selected (6060h = 0) is refused: Fault, {}.\n",
-        error_report(c)
-    );
+    if let Some(c) = &r.enable_without_mode_error {
+        let _ = writeln!(
+            out,
+            "- Enable operation with no mode of operation selected (6060h = 0) is refused: Fault, {}.",
+            error_report(c)
+        );
+    }
+    if r.stops_end_switched_off {
+        out.push_str("- Shutdown and disable operation end in Switch On Disabled after their stop (605Bh/605Ch).\n");
+    }
+    out.push('\n');
 }
 
 /// `[[adjusting]]`: the adjusting-service objects and their adjustments.

@@ -977,4 +977,8 @@ pub struct Cia402File {
     /// display; the SDV3-E's oPE); absent: the drive enables and holds the position.
     #[serde(default)]
     pub enable_without_mode_error: Option<MotorFaultFile>,
+    /// Shutdown and disable operation end in Switch On Disabled after their stop (default
+    /// false: CiA402's Ready to Switch On / Switched On).
+    #[serde(default)]
+    pub stops_end_switched_off: bool,
 }

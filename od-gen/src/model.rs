@@ -1527,4 +1527,6 @@ impl ErrLed {
 pub struct Cia402Rules {
     /// The error raised when enable operation is requested with no mode selected.
     pub enable_without_mode_error: Option<MotorFaultCode>,
+    /// Shutdown and disable operation end in Switch On Disabled.
+    pub stops_end_switched_off: bool,
 }

@@ -506,6 +506,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .as_ref()
             .map(|r| fault_report(r, &alarms, "cia402.enable_without_mode_error"))
             .transpose()?,
+        stops_end_switched_off: f.cia402.stops_end_switched_off,
     };
     let mut profile = Profile {
         name: f.name.clone(),

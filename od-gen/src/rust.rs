@@ -498,14 +498,15 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, stops_end_switched_off: {} }},",
             p.cia402
                 .enable_without_mode_error
                 .as_ref()
                 .map_or("None".into(), |c| format!(
                     "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
                     c.error_code, c.emcy.code, c.emcy.data
-                ))
+                )),
+            p.cia402.stops_end_switched_off
         );
     }
     let _ = writeln!(out, "    }};\n");

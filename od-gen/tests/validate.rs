@@ -1352,6 +1352,11 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(rust.contains("cia402: crate::profile::Cia402Rules { enable_without_mode_error: Some(FaultReport { error_code: 0x8800"));
     let p = od_gen::parse(STANDARD, "ok").unwrap();
     assert_eq!(p.cia402.enable_without_mode_error, None);
+    assert!(!p.cia402.stops_end_switched_off);
+    let p = od_gen::parse(&appended("[cia402]\nstops_end_switched_off = true"), "ok").unwrap();
+    assert!(p.cia402.stops_end_switched_off);
+    let rust = od_gen::rust::generate(&[p]);
+    assert!(rust.contains("enable_without_mode_error: None, stops_end_switched_off: true }"));
     let (key, _) = invalid(&appended("[cia402]\nenable_without_mode_error = 0"));
     assert_eq!(key, "cia402.enable_without_mode_error");
     let (key, _) = invalid(&appended("[cia402]\nenable_without_mode_error = \"A.99\""));

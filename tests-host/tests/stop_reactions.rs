@@ -9,7 +9,8 @@
 //!   Switched On;
 //! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled (statusword bit 10
 //!   "target reached" once at rest) and resumes;
-//! - a profile precondition: the SDV3-E refuses enable operation with no mode (oPE).
+//! - a profile precondition: the SDV3-E refuses enable operation with no mode (oPE);
+//! - a profile end state: the Σ-V-SD's disable operation ends in Switch On Disabled.
 //!
 //! Decelerations are checked on the plant's true speed against the ramp the objects set.
 
@@ -411,5 +412,72 @@ fn sdv3e_enable_operation_without_a_mode_is_ope() {
         run(vec![0, FAULT_RESET, FAULT_RESET, 0], 8).await;
         let sw = run(enable(), 8).await;
         assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "{sw:#06x}");
+    });
+}
+
+#[test]
+fn sigma_v_sd_disable_operation_ends_in_switch_on_disabled() {
+    // Σ-V-SD §4.7 (5)/(6): 605Ch = 1 "slow down on slow down ramp", then Switch On Disabled
+    // (CiA402 would end in Switched On). RxPDO 1600h starts with 6040h, 607Ah; TxPDO 1A00h
+    // with 6041h, 6064h.
+    const MODES_OF_OPERATION: u16 = 0x6060;
+    block_on(async {
+        let (m, transport) =
+            tests_host::master_for(board_sim::Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        group
+            .subdevice(md, 0)
+            .expect("drive")
+            .sdo_write(MODES_OF_OPERATION, 0, MODE_CSP as i8)
+            .await
+            .expect("6060h");
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let mut position = 0i32;
+        let mut sw = 0;
+        let cws = [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 60])
+            .chain([SWITCH_ON; 60]);
+        let mut states = Vec::new();
+        for cw in cws {
+            let sd = group.subdevice(md, 0).expect("drive");
+            {
+                let mut out = sd.outputs_raw_mut();
+                out[0..2].copy_from_slice(&cw.to_le_bytes());
+                out[2..6].copy_from_slice(&position.to_le_bytes());
+            }
+            group.tx_rx(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+            let inp = sd.inputs_raw();
+            sw = u16::from_le_bytes([inp[0], inp[1]]);
+            position = i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]);
+            if states.last() != Some(&(sw & STATE_MASK)) {
+                states.push(sw & STATE_MASK);
+            }
+        }
+        assert!(states.contains(&OPERATION_ENABLED), "{states:02x?}");
+        assert_eq!(
+            sw & SWITCH_ON_DISABLED_MASK,
+            SWITCH_ON_DISABLED,
+            "disable operation ends in Switch On Disabled: {states:02x?}"
+        );
+        assert!(
+            !states.contains(&SWITCHED_ON)
+                || states.iter().position(|s| *s == SWITCHED_ON)
+                    < states.iter().position(|s| *s == OPERATION_ENABLED),
+            "never Switched On after Operation Enabled: {states:02x?}"
+        );
     });
 }

@@ -42,6 +42,9 @@ pub struct Device {
     leave_to: Option<PdsState>,
     /// The option codes of the last cycle (a fault raised between cycles reacts with them).
     options: OptionCodes,
+    /// A profile rule: shutdown and disable operation end in Switch On Disabled after their
+    /// stop (the Σ-V-SD's 605Bh/605Ch texts) instead of Ready to Switch On / Switched On.
+    stops_end_switched_off: bool,
 }
 
 /// The result of one [`Device::step`].
@@ -64,6 +67,12 @@ impl Default for Device {
 impl Device {
     /// Power-on: Not Ready to Switch On, no fault.
     pub const fn new() -> Self {
+        Self::with_rules(false)
+    }
+
+    /// [`Self::new`] for a profile whose shutdown and disable operation end in Switch On
+    /// Disabled (`stops_end_switched_off`).
+    pub const fn with_rules(stops_end_switched_off: bool) -> Self {
         Self {
             state: PdsState::NotReadyToSwitchOn,
             previous_controlword: 0,
@@ -77,6 +86,7 @@ impl Device {
                 halt: None,
                 fault_reaction: None,
             },
+            stops_end_switched_off,
         }
     }
 
@@ -139,7 +149,11 @@ impl Device {
                 };
                 let reaction = options.reaction(cause).unwrap_or(Reaction::COAST);
                 self.stop = Some(reaction);
-                self.leave_to = Some(to);
+                self.leave_to = Some(if self.stops_end_switched_off {
+                    PdsState::SwitchOnDisabled
+                } else {
+                    to
+                });
                 PdsState::OperationEnabled
             }
             (PdsState::OperationEnabled, PdsState::OperationEnabled) => {
@@ -482,6 +496,20 @@ mod tests {
         let mut d = enabled(coast);
         assert_eq!(d.step(0x06, coast, false).motion, Motion::Off);
         assert_eq!(d.state(), PdsState::ReadyToSwitchOn);
+    }
+
+    #[test]
+    fn a_profile_may_end_shutdown_and_disable_operation_in_switch_on_disabled() {
+        for c in [0x06, 0x07] {
+            let mut d = Device::with_rules(true);
+            for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
+                d.step(c, RAMPS, true);
+            }
+            d.step(c, RAMPS, false);
+            assert_eq!(d.state(), PdsState::OperationEnabled, "decelerating");
+            d.step(c, RAMPS, true);
+            assert_eq!(d.state(), PdsState::SwitchOnDisabled, "cw {c:#x}");
+        }
     }
 
     #[test]
