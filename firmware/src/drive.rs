@@ -16,7 +16,7 @@
 //! objects wrap; the axis works on 64-bit positions), velocities in increments/s, torques in ‰
 //! of the motor rated torque 6076h (mN·m).
 
-use cia402::device::{Device, Motion};
+use cia402::device::{Device, DeviceRules, Motion};
 use cia402::faults::FaultReport;
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, PdsState};
@@ -97,7 +97,10 @@ impl Drive {
             fault_codes: profile.motor_faults,
             rules: &profile.cia402,
             fault_emcy: (0, [0; 5]),
-            device: Device::with_rules(profile.cia402.stops_end_switched_off),
+            device: Device::with_rules(DeviceRules {
+                stops_end_switched_off: profile.cia402.stops_end_switched_off,
+                switch_on_requires_main_power: profile.cia402.switch_on_requires_main_power,
+            }),
             axis: None,
             adjusting,
             adjustment: None,
@@ -171,6 +174,9 @@ impl Drive {
             }
         }
         let cw = read_u16(ram, vars.controlword).unwrap_or(0);
+        if let Some(port) = &self.axis {
+            self.device.set_main_power(port.link.feedback().main_power);
+        }
         let step = self.device.step(cw, options, self.at_rest());
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);

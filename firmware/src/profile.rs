@@ -193,6 +193,9 @@ pub struct Cia402Rules {
     /// stop (the Σ-V-SD's option code texts) instead of CiA402's Ready to Switch On / Switched
     /// On.
     pub stops_end_switched_off: bool,
+    /// Switched On needs the main power; losing it in Switched On, Operation Enabled or Quick
+    /// Stop Active falls to Switch On Disabled (the Σ-V-SD, §4.7 *2-*4).
+    pub switch_on_requires_main_power: bool,
 }
 
 /// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].

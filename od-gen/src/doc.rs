@@ -1045,7 +1045,10 @@ fn motor_faults(out: &mut String, p: &Profile) {
 /// `[cia402]`: the CiA402 behaviour the manual adds.
 fn cia402_rules(out: &mut String, p: &Profile) {
     let r = &p.cia402;
-    if r.enable_without_mode_error.is_none() && !r.stops_end_switched_off {
+    if r.enable_without_mode_error.is_none()
+        && !r.stops_end_switched_off
+        && !r.switch_on_requires_main_power
+    {
         return;
     }
     out.push_str("## CiA402 rules\n\n");
@@ -1058,6 +1061,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     }
     if r.stops_end_switched_off {
         out.push_str("- Shutdown and disable operation end in Switch On Disabled after their stop (605Bh/605Ch).\n");
+    }
+    if r.switch_on_requires_main_power {
+        out.push_str("- Switched On needs the main power; losing it in Switched On, Operation Enabled or Quick Stop Active falls to Switch On Disabled.\n");
     }
     out.push('\n');
 }

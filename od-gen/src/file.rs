@@ -981,4 +981,7 @@ pub struct Cia402File {
     /// false: CiA402's Ready to Switch On / Switched On).
     #[serde(default)]
     pub stops_end_switched_off: bool,
+    /// Switched On needs the main power (default false).
+    #[serde(default)]
+    pub switch_on_requires_main_power: bool,
 }

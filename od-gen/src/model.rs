@@ -1529,4 +1529,6 @@ pub struct Cia402Rules {
     pub enable_without_mode_error: Option<MotorFaultCode>,
     /// Shutdown and disable operation end in Switch On Disabled.
     pub stops_end_switched_off: bool,
+    /// Switched On needs the main power.
+    pub switch_on_requires_main_power: bool,
 }

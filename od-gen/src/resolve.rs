@@ -507,6 +507,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .map(|r| fault_report(r, &alarms, "cia402.enable_without_mode_error"))
             .transpose()?,
         stops_end_switched_off: f.cia402.stops_end_switched_off,
+        switch_on_requires_main_power: f.cia402.switch_on_requires_main_power,
     };
     let mut profile = Profile {
         name: f.name.clone(),

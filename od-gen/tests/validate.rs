@@ -1356,7 +1356,15 @@ fn cia402_rules_are_resolved_and_checked() {
     let p = od_gen::parse(&appended("[cia402]\nstops_end_switched_off = true"), "ok").unwrap();
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
-    assert!(rust.contains("enable_without_mode_error: None, stops_end_switched_off: true }"));
+    assert!(rust.contains(
+        "enable_without_mode_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false }"
+    ));
+    let p = od_gen::parse(
+        &appended("[cia402]\nswitch_on_requires_main_power = true"),
+        "ok",
+    )
+    .unwrap();
+    assert!(p.cia402.switch_on_requires_main_power);
     let (key, _) = invalid(&appended("[cia402]\nenable_without_mode_error = 0"));
     assert_eq!(key, "cia402.enable_without_mode_error");
     let (key, _) = invalid(&appended("[cia402]\nenable_without_mode_error = \"A.99\""));

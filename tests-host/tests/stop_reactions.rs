@@ -10,7 +10,8 @@
 //! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled (statusword bit 10
 //!   "target reached" once at rest) and resumes;
 //! - a profile precondition: the SDV3-E refuses enable operation with no mode (oPE);
-//! - a profile end state: the Σ-V-SD's disable operation ends in Switch On Disabled.
+//! - a profile end state: the Σ-V-SD's disable operation ends in Switch On Disabled;
+//! - a profile precondition: the Σ-V-SD switches on only with the main power (statusword bit 4).
 //!
 //! Decelerations are checked on the plant's true speed against the ramp the objects set.
 
@@ -479,5 +480,89 @@ fn sigma_v_sd_disable_operation_ends_in_switch_on_disabled() {
                     < states.iter().position(|s| *s == OPERATION_ENABLED),
             "never Switched On after Operation Enabled: {states:02x?}"
         );
+    });
+}
+
+#[test]
+fn sigma_v_sd_switched_on_needs_the_main_power() {
+    // Σ-V-SD §3.1 *3: Ready to Switch On → Switched On only with main power on; *2/*4: main
+    // power off in Switched On / Operation Enabled → Switch On Disabled. Statusword bit 4
+    // "voltage enabled" shows the main power (§4.7 (2)).
+    const MODES_OF_OPERATION: u16 = 0x6060;
+    const READY_TO_SWITCH_ON: u16 = 0x21;
+    const VOLTAGE_ENABLED: u16 = 0x10;
+    const FAULT_BIT: u16 = 0x08;
+    block_on(async {
+        let (m, transport) =
+            tests_host::master_for(board_sim::Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        group
+            .subdevice(md, 0)
+            .expect("drive")
+            .sdo_write(MODES_OF_OPERATION, 0, MODE_CSP as i8)
+            .await
+            .expect("6060h");
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("request OP");
+        let bus = |v: f64| {
+            m.shared.segment().drives_mut()[0]
+                .servo
+                .plant
+                .set_bus_voltage(v)
+        };
+        let run = |cws: Vec<u16>| {
+            let group = &group;
+            let m = &m;
+            async move {
+                let mut sw = 0;
+                let mut position = 0i32;
+                for cw in cws {
+                    let sd = group.subdevice(md, 0).expect("drive");
+                    {
+                        let mut out = sd.outputs_raw_mut();
+                        out[0..2].copy_from_slice(&cw.to_le_bytes());
+                        out[2..6].copy_from_slice(&position.to_le_bytes());
+                    }
+                    group.tx_rx(md).await.expect("tx/rx");
+                    m.shared.advance(CYCLE_NS);
+                    let inp = sd.inputs_raw();
+                    sw = u16::from_le_bytes([inp[0], inp[1]]);
+                    position = i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]);
+                }
+                sw
+            }
+        };
+        bus(0.0);
+        let sw = run([vec![SHUTDOWN; 10], vec![SWITCH_ON; 20]].concat()).await;
+        assert_eq!(
+            sw & STATE_MASK,
+            READY_TO_SWITCH_ON,
+            "no main power: {sw:#06x}"
+        );
+        assert_eq!(sw & VOLTAGE_ENABLED, 0, "bit 4 clear without main power");
+        bus(48.0);
+        let sw = run(vec![SWITCH_ON; 10]).await;
+        assert_eq!(sw & STATE_MASK, SWITCHED_ON, "main power on: {sw:#06x}");
+        assert_ne!(sw & VOLTAGE_ENABLED, 0, "bit 4 set");
+        let sw = run(vec![ENABLE_OPERATION; 60]).await;
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "{sw:#06x}");
+        bus(0.0);
+        let sw = run(vec![ENABLE_OPERATION; 10]).await;
+        assert_eq!(
+            sw & SWITCH_ON_DISABLED_MASK,
+            SWITCH_ON_DISABLED,
+            "main power off: Switch On Disabled, {sw:#06x}"
+        );
+        assert_eq!(sw & FAULT_BIT, 0, "not a fault");
     });
 }

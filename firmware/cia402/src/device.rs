@@ -42,9 +42,22 @@ pub struct Device {
     leave_to: Option<PdsState>,
     /// The option codes of the last cycle (a fault raised between cycles reacts with them).
     options: OptionCodes,
-    /// A profile rule: shutdown and disable operation end in Switch On Disabled after their
-    /// stop (the Σ-V-SD's 605Bh/605Ch texts) instead of Ready to Switch On / Switched On.
-    stops_end_switched_off: bool,
+    /// The profile's rules.
+    rules: DeviceRules,
+    /// The main circuit is powered (the drive application tells, [`Self::set_main_power`]).
+    main_power: bool,
+}
+
+/// CiA402 behaviour a profile adds to the standard.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DeviceRules {
+    /// Shutdown and disable operation end in Switch On Disabled after their stop (the
+    /// Σ-V-SD's 605Bh/605Ch texts) instead of Ready to Switch On / Switched On.
+    pub stops_end_switched_off: bool,
+    /// Switched On needs the main power: transition 3 waits for it, and Switched On,
+    /// Operation Enabled and Quick Stop Active fall to Switch On Disabled when it goes (the
+    /// Σ-V-SD, §4.7 *2-*4).
+    pub switch_on_requires_main_power: bool,
 }
 
 /// The result of one [`Device::step`].
@@ -65,14 +78,16 @@ impl Default for Device {
 }
 
 impl Device {
-    /// Power-on: Not Ready to Switch On, no fault.
+    /// Power-on: Not Ready to Switch On, no fault, CiA402 as written.
     pub const fn new() -> Self {
-        Self::with_rules(false)
+        Self::with_rules(DeviceRules {
+            stops_end_switched_off: false,
+            switch_on_requires_main_power: false,
+        })
     }
 
-    /// [`Self::new`] for a profile whose shutdown and disable operation end in Switch On
-    /// Disabled (`stops_end_switched_off`).
-    pub const fn with_rules(stops_end_switched_off: bool) -> Self {
+    /// [`Self::new`] with a profile's rules.
+    pub const fn with_rules(rules: DeviceRules) -> Self {
         Self {
             state: PdsState::NotReadyToSwitchOn,
             previous_controlword: 0,
@@ -86,8 +101,15 @@ impl Device {
                 halt: None,
                 fault_reaction: None,
             },
-            stops_end_switched_off,
+            rules,
+            main_power: false,
         }
+    }
+
+    /// Whether the main circuit is powered (the bus voltage is up): statusword bit 4 "voltage
+    /// enabled" and, with [`DeviceRules::switch_on_requires_main_power`], transition 3.
+    pub fn set_main_power(&mut self, on: bool) {
+        self.main_power = on;
     }
 
     /// The PDS state.
@@ -134,7 +156,17 @@ impl Device {
     /// below the standstill threshold).
     pub fn step(&mut self, cw: u16, options: OptionCodes, at_rest: bool) -> Step {
         self.options = options;
-        let requested = pds::next(self.state, cw, self.previous_controlword);
+        let mut requested = pds::next(self.state, cw, self.previous_controlword);
+        if self.rules.switch_on_requires_main_power && !self.main_power {
+            requested = match (self.state, requested) {
+                (PdsState::ReadyToSwitchOn, PdsState::SwitchedOn) => PdsState::ReadyToSwitchOn,
+                (
+                    PdsState::SwitchedOn | PdsState::OperationEnabled | PdsState::QuickStopActive,
+                    _,
+                ) => PdsState::SwitchOnDisabled,
+                (_, to) => to,
+            };
+        }
         self.previous_controlword = cw;
         self.state = match (self.state, requested) {
             // 5 / 8: stop per 605Ch / 605Bh first (a new request replaces a waiting one).
@@ -149,7 +181,7 @@ impl Device {
                 };
                 let reaction = options.reaction(cause).unwrap_or(Reaction::COAST);
                 self.stop = Some(reaction);
-                self.leave_to = Some(if self.stops_end_switched_off {
+                self.leave_to = Some(if self.rules.stops_end_switched_off {
                     PdsState::SwitchOnDisabled
                 } else {
                     to
@@ -205,6 +237,9 @@ impl Device {
         };
         let motion = self.motion(cw);
         let mut statusword = pds::statusword_of(self.state);
+        if self.main_power {
+            statusword |= pds::statusword::VOLTAGE_ENABLED;
+        }
         let halted = self.state == PdsState::OperationEnabled
             && self.stop.is_none()
             && matches!(motion, Motion::Stop(_));
@@ -501,7 +536,10 @@ mod tests {
     #[test]
     fn a_profile_may_end_shutdown_and_disable_operation_in_switch_on_disabled() {
         for c in [0x06, 0x07] {
-            let mut d = Device::with_rules(true);
+            let mut d = Device::with_rules(DeviceRules {
+                stops_end_switched_off: true,
+                switch_on_requires_main_power: false,
+            });
             for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
                 d.step(c, RAMPS, true);
             }
@@ -510,6 +548,44 @@ mod tests {
             d.step(c, RAMPS, true);
             assert_eq!(d.state(), PdsState::SwitchOnDisabled, "cw {c:#x}");
         }
+    }
+
+    #[test]
+    fn a_profile_may_need_the_main_power_for_switched_on() {
+        let mut d = Device::with_rules(DeviceRules {
+            stops_end_switched_off: false,
+            switch_on_requires_main_power: true,
+        });
+        for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, 0x07] {
+            d.step(c, RAMPS, true);
+        }
+        assert_eq!(
+            d.state(),
+            PdsState::ReadyToSwitchOn,
+            "no main power: 3 waits"
+        );
+        d.set_main_power(true);
+        let step = d.step(0x07, RAMPS, true);
+        assert_eq!(d.state(), PdsState::SwitchedOn);
+        assert_ne!(
+            step.statusword & sw::VOLTAGE_ENABLED,
+            0,
+            "bit 4: main power"
+        );
+        d.step(ENABLE, RAMPS, true);
+        assert!(d.operation_enabled());
+        d.set_main_power(false);
+        let step = d.step(ENABLE, RAMPS, false);
+        assert_eq!(
+            (d.state(), step.motion),
+            (PdsState::SwitchOnDisabled, Motion::Off)
+        );
+        assert_eq!(step.statusword & sw::VOLTAGE_ENABLED, 0);
+        // CiA402 as written: no such condition.
+        let mut d = enabled(RAMPS);
+        assert!(d.operation_enabled());
+        d.step(ENABLE, RAMPS, true);
+        assert!(d.operation_enabled());
     }
 
     #[test]
