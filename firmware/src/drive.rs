@@ -19,7 +19,7 @@
 use cia402::device::{Device, DeviceRules, Motion};
 use cia402::faults::FaultReport;
 use cia402::modes::{self, Mode, Targets};
-use cia402::pds::{controlword, PdsState};
+use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
 use cia402::units;
 use ethercat_slave::od::ErrorReport;
@@ -321,6 +321,12 @@ impl Drive {
             deceleration,
             bus_cycle_ns: cycle_ns,
         });
+        if feedback.current_limited && enable {
+            // CiA402 statusword bit 11: the torque demand is at its limit.
+            if let Some(sw) = read_u16(ram, vars.statusword) {
+                write_u16(ram, vars.statusword, sw | statusword::INTERNAL_LIMIT_ACTIVE);
+            }
+        }
         write_bytes(
             ram,
             vars.position_actual_value,

@@ -5,6 +5,8 @@
 //! - quick stop with 605Ah = 2: Quick Stop Active while the motor decelerates along the
 //!   quick-stop ramp 6085h, then Switch On Disabled; with 605Ah = 0 it coasts instead;
 //! - 605Ah = 6: Quick Stop Active holds the motor at rest until enable operation (16);
+//! - 605Ah = 3: the stop brakes at the current limit, statusword bit 11 "internal limit
+//!   active" meanwhile;
 //! - disable operation with 605Ch = 1: Operation Enabled while decelerating on 6084h, then
 //!   Switched On;
 //! - halt (bit 8) with 605Dh = 1: decelerates on 6084h in Operation Enabled (statusword bit 10
@@ -231,6 +233,44 @@ fn quick_stop_with_605ah_0_disables_at_once_and_the_motor_coasts() {
         // standard profile's quick-stop ramp (6085h, 30000 rpm/s) would have stopped it
         // after 1/30 s.
         assert!(rpm > 0.3 * SPEED_RPM, "coasting at {rpm:.0} rpm");
+    });
+}
+
+#[test]
+fn quick_stop_at_the_current_limit_is_quicker_than_a_ramp_and_shows_internal_limit_active() {
+    // 605Ah = 3: slow down on the current limit, then Switch On Disabled; statusword bit 11
+    // "internal limit active" while the torque demand is at its limit, clear while moving
+    // steadily.
+    const INTERNAL_LIMIT_ACTIVE: u16 = 0x0800;
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(m, md, &[(QUICK_STOP_OPTION, 3)]);
+        let (sw, _, _) = cycle!(m, md, group, ENABLE_OPERATION, target as i32);
+        assert_eq!(sw & INTERNAL_LIMIT_ACTIVE, 0, "steady speed: no limit");
+        let mut limited = 0;
+        let mut cycles = 0;
+        let mut sw = 0;
+        for k in 0..200 {
+            (sw, _, _) = cycle!(m, md, group, QUICK_STOP, target as i32);
+            if sw & INTERNAL_LIMIT_ACTIVE != 0 {
+                limited += 1;
+            }
+            if k > 2 && sw & STATE_MASK != QUICK_STOP_ACTIVE {
+                cycles = k;
+                break;
+            }
+        }
+        assert_eq!(
+            sw & SWITCH_ON_DISABLED_MASK,
+            SWITCH_ON_DISABLED,
+            "then Switch On Disabled"
+        );
+        // The standard profile's quick-stop ramp (6085h, 30000 rpm/s) takes 33 ms from 1000
+        // rpm; the current limit needs less.
+        assert!(cycles < 33, "at rest after {cycles} ms");
+        assert!(limited > 0, "bit 11 while braking at the limit");
     });
 }
 

@@ -81,6 +81,18 @@ fn the_motor_follows_the_stop_ramp_and_holds_zero_speed() {
 #[test]
 fn a_stop_at_once_brakes_at_the_current_limit() {
     let mut servo = spinning();
+    assert!(
+        !servo.feedback().current_limited,
+        "steady speed: below the limit"
+    );
+    let command = AxisCommand {
+        enable: true,
+        mode: ControlMode::Stop,
+        ..Default::default()
+    };
+    servo.publish(command);
+    servo.run_periods(PERIODS_PER_CYCLE);
+    assert!(servo.feedback().current_limited, "braking at the limit");
     let speeds = stop(&mut servo, 0.0, 100);
     let to_rest = speeds.iter().position(|v| v.abs() < 20.0).expect("stops");
     // The quickest ramp of the tests (6000 rpm/s) needs 167 ms; the current limit far less.

@@ -60,6 +60,8 @@ pub mod statusword {
     pub const REMOTE: u16 = 1 << 9;
     /// Bit 10: target reached (operation-mode specific; with halt set: the motor is at rest).
     pub const TARGET_REACHED: u16 = 1 << 10;
+    /// Bit 11: internal limit active (e.g. the torque demand at its limit).
+    pub const INTERNAL_LIMIT_ACTIVE: u16 = 1 << 11;
 }
 
 /// The device-control commands encoded in controlword bits 0..3 and 7 (CiA402 Table 5).

@@ -219,6 +219,9 @@ pub struct AxisFeedback {
     pub main_power: bool,
     /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
     pub stopping: bool,
+    /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
+    /// "internal limit active").
+    pub current_limited: bool,
 }
 
 /// Results of a commissioning run.
@@ -362,6 +365,7 @@ impl AxisLink {
                     offset_calibrations: 0,
                     main_power: false,
                     stopping: false,
+                    current_limited: false,
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -452,6 +456,8 @@ pub struct Axis {
     offset_calibrations: u32,
     /// The deceleration ramp of [`ControlMode::Stop`].
     stop_ramp: StopRamp,
+    /// The last loop tick's torque demand was at the limit.
+    current_limited: bool,
 }
 
 impl Axis {
@@ -539,6 +545,7 @@ impl Axis {
             previous_calibrate: false,
             offset_calibrations: 0,
             stop_ramp: StopRamp::default(),
+            current_limited: false,
             bus_cycle_ns: (cfg.bus_cycle_s * 1e9) as u32,
             model_seq: 0,
             model: MotorModel {
@@ -794,6 +801,7 @@ impl Axis {
             stopping: self.state == AxisState::Running
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),
+            current_limited: self.state == AxisState::Running && self.current_limited,
         });
     }
 
@@ -971,7 +979,12 @@ impl Axis {
                 }
             };
             let limit = self.cfg.current_limit_a;
-            self.iq_ref = math::clamp_symmetric(torque * self.iq_per_nm, limit);
+            let iq_request = torque * self.iq_per_nm;
+            // The speed loop pins its output at its torque limit; a torque set-point is cut
+            // at the current limit.
+            self.current_limited =
+                torque.abs() >= self.speed_loop.torque_limit() || iq_request.abs() >= limit;
+            self.iq_ref = math::clamp_symmetric(iq_request, limit);
             self.id_ref = 0.0;
         }
         let angle = self.commutation.angle(self.position);
