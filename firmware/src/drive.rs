@@ -157,7 +157,9 @@ impl Drive {
     /// display, the axis exchange.
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
         let vars = self.vars;
-        let cw = read_u16(ram, vars.controlword).unwrap_or(0);
+        let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
+        // The axis feedback of this cycle, read once (a seqlock read).
+        let feedback = self.axis.as_ref().map(|port| port.link.feedback());
         let options = OptionCodes {
             quick_stop: read_i16(ram, vars.quick_stop_option_code),
             shutdown: read_i16(ram, vars.shutdown_option_code),
@@ -170,14 +172,16 @@ impl Drive {
             // Profile rule: enable operation with no mode selected is refused as an error.
             let no_mode = mode.is_none_or(|[m]| m == 0);
             if no_mode && self.device.requested(cw) == PdsState::OperationEnabled {
+                // The fault counts the controlword as 0 (report_fault writes it so).
                 self.report_fault(report, ram);
+                cw = 0;
             }
         }
-        let cw = read_u16(ram, vars.controlword).unwrap_or(0);
-        if let Some(port) = &self.axis {
-            self.device.set_main_power(port.link.feedback().main_power);
+        if let Some(f) = &feedback {
+            self.device.set_main_power(f.main_power);
         }
-        let step = self.device.step(cw, options, self.at_rest());
+        let at_rest = feedback.as_ref().is_none_or(|f| self.at_rest(f));
+        let step = self.device.step(cw, options, at_rest);
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);
         }
@@ -185,9 +189,9 @@ impl Drive {
         if let Some(mode) = mode {
             write_bytes(ram, vars.modes_of_operation_display, mode);
         }
-        if self.axis.is_some() {
+        if let Some(feedback) = feedback {
             let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
-            self.exchange_with_axis(ram, cw, mode, step.motion, cycle_ns);
+            self.exchange_with_axis(ram, cw, mode, step.motion, feedback, cycle_ns);
         } else if step.motion == Motion::Run {
             if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
                 write_bytes(ram, vars.position_actual_value, target);
@@ -195,24 +199,24 @@ impl Drive {
         }
     }
 
-    /// Whether the motor is at rest: no stop ramp under way and the velocity at or below
-    /// [`STANDSTILL_RPM`] (always without a motor).
-    fn at_rest(&self) -> bool {
+    /// Whether the motor is at rest by the axis' `feedback`: no stop ramp under way and the
+    /// velocity at or below [`STANDSTILL_RPM`].
+    fn at_rest(&self, feedback: &AxisFeedback) -> bool {
         self.axis.as_ref().is_none_or(|port| {
-            let feedback = port.link.feedback();
             !feedback.stopping
                 && feedback.velocity.abs() <= standstill_counts_per_s(port.counts_per_rev)
         })
     }
 
-    /// Raises a new motor fault, hands the set-points of this cycle (or the stop `motion`
-    /// asks for) to the axis, and writes its actual values.
+    /// With the axis' `feedback` of this cycle: raises a new motor fault, hands the set-points
+    /// of this cycle (or the stop `motion` asks for) to the axis, and writes its actual values.
     fn exchange_with_axis(
         &mut self,
         ram: &mut [u8],
         cw: u16,
         mode: Mode,
         motion: Motion,
+        feedback: AxisFeedback,
         cycle_ns: u32,
     ) {
         // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
@@ -221,7 +225,6 @@ impl Drive {
         };
         let vars = self.vars;
         let link = port.link;
-        let feedback = link.feedback();
         let new_fault = if feedback.trips != port.trips_seen {
             port.trips_seen = feedback.trips;
             feedback

@@ -18,7 +18,7 @@ use board_sim::Segment;
 use ethercrab::subdevice_group::PreOp;
 use ethercrab::{DefaultLock, MainDevice, SubDeviceGroup};
 use tests_host::raw_sdo::RawSdo;
-use tests_host::{block_on, master_for, FIRST_STATION};
+use tests_host::{block_on, csp, master_for, FIRST_STATION};
 
 const MAX_SUBDEVICES: usize = 2;
 const MAX_PDI: usize = 64;
@@ -225,7 +225,6 @@ fn sigma_v_sd_adjusting_sequence_errors_abort_and_timeout() {
 #[test]
 fn sigma_v_sd_offset_adjustment_is_refused_while_the_servo_is_on() {
     // §4.5 (8): "Adjustment is disabled ... while the servo is ON".
-    const CYCLE_NS: u64 = 1_000_000;
     /// Controlwords (CiA402): shutdown, switch on, enable operation; statusword state mask
     /// and Operation Enabled.
     const SHUTDOWN: u16 = 0x06;
@@ -233,46 +232,17 @@ fn sigma_v_sd_offset_adjustment_is_refused_while_the_servo_is_on() {
     const ENABLE_OPERATION: u16 = 0x0F;
     const STATE_MASK: u16 = 0x6F;
     const OPERATION_ENABLED: u16 = 0x27;
-    const MODES_OF_OPERATION: u16 = 0x6060;
     const MODE_CSP: i8 = 8;
     block_on(async {
         let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = init(&m).await;
-        group
-            .subdevice(md, 0)
-            .expect("drive")
-            .sdo_write(MODES_OF_OPERATION, 0, MODE_CSP)
-            .await
-            .expect("6060h");
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
-        // Default RxPDO 1600h starts with 6040h, 607Ah; TxPDO 1A00h with 6041h, 6064h.
-        let mut statusword = 0;
-        let mut position = 0i32;
-        for cw in [SHUTDOWN; 5]
+        let group = csp::into_op_with_mode(&m, md, MODE_CSP).await;
+        let cws = [SHUTDOWN; 5]
             .into_iter()
             .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 100])
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            {
-                let mut out = sd.outputs_raw_mut();
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[2..6].copy_from_slice(&position.to_le_bytes());
-            }
-            group.tx_rx(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-            let inputs = sd.inputs_raw();
-            statusword = u16::from_le_bytes([inputs[0], inputs[1]]);
-            position = i32::from_le_bytes([inputs[2], inputs[3], inputs[4], inputs[5]]);
-        }
+            .chain([ENABLE_OPERATION; 100]);
+        let (statusword, _) = csp::hold_through(&m, md, &group, cws, STATE_MASK).await;
         assert_eq!(statusword & STATE_MASK, OPERATION_ENABLED, "servo ON");
         let sdo = sdo();
         sdo.download(

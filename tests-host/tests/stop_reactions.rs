@@ -20,7 +20,7 @@
 use std::f64::consts::TAU;
 
 use ethercrab::MainDevice;
-use tests_host::{block_on, master};
+use tests_host::{block_on, csp, master};
 
 /// Simulated time per cycle (free run).
 const CYCLE_NS: u64 = 1_000_000;
@@ -459,55 +459,19 @@ fn sdv3e_enable_operation_without_a_mode_is_ope() {
 #[test]
 fn sigma_v_sd_disable_operation_ends_in_switch_on_disabled() {
     // Σ-V-SD §4.7 (5)/(6): 605Ch = 1 "slow down on slow down ramp", then Switch On Disabled
-    // (CiA402 would end in Switched On). RxPDO 1600h starts with 6040h, 607Ah; TxPDO 1A00h
-    // with 6041h, 6064h.
-    const MODES_OF_OPERATION: u16 = 0x6060;
+    // (CiA402 would end in Switched On).
     block_on(async {
         let (m, transport) =
             tests_host::master_for(board_sim::Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        group
-            .subdevice(md, 0)
-            .expect("drive")
-            .sdo_write(MODES_OF_OPERATION, 0, MODE_CSP as i8)
-            .await
-            .expect("6060h");
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
-        let mut position = 0i32;
-        let mut sw = 0;
+        let group = csp::into_op_with_mode(&m, md, MODE_CSP as i8).await;
         let cws = [SHUTDOWN; 5]
             .into_iter()
             .chain([SWITCH_ON; 5])
             .chain([ENABLE_OPERATION; 60])
             .chain([SWITCH_ON; 60]);
-        let mut states = Vec::new();
-        for cw in cws {
-            let sd = group.subdevice(md, 0).expect("drive");
-            {
-                let mut out = sd.outputs_raw_mut();
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[2..6].copy_from_slice(&position.to_le_bytes());
-            }
-            group.tx_rx(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-            let inp = sd.inputs_raw();
-            sw = u16::from_le_bytes([inp[0], inp[1]]);
-            position = i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]);
-            if states.last() != Some(&(sw & STATE_MASK)) {
-                states.push(sw & STATE_MASK);
-            }
-        }
+        let (sw, states) = csp::hold_through(&m, md, &group, cws, STATE_MASK).await;
         assert!(states.contains(&OPERATION_ENABLED), "{states:02x?}");
         assert_eq!(
             sw & SWITCH_ON_DISABLED_MASK,
@@ -528,7 +492,6 @@ fn sigma_v_sd_switched_on_needs_the_main_power() {
     // Σ-V-SD §3.1 *3: Ready to Switch On → Switched On only with main power on; *2/*4: main
     // power off in Switched On / Operation Enabled → Switch On Disabled. Statusword bit 4
     // "voltage enabled" shows the main power (§4.7 (2)).
-    const MODES_OF_OPERATION: u16 = 0x6060;
     const READY_TO_SWITCH_ON: u16 = 0x21;
     const VOLTAGE_ENABLED: u16 = 0x10;
     const FAULT_BIT: u16 = 0x08;
@@ -537,23 +500,7 @@ fn sigma_v_sd_switched_on_needs_the_main_power() {
             tests_host::master_for(board_sim::Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        group
-            .subdevice(md, 0)
-            .expect("drive")
-            .sdo_write(MODES_OF_OPERATION, 0, MODE_CSP as i8)
-            .await
-            .expect("6060h");
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
+        let group = csp::into_op_with_mode(&m, md, MODE_CSP as i8).await;
         let bus = |v: f64| {
             m.shared.segment().drives_mut()[0]
                 .servo
@@ -561,26 +508,8 @@ fn sigma_v_sd_switched_on_needs_the_main_power() {
                 .set_bus_voltage(v)
         };
         let run = |cws: Vec<u16>| {
-            let group = &group;
-            let m = &m;
-            async move {
-                let mut sw = 0;
-                let mut position = 0i32;
-                for cw in cws {
-                    let sd = group.subdevice(md, 0).expect("drive");
-                    {
-                        let mut out = sd.outputs_raw_mut();
-                        out[0..2].copy_from_slice(&cw.to_le_bytes());
-                        out[2..6].copy_from_slice(&position.to_le_bytes());
-                    }
-                    group.tx_rx(md).await.expect("tx/rx");
-                    m.shared.advance(CYCLE_NS);
-                    let inp = sd.inputs_raw();
-                    sw = u16::from_le_bytes([inp[0], inp[1]]);
-                    position = i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]);
-                }
-                sw
-            }
+            let (m, group) = (&m, &group);
+            async move { csp::hold_through(m, md, group, cws, STATE_MASK).await.0 }
         };
         bus(0.0);
         let sw = run([vec![SHUTDOWN; 10], vec![SWITCH_ON; 20]].concat()).await;

@@ -89,6 +89,14 @@ fn profile(name: &str) -> Profile {
     od_gen::builtin(name).expect("built-in profile")
 }
 
+/// The `[[alarm]]` of `p` with `display`.
+fn alarm<'p>(p: &'p Profile, display: &str) -> &'p od_gen::model::Alarm {
+    p.alarms
+        .iter()
+        .find(|a| a.display == display)
+        .unwrap_or_else(|| panic!("alarm {display}"))
+}
+
 async fn init(m: &InProcess) -> Group {
     m.maindevice
         .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(m.shared.clock().now_fn())
@@ -255,11 +263,7 @@ fn sigma_v_sd_input_shift_takes_125_us_steps_up_to_the_cycle_minus_125_us() {
 fn sigma_v_sd_sync_error(slow_sync0: bool, missed_cycle: fn(usize) -> bool) {
     const CYCLE_NS: u64 = 1_000_000;
     let p = profile("sigma-v-sd");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "A.A12")
-        .expect("alarm A.A12");
+    let alarm = alarm(&p, "A.A12");
     let limit = p.entry(0x10F1, 2).expect("10F1h:02").initial_bytes()[0];
     assert_eq!(limit, 9, "§4.4 (4): default 9");
     block_on(async {
@@ -419,11 +423,7 @@ fn sdv3e_missed_sync0_is_cs_with_al_status_0x2c() {
     // §5.2 5): cS "SYNC signal out of step" → SafeOP, AL status 0x002C, alarm cS.
     const CYCLE_NS: u64 = 1_000_000;
     let p = profile("sdv3-e");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "cS")
-        .expect("alarm cS");
+    let alarm = alarm(&p, "cS");
     block_on(async {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
@@ -459,11 +459,7 @@ fn sdv3e_sync0_not_locked_within_2_s_of_safeop_is_plf_in_preop() {
     // §5.2 7): PLF "PLL phase-locking failure": no lock within 2 s in SafeOP → PreOP, 0x002D.
     const CYCLE_NS: u64 = 1_000_000;
     let p = profile("sdv3-e");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "PLF")
-        .expect("alarm PLF");
+    let alarm = alarm(&p, "PLF");
     block_on(async {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
@@ -513,11 +509,7 @@ fn sdv3e_input_link_lost_in_op_is_ll_in_init() {
     // AL status code 0x0000; the drive holds alarm LL (603Fh 8502h) until a fault reset.
     const CYCLE_NS: u64 = 1_000_000;
     let p = profile("sdv3-e");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "LL")
-        .expect("alarm LL");
+    let alarm = alarm(&p, "LL");
     let segment = block_on(async {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         let transport = tokio::task::spawn_local(transport);
@@ -578,11 +570,7 @@ fn sdv3e_pdi_error_is_hr_in_init_with_the_err_led_on() {
     // ESM → Init, AL status code 0x0000, ERR LED on; 603Fh = Hr (8500h).
     const CYCLE_NS: u64 = 1_000_000;
     let p = profile("sdv3-e");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "Hr")
-        .expect("alarm Hr");
+    let alarm = alarm(&p, "Hr");
     let segment = block_on(async {
         let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
         let transport = tokio::task::spawn_local(transport);
@@ -681,11 +669,7 @@ fn sdv3e_outputs_lost_p4_03_times_in_a_row_in_csp_are_csd() {
     const CYCLE_NS: u64 = 1_000_000;
     const LIMIT: u32 = 3;
     let p = profile("sdv3-e");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "cSD")
-        .expect("alarm cSD");
+    let alarm = alarm(&p, "cSD");
     let (mut segment, out) = session(
         Segment::new("sdv3-e", 1).expect("profile"),
         &[
@@ -780,11 +764,7 @@ fn gha_e_counts_missed_events_in_both_sm_parameter_objects() {
 #[test]
 fn gha_e_sync0_period_outside_the_allowed_set_is_alarm_co03() {
     let p = profile("gha-e");
-    let alarm = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "Co03")
-        .expect("alarm Co03");
+    let alarm = alarm(&p, "Co03");
     block_on(async {
         let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);

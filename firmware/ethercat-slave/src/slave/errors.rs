@@ -6,6 +6,20 @@ use super::*;
 /// Emergencies, the error register 1001h and the diagnosis history 10F3h
 /// ([`crate::mailbox::emcy`], [`crate::diag`]).
 impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
+    /// A profile rule raises `report` as one of the application's errors (a drive: 603Fh,
+    /// Fault) and sends its emergency. A full EMCY queue or a stopped mailbox loses only the
+    /// EMCY; 1001h and the application hold the error until its fault reset.
+    pub(super) fn raise_app_error(&mut self, report: ErrorReport) {
+        self.app.raise_error(report, &mut self.ram);
+        let _ = self.report_error(
+            report.emcy_code,
+            emcy::register::DEVICE_PROFILE,
+            report.emcy_data,
+            None,
+            self.now_ns,
+        );
+    }
+
     /// Reports an error that is now active: marks `code` active in 1001h (bits from its
     /// CiA 301 class, plus `extra_register_bits`, e.g. [`emcy::register::DEVICE_PROFILE`]),
     /// stores `diag` in 10F3h if given (time stamp `now_ns`), and queues the emergency

@@ -80,20 +80,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if dl_status & DlStatus::link(INPUT_PORT) != 0 {
             return Ok(());
         }
-        self.app.raise_error(report, &mut self.ram);
-        // The error stays in 1001h until the drive's fault reset; the EMCY is dropped with the
-        // mailbox in INIT (nobody could receive it).
-        let _ = self.report_error(
-            report.emcy_code,
-            emcy::register::DEVICE_PROFILE,
-            report.emcy_data,
-            None,
-            self.now_ns,
-        );
-        self.pending_op = None;
-        self.error_indication = ErrorIndication::InvalidConfiguration;
-        self.error_without_flag = true;
-        self.apply(pdi, from, esm::dropped_to_init(self.status))
+        self.drop_to_init_with(pdi, from, report, ErrorIndication::InvalidConfiguration)
     }
 
     /// Profile rule (`[esm] pdi_error`): the ESC counted a PDI access error (0x030D, e.g. an SPI
@@ -114,18 +101,29 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if count <= seen {
             return Ok(());
         }
-        self.app.raise_error(report, &mut self.ram);
         let from = self.status.state;
-        // In INIT the EMCY cannot be sent (no mailbox); 603Fh and 1001h hold the error.
-        let _ = self.report_error(
-            report.emcy_code,
-            emcy::register::DEVICE_PROFILE,
-            report.emcy_data,
-            None,
-            self.now_ns,
-        );
+        self.drop_to_init_with(
+            pdi,
+            from,
+            report,
+            ErrorIndication::ApplicationControllerFailure,
+        )
+    }
+
+    /// A profile's fault that drops to INIT with AL status code 0x0000 (link loss, PDI error):
+    /// the application raises `report` and the ERR LED shows `indication` although the AL
+    /// status has no error flag. The error stays in 1001h until the drive's fault reset; its
+    /// EMCY is dropped with the mailbox in INIT (nobody could receive it).
+    fn drop_to_init_with<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        from: AlState,
+        report: ErrorReport,
+        indication: ErrorIndication,
+    ) -> Result<(), P::Error> {
+        self.raise_app_error(report);
         self.pending_op = None;
-        self.error_indication = ErrorIndication::ApplicationControllerFailure;
+        self.error_indication = indication;
         self.error_without_flag = true;
         self.apply(pdi, from, esm::dropped_to_init(self.status))
     }

@@ -201,15 +201,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 .op_exit_while_enabled_error
                 .filter(|_| was_enabled)
             {
-                self.app.raise_error(report, &mut self.ram);
-                // A full EMCY queue or a stopped mailbox loses only the EMCY; 1001h/603Fh hold.
-                let _ = self.report_error(
-                    report.emcy_code,
-                    emcy::register::DEVICE_PROFILE,
-                    report.emcy_data,
-                    None,
-                    self.now_ns,
-                );
+                self.raise_app_error(report);
             }
         }
         if rank_to < 2 && rank_from >= 2 {

@@ -1,0 +1,81 @@
+//! A master that runs a drive in cyclic synchronous position, free run, over a default mapping
+//! that starts with controlword 6040h and target position 607Ah (outputs) and statusword 6041h
+//! and position actual value 6064h (inputs): the Σ-V-SD's 1600h/1A00h. The ethercrab group is
+//! sized for one drive.
+
+use board_sim::inproc::InProcess;
+use ethercrab::subdevice_group::Op;
+use ethercrab::{DefaultLock, MainDevice, SubDeviceGroup};
+
+/// A group of one drive in OP.
+pub type OpGroup = SubDeviceGroup<4, 64, DefaultLock, Op>;
+
+/// Simulated time per cycle (free run).
+pub const CYCLE_NS: u64 = 1_000_000;
+/// 6060h "modes of operation" (CiA402).
+const MODES_OF_OPERATION: u16 = 0x6060;
+
+/// INIT → OP in free run, with 6060h = `mode` written by SDO in PREOP.
+pub async fn into_op_with_mode(m: &InProcess, md: &MainDevice<'_>, mode: i8) -> OpGroup {
+    let group = md
+        .init_single_group::<4, 64>(m.shared.clock().now_fn())
+        .await
+        .expect("init");
+    group
+        .subdevice(md, 0)
+        .expect("drive")
+        .sdo_write(MODES_OF_OPERATION, 0, mode)
+        .await
+        .expect("6060h");
+    group
+        .into_safe_op(md)
+        .await
+        .expect("SAFE-OP")
+        .request_into_op(md)
+        .await
+        .expect("request OP")
+}
+
+/// One cycle with controlword `cw` and target position `target`; returns the statusword and
+/// the position actual value the drive sent back.
+pub async fn cycle(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &OpGroup,
+    cw: u16,
+    target: i32,
+) -> (u16, i32) {
+    let sd = group.subdevice(md, 0).expect("drive");
+    {
+        let mut out = sd.outputs_raw_mut();
+        out[0..2].copy_from_slice(&cw.to_le_bytes());
+        out[2..6].copy_from_slice(&target.to_le_bytes());
+    }
+    group.tx_rx(md).await.expect("tx/rx");
+    m.shared.advance(CYCLE_NS);
+    let inp = sd.inputs_raw();
+    (
+        u16::from_le_bytes([inp[0], inp[1]]),
+        i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
+    )
+}
+
+/// Cycles through `cws`, each holding the position the drive reported last (no motion asked);
+/// returns the last statusword and the masked state (`sw & state_mask`) after each change.
+pub async fn hold_through(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &OpGroup,
+    cws: impl IntoIterator<Item = u16>,
+    state_mask: u16,
+) -> (u16, Vec<u16>) {
+    let (mut sw, mut position) = (0, 0);
+    let mut states = Vec::new();
+    for cw in cws {
+        (sw, position) = cycle(m, md, group, cw, position).await;
+        if states.last() != Some(&(sw & state_mask)) {
+            states.push(sw & state_mask);
+        }
+    }
+    (sw, states)
+}
