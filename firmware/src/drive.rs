@@ -27,7 +27,9 @@ use ethercat_slave::slave::{AppEvent, Application};
 
 use crate::adjust::service::{Progress, Refusal};
 use crate::adjust::{Action, AdjustingService};
+use crate::motion::{self, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
+use crate::motor::trajectory::Limits;
 use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, MOTOR_FAULT_COUNT};
 
 /// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
@@ -39,6 +41,7 @@ pub const MAX_ADJUSTING_SERVICES: usize = 2;
 const STANDSTILL_RPM: f32 = 20.0;
 const SECONDS_PER_MINUTE: f32 = 60.0;
 const NS_PER_MS: u64 = 1_000_000;
+const NS_TO_S: f32 = 1e-9;
 
 /// An adjustment running on the axis: which service started it and the axis counters then.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,6 +83,8 @@ pub struct Drive {
     adjusting: [Option<AdjustingService>; MAX_ADJUSTING_SERVICES],
     /// The adjustment running on the axis, if any.
     adjustment: Option<RunningAdjustment>,
+    /// The set-point generators of the profile modes.
+    profile_modes: ProfileModes,
 }
 
 impl Drive {
@@ -104,6 +109,7 @@ impl Drive {
             axis: None,
             adjusting,
             adjustment: None,
+            profile_modes: ProfileModes::new(),
         }
     }
 
@@ -285,7 +291,29 @@ impl Drive {
                 rated_nm,
             ),
         };
-        let set_point = modes::set_point(mode, targets, feedback.position);
+        let mut set_point = modes::set_point(mode, targets, feedback.position);
+        let mut mode_statusword = 0;
+        if motion::is_profile_mode(mode) {
+            let inputs = profile_inputs(
+                ram,
+                vars,
+                cw,
+                motion,
+                &targets,
+                &feedback,
+                (position_ratio, velocity_ratio),
+                rated_nm,
+            );
+            let out = self.profile_modes.step(
+                mode,
+                &inputs,
+                self.rules.profile_position(),
+                feedback.torque,
+                cycle_ns as f32 * NS_TO_S,
+            );
+            set_point = out.set_point;
+            mode_statusword = out.statusword;
+        }
         let loop_mode = match set_point.control {
             modes::Loop::Position => ControlMode::Position,
             modes::Loop::Velocity => ControlMode::Velocity,
@@ -326,10 +354,35 @@ impl Drive {
         });
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
+            mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+        }
+        if mode_statusword != 0 {
             if let Some(sw) = read_u16(ram, vars.statusword) {
-                write_u16(ram, vars.statusword, sw | statusword::INTERNAL_LIMIT_ACTIVE);
+                write_u16(ram, vars.statusword, sw | mode_statusword);
             }
         }
+        // Demand values: what the axis is asked for this cycle.
+        write_bytes(
+            ram,
+            vars.position_demand_value,
+            units::actual_position(set_point.position, position_ratio).to_le_bytes(),
+        );
+        write_bytes(
+            ram,
+            vars.velocity_demand_value,
+            units::velocity_object(velocity_ratio.velocity_from_internal(set_point.velocity))
+                .to_le_bytes(),
+        );
+        let torque_demand = if set_point.control == modes::Loop::Torque {
+            set_point.torque
+        } else {
+            feedback.torque
+        };
+        write_bytes(
+            ram,
+            vars.torque_demand,
+            units::torque_to_permille(torque_demand, rated_nm).to_le_bytes(),
+        );
         write_bytes(
             ram,
             vars.position_actual_value,
@@ -537,6 +590,69 @@ impl Application for Drive {
                 self.publish_adjustment();
             }
         }
+    }
+}
+
+/// The objects of the profile modes this cycle, in axis units (ramps in the velocity unit per
+/// second; 6081h and 60FFh limited by 607Fh when the profile has it).
+#[allow(clippy::too_many_arguments)]
+fn profile_inputs(
+    ram: &[u8],
+    vars: &AppVars,
+    cw: u16,
+    motion: Motion,
+    targets: &Targets,
+    feedback: &AxisFeedback,
+    (position_ratio, velocity_ratio): (units::Ratio, units::Ratio),
+    rated_nm: f32,
+) -> motion::Inputs {
+    let velocity = |at, default: f32| {
+        read_u32(ram, at).map_or(default, |v| velocity_ratio.velocity_to_internal(v as f32))
+    };
+    let window =
+        |at| read_u16(ram, at).map_or(0.0, |v| velocity_ratio.velocity_to_internal(f32::from(v)));
+    let max_velocity = velocity(vars.max_profile_velocity, f32::INFINITY);
+    let acceleration = velocity(vars.profile_acceleration, 0.0);
+    let deceleration = velocity(vars.profile_deceleration, acceleration);
+    let move_velocity = velocity(vars.profile_velocity, 0.0);
+    let slope_permille = read_u32(ram, vars.torque_slope).unwrap_or(0);
+    motion::Inputs {
+        controlword: cw,
+        running: motion == Motion::Run,
+        halted: cw & controlword::HALT != 0 && matches!(motion, Motion::Stop(_)),
+        target_position: read_i32(ram, vars.target_position).unwrap_or(0),
+        target_velocity: targets.velocity,
+        target_torque: targets.torque,
+        move_limits: Limits {
+            velocity: if move_velocity < max_velocity {
+                move_velocity
+            } else {
+                max_velocity
+            },
+            acceleration,
+            deceleration,
+        },
+        velocity_limits: Limits {
+            velocity: max_velocity,
+            acceleration,
+            deceleration,
+        },
+        torque_slope: units::torque_from_permille_f32(slope_permille as f32, rated_nm),
+        position_ratio,
+        position_window: (
+            read_u32(ram, vars.position_window).unwrap_or(0),
+            read_u16(ram, vars.position_window_time).unwrap_or(0),
+        ),
+        velocity_window: (
+            window(vars.velocity_window),
+            read_u16(ram, vars.velocity_window_time).unwrap_or(0),
+        ),
+        velocity_threshold: (
+            window(vars.velocity_threshold),
+            read_u16(ram, vars.velocity_threshold_time).unwrap_or(0),
+        ),
+        actual_position: feedback.position,
+        actual_velocity: feedback.velocity,
     }
 }
 

@@ -33,6 +33,7 @@ pub use ethercat_slave::{diag, esm, leds, mailbox, od, params, pdo, slave};
 
 pub mod adjust;
 pub mod drive;
+pub mod motion;
 pub mod profile;
 pub mod profiles;
 pub mod sync0;

@@ -60,6 +60,32 @@ pub struct AppVars {
     pub profile_deceleration: Option<u16>,
     /// 6085h quick stop deceleration (u32, acceleration units).
     pub quick_stop_deceleration: Option<u16>,
+    /// 6081h profile velocity (u32, velocity units).
+    pub profile_velocity: Option<u16>,
+    /// 6083h profile acceleration (u32, acceleration units).
+    pub profile_acceleration: Option<u16>,
+    /// 607Fh max profile velocity (u32, velocity units).
+    pub max_profile_velocity: Option<u16>,
+    /// 6087h torque slope (u32, ‰ of the rated torque per second).
+    pub torque_slope: Option<u16>,
+    /// 6067h position window (u32, position units).
+    pub position_window: Option<u16>,
+    /// 6068h position window time (u16, ms).
+    pub position_window_time: Option<u16>,
+    /// 606Dh velocity window (u16, velocity units).
+    pub velocity_window: Option<u16>,
+    /// 606Eh velocity window time (u16, ms).
+    pub velocity_window_time: Option<u16>,
+    /// 606Fh velocity threshold (u16, velocity units).
+    pub velocity_threshold: Option<u16>,
+    /// 6070h velocity threshold time (u16, ms).
+    pub velocity_threshold_time: Option<u16>,
+    /// 6062h position demand value (i32, position units).
+    pub position_demand_value: Option<u16>,
+    /// 606Bh velocity demand value (i32, velocity units).
+    pub velocity_demand_value: Option<u16>,
+    /// 6074h torque demand (i16, ‰ of the rated torque).
+    pub torque_demand: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -159,6 +185,19 @@ impl AppVars {
         fault_reaction_option_code: None,
         profile_deceleration: None,
         quick_stop_deceleration: None,
+        profile_velocity: None,
+        profile_acceleration: None,
+        max_profile_velocity: None,
+        torque_slope: None,
+        position_window: None,
+        position_window_time: None,
+        velocity_window: None,
+        velocity_window_time: None,
+        velocity_threshold: None,
+        velocity_threshold_time: None,
+        position_demand_value: None,
+        velocity_demand_value: None,
+        torque_demand: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
     };
@@ -196,6 +235,22 @@ pub struct Cia402Rules {
     /// Switched On needs the main power; losing it in Switched On, Operation Enabled or Quick
     /// Stop Active falls to Switch On Disabled (the Σ-V-SD, §4.7 *2-*4).
     pub switch_on_requires_main_power: bool,
+    /// Profile position: controlword bit 6 set means an absolute target (the SDV3-E's and
+    /// OSD-G-E's ABS/INC) where CiA402 has it mean relative.
+    pub pp_bit6_absolute: bool,
+    /// Profile position: controlword bit 9 "change on set-point" is honoured (false: ignored,
+    /// GHA-E and RSE).
+    pub pp_change_on_set_point: bool,
+}
+
+impl Cia402Rules {
+    /// The profile-position rules of [`cia402::profile_position`].
+    pub const fn profile_position(&self) -> cia402::profile_position::Rules {
+        cia402::profile_position::Rules {
+            bit6_set_is_absolute: self.pp_bit6_absolute,
+            no_change_on_set_point: !self.pp_change_on_set_point,
+        }
+    }
 }
 
 /// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].

@@ -1048,6 +1048,8 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.enable_without_mode_error.is_none()
         && !r.stops_end_switched_off
         && !r.switch_on_requires_main_power
+        && !r.pp_bit6_absolute
+        && r.pp_change_on_set_point
     {
         return;
     }
@@ -1064,6 +1066,12 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     }
     if r.switch_on_requires_main_power {
         out.push_str("- Switched On needs the main power; losing it in Switched On, Operation Enabled or Quick Stop Active falls to Switch On Disabled.\n");
+    }
+    if r.pp_bit6_absolute {
+        out.push_str("- Profile position: controlword bit 6 set means an absolute target (CiA402: relative).\n");
+    }
+    if !r.pp_change_on_set_point {
+        out.push_str("- Profile position: controlword bit 9 (change on set-point) is not supported and ignored.\n");
     }
     out.push('\n');
 }

@@ -773,8 +773,16 @@ pub struct PdoFile {
     pub entries: Vec<PdoEntryFile>,
 }
 
-fn yes() -> bool {
-    true
+impl Default for Cia402File {
+    fn default() -> Self {
+        Self {
+            enable_without_mode_error: None,
+            stops_end_switched_off: false,
+            switch_on_requires_main_power: false,
+            pp_bit6_absolute: false,
+            pp_change_on_set_point: true,
+        }
+    }
 }
 
 /// One default mapping entry: `{ index, sub, bits }` or padding `{ pad = n }`.
@@ -969,7 +977,7 @@ attrs_of!(ObjectFile);
 attrs_of!(EntryFile);
 
 /// `[cia402]`: CiA402 behaviour a manual adds to the standard.
-#[derive(Debug, Default, Deserialize)]
+#[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cia402File {
     /// Enable operation (transition 4) requested while no mode of operation is selected
@@ -984,4 +992,15 @@ pub struct Cia402File {
     /// Switched On needs the main power (default false).
     #[serde(default)]
     pub switch_on_requires_main_power: bool,
+    /// Profile position: controlword bit 6 set means an absolute target (default false:
+    /// CiA402's relative).
+    #[serde(default)]
+    pub pp_bit6_absolute: bool,
+    /// Profile position: controlword bit 9 "change on set-point" is supported (default true).
+    #[serde(default = "yes")]
+    pub pp_change_on_set_point: bool,
+}
+
+fn yes() -> bool {
+    true
 }

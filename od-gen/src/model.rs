@@ -398,11 +398,37 @@ pub enum Role {
     ProfileDeceleration,
     /// 6085h quick stop deceleration (UDINT, acceleration units): the quick-stop ramp.
     QuickStopDeceleration,
+    /// 6081h profile velocity (UDINT, velocity units): the speed of a profile-position move.
+    ProfileVelocity,
+    /// 6083h profile acceleration (UDINT, acceleration units).
+    ProfileAcceleration,
+    /// 607Fh max profile velocity (UDINT, velocity units): limits 6081h and 60FFh in the profile modes.
+    MaxProfileVelocity,
+    /// 6087h torque slope (UDINT, ‰ of the rated torque per second): the torque ramp of profile torque.
+    TorqueSlope,
+    /// 6067h position window (UDINT, position units): target reached in the position modes.
+    PositionWindow,
+    /// 6068h position window time (UINT, ms).
+    PositionWindowTime,
+    /// 606Dh velocity window (UINT, velocity units): target reached in profile velocity.
+    VelocityWindow,
+    /// 606Eh velocity window time (UINT, ms).
+    VelocityWindowTime,
+    /// 606Fh velocity threshold (UINT, velocity units): speed zero (statusword bit 12 in profile velocity).
+    VelocityThreshold,
+    /// 6070h velocity threshold time (UINT, ms).
+    VelocityThresholdTime,
+    /// 6062h position demand value (DINT, position units): the position the profile generator commands.
+    PositionDemandValue,
+    /// 606Bh velocity demand value (DINT, velocity units).
+    VelocityDemandValue,
+    /// 6074h torque demand (INT, ‰ of the rated torque).
+    TorqueDemand,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 23] = [
+    pub const ALL: [Role; 36] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -426,6 +452,19 @@ impl Role {
         Self::FaultReactionOptionCode,
         Self::ProfileDeceleration,
         Self::QuickStopDeceleration,
+        Self::ProfileVelocity,
+        Self::ProfileAcceleration,
+        Self::MaxProfileVelocity,
+        Self::TorqueSlope,
+        Self::PositionWindow,
+        Self::PositionWindowTime,
+        Self::VelocityWindow,
+        Self::VelocityWindowTime,
+        Self::VelocityThreshold,
+        Self::VelocityThresholdTime,
+        Self::PositionDemandValue,
+        Self::VelocityDemandValue,
+        Self::TorqueDemand,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -453,6 +492,19 @@ impl Role {
             Self::FaultReactionOptionCode => "fault_reaction_option_code",
             Self::ProfileDeceleration => "profile_deceleration",
             Self::QuickStopDeceleration => "quick_stop_deceleration",
+            Self::ProfileVelocity => "profile_velocity",
+            Self::ProfileAcceleration => "profile_acceleration",
+            Self::MaxProfileVelocity => "max_profile_velocity",
+            Self::TorqueSlope => "torque_slope",
+            Self::PositionWindow => "position_window",
+            Self::PositionWindowTime => "position_window_time",
+            Self::VelocityWindow => "velocity_window",
+            Self::VelocityWindowTime => "velocity_window_time",
+            Self::VelocityThreshold => "velocity_threshold",
+            Self::VelocityThresholdTime => "velocity_threshold_time",
+            Self::PositionDemandValue => "position_demand_value",
+            Self::VelocityDemandValue => "velocity_demand_value",
+            Self::TorqueDemand => "torque_demand",
         }
     }
     /// Parses the profile-file spelling.
@@ -479,15 +531,27 @@ impl Role {
             Self::TargetPosition
             | Self::PositionActualValue
             | Self::TargetVelocity
-            | Self::VelocityActualValue => DataType::Dint,
-            Self::TargetTorque | Self::TorqueActualValue => DataType::Int,
+            | Self::VelocityActualValue
+            | Self::PositionDemandValue
+            | Self::VelocityDemandValue => DataType::Dint,
+            Self::TargetTorque | Self::TorqueActualValue | Self::TorqueDemand => DataType::Int,
+            Self::PositionWindowTime
+            | Self::VelocityWindow
+            | Self::VelocityWindowTime
+            | Self::VelocityThreshold
+            | Self::VelocityThresholdTime => DataType::Uint,
             Self::MotorRatedTorque
             | Self::MotorResistance
             | Self::MotorLd
             | Self::MotorLq
             | Self::MotorInertia
             | Self::ProfileDeceleration
-            | Self::QuickStopDeceleration => DataType::Udint,
+            | Self::QuickStopDeceleration
+            | Self::ProfileVelocity
+            | Self::ProfileAcceleration
+            | Self::MaxProfileVelocity
+            | Self::TorqueSlope
+            | Self::PositionWindow => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode
             | Self::DisableOperationOptionCode
@@ -1523,7 +1587,7 @@ impl ErrLed {
 }
 
 /// CiA402 behaviour a manual adds to the standard (`[cia402]`).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Cia402Rules {
     /// The error raised when enable operation is requested with no mode selected.
     pub enable_without_mode_error: Option<MotorFaultCode>,
@@ -1531,4 +1595,21 @@ pub struct Cia402Rules {
     pub stops_end_switched_off: bool,
     /// Switched On needs the main power.
     pub switch_on_requires_main_power: bool,
+    /// Profile position: controlword bit 6 set = absolute.
+    pub pp_bit6_absolute: bool,
+    /// Profile position: controlword bit 9 is honoured.
+    pub pp_change_on_set_point: bool,
+}
+
+impl Default for Cia402Rules {
+    /// CiA402 as written.
+    fn default() -> Self {
+        Self {
+            enable_without_mode_error: None,
+            stops_end_switched_off: false,
+            switch_on_requires_main_power: false,
+            pp_bit6_absolute: false,
+            pp_change_on_set_point: true,
+        }
+    }
 }

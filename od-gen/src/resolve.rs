@@ -508,6 +508,8 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .transpose()?,
         stops_end_switched_off: f.cia402.stops_end_switched_off,
         switch_on_requires_main_power: f.cia402.switch_on_requires_main_power,
+        pp_bit6_absolute: f.cia402.pp_bit6_absolute,
+        pp_change_on_set_point: f.cia402.pp_change_on_set_point,
     };
     let mut profile = Profile {
         name: f.name.clone(),

@@ -1357,8 +1357,17 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false }"
+        "enable_without_mode_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true }"
     ));
+    // Profile position: CiA402's bit 6 and bit 9 unless the profile says otherwise.
+    let p = od_gen::parse(
+        &appended("[cia402]\npp_bit6_absolute = true\npp_change_on_set_point = false"),
+        "ok",
+    )
+    .unwrap();
+    assert!(p.cia402.pp_bit6_absolute && !p.cia402.pp_change_on_set_point);
+    assert!(od_gen::rust::generate(&[p])
+        .contains("pp_bit6_absolute: true, pp_change_on_set_point: false }"));
     let p = od_gen::parse(
         &appended("[cia402]\nswitch_on_requires_main_power = true"),
         "ok",

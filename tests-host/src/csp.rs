@@ -79,3 +79,53 @@ pub async fn hold_through(
     }
     (sw, states)
 }
+
+/// What the drive sent back in one [`phase_locked`] cycle, and the plant's true motion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// 6041h.
+    pub statusword: u16,
+    /// 6064h.
+    pub position: i32,
+    /// 6061h.
+    pub mode_display: i8,
+    /// The simulated motor's true speed, rpm.
+    pub rpm: f64,
+    /// The simulated motor's true angle, revolutions.
+    pub revolutions: f64,
+}
+
+/// One cycle with controlword `cw`, target position `target` and 6060h `mode` over the default
+/// mapping (6040h, 607Ah, 6060h / 6041h, 6064h, 6061h). The frame's wire time is part of the
+/// cycle, so the master stays in phase with the drive's free-run timer (a drifting master would
+/// now and then send nothing new in a cycle).
+pub async fn phase_locked(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &OpGroup,
+    cw: u16,
+    target: i32,
+    mode: i8,
+) -> Sample {
+    let sd = group.subdevice(md, 0).expect("drive");
+    {
+        let mut out = sd.outputs_raw_mut();
+        out[0..2].copy_from_slice(&cw.to_le_bytes());
+        out[2..6].copy_from_slice(&target.to_le_bytes());
+        out[6] = mode as u8;
+    }
+    let since = m.shared.clock().now();
+    group.tx_rx(md).await.expect("tx/rx");
+    let spent = m.shared.clock().now() - since;
+    m.shared.advance(CYCLE_NS.saturating_sub(spent));
+    let inp = sd.inputs_raw();
+    let segment = m.shared.segment();
+    let plant = &segment.drives()[0].servo.plant;
+    Sample {
+        statusword: u16::from_le_bytes([inp[0], inp[1]]),
+        position: i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
+        mode_display: inp[6] as i8,
+        rpm: plant.mech_speed_rad_s() / std::f64::consts::TAU * 60.0,
+        revolutions: plant.mech_angle_rad() / std::f64::consts::TAU,
+    }
+}

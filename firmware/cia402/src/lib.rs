@@ -9,6 +9,8 @@
 //! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
 //! | [`stop`] | stop reactions of the option codes 605Ah–605Eh and the deceleration ramp |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
+//! | [`profile_position`] | the set-point handshake of profile position (controlword bits 4, 5, 6, 9; statusword bit 12; the buffer) |
+//! | [`window`] | "inside a window for a time": target reached, speed zero |
 //! | [`units`] | conversions between object units (‰ of rated torque, 32-bit positions, µΩ, nH, g·mm²) and SI |
 //! | [`faults`] | the profile's error code for each internal fault |
 //!
@@ -20,5 +22,7 @@ pub mod device;
 pub mod faults;
 pub mod modes;
 pub mod pds;
+pub mod profile_position;
 pub mod stop;
 pub mod units;
+pub mod window;

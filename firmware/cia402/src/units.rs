@@ -28,6 +28,12 @@ pub fn torque_from_permille(permille: i16, rated_nm: f32) -> f32 {
     f32::from(permille) * PER_MILLE * rated_nm
 }
 
+/// A torque-like quantity in ‰ of the rated torque (e.g. the torque slope 6087h, ‰/s) in N·m
+/// (per the same time unit).
+pub fn torque_from_permille_f32(permille: f32, rated_nm: f32) -> f32 {
+    permille * PER_MILLE * rated_nm
+}
+
 /// A torque in N·m as ‰ of the rated torque (`as` saturates; NaN → 0).
 pub fn torque_to_permille(torque_nm: f32, rated_nm: f32) -> i16 {
     (torque_nm / rated_nm * PER_MILLE_INV) as i16

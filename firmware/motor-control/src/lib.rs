@@ -33,6 +33,7 @@
 //! | [`speed`], [`position`] | the speed and position loops |
 //! | [`interpolate`] | set-points between SYNC0 events at the control-loop rate |
 //! | [`ramp`] | the deceleration ramp of a stop |
+//! | [`trajectory`] | motion profiles of the profile modes at the bus-cycle rate: point-to-point moves, velocity ramps, slew limits |
 //! | [`handoff`] | lock-free set-point/feedback exchange between SYNC0 and the control interrupt |
 //! | [`protection`] | over-current, I²t, bus voltage, over-speed, encoder and temperature faults |
 //! | [`calibration`] | phase-current offsets, commutation-angle alignment |
@@ -57,6 +58,7 @@ pub mod ramp;
 pub mod servo;
 pub mod speed;
 pub mod svpwm;
+pub mod trajectory;
 pub mod velocity;
 
 /// Electrical angle: a fraction of one electrical turn; wraps at one turn.
