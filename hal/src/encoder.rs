@@ -25,6 +25,9 @@ pub trait Encoder {
     fn resolution(&self) -> u32;
     /// Multi-turn position in increments.
     fn position(&mut self) -> Result<i64, EncoderFault>;
-    /// Whether the index pulse was seen since the last call (incremental encoders).
-    fn take_index(&mut self) -> bool;
+    /// The position (increments, as [`Encoder::position`] counts them) of the last index pulse
+    /// since the previous call, `None` if none was seen: the counter value an incremental
+    /// interface captured on Z; an absolute encoder driver reports its single-turn zero crossing
+    /// (the once-per-revolution reference absolute servos offer for homing in its place).
+    fn take_index(&mut self) -> Option<i64>;
 }

@@ -228,7 +228,8 @@ pub struct SimEncoder {
     params: EncoderParams,
     extender: PositionExtender,
     position: Result<i64, EncoderFault>,
-    index: bool,
+    /// Position of the last index pulse not yet taken.
+    index: Option<i64>,
 }
 
 impl SimEncoder {
@@ -238,7 +239,7 @@ impl SimEncoder {
             params,
             extender: PositionExtender::default(),
             position: Err(EncoderFault::SignalLoss),
-            index: false,
+            index: None,
         }
     }
 
@@ -250,6 +251,7 @@ impl SimEncoder {
 
     /// Latches and decodes a sample's encoder reading.
     pub fn latch(&mut self, sample: &Sample) {
+        let previous = self.position;
         self.position = match (sample.encoder, self.params) {
             (
                 EncoderSample::Incremental {
@@ -259,9 +261,14 @@ impl SimEncoder {
                 },
                 _,
             ) => {
-                self.index |= index_count.is_some();
                 if signal_ok {
-                    Ok(self.extender.update(u64::from(count), 32))
+                    let position = self.extender.update(u64::from(count), 32);
+                    if let Some(at) = index_count {
+                        // The counter value captured on Z, extended like the count itself.
+                        let back = i64::from(at.wrapping_sub(count) as i32);
+                        self.index = Some(position + back);
+                    }
+                    Ok(position)
                 } else {
                     Err(EncoderFault::SignalLoss)
                 }
@@ -280,7 +287,17 @@ impl SimEncoder {
                         let raw = (u64::from(p.multi_turn) << single_turn_bits)
                             | u64::from(p.single_turn);
                         let bits = u32::from(single_turn_bits) + u32::from(multi_turn_bits);
-                        Ok(self.extender.update(raw, bits))
+                        let position = self.extender.update(raw, bits);
+                        if let Ok(before) = previous {
+                            // The single-turn zero crossed since the last frame serves as
+                            // the index.
+                            let turn = |x: i64| x >> single_turn_bits;
+                            if turn(before) != turn(position) {
+                                let crossed = turn(position.max(before)) << single_turn_bits;
+                                self.index = Some(crossed);
+                            }
+                        }
+                        Ok(position)
                     }
                     Err(SerialFrameError::Crc) => Err(EncoderFault::Crc),
                     Err(_) => Err(EncoderFault::SignalLoss),
@@ -302,8 +319,8 @@ impl Encoder for SimEncoder {
         self.position
     }
 
-    fn take_index(&mut self) -> bool {
-        core::mem::take(&mut self.index)
+    fn take_index(&mut self) -> Option<i64> {
+        self.index.take()
     }
 }
 
@@ -450,21 +467,40 @@ mod tests {
         assert_eq!(io.encoder.position(), Err(EncoderFault::SignalLoss));
         io.sample(&mut plant);
         assert_eq!(io.encoder.position(), Ok(0));
-        assert!(!io.encoder.take_index());
-        // Past the index at 0.5 rad.
+        assert_eq!(io.encoder.take_index(), None);
+        // Past the index at 0.5 rad: the counter value there, ⌊0.5 / 2π · 4000⌋ = 318.
         plant.set_driven_speed(Some(100.0));
         for _ in 0..400 {
             io.run_period(&mut plant);
             io.sample(&mut plant);
         }
-        assert!(io.encoder.take_index());
-        assert!(!io.encoder.take_index());
+        assert_eq!(io.encoder.take_index(), Some(318));
+        assert_eq!(io.encoder.take_index(), None);
         let expected = plant.mech_angle_rad() / core::f64::consts::TAU * 4_000.0;
         let position = io.encoder.position().expect("signal") as f64;
         assert!(
             (position - expected).abs() <= 2.0,
             "{position} vs {expected}"
         );
+    }
+
+    #[test]
+    fn absolute_encoder_reports_its_single_turn_zero_as_the_index() {
+        let cfg = PlantConfig::servo_400w(); // 20-bit single turn
+        let mut plant = Plant::new(cfg.clone()).expect("valid plant");
+        let mut io = AxisIo::new(&cfg);
+        io.sample(&mut plant);
+        // Forward past one revolution, then back past it.
+        for (speed, index) in [(300.0, 1 << 20), (-300.0, 1 << 20)] {
+            plant.set_driven_speed(Some(speed));
+            let mut seen = None;
+            for _ in 0..1_000 {
+                io.run_period(&mut plant);
+                io.sample(&mut plant);
+                seen = seen.or(io.encoder.take_index());
+            }
+            assert_eq!(seen, Some(index), "at {speed} rad/s");
+        }
     }
 
     #[test]

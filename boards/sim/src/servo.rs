@@ -16,8 +16,6 @@ use firmware::motor::axis::{
 };
 use firmware::motor::servo::{self, EncoderSpec, InverterSpec, MotorSpec, ServoSpec, SERVO_400W};
 use firmware::motor::Duties;
-use hal::encoder::Encoder;
-use hal::io::DigitalInputs;
 
 use crate::axis_io::AxisIo;
 use crate::plant::{EncoderParams, Plant, PlantConfig, PlantError};
@@ -93,21 +91,6 @@ pub enum ServoError {
     Axis(AxisConfigError),
 }
 
-/// What the board read from its inputs in a PWM period besides the firmware's [`Sample`]
-/// (through [`DigitalInputs`] and [`Encoder::take_index`]); not used by the motor control, kept
-/// for the application (digital inputs, homing).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct BoardInputs {
-    /// Positive limit switch actuated.
-    pub positive_limit: bool,
-    /// Negative limit switch actuated.
-    pub negative_limit: bool,
-    /// Home switch actuated.
-    pub home: bool,
-    /// The encoder's index pulse was seen since the previous period (incremental encoders).
-    pub index: bool,
-}
-
 /// One axis of the simulated board.
 pub struct SimServo {
     /// The motor, inverter and sensors.
@@ -119,7 +102,6 @@ pub struct SimServo {
     /// here each servo leaks one (a few hundred bytes per servo, for the life of the process).
     link: &'static AxisLink,
     io: AxisIo,
-    inputs: BoardInputs,
     last_sample: Option<Sample>,
     periods: u64,
 }
@@ -137,7 +119,6 @@ impl SimServo {
             // the simulated drive that owns this servo is driven from one thread at a time.
             link: Box::leak(Box::new(unsafe { AxisLink::new() })),
             io,
-            inputs: BoardInputs::default(),
             last_sample: None,
             periods: 0,
         })
@@ -215,11 +196,6 @@ impl SimServo {
         }
     }
 
-    /// The limit/home switches and the index as the board read them in the last period.
-    pub fn inputs(&self) -> BoardInputs {
-        self.inputs
-    }
-
     /// The board's axis hardware (the `hal` drivers between plant and firmware).
     pub fn io(&self) -> &AxisIo {
         &self.io
@@ -239,12 +215,6 @@ impl SimServo {
         );
         let next = self.axis.control_step(&sample, self.link);
         next.apply(&mut io.power);
-        self.inputs = BoardInputs {
-            positive_limit: io.inputs.positive_limit(),
-            negative_limit: io.inputs.negative_limit(),
-            home: io.inputs.home_switch(),
-            index: io.encoder.take_index(),
-        };
         io.run_period(&mut self.plant);
         self.last_sample = Some(sample);
         self.periods += 1;

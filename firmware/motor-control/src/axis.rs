@@ -24,6 +24,7 @@ use hal::io::DigitalInputs;
 use hal::power::{BusSense, CurrentSense, Inverter, PhaseCurrents};
 
 use super::calibration::{AlignStep, Alignment, AlignmentConfig, Commutation, OffsetCalibration};
+use super::capture::{Captures, Switches};
 use super::commissioning::{
     ElectricalIdentConfig, ElectricalIdentification, IdentCommand, IdentMeasurement,
     InertiaIdentConfig, InertiaIdentification, InertiaStep,
@@ -219,6 +220,8 @@ pub struct AxisFeedback {
     pub main_power: bool,
     /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
     pub stopping: bool,
+    /// Switch levels and the positions of their edges and of the index pulses.
+    pub captures: Captures,
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
@@ -267,6 +270,10 @@ pub struct Sample {
     pub motor_overtemp: bool,
     /// Multi-turn encoder position, increments.
     pub position: Result<i64, EncoderFault>,
+    /// Limit and home switches.
+    pub switches: Switches,
+    /// Position of an encoder index pulse since the last sample.
+    pub index: Option<i64>,
 }
 
 /// What the board applies during the next PWM period.
@@ -294,6 +301,12 @@ impl Sample {
             temperature: bus.temperature(),
             motor_overtemp: inputs.motor_over_temperature(),
             position: encoder.position(),
+            switches: Switches {
+                positive_limit: inputs.positive_limit(),
+                negative_limit: inputs.negative_limit(),
+                home: inputs.home_switch(),
+            },
+            index: encoder.take_index(),
         }
     }
 }
@@ -366,6 +379,11 @@ impl AxisLink {
                     main_power: false,
                     stopping: false,
                     current_limited: false,
+                    captures: Captures::initial(Switches {
+                        positive_limit: false,
+                        negative_limit: false,
+                        home: false,
+                    }),
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -423,6 +441,8 @@ pub struct Axis {
     /// Last good encoder position (held over a bad serial frame).
     position: i64,
     position_valid: bool,
+    /// Switch and index captures (`None` until the first sample set the levels).
+    captures: Option<Captures>,
     omega_e: f32,
     /// Bus voltage and its reciprocal, refreshed at the loop rate (the bus changes slowly; one
     /// division per loop tick instead of one per PWM period).
@@ -528,6 +548,7 @@ impl Axis {
             identified: None,
             position: 0,
             position_valid: false,
+            captures: None,
             omega_e: 0.0,
             vbus: MIN_BUS_VOLTAGE,
             inv_vbus: 1.0 / MIN_BUS_VOLTAGE,
@@ -802,6 +823,7 @@ impl Axis {
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),
             current_limited: self.state == AxisState::Running && self.current_limited,
+            captures: self.captures.unwrap_or_default(),
         });
     }
 
@@ -810,6 +832,10 @@ impl Axis {
         if let Ok(p) = sample.position {
             self.position = p;
             self.position_valid = true;
+        }
+        match self.captures.as_mut() {
+            Some(c) => c.update(sample.switches, sample.index, self.position),
+            None => self.captures = Some(Captures::initial(sample.switches)),
         }
     }
 
@@ -1204,8 +1230,8 @@ mod tests {
         fn position(&mut self) -> Result<i64, EncoderFault> {
             Err(EncoderFault::Crc)
         }
-        fn take_index(&mut self) -> bool {
-            false
+        fn take_index(&mut self) -> Option<i64> {
+            None
         }
     }
 
@@ -1259,6 +1285,8 @@ mod tests {
             temperature: 25.0,
             motor_overtemp: false,
             position: Ok(position),
+            switches: Switches::default(),
+            index: None,
         };
         for _ in 0..ticks {
             link.publish(command);
@@ -1312,6 +1340,8 @@ mod tests {
                 temperature: 31.0,
                 motor_overtemp: true,
                 position: Err(EncoderFault::Crc),
+                switches: Switches::default(),
+                index: None,
             }
         );
     }

@@ -36,6 +36,7 @@
 //! | [`trajectory`] | motion profiles of the profile modes at the bus-cycle rate: point-to-point moves, velocity ramps, slew limits |
 //! | [`handoff`] | lock-free set-point/feedback exchange between SYNC0 and the control interrupt |
 //! | [`protection`] | over-current, I²t, bus voltage, over-speed, encoder and temperature faults |
+//! | [`capture`] | positions latched at the edges of the limit and home switches and at the encoder index |
 //! | [`calibration`] | phase-current offsets, commutation-angle alignment |
 //! | [`commissioning`] | identification of R, L and inertia; gains from bandwidths |
 //! | [`axis`] | the whole control interrupt of one axis |
@@ -45,6 +46,7 @@
 
 pub mod axis;
 pub mod calibration;
+pub mod capture;
 pub mod commissioning;
 pub mod filters;
 pub mod foc;

@@ -15,6 +15,7 @@
 use core::hint::black_box;
 
 use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode, Output, Sample};
+use firmware::motor::capture::Switches;
 use firmware::motor::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
 use firmware::motor::math::{sin_cos, TAU};
 use firmware::motor::servo::{self, Tuning, SERVO_400W};
@@ -208,6 +209,12 @@ const SAMPLE: Sample = Sample {
     temperature: TEMPERATURE,
     motor_overtemp: false,
     position: Ok(POSITION),
+    switches: Switches {
+        positive_limit: false,
+        negative_limit: false,
+        home: false,
+    },
+    index: None,
 };
 
 /// An axis of the servo at `tuning`, brought to Running in CSP through its link, at rest on
