@@ -18,6 +18,7 @@
 
 use cia402::device::{Device, DeviceRules, Motion};
 use cia402::faults::FaultReport;
+use cia402::homing;
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
@@ -29,6 +30,7 @@ use crate::adjust::service::{Progress, Refusal};
 use crate::adjust::{Action, AdjustingService};
 use crate::motion::{self, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
+use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::trajectory::Limits;
 use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, MOTOR_FAULT_COUNT};
 
@@ -85,6 +87,10 @@ pub struct Drive {
     adjustment: Option<RunningAdjustment>,
     /// The set-point generators of the profile modes.
     profile_modes: ProfileModes,
+    /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
+    /// home position reads as the home offset 607Ch. Every position of the objects and of the
+    /// profile modes is a drive position; the axis works on encoder positions.
+    position_shift: i64,
 }
 
 impl Drive {
@@ -110,6 +116,7 @@ impl Drive {
             adjusting,
             adjustment: None,
             profile_modes: ProfileModes::new(),
+            position_shift: 0,
         }
     }
 
@@ -229,6 +236,8 @@ impl Drive {
         let Some(mut port) = self.axis.take() else {
             return;
         };
+        let shift = self.position_shift;
+        let feedback = shifted(feedback, shift);
         let vars = self.vars;
         let link = port.link;
         let new_fault = if feedback.trips != port.trips_seen {
@@ -304,6 +313,15 @@ impl Drive {
                 (position_ratio, velocity_ratio),
                 rated_nm,
             );
+            let inputs = motion::Inputs {
+                homing_method: if mode == Mode::Homing {
+                    read_bytes::<1>(ram, vars.homing_method)
+                        .and_then(|[m]| self.rules.homing_reference(m as i8))
+                } else {
+                    None
+                },
+                ..inputs
+            };
             let out = self.profile_modes.step(
                 mode,
                 &inputs,
@@ -313,6 +331,16 @@ impl Drive {
             );
             set_point = out.set_point;
             mode_statusword = out.statusword;
+            if let Some(home) = out.home_found {
+                // The home position reads as the home offset from now on.
+                let offset = read_i32(ram, vars.home_offset).unwrap_or(0);
+                let delta = position_ratio
+                    .position_to_internal(i64::from(offset))
+                    .saturating_sub(home);
+                self.position_shift = self.position_shift.saturating_add(delta);
+                self.profile_modes.rebase(delta);
+                set_point.position = set_point.position.saturating_add(delta);
+            }
         }
         let loop_mode = match set_point.control {
             modes::Loop::Position => ControlMode::Position,
@@ -346,7 +374,7 @@ impl Drive {
             identify: identifying && motion == Motion::Run,
             calibrate_offsets: self.calibrating_offsets(),
             mode: control_mode,
-            position: set_point.position,
+            position: set_point.position.saturating_sub(self.position_shift),
             velocity: set_point.velocity,
             torque: set_point.torque,
             deceleration,
@@ -653,7 +681,47 @@ fn profile_inputs(
         ),
         actual_position: feedback.position,
         actual_velocity: feedback.velocity,
+        // The drive sets the method in the cycle (it needs the profile's rules).
+        homing_method: None,
+        homing_speeds: (
+            velocity(vars.homing_speed_switch, 0.0),
+            velocity(vars.homing_speed_zero, 0.0),
+            velocity(vars.homing_acceleration, 0.0),
+        ),
+        homing_signals: homing_signals(&feedback.captures),
     }
+}
+
+/// The axis' switch and index captures as homing sees them.
+fn homing_signals(c: &Captures) -> homing::Signals {
+    let edges = |l: Latch| homing::Edges {
+        count: l.count,
+        position: l.position,
+    };
+    let switch = |s: SwitchCapture| homing::SwitchSignal {
+        level: s.level,
+        rising: edges(s.rising),
+        falling: edges(s.falling),
+    };
+    homing::Signals {
+        negative_limit: switch(c.negative_limit),
+        positive_limit: switch(c.positive_limit),
+        home: switch(c.home),
+        index: edges(c.index),
+    }
+}
+
+/// The axis' `feedback` in drive positions (`shift` added to every position).
+fn shifted(mut feedback: AxisFeedback, shift: i64) -> AxisFeedback {
+    let to_drive = |p: i64| p.saturating_add(shift);
+    feedback.position = to_drive(feedback.position);
+    let c = &mut feedback.captures;
+    for s in [&mut c.negative_limit, &mut c.positive_limit, &mut c.home] {
+        s.rising.position = to_drive(s.rising.position);
+        s.falling.position = to_drive(s.falling.position);
+    }
+    c.index.position = to_drive(c.index.position);
+    feedback
 }
 
 /// Hands the commissioned motor data (stored parameters, identification results, SDO writes)

@@ -2,9 +2,10 @@
 //!
 //! | mode | the master writes | the drive generates | statusword |
 //! |---|---|---|---|
-//! | profile position (1) | 607Ah, 6081h, 6083h, 6084h, bits 4/5/6/9 | a trapezoidal move per set-point ([`motor::trajectory`]) | 10 target reached (6067h/6068h), 12 set-point acknowledge |
+//! | profile position (1) | 607Ah, 6081h, 6083h, 6084h, bits 4/5/6/9 | a trapezoidal move per set-point ([`crate::motor::trajectory`]) | 10 target reached (6067h/6068h), 12 set-point acknowledge |
 //! | profile velocity (3) | 60FFh, 6083h, 6084h | a velocity ramp | 10 target reached (606Dh/606Eh), 12 speed zero (606Fh/6070h) |
 //! | profile torque (4) | 6071h, 6087h | a torque ramp at the torque slope | 10 target reached (the ramp has arrived) |
+//! | homing (6) | 6098h, 6099h, 609Ah, bit 4 | the search of [`cia402::homing`]: velocity ramps on 609Ah, the move to the home found | 10, 12 homing attained, 13 homing error |
 //!
 //! 607Fh limits the profile velocity and 60FFh. The set-point handshake is
 //! [`cia402::profile_position`]; the axis interpolates the generated positions between cycles
@@ -12,6 +13,7 @@
 //! off, the generator follows the actual values, so a move resumes from where the motor is;
 //! halt keeps the profile-position set-points, everything else drops them.
 
+use cia402::homing::{self, Demand, Homing};
 use cia402::modes::{Loop, Mode, SetPoint};
 use cia402::profile_position::{self, ProfilePosition};
 use cia402::units::Ratio;
@@ -24,8 +26,8 @@ use crate::motor::trajectory::{self, Limits, Trajectory};
 pub const TARGET_REACHED: u16 = 1 << 10;
 /// Statusword bit 12 in profile velocity: "speed" (1 = the speed is zero).
 pub const SPEED_ZERO: u16 = 1 << 12;
-/// The statusword bits the profile modes own (10 and 12).
-pub const MODE_BITS: u16 = TARGET_REACHED | SPEED_ZERO;
+/// The statusword bits the profile modes own (10, 12 and, in homing, 13).
+pub const MODE_BITS: u16 = TARGET_REACHED | SPEED_ZERO | homing::HOMING_ERROR;
 
 /// What the drive read from the objects this cycle, in axis units (increments, increments/s,
 /// N·m) except where noted.
@@ -62,6 +64,12 @@ pub struct Inputs {
     pub actual_position: i64,
     /// Increments/s.
     pub actual_velocity: f32,
+    /// Homing: what 6098h looks for (`None`: a method the profile does not run).
+    pub homing_method: Option<homing::Reference>,
+    /// Homing: 6099h:01 (search for switch), 6099h:02 (search for zero), 609Ah.
+    pub homing_speeds: (f32, f32, f32),
+    /// Homing: the switches and index pulses (drive positions).
+    pub homing_signals: homing::Signals,
 }
 
 /// The set-point of a profile mode and the statusword bits it sets.
@@ -71,6 +79,8 @@ pub struct Output {
     pub set_point: SetPoint,
     /// Statusword bits 10 and 12 (within [`MODE_BITS`]).
     pub statusword: u16,
+    /// Homing found this home position (drive position) in this cycle.
+    pub home_found: Option<i64>,
 }
 
 /// The generator state of the profile modes.
@@ -83,13 +93,14 @@ pub struct ProfileModes {
     active: Option<Mode>,
     target_window: WindowTimer,
     speed_zero: WindowTimer,
+    homing: Homing,
 }
 
 /// Whether `mode` is one of the profile modes generated here.
 pub fn is_profile_mode(mode: Mode) -> bool {
     matches!(
         mode,
-        Mode::ProfilePosition | Mode::ProfileVelocity | Mode::ProfileTorque
+        Mode::ProfilePosition | Mode::ProfileVelocity | Mode::ProfileTorque | Mode::Homing
     )
 }
 
@@ -103,7 +114,15 @@ impl ProfileModes {
             active: None,
             target_window: WindowTimer::new(),
             speed_zero: WindowTimer::new(),
+            homing: Homing::new(),
         }
+    }
+
+    /// The drive positions moved by `delta` (homing made the home read as the home offset):
+    /// the generator moves along, so the axis sees no step.
+    pub fn rebase(&mut self, delta: i64) {
+        let t = self.trajectory;
+        self.trajectory = Trajectory::at(t.position().saturating_add(delta), t.velocity());
     }
 
     /// The demand position and velocity (6062h, 606Bh) and torque (6074h in profile torque).
@@ -134,6 +153,9 @@ impl ProfileModes {
             if mode != Mode::ProfilePosition || !(inputs.running || inputs.halted) {
                 self.set_points.clear(held_user);
             }
+            if mode != Mode::Homing {
+                self.homing.leave();
+            }
         }
         self.active = inputs.running.then_some(mode);
         let acknowledge = if mode == Mode::ProfilePosition && (inputs.running || inputs.halted) {
@@ -147,15 +169,66 @@ impl ProfileModes {
         } else {
             0
         };
+        let mut home_found = None;
         let (set_point, statusword) = match mode {
             Mode::ProfileVelocity => self.velocity(inputs, dt_s),
             Mode::ProfileTorque => self.torque_ramp(inputs, dt_s),
+            Mode::Homing => {
+                let (set_point, statusword, found) = self.home(inputs, dt_s);
+                home_found = found;
+                // Homing reports "interrupted" and "error" also while halted.
+                return Output {
+                    set_point,
+                    statusword,
+                    home_found,
+                };
+            }
             _ => self.position(inputs, dt_s, acknowledge),
         };
         Output {
             set_point,
             statusword: if inputs.running { statusword } else { 0 },
+            home_found,
         }
+    }
+
+    /// Homing: the demand of the search.
+    fn home(&mut self, inputs: &Inputs, dt_s: f32) -> (SetPoint, u16, Option<i64>) {
+        let out = self.homing.step(&homing::Inputs {
+            controlword: inputs.controlword,
+            running: inputs.running,
+            method: inputs.homing_method,
+            signals: inputs.homing_signals,
+            demand_position: self.trajectory.position(),
+            demand_at_rest: self.trajectory.velocity() == 0.0,
+        });
+        let (switch_speed, zero_speed, acceleration) = inputs.homing_speeds;
+        let ramp = |velocity| Limits {
+            velocity,
+            acceleration,
+            deceleration: acceleration,
+        };
+        if inputs.running {
+            let t = &mut self.trajectory;
+            match out.demand {
+                Demand::Hold => {}
+                Demand::Search(d) => {
+                    t.run_at(f32::from(d) * switch_speed, ramp(switch_speed), dt_s)
+                }
+                Demand::Creep(d) => t.run_at(f32::from(d) * zero_speed, ramp(zero_speed), dt_s),
+                Demand::Stop => t.run_at(0.0, ramp(switch_speed), dt_s),
+                Demand::MoveTo(p) => {
+                    t.move_to(p, 0.0, ramp(zero_speed), dt_s);
+                }
+            }
+        }
+        let set_point = SetPoint {
+            control: Loop::Position,
+            position: self.trajectory.position(),
+            velocity: self.trajectory.velocity(),
+            torque: 0.0,
+        };
+        (set_point, out.statusword, out.home_found)
     }
 
     /// Profile position: the move of the current set-point.
@@ -301,6 +374,9 @@ mod tests {
             velocity_threshold: (50.0, 0),
             actual_position: 0,
             actual_velocity: 0.0,
+            homing_method: None,
+            homing_speeds: (0.0, 0.0, 0.0),
+            homing_signals: homing::Signals::default(),
         }
     }
 

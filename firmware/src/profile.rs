@@ -86,6 +86,16 @@ pub struct AppVars {
     pub velocity_demand_value: Option<u16>,
     /// 6074h torque demand (i16, ‰ of the rated torque).
     pub torque_demand: Option<u16>,
+    /// 6098h homing method (i8).
+    pub homing_method: Option<u16>,
+    /// 6099h:01 speed during search for switch (u32, velocity units).
+    pub homing_speed_switch: Option<u16>,
+    /// 6099h:02 speed during search for zero (u32, velocity units).
+    pub homing_speed_zero: Option<u16>,
+    /// 609Ah homing acceleration (u32, acceleration units).
+    pub homing_acceleration: Option<u16>,
+    /// 607Ch home offset (i32, position units).
+    pub home_offset: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -198,6 +208,11 @@ impl AppVars {
         position_demand_value: None,
         velocity_demand_value: None,
         torque_demand: None,
+        homing_method: None,
+        homing_speed_switch: None,
+        homing_speed_zero: None,
+        homing_acceleration: None,
+        home_offset: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
     };
@@ -241,9 +256,27 @@ pub struct Cia402Rules {
     /// Profile position: controlword bit 9 "change on set-point" is honoured (false: ignored,
     /// GHA-E and RSE).
     pub pp_change_on_set_point: bool,
+    /// The homing methods (6098h values) the drive runs, ascending.
+    pub homing_methods: &'static [i8],
+    /// `(vendor method, CiA402 method)`: vendor numbers that run a CiA402 method.
+    pub homing_method_aliases: &'static [(i8, i8)],
 }
 
 impl Cia402Rules {
+    /// What homing method 6098h = `method` looks for in this profile: `None` for a method the
+    /// profile does not run.
+    pub fn homing_reference(&self, method: i8) -> Option<cia402::homing::Reference> {
+        if self.homing_methods.binary_search(&method).is_err() {
+            return None;
+        }
+        let cia402_method = self
+            .homing_method_aliases
+            .iter()
+            .find(|(from, _)| *from == method)
+            .map_or(method, |&(_, to)| to);
+        cia402::homing::method(cia402_method)
+    }
+
     /// The profile-position rules of [`cia402::profile_position`].
     pub const fn profile_position(&self) -> cia402::profile_position::Rules {
         cia402::profile_position::Rules {
@@ -405,5 +438,41 @@ mod tests {
         ram[4] = 0;
         ram[5] = 0;
         assert_eq!(f.ratio(&ram, 0), Ratio::ONE);
+    }
+}
+
+#[cfg(test)]
+mod homing_rules {
+    use cia402::homing::{self, Reference};
+
+    use crate::profiles;
+
+    fn reference(profile: &str, method: i8) -> Option<Reference> {
+        let p = profiles::by_name(profile).expect("profile");
+        p.cia402.homing_reference(method)
+    }
+
+    #[test]
+    fn a_profile_runs_the_homing_methods_its_manual_lists() {
+        // The standard drive: every CiA402 method.
+        assert_eq!(reference("standard", 3), homing::method(3));
+        assert_eq!(reference("standard", 37), Some(Reference::Here));
+        assert_eq!(reference("standard", 0), None);
+        // Σ-V-SD §6.9: 3-6 and 19 are not supported, 7-14, 24, 28 are.
+        assert_eq!(reference("sigma-v-sd", 3), None);
+        assert_eq!(reference("sigma-v-sd", 19), None);
+        assert_eq!(reference("sigma-v-sd", 24), homing::method(24));
+        // RSE 7.11: no index-pulse methods.
+        assert_eq!(reference("rse", 1), None);
+        assert_eq!(reference("rse", 33), None);
+        assert_eq!(reference("rse", 21), homing::method(21));
+        // SDV3-E §7.6: 7 is "the same to way 3", 28 the same as 22; 36/37 (stopper) not run.
+        assert_eq!(reference("sdv3-e", 7), homing::method(3));
+        assert_eq!(reference("sdv3-e", 28), homing::method(22));
+        assert_eq!(reference("sdv3-e", 37), None);
+        assert_eq!(reference("sdv3-e", 35), Some(Reference::Here));
+        // GHA-E §5.4.3: 35 is the current position, 37 is not listed.
+        assert_eq!(reference("gha-e", 35), Some(Reference::Here));
+        assert_eq!(reference("gha-e", 37), None);
     }
 }

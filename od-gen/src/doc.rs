@@ -1050,6 +1050,8 @@ fn cia402_rules(out: &mut String, p: &Profile) {
         && !r.switch_on_requires_main_power
         && !r.pp_bit6_absolute
         && r.pp_change_on_set_point
+        && r.homing_methods == crate::model::CIA402_HOMING_METHODS
+        && r.homing_method_aliases.is_empty()
     {
         return;
     }
@@ -1072,6 +1074,17 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     }
     if !r.pp_change_on_set_point {
         out.push_str("- Profile position: controlword bit 9 (change on set-point) is not supported and ignored.\n");
+    }
+    if r.homing_methods != crate::model::CIA402_HOMING_METHODS {
+        let list: Vec<String> = r.homing_methods.iter().map(i8::to_string).collect();
+        let _ = writeln!(
+            out,
+            "- Homing methods (6098h): {}; any other starts homing with a homing error (statusword bit 13).",
+            list.join(", ")
+        );
+    }
+    for (from, to) in &r.homing_method_aliases {
+        let _ = writeln!(out, "- Homing method {from} runs CiA402 method {to}.");
     }
     out.push('\n');
 }

@@ -781,6 +781,8 @@ impl Default for Cia402File {
             switch_on_requires_main_power: false,
             pp_bit6_absolute: false,
             pp_change_on_set_point: true,
+            homing_methods: None,
+            homing_method_aliases: Vec::new(),
         }
     }
 }
@@ -999,6 +1001,12 @@ pub struct Cia402File {
     /// Profile position: controlword bit 9 "change on set-point" is supported (default true).
     #[serde(default = "yes")]
     pub pp_change_on_set_point: bool,
+    /// The homing methods (6098h values) the drive runs (default: every CiA402 method).
+    #[serde(default)]
+    pub homing_methods: Option<Vec<i8>>,
+    /// `[vendor method, CiA402 method]`: a vendor number that runs a CiA402 method.
+    #[serde(default)]
+    pub homing_method_aliases: Vec<[i8; 2]>,
 }
 
 fn yes() -> bool {

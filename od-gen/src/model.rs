@@ -424,11 +424,21 @@ pub enum Role {
     VelocityDemandValue,
     /// 6074h torque demand (INT, ‰ of the rated torque).
     TorqueDemand,
+    /// 6098h homing method (SINT).
+    HomingMethod,
+    /// 6099h:01 speed during search for switch (UDINT, velocity units).
+    HomingSpeedSwitch,
+    /// 6099h:02 speed during search for zero (UDINT, velocity units).
+    HomingSpeedZero,
+    /// 609Ah homing acceleration (UDINT, acceleration units).
+    HomingAcceleration,
+    /// 607Ch home offset (DINT, position units): the position value of the home position.
+    HomeOffset,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 36] = [
+    pub const ALL: [Role; 41] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -465,6 +475,11 @@ impl Role {
         Self::PositionDemandValue,
         Self::VelocityDemandValue,
         Self::TorqueDemand,
+        Self::HomingMethod,
+        Self::HomingSpeedSwitch,
+        Self::HomingSpeedZero,
+        Self::HomingAcceleration,
+        Self::HomeOffset,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -505,6 +520,11 @@ impl Role {
             Self::PositionDemandValue => "position_demand_value",
             Self::VelocityDemandValue => "velocity_demand_value",
             Self::TorqueDemand => "torque_demand",
+            Self::HomingMethod => "homing_method",
+            Self::HomingSpeedSwitch => "homing_speed_switch",
+            Self::HomingSpeedZero => "homing_speed_zero",
+            Self::HomingAcceleration => "homing_acceleration",
+            Self::HomeOffset => "home_offset",
         }
     }
     /// Parses the profile-file spelling.
@@ -527,13 +547,16 @@ impl Role {
     pub fn data_type(self) -> DataType {
         match self {
             Self::Controlword | Self::Statusword | Self::ErrorCode => DataType::Uint,
-            Self::ModesOfOperation | Self::ModesOfOperationDisplay => DataType::Sint,
+            Self::ModesOfOperation | Self::ModesOfOperationDisplay | Self::HomingMethod => {
+                DataType::Sint
+            }
             Self::TargetPosition
             | Self::PositionActualValue
             | Self::TargetVelocity
             | Self::VelocityActualValue
             | Self::PositionDemandValue
-            | Self::VelocityDemandValue => DataType::Dint,
+            | Self::VelocityDemandValue
+            | Self::HomeOffset => DataType::Dint,
             Self::TargetTorque | Self::TorqueActualValue | Self::TorqueDemand => DataType::Int,
             Self::PositionWindowTime
             | Self::VelocityWindow
@@ -551,7 +574,10 @@ impl Role {
             | Self::ProfileAcceleration
             | Self::MaxProfileVelocity
             | Self::TorqueSlope
-            | Self::PositionWindow => DataType::Udint,
+            | Self::PositionWindow
+            | Self::HomingSpeedSwitch
+            | Self::HomingSpeedZero
+            | Self::HomingAcceleration => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode
             | Self::DisableOperationOptionCode
@@ -1599,7 +1625,18 @@ pub struct Cia402Rules {
     pub pp_bit6_absolute: bool,
     /// Profile position: controlword bit 9 is honoured.
     pub pp_change_on_set_point: bool,
+    /// The homing methods the drive runs (6098h values), ascending.
+    pub homing_methods: Vec<i8>,
+    /// `(vendor method, CiA402 method)`: vendor numbers that run a CiA402 method.
+    pub homing_method_aliases: Vec<(i8, i8)>,
 }
+
+/// The homing methods CiA402 defines (IEC 61800-7-201; 35 is the older number of 37). The
+/// firmware's `cia402::homing::method` implements exactly these.
+pub const CIA402_HOMING_METHODS: [i8; 32] = [
+    1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28,
+    29, 30, 33, 34, 35, 37,
+];
 
 impl Default for Cia402Rules {
     /// CiA402 as written.
@@ -1610,6 +1647,8 @@ impl Default for Cia402Rules {
             switch_on_requires_main_power: false,
             pp_bit6_absolute: false,
             pp_change_on_set_point: true,
+            homing_methods: CIA402_HOMING_METHODS.to_vec(),
+            homing_method_aliases: Vec::new(),
         }
     }
 }

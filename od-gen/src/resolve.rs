@@ -510,6 +510,13 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         switch_on_requires_main_power: f.cia402.switch_on_requires_main_power,
         pp_bit6_absolute: f.cia402.pp_bit6_absolute,
         pp_change_on_set_point: f.cia402.pp_change_on_set_point,
+        homing_methods: homing_methods(&f.cia402)?,
+        homing_method_aliases: f
+            .cia402
+            .homing_method_aliases
+            .iter()
+            .map(|[from, to]| (*from, *to))
+            .collect(),
     };
     let mut profile = Profile {
         name: f.name.clone(),
@@ -1877,4 +1884,47 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         });
     }
     Ok(v)
+}
+
+/// `[cia402] homing_methods` and `homing_method_aliases`: every method listed is a CiA402
+/// method or an alias; an alias is a number CiA402 leaves free (or redefines) that runs a
+/// CiA402 method; no repeats. The list comes out ascending.
+fn homing_methods(c: &crate::file::Cia402File) -> Result<Vec<i8>, Fault> {
+    use crate::model::CIA402_HOMING_METHODS;
+    let mut aliases = Vec::new();
+    for [from, to] in &c.homing_method_aliases {
+        if !CIA402_HOMING_METHODS.contains(to) || aliases.contains(from) {
+            return Err(fault(
+                "cia402.homing_method_aliases",
+                Invalid::Value(format!(
+                    "[{from}, {to}]: the target must be a CiA402 homing method ({CIA402_HOMING_METHODS:?}) and each vendor number appear once"
+                )),
+            ));
+        }
+        aliases.push(*from);
+    }
+    let Some(list) = &c.homing_methods else {
+        return Ok(CIA402_HOMING_METHODS.to_vec());
+    };
+    let mut methods = list.clone();
+    methods.sort_unstable();
+    methods.dedup();
+    if methods.len() != list.len() {
+        return Err(fault(
+            "cia402.homing_methods",
+            Invalid::Value("a method is listed twice".into()),
+        ));
+    }
+    if let Some(m) = methods
+        .iter()
+        .find(|m| !CIA402_HOMING_METHODS.contains(m) && !aliases.contains(m))
+    {
+        return Err(fault(
+            "cia402.homing_methods",
+            Invalid::Value(format!(
+                "{m} is neither a CiA402 homing method ({CIA402_HOMING_METHODS:?}) nor in homing_method_aliases"
+            )),
+        ));
+    }
+    Ok(methods)
 }

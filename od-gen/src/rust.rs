@@ -498,7 +498,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?} }},",
             p.cia402
                 .enable_without_mode_error
                 .as_ref()
@@ -509,7 +509,9 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.stops_end_switched_off,
             p.cia402.switch_on_requires_main_power,
             p.cia402.pp_bit6_absolute,
-            p.cia402.pp_change_on_set_point
+            p.cia402.pp_change_on_set_point,
+            p.cia402.homing_methods,
+            p.cia402.homing_method_aliases
         );
     }
     let _ = writeln!(out, "    }};\n");

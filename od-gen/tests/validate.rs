@@ -1357,7 +1357,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true }"
+        "enable_without_mode_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[] }"
     ));
     // Profile position: CiA402's bit 6 and bit 9 unless the profile says otherwise.
     let p = od_gen::parse(
@@ -1367,7 +1367,24 @@ fn cia402_rules_are_resolved_and_checked() {
     .unwrap();
     assert!(p.cia402.pp_bit6_absolute && !p.cia402.pp_change_on_set_point);
     assert!(od_gen::rust::generate(&[p])
-        .contains("pp_bit6_absolute: true, pp_change_on_set_point: false }"));
+        .contains("pp_bit6_absolute: true, pp_change_on_set_point: false, homing_methods"));
+    // Homing methods: CiA402 methods or aliases, each once; the list comes out sorted.
+    let p = od_gen::parse(
+        &appended("[cia402]\nhoming_methods = [35, 1, 36]\nhoming_method_aliases = [[36, 19]]"),
+        "ok",
+    )
+    .unwrap();
+    assert_eq!(p.cia402.homing_methods, [1, 35, 36]);
+    assert_eq!(p.cia402.homing_method_aliases, [(36, 19)]);
+    for bad in [
+        "homing_methods = [36]",
+        "homing_methods = [1, 1]",
+        "homing_method_aliases = [[40, 15]]",
+        "homing_method_aliases = [[40, 1], [40, 2]]",
+    ] {
+        let (key, _) = invalid(&appended(&format!("[cia402]\n{bad}")));
+        assert!(key.starts_with("cia402.homing_method"), "{bad}: {key}");
+    }
     let p = od_gen::parse(
         &appended("[cia402]\nswitch_on_requires_main_power = true"),
         "ok",

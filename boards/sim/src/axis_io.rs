@@ -511,6 +511,7 @@ mod tests {
             limit_neg_rad: Some(0.1),
             limit_pos_rad: Some(0.2),
             home_rad: Some(0.0),
+            home_end_rad: None,
         };
         let mut plant = Plant::new(cfg.clone()).expect("valid plant");
         plant.set_motor_overtemp_input(true);

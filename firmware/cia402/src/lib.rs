@@ -9,6 +9,7 @@
 //! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
 //! | [`stop`] | stop reactions of the option codes 605Ah–605Eh and the deceleration ramp |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
+//! | [`homing`] | homing mode: the search sequences of the CiA402 homing methods on latched switch edges and index pulses, homing statusword bits |
 //! | [`profile_position`] | the set-point handshake of profile position (controlword bits 4, 5, 6, 9; statusword bit 12; the buffer) |
 //! | [`window`] | "inside a window for a time": target reached, speed zero |
 //! | [`units`] | conversions between object units (‰ of rated torque, 32-bit positions, µΩ, nH, g·mm²) and SI |
@@ -20,6 +21,7 @@
 
 pub mod device;
 pub mod faults;
+pub mod homing;
 pub mod modes;
 pub mod pds;
 pub mod profile_position;

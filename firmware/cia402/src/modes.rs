@@ -11,6 +11,8 @@ pub const PP: i8 = 1;
 pub const PV: i8 = 3;
 /// 6060h value of profile torque.
 pub const PT: i8 = 4;
+/// 6060h value of homing.
+pub const HM: i8 = crate::homing::HOMING;
 /// 6060h value of cyclic synchronous position.
 pub const CSP: i8 = 8;
 /// 6060h value of cyclic synchronous velocity.
@@ -35,6 +37,8 @@ pub enum Mode {
     ProfileVelocity,
     /// Profile torque (4): the drive ramps to the target torque at the torque slope.
     ProfileTorque,
+    /// Homing (6): the drive searches the home position of the homing method 6098h.
+    Homing,
     /// Cyclic synchronous position (8).
     CyclicPosition,
     /// Cyclic synchronous velocity (9).
@@ -54,6 +58,7 @@ impl Mode {
             PP => Self::ProfilePosition,
             PV => Self::ProfileVelocity,
             PT => Self::ProfileTorque,
+            HM => Self::Homing,
             CSP => Self::CyclicPosition,
             CSV => Self::CyclicVelocity,
             CST => Self::CyclicTorque,
@@ -111,6 +116,7 @@ pub fn set_point(mode: Mode, targets: Targets, actual_position: i64) -> SetPoint
         Mode::ProfilePosition
         | Mode::ProfileVelocity
         | Mode::ProfileTorque
+        | Mode::Homing
         | Mode::Identification
         | Mode::Other(_) => (Loop::Position, actual_position),
     };
@@ -142,6 +148,7 @@ mod tests {
         assert_eq!(Mode::from_object(1), Mode::ProfilePosition);
         assert_eq!(Mode::from_object(3), Mode::ProfileVelocity);
         assert_eq!(Mode::from_object(4), Mode::ProfileTorque);
+        assert_eq!(Mode::from_object(6), Mode::Homing);
         assert_eq!(Mode::from_object(2), Mode::Other(2));
     }
 

@@ -36,8 +36,11 @@ pub struct SwitchParams {
     pub limit_neg_rad: Option<f64>,
     /// Positive limit switch, active for positions `>= limit_pos_rad`.
     pub limit_pos_rad: Option<f64>,
-    /// Home switch, active for positions `>= home_rad`.
+    /// Home switch, active for positions `>= home_rad` (up to `home_end_rad`).
     pub home_rad: Option<f64>,
+    /// The end of a home cam: with it, the home switch is active for
+    /// `home_rad <= θ <= home_end_rad` only.
+    pub home_end_rad: Option<f64>,
 }
 
 /// States of the three switches (`true` = actuated).
@@ -57,7 +60,8 @@ impl SwitchParams {
         SwitchStates {
             limit_neg: self.limit_neg_rad.is_some_and(|l| theta_rad <= l),
             limit_pos: self.limit_pos_rad.is_some_and(|l| theta_rad >= l),
-            home: self.home_rad.is_some_and(|l| theta_rad >= l),
+            home: self.home_rad.is_some_and(|l| theta_rad >= l)
+                && self.home_end_rad.is_none_or(|e| theta_rad <= e),
         }
     }
 }
@@ -221,6 +225,7 @@ mod tests {
             limit_neg_rad: Some(-2.0),
             limit_pos_rad: Some(2.0),
             home_rad: Some(0.5),
+            home_end_rad: None,
         };
         assert_eq!(
             sw.evaluate(0.0),
@@ -233,6 +238,13 @@ mod tests {
         assert!(sw.evaluate(-2.0).limit_neg);
         assert!(sw.evaluate(2.5).limit_pos && sw.evaluate(2.5).home);
         assert!(sw.evaluate(0.5).home);
+        // A home cam: active between its two edges only.
+        let cam = SwitchParams {
+            home_end_rad: Some(1.0),
+            ..sw
+        };
+        assert!(!cam.evaluate(0.4).home && cam.evaluate(0.7).home && cam.evaluate(1.0).home);
+        assert!(!cam.evaluate(1.1).home);
         assert_eq!(
             SwitchParams::default().evaluate(1e9),
             SwitchStates::default()

@@ -726,6 +726,11 @@ impl Plant {
         }
     }
 
+    /// Places the limit and home switches (the machine around the motor).
+    pub fn set_switches(&mut self, switches: SwitchParams) {
+        self.cfg.switches = switches;
+    }
+
     /// Moves the rotor to `theta_rad` (mechanical, multi-turn) at rest, e.g. to start a test
     /// at a given position. The encoders read the new position as if it had always been there
     /// (no index latch, no history). Non-finite values are ignored.

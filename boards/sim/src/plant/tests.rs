@@ -618,6 +618,7 @@ fn switches_follow_the_true_angle() {
         limit_neg_rad: Some(-1.0),
         limit_pos_rad: Some(1.0),
         home_rad: Some(0.2),
+        home_end_rad: None,
     };
     let mut p = plant(c);
     let s = p.sample();
