@@ -313,14 +313,17 @@ impl Drive {
                 (position_ratio, velocity_ratio),
                 rated_nm,
             );
-            let inputs = motion::Inputs {
-                homing_method: if mode == Mode::Homing {
-                    read_bytes::<1>(ram, vars.homing_method)
-                        .and_then(|[m]| self.rules.homing_reference(m as i8))
-                } else {
-                    None
-                },
-                ..inputs
+            let inputs = if mode == Mode::Homing {
+                // Read only where needed: a seqlock read of the captures.
+                let captures = shifted_captures(link.captures(), self.position_shift);
+                motion::Inputs {
+                    homing_method: read_bytes::<1>(ram, vars.homing_method)
+                        .and_then(|[m]| self.rules.homing_reference(m as i8)),
+                    homing_signals: homing_signals(&captures),
+                    ..inputs
+                }
+            } else {
+                inputs
             };
             let out = self.profile_modes.step(
                 mode,
@@ -688,7 +691,7 @@ fn profile_inputs(
             velocity(vars.homing_speed_zero, 0.0),
             velocity(vars.homing_acceleration, 0.0),
         ),
-        homing_signals: homing_signals(&feedback.captures),
+        homing_signals: homing::Signals::default(),
     }
 }
 
@@ -711,17 +714,21 @@ fn homing_signals(c: &Captures) -> homing::Signals {
     }
 }
 
-/// The axis' `feedback` in drive positions (`shift` added to every position).
+/// The axis' `feedback` in drive positions (`shift` added).
 fn shifted(mut feedback: AxisFeedback, shift: i64) -> AxisFeedback {
+    feedback.position = feedback.position.saturating_add(shift);
+    feedback
+}
+
+/// The axis' `captures` in drive positions (`shift` added to every position).
+fn shifted_captures(mut c: Captures, shift: i64) -> Captures {
     let to_drive = |p: i64| p.saturating_add(shift);
-    feedback.position = to_drive(feedback.position);
-    let c = &mut feedback.captures;
     for s in [&mut c.negative_limit, &mut c.positive_limit, &mut c.home] {
         s.rising.position = to_drive(s.rising.position);
         s.falling.position = to_drive(s.falling.position);
     }
     c.index.position = to_drive(c.index.position);
-    feedback
+    c
 }
 
 /// Hands the commissioned motor data (stored parameters, identification results, SDO writes)

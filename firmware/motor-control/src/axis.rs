@@ -220,8 +220,6 @@ pub struct AxisFeedback {
     pub main_power: bool,
     /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
     pub stopping: bool,
-    /// Switch levels and the positions of their edges and of the index pulses.
-    pub captures: Captures,
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
@@ -336,6 +334,8 @@ pub struct AxisLink {
     feedback: FeedbackHandoff<AxisFeedback>,
     /// Motor parameters, written rarely (after commissioning, after loading parameters).
     model: SetpointHandoff<MotorModel>,
+    /// Switch edges and index pulses, written when one happened.
+    captures: FeedbackHandoff<Captures>,
 }
 
 impl AxisLink {
@@ -379,11 +379,6 @@ impl AxisLink {
                     main_power: false,
                     stopping: false,
                     current_limited: false,
-                    captures: Captures::initial(Switches {
-                        positive_limit: false,
-                        negative_limit: false,
-                        home: false,
-                    }),
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -394,6 +389,14 @@ impl AxisLink {
                     lq_h: 0.0,
                     inertia_kgm2: 0.0,
                 })
+            },
+            // SAFETY: as above (written by the control interrupt only).
+            captures: unsafe {
+                FeedbackHandoff::new(Captures::initial(Switches {
+                    positive_limit: false,
+                    negative_limit: false,
+                    home: false,
+                }))
             },
         }
     }
@@ -412,6 +415,11 @@ impl AxisLink {
     /// SYNC0 side: the latest feedback.
     pub fn feedback(&self) -> AxisFeedback {
         self.feedback.read().0
+    }
+
+    /// SYNC0 side: the latest switch levels and edge/index captures.
+    pub fn captures(&self) -> Captures {
+        self.captures.read().0
     }
 }
 
@@ -441,8 +449,12 @@ pub struct Axis {
     /// Last good encoder position (held over a bad serial frame).
     position: i64,
     position_valid: bool,
-    /// Switch and index captures (`None` until the first sample set the levels).
-    captures: Option<Captures>,
+    /// Switch and index captures.
+    captures: Captures,
+    /// The captures changed since they were last published (the first sample sets the levels).
+    captures_changed: bool,
+    /// A sample has set the switch levels.
+    captures_started: bool,
     omega_e: f32,
     /// Bus voltage and its reciprocal, refreshed at the loop rate (the bus changes slowly; one
     /// division per loop tick instead of one per PWM period).
@@ -548,7 +560,13 @@ impl Axis {
             identified: None,
             position: 0,
             position_valid: false,
-            captures: None,
+            captures: Captures::initial(Switches {
+                positive_limit: false,
+                negative_limit: false,
+                home: false,
+            }),
+            captures_changed: false,
+            captures_started: false,
             omega_e: 0.0,
             vbus: MIN_BUS_VOLTAGE,
             inv_vbus: 1.0 / MIN_BUS_VOLTAGE,
@@ -807,7 +825,7 @@ impl Axis {
         Output::OFF
     }
 
-    fn publish(&self, link: &AxisLink) {
+    fn publish(&mut self, link: &AxisLink) {
         link.feedback.write(AxisFeedback {
             state: self.state,
             fault: self.fault,
@@ -823,8 +841,12 @@ impl Axis {
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),
             current_limited: self.state == AxisState::Running && self.current_limited,
-            captures: self.captures.unwrap_or_default(),
         });
+        if self.captures_changed {
+            // Edges are rare: the captures go out only when one happened.
+            link.captures.write(self.captures);
+            self.captures_changed = false;
+        }
     }
 
     fn read_encoder(&mut self, sample: &Sample) {
@@ -833,9 +855,14 @@ impl Axis {
             self.position = p;
             self.position_valid = true;
         }
-        match self.captures.as_mut() {
-            Some(c) => c.update(sample.switches, sample.index, self.position),
-            None => self.captures = Some(Captures::initial(sample.switches)),
+        if self.captures_started {
+            self.captures_changed |=
+                self.captures
+                    .update(sample.switches, sample.index, self.position);
+        } else {
+            self.captures = Captures::initial(sample.switches);
+            self.captures_started = true;
+            self.captures_changed = true;
         }
     }
 

@@ -62,8 +62,9 @@ impl SwitchCapture {
         }
     }
 
-    fn update(&mut self, level: bool, position: i64) {
-        if level != self.level {
+    fn update(&mut self, level: bool, position: i64) -> bool {
+        let changed = level != self.level;
+        if changed {
             if level {
                 self.rising.take(position);
             } else {
@@ -71,6 +72,7 @@ impl SwitchCapture {
             }
             self.level = level;
         }
+        changed
     }
 
     /// The latch of the edge that goes to `level`.
@@ -98,16 +100,21 @@ pub struct Captures {
 
 impl Captures {
     /// One sample: the switch levels at `position`, and the index position if one was seen.
-    /// The first sample after power-on sets the levels without counting an edge.
-    pub fn update(&mut self, switches: Switches, index: Option<i64>, position: i64) {
-        self.positive_limit
+    /// Returns whether anything was latched. (The first sample after power-on sets the levels
+    /// with [`Self::initial`], counting no edge.)
+    pub fn update(&mut self, switches: Switches, index: Option<i64>, position: i64) -> bool {
+        let mut changed = self
+            .positive_limit
             .update(switches.positive_limit, position);
-        self.negative_limit
+        changed |= self
+            .negative_limit
             .update(switches.negative_limit, position);
-        self.home.update(switches.home, position);
+        changed |= self.home.update(switches.home, position);
         if let Some(at) = index {
             self.index.take(at);
+            changed = true;
         }
+        changed
     }
 
     /// The captures of a power-on with the switches at `switches`: levels set, no edges.
@@ -135,10 +142,10 @@ mod tests {
             home: on,
             ..Switches::default()
         };
-        c.update(home(false), None, 10);
+        assert!(!c.update(home(false), None, 10));
         assert_eq!(c.home.rising.count, 0);
-        c.update(home(true), None, 20);
-        c.update(home(true), None, 30);
+        assert!(c.update(home(true), None, 20));
+        assert!(!c.update(home(true), None, 30));
         assert_eq!(
             c.home.rising,
             Latch {
