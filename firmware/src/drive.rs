@@ -22,6 +22,7 @@ use cia402::homing;
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
+use cia402::touch_probe::{self, Bit7, TouchProbes};
 use cia402::units;
 use ethercat_slave::od::ErrorReport;
 use ethercat_slave::slave::{AppEvent, Application};
@@ -87,6 +88,8 @@ pub struct Drive {
     adjustment: Option<RunningAdjustment>,
     /// The set-point generators of the profile modes.
     profile_modes: ProfileModes,
+    /// The touch probes (60B8h–60BDh, 60D5h–60D8h).
+    touch_probes: TouchProbes,
     /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
     /// home position reads as the home offset 607Ch. Every position of the objects and of the
     /// profile modes is a drive position; the axis works on encoder positions.
@@ -116,6 +119,7 @@ impl Drive {
             adjusting,
             adjustment: None,
             profile_modes: ProfileModes::new(),
+            touch_probes: TouchProbes::new(),
             position_shift: 0,
         }
     }
@@ -392,6 +396,7 @@ impl Drive {
                 write_u16(ram, vars.statusword, sw | mode_statusword);
             }
         }
+        self.touch_probe(ram, link, position_ratio);
         // Demand values: what the axis is asked for this cycle.
         write_bytes(
             ram,
@@ -431,6 +436,51 @@ impl Drive {
             units::torque_to_permille(feedback.torque, rated_nm).to_le_bytes(),
         );
         self.axis = Some(port);
+    }
+
+    /// The touch probes: 60B8h in, 60B9h, the positions 60BAh–60BDh (user units) and the
+    /// counters 60D5h–60D8h out. The axis' captures are read only while a probe is in use (or
+    /// the profile shows the input level in 60B9h).
+    fn touch_probe(&mut self, ram: &mut [u8], link: &AxisLink, ratio: units::Ratio) {
+        let vars = self.vars;
+        let Some(function) = read_u16(ram, vars.touch_probe_function) else {
+            return;
+        };
+        let rules = &self.rules.touch_probe;
+        if function == 0 && !self.touch_probes.enabled() && rules.bit7 != Bit7::InputLevel {
+            return;
+        }
+        let c = shifted_captures(link.captures(), self.position_shift);
+        let signals = homing_signals(&c);
+        let [p1, p2] = c.probes.map(switch_signal);
+        let out = self.touch_probes.step(
+            &touch_probe::Inputs {
+                function,
+                probes: [p1, p2],
+                index: signals.index,
+                homing: self.profile_modes.homing_running(),
+            },
+            rules,
+        );
+        write_u16(ram, vars.touch_probe_status, out.status);
+        let positions = [
+            vars.touch_probe_1_positive,
+            vars.touch_probe_1_negative,
+            vars.touch_probe_2_positive,
+            vars.touch_probe_2_negative,
+        ];
+        for (at, value) in positions.into_iter().zip(out.values) {
+            write_bytes(ram, at, units::actual_position(value, ratio).to_le_bytes());
+        }
+        let counters = [
+            vars.touch_probe_1_positive_count,
+            vars.touch_probe_1_negative_count,
+            vars.touch_probe_2_positive_count,
+            vars.touch_probe_2_negative_count,
+        ];
+        for (at, count) in counters.into_iter().zip(out.counters) {
+            write_u16(ram, at, count);
+        }
     }
 
     /// Puts the outputs the master drives into their safe state (on leaving OP, on a watchdog).
@@ -697,20 +747,28 @@ fn profile_inputs(
 
 /// The axis' switch and index captures as homing sees them.
 fn homing_signals(c: &Captures) -> homing::Signals {
-    let edges = |l: Latch| homing::Edges {
+    homing::Signals {
+        negative_limit: switch_signal(c.negative_limit),
+        positive_limit: switch_signal(c.positive_limit),
+        home: switch_signal(c.home),
+        index: edges(c.index),
+    }
+}
+
+/// A latch of the axis as CiA402 sees it.
+fn edges(l: Latch) -> homing::Edges {
+    homing::Edges {
         count: l.count,
         position: l.position,
-    };
-    let switch = |s: SwitchCapture| homing::SwitchSignal {
+    }
+}
+
+/// A switch capture of the axis as CiA402 sees it.
+fn switch_signal(s: SwitchCapture) -> homing::SwitchSignal {
+    homing::SwitchSignal {
         level: s.level,
         rising: edges(s.rising),
         falling: edges(s.falling),
-    };
-    homing::Signals {
-        negative_limit: switch(c.negative_limit),
-        positive_limit: switch(c.positive_limit),
-        home: switch(c.home),
-        index: edges(c.index),
     }
 }
 
@@ -723,7 +781,14 @@ fn shifted(mut feedback: AxisFeedback, shift: i64) -> AxisFeedback {
 /// The axis' `captures` in drive positions (`shift` added to every position).
 fn shifted_captures(mut c: Captures, shift: i64) -> Captures {
     let to_drive = |p: i64| p.saturating_add(shift);
-    for s in [&mut c.negative_limit, &mut c.positive_limit, &mut c.home] {
+    let [p1, p2] = &mut c.probes;
+    for s in [
+        &mut c.negative_limit,
+        &mut c.positive_limit,
+        &mut c.home,
+        p1,
+        p2,
+    ] {
         s.rising.position = to_drive(s.rising.position);
         s.falling.position = to_drive(s.falling.position);
     }

@@ -125,6 +125,11 @@ impl ProfileModes {
         self.trajectory = Trajectory::at(t.position().saturating_add(delta), t.velocity());
     }
 
+    /// Whether a homing run is under way.
+    pub fn homing_running(&self) -> bool {
+        self.homing.running()
+    }
+
     /// The demand position and velocity (6062h, 606Bh) and torque (6074h in profile torque).
     pub fn demand(&self) -> (i64, f32, f32) {
         (

@@ -96,6 +96,26 @@ pub struct AppVars {
     pub homing_acceleration: Option<u16>,
     /// 607Ch home offset (i32, position units).
     pub home_offset: Option<u16>,
+    /// 60B8h touch probe function (u16).
+    pub touch_probe_function: Option<u16>,
+    /// 60B9h touch probe status (u16).
+    pub touch_probe_status: Option<u16>,
+    /// 60BAh touch probe 1 positive edge position (i32, position units).
+    pub touch_probe_1_positive: Option<u16>,
+    /// 60BBh touch probe 1 negative edge position (i32, position units).
+    pub touch_probe_1_negative: Option<u16>,
+    /// 60BCh touch probe 2 positive edge position (i32, position units).
+    pub touch_probe_2_positive: Option<u16>,
+    /// 60BDh touch probe 2 negative edge position (i32, position units).
+    pub touch_probe_2_negative: Option<u16>,
+    /// 60D5h touch probe 1 positive edge counter (u16).
+    pub touch_probe_1_positive_count: Option<u16>,
+    /// 60D6h touch probe 1 negative edge counter (u16).
+    pub touch_probe_1_negative_count: Option<u16>,
+    /// 60D7h touch probe 2 positive edge counter (u16).
+    pub touch_probe_2_positive_count: Option<u16>,
+    /// 60D8h touch probe 2 negative edge counter (u16).
+    pub touch_probe_2_negative_count: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -213,6 +233,16 @@ impl AppVars {
         homing_speed_zero: None,
         homing_acceleration: None,
         home_offset: None,
+        touch_probe_function: None,
+        touch_probe_status: None,
+        touch_probe_1_positive: None,
+        touch_probe_1_negative: None,
+        touch_probe_2_positive: None,
+        touch_probe_2_negative: None,
+        touch_probe_1_positive_count: None,
+        touch_probe_1_negative_count: None,
+        touch_probe_2_positive_count: None,
+        touch_probe_2_negative_count: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
     };
@@ -260,6 +290,8 @@ pub struct Cia402Rules {
     pub homing_methods: &'static [i8],
     /// `(vendor method, CiA402 method)`: vendor numbers that run a CiA402 method.
     pub homing_method_aliases: &'static [(i8, i8)],
+    /// The touch probe's deviations (60B9h bits 6/7, probe 1 during homing).
+    pub touch_probe: cia402::touch_probe::Rules,
 }
 
 impl Cia402Rules {

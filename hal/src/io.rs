@@ -16,6 +16,31 @@ pub trait DigitalInputs {
     fn home_switch(&mut self) -> bool;
     /// The motor's over-temperature input (thermal switch).
     fn motor_over_temperature(&mut self) -> bool;
+    /// Touch-probe input `probe` as captured in the last PWM period.
+    fn touch_probe(&mut self, probe: TouchProbe) -> ProbeCapture;
+}
+
+/// The two touch-probe inputs (CiA402 60B8h probe 1 and 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum TouchProbe {
+    /// Probe 1.
+    One,
+    /// Probe 2.
+    Two,
+}
+
+/// A touch-probe input as the board captured it in one PWM period.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ProbeCapture {
+    /// The input level at the sample.
+    pub active: bool,
+    /// When the input last changed since the previous sample, ns before the instant at which
+    /// this sample's encoder position was taken (negative: after it); from a timer input
+    /// capture or the ET1100 latch unit. `None`: no edge. Of two edges in one period only the
+    /// last is reported (the inputs' minimum pulse width exceeds a PWM period).
+    pub edge_ns_before_position: Option<i32>,
 }
 
 /// The EtherCAT RUN and ERR LEDs (ETG.1300). The firmware computes the blink pattern; the board

@@ -1052,6 +1052,10 @@ fn cia402_rules(out: &mut String, p: &Profile) {
         && r.pp_change_on_set_point
         && r.homing_methods == crate::model::CIA402_HOMING_METHODS
         && r.homing_method_aliases.is_empty()
+        && r.touch_probe_bit7 == crate::model::TouchProbeBit7::None
+        && !r.touch_probe_bit6_source
+        && !r.touch_probe1_off_while_homing
+        && !r.touch_probe2_off_while_homing
     {
         return;
     }
@@ -1085,6 +1089,25 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     }
     for (from, to) in &r.homing_method_aliases {
         let _ = writeln!(out, "- Homing method {from} runs CiA402 method {to}.");
+    }
+    match r.touch_probe_bit7 {
+        crate::model::TouchProbeBit7::None => {}
+        crate::model::TouchProbeBit7::ToggleOnStore => out
+            .push_str("- Touch probe status 60B9h bit 7 (15) toggles on every stored position.\n"),
+        crate::model::TouchProbeBit7::InputLevel => {
+            out.push_str("- Touch probe status 60B9h bit 7 (15) shows the probe input level.\n")
+        }
+    }
+    if r.touch_probe_bit6_source {
+        out.push_str(
+            "- Touch probe status 60B9h bit 6 (14) shows the trigger source (1 = index).\n",
+        );
+    }
+    if r.touch_probe1_off_while_homing {
+        out.push_str("- Touch probe 1 is switched off while homing runs.\n");
+    }
+    if r.touch_probe2_off_while_homing {
+        out.push_str("- Touch probe 2 is switched off while homing runs.\n");
     }
     out.push('\n');
 }

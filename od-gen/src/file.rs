@@ -783,6 +783,10 @@ impl Default for Cia402File {
             pp_change_on_set_point: true,
             homing_methods: None,
             homing_method_aliases: Vec::new(),
+            touch_probe_bit7: None,
+            touch_probe_bit6_source: false,
+            touch_probe1_off_while_homing: false,
+            touch_probe2_off_while_homing: false,
         }
     }
 }
@@ -1007,6 +1011,19 @@ pub struct Cia402File {
     /// `[vendor method, CiA402 method]`: a vendor number that runs a CiA402 method.
     #[serde(default)]
     pub homing_method_aliases: Vec<[i8; 2]>,
+    /// What 60B9h bit 7 (15) shows: "none" (default), "toggle" (on every stored position) or
+    /// "level" (the probe input).
+    #[serde(default)]
+    pub touch_probe_bit7: Option<String>,
+    /// 60B9h bit 6 (14) shows the trigger source (1 = index).
+    #[serde(default)]
+    pub touch_probe_bit6_source: bool,
+    /// Touch probe 1 is switched off while homing runs.
+    #[serde(default)]
+    pub touch_probe1_off_while_homing: bool,
+    /// Touch probe 2 is switched off while homing runs.
+    #[serde(default)]
+    pub touch_probe2_off_while_homing: bool,
 }
 
 fn yes() -> bool {

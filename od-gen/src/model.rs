@@ -434,11 +434,31 @@ pub enum Role {
     HomingAcceleration,
     /// 607Ch home offset (DINT, position units): the position value of the home position.
     HomeOffset,
+    /// 60B8h touch probe function (UINT).
+    TouchProbeFunction,
+    /// 60B9h touch probe status (UINT).
+    TouchProbeStatus,
+    /// 60BAh touch probe 1 positive edge position (DINT, position units).
+    TouchProbe1Positive,
+    /// 60BBh touch probe 1 negative edge position (DINT, position units).
+    TouchProbe1Negative,
+    /// 60BCh touch probe 2 positive edge position (DINT, position units).
+    TouchProbe2Positive,
+    /// 60BDh touch probe 2 negative edge position (DINT, position units).
+    TouchProbe2Negative,
+    /// 60D5h touch probe 1 positive edge counter (UINT).
+    TouchProbe1PositiveCount,
+    /// 60D6h touch probe 1 negative edge counter (UINT).
+    TouchProbe1NegativeCount,
+    /// 60D7h touch probe 2 positive edge counter (UINT).
+    TouchProbe2PositiveCount,
+    /// 60D8h touch probe 2 negative edge counter (UINT).
+    TouchProbe2NegativeCount,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 41] = [
+    pub const ALL: [Role; 51] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -480,6 +500,16 @@ impl Role {
         Self::HomingSpeedZero,
         Self::HomingAcceleration,
         Self::HomeOffset,
+        Self::TouchProbeFunction,
+        Self::TouchProbeStatus,
+        Self::TouchProbe1Positive,
+        Self::TouchProbe1Negative,
+        Self::TouchProbe2Positive,
+        Self::TouchProbe2Negative,
+        Self::TouchProbe1PositiveCount,
+        Self::TouchProbe1NegativeCount,
+        Self::TouchProbe2PositiveCount,
+        Self::TouchProbe2NegativeCount,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -525,6 +555,16 @@ impl Role {
             Self::HomingSpeedZero => "homing_speed_zero",
             Self::HomingAcceleration => "homing_acceleration",
             Self::HomeOffset => "home_offset",
+            Self::TouchProbeFunction => "touch_probe_function",
+            Self::TouchProbeStatus => "touch_probe_status",
+            Self::TouchProbe1Positive => "touch_probe_1_positive",
+            Self::TouchProbe1Negative => "touch_probe_1_negative",
+            Self::TouchProbe2Positive => "touch_probe_2_positive",
+            Self::TouchProbe2Negative => "touch_probe_2_negative",
+            Self::TouchProbe1PositiveCount => "touch_probe_1_positive_count",
+            Self::TouchProbe1NegativeCount => "touch_probe_1_negative_count",
+            Self::TouchProbe2PositiveCount => "touch_probe_2_positive_count",
+            Self::TouchProbe2NegativeCount => "touch_probe_2_negative_count",
         }
     }
     /// Parses the profile-file spelling.
@@ -556,13 +596,23 @@ impl Role {
             | Self::VelocityActualValue
             | Self::PositionDemandValue
             | Self::VelocityDemandValue
-            | Self::HomeOffset => DataType::Dint,
+            | Self::HomeOffset
+            | Self::TouchProbe1Positive
+            | Self::TouchProbe1Negative
+            | Self::TouchProbe2Positive
+            | Self::TouchProbe2Negative => DataType::Dint,
             Self::TargetTorque | Self::TorqueActualValue | Self::TorqueDemand => DataType::Int,
             Self::PositionWindowTime
             | Self::VelocityWindow
             | Self::VelocityWindowTime
             | Self::VelocityThreshold
-            | Self::VelocityThresholdTime => DataType::Uint,
+            | Self::VelocityThresholdTime
+            | Self::TouchProbeFunction
+            | Self::TouchProbeStatus
+            | Self::TouchProbe1PositiveCount
+            | Self::TouchProbe1NegativeCount
+            | Self::TouchProbe2PositiveCount
+            | Self::TouchProbe2NegativeCount => DataType::Uint,
             Self::MotorRatedTorque
             | Self::MotorResistance
             | Self::MotorLd
@@ -1629,6 +1679,50 @@ pub struct Cia402Rules {
     pub homing_methods: Vec<i8>,
     /// `(vendor method, CiA402 method)`: vendor numbers that run a CiA402 method.
     pub homing_method_aliases: Vec<(i8, i8)>,
+    /// 60B9h bit 7 (15).
+    pub touch_probe_bit7: TouchProbeBit7,
+    /// 60B9h bit 6 (14) shows the trigger source.
+    pub touch_probe_bit6_source: bool,
+    /// Touch probe 1 is off while homing runs.
+    pub touch_probe1_off_while_homing: bool,
+    /// Touch probe 2 is off while homing runs.
+    pub touch_probe2_off_while_homing: bool,
+}
+
+/// What a profile shows in 60B9h bit 7 (15) (`firmware: cia402::touch_probe::Bit7`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TouchProbeBit7 {
+    /// Nothing.
+    #[default]
+    None,
+    /// Toggles on every stored position.
+    ToggleOnStore,
+    /// The probe input level.
+    InputLevel,
+}
+
+impl TouchProbeBit7 {
+    /// The profile-file spellings.
+    pub const NAMES: [&'static str; 3] = ["none", "toggle", "level"];
+
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "none" => Some(Self::None),
+            "toggle" => Some(Self::ToggleOnStore),
+            "level" => Some(Self::InputLevel),
+            _ => None,
+        }
+    }
+
+    /// The firmware's variant name.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::None => "None",
+            Self::ToggleOnStore => "ToggleOnStore",
+            Self::InputLevel => "InputLevel",
+        }
+    }
 }
 
 /// The homing methods CiA402 defines (IEC 61800-7-201; 35 is the older number of 37). The
@@ -1649,6 +1743,10 @@ impl Default for Cia402Rules {
             pp_change_on_set_point: true,
             homing_methods: CIA402_HOMING_METHODS.to_vec(),
             homing_method_aliases: Vec::new(),
+            touch_probe_bit7: TouchProbeBit7::None,
+            touch_probe_bit6_source: false,
+            touch_probe1_off_while_homing: false,
+            touch_probe2_off_while_homing: false,
         }
     }
 }

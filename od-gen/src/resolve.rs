@@ -517,6 +517,21 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .iter()
             .map(|[from, to]| (*from, *to))
             .collect(),
+        touch_probe_bit7: match f.cia402.touch_probe_bit7.as_deref() {
+            None => crate::model::TouchProbeBit7::None,
+            Some(s) => crate::model::TouchProbeBit7::parse(s).ok_or_else(|| {
+                fault(
+                    "cia402.touch_probe_bit7",
+                    Invalid::Value(format!(
+                        "`{s}` is not one of {:?}",
+                        crate::model::TouchProbeBit7::NAMES
+                    )),
+                )
+            })?,
+        },
+        touch_probe_bit6_source: f.cia402.touch_probe_bit6_source,
+        touch_probe1_off_while_homing: f.cia402.touch_probe1_off_while_homing,
+        touch_probe2_off_while_homing: f.cia402.touch_probe2_off_while_homing,
     };
     let mut profile = Profile {
         name: f.name.clone(),

@@ -498,7 +498,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, off_while_homing: [{}, {}] }} }},",
             p.cia402
                 .enable_without_mode_error
                 .as_ref()
@@ -511,7 +511,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.pp_bit6_absolute,
             p.cia402.pp_change_on_set_point,
             p.cia402.homing_methods,
-            p.cia402.homing_method_aliases
+            p.cia402.homing_method_aliases,
+            p.cia402.touch_probe_bit7.rust_variant(),
+            p.cia402.touch_probe_bit6_source,
+            p.cia402.touch_probe1_off_while_homing,
+            p.cia402.touch_probe2_off_while_homing
         );
     }
     let _ = writeln!(out, "    }};\n");

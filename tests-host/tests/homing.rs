@@ -43,6 +43,7 @@ impl Machine {
             limit_pos_rad: self.positive_limit.map(|r| r * TAU),
             home_rad: self.home.map(|(a, _)| a * TAU),
             home_end_rad: self.home.and_then(|(_, b)| b.map(|b| b * TAU)),
+            probes: [None; 2],
         }
     }
 }

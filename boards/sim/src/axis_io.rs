@@ -17,7 +17,7 @@
 //! stay unknown to the firmware, which calibrates them.
 
 use hal::encoder::{Encoder, EncoderFault};
-use hal::io::DigitalInputs;
+use hal::io::{DigitalInputs, ProbeCapture, TouchProbe};
 use hal::power::{BusSense, CurrentSense, Inverter, PhaseCurrents};
 
 use crate::plant::{
@@ -324,22 +324,40 @@ impl Encoder for SimEncoder {
     }
 }
 
-/// The digital inputs: limit and home switches and the motor's thermal switch, as latched.
+/// The digital inputs: limit and home switches, the motor's thermal switch and the touch-probe
+/// inputs with their edge times (a timer input capture on the board), as latched.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SimInputs {
     positive_limit: bool,
     negative_limit: bool,
     home: bool,
     motor_over_temperature: bool,
+    probes: [ProbeCapture; 2],
 }
 
 impl SimInputs {
-    /// Latches a sample's switch states.
-    pub fn latch(&mut self, sample: &Sample) {
+    /// Latches a sample's switch states; probe edges are timed relative to
+    /// `position_at_s`, the plant time at which the sample's encoder position was taken.
+    pub fn latch(&mut self, sample: &Sample, position_at_s: f64) {
         self.positive_limit = sample.limit_pos;
         self.negative_limit = sample.limit_neg;
         self.home = sample.home;
         self.motor_over_temperature = sample.motor_overtemp_input;
+        self.probes = sample.probes.map(|p| ProbeCapture {
+            active: p.active,
+            edge_ns_before_position: p.last_edge_s.map(|t| {
+                let ns = ((position_at_s - t) * 1e9).round();
+                ns.clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+            }),
+        });
+    }
+}
+
+/// How long before the sample instant the encoder's position is taken, s.
+fn encoder_sample_delay_s(encoder: &EncoderParams) -> f64 {
+    match *encoder {
+        EncoderParams::Absolute { sample_delay_s, .. } => sample_delay_s,
+        EncoderParams::Incremental { .. } => 0.0,
     }
 }
 
@@ -358,6 +376,14 @@ impl DigitalInputs for SimInputs {
 
     fn motor_over_temperature(&mut self) -> bool {
         self.motor_over_temperature
+    }
+
+    fn touch_probe(&mut self, probe: TouchProbe) -> ProbeCapture {
+        let [one, two] = self.probes;
+        match probe {
+            TouchProbe::One => one,
+            TouchProbe::Two => two,
+        }
     }
 }
 
@@ -401,7 +427,10 @@ impl AxisIo {
         self.currents.latch(&s);
         self.bus.latch(&s);
         self.encoder.latch(&s);
-        self.inputs.latch(&s);
+        // The probe edges are timed against the instant the encoder position was taken (the
+        // board's capture timer runs in step with its encoder sampling).
+        let position_at_s = plant.time_s() - encoder_sample_delay_s(&plant.config().encoder);
+        self.inputs.latch(&s, position_at_s);
     }
 
     /// Runs the present PWM period on `plant` ([`SimPowerStage::run_period`]).
@@ -512,6 +541,7 @@ mod tests {
             limit_pos_rad: Some(0.2),
             home_rad: Some(0.0),
             home_end_rad: None,
+            probes: [None; 2],
         };
         let mut plant = Plant::new(cfg.clone()).expect("valid plant");
         plant.set_motor_overtemp_input(true);

@@ -12,6 +12,7 @@
 //! | [`homing`] | homing mode: the search sequences of the CiA402 homing methods on latched switch edges and index pulses, homing statusword bits |
 //! | [`profile_position`] | the set-point handshake of profile position (controlword bits 4, 5, 6, 9; statusword bit 12; the buffer) |
 //! | [`window`] | "inside a window for a time": target reached, speed zero |
+//! | [`touch_probe`] | touch probe 60B8h/60B9h: single and continuous trigger, input or index source, latched positions 60BAh–60BDh and counters 60D5h–60D8h, the profile's status bits 6/7 |
 //! | [`units`] | conversions between object units (‰ of rated torque, 32-bit positions, µΩ, nH, g·mm²) and SI |
 //! | [`faults`] | the profile's error code for each internal fault |
 //!
@@ -26,5 +27,6 @@ pub mod modes;
 pub mod pds;
 pub mod profile_position;
 pub mod stop;
+pub mod touch_probe;
 pub mod units;
 pub mod window;

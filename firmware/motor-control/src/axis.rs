@@ -20,7 +20,7 @@
 //! worst period (the one running the position and speed loops); the current loop alone ≤ 250.
 
 use hal::encoder::{Encoder, EncoderFault};
-use hal::io::DigitalInputs;
+use hal::io::{DigitalInputs, ProbeCapture, TouchProbe};
 use hal::power::{BusSense, CurrentSense, Inverter, PhaseCurrents};
 
 use super::calibration::{AlignStep, Alignment, AlignmentConfig, Commutation, OffsetCalibration};
@@ -272,6 +272,8 @@ pub struct Sample {
     pub switches: Switches,
     /// Position of an encoder index pulse since the last sample.
     pub index: Option<i64>,
+    /// Touch-probe inputs 1 and 2 with their edge times.
+    pub probes: [ProbeCapture; 2],
 }
 
 /// What the board applies during the next PWM period.
@@ -305,6 +307,10 @@ impl Sample {
                 home: inputs.home_switch(),
             },
             index: encoder.take_index(),
+            probes: [
+                inputs.touch_probe(TouchProbe::One),
+                inputs.touch_probe(TouchProbe::Two),
+            ],
         }
     }
 }
@@ -455,6 +461,8 @@ pub struct Axis {
     captures_changed: bool,
     /// A sample has set the switch levels.
     captures_started: bool,
+    /// 1 / the PWM period in ns (touch-probe edge interpolation).
+    inv_period_ns: f32,
     omega_e: f32,
     /// Bus voltage and its reciprocal, refreshed at the loop rate (the bus changes slowly; one
     /// division per loop tick instead of one per PWM period).
@@ -567,6 +575,7 @@ impl Axis {
             }),
             captures_changed: false,
             captures_started: false,
+            inv_period_ns: cfg.pwm_hz * 1e-9,
             omega_e: 0.0,
             vbus: MIN_BUS_VOLTAGE,
             inv_vbus: 1.0 / MIN_BUS_VOLTAGE,
@@ -850,6 +859,7 @@ impl Axis {
     }
 
     fn read_encoder(&mut self, sample: &Sample) {
+        let previous = self.position;
         // A bad frame keeps the last good position (the protections count the errors).
         if let Ok(p) = sample.position {
             self.position = p;
@@ -859,8 +869,17 @@ impl Axis {
             self.captures_changed |=
                 self.captures
                     .update(sample.switches, sample.index, self.position);
+            self.captures_changed |= self.captures.update_probes(
+                sample.probes,
+                self.position,
+                previous,
+                self.inv_period_ns,
+            );
         } else {
             self.captures = Captures::initial(sample.switches);
+            for (capture, probe) in self.captures.probes.iter_mut().zip(sample.probes) {
+                capture.level = probe.active;
+            }
             self.captures_started = true;
             self.captures_changed = true;
         }
@@ -1275,6 +1294,9 @@ mod tests {
         fn motor_over_temperature(&mut self) -> bool {
             true
         }
+        fn touch_probe(&mut self, _: TouchProbe) -> ProbeCapture {
+            ProbeCapture::default()
+        }
     }
 
     impl Inverter for Board {
@@ -1314,6 +1336,7 @@ mod tests {
             position: Ok(position),
             switches: Switches::default(),
             index: None,
+            probes: [ProbeCapture::default(); 2],
         };
         for _ in 0..ticks {
             link.publish(command);
@@ -1369,6 +1392,7 @@ mod tests {
                 position: Err(EncoderFault::Crc),
                 switches: Switches::default(),
                 index: None,
+                probes: [ProbeCapture::default(); 2],
             }
         );
     }

@@ -8,7 +8,14 @@
 //! Resolution: an edge is placed at the position of the first sample that shows the new level
 //! (one PWM period late at most: 0.9° at 3000 rpm and 20 kHz; homing searches run slowly).
 //!
-//! Timing: three compare-and-latch steps and an optional index latch per period; no arithmetic.
+//! The touch-probe inputs come with the time of their edge within the period (a timer input
+//! capture or the ET1100 latch unit): their edges are latched at the position of that instant,
+//! interpolated between this period's and the previous period's encoder positions.
+//!
+//! Timing: five compare-and-latch steps and an optional index latch per period; a multiply
+//! and an add per probe edge.
+
+use hal::io::ProbeCapture;
 
 /// The level of the axis' switches in one sample (`true` = actuated).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -85,7 +92,7 @@ impl SwitchCapture {
     }
 }
 
-/// Everything the axis captured: the three switches and the index.
+/// Everything the axis captured: the three switches, the index and the touch-probe inputs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Captures {
     /// Positive limit switch.
@@ -96,6 +103,24 @@ pub struct Captures {
     pub home: SwitchCapture,
     /// Encoder index pulses.
     pub index: Latch,
+    /// Touch-probe inputs 1 and 2, each edge at the position of its edge time.
+    pub probes: [SwitchCapture; 2],
+}
+
+/// The position at an edge `edge_ns_before` the instant of `position` (negative: after it),
+/// the motor having moved from `previous` one PWM period earlier (`inv_period_ns` = 1 / the
+/// period in ns): linear interpolation, exact at a constant speed.
+pub fn position_at_edge(
+    position: i64,
+    previous: i64,
+    edge_ns_before: i32,
+    inv_period_ns: f32,
+) -> i64 {
+    let moved = position.wrapping_sub(previous) as f32;
+    let back = moved * edge_ns_before as f32 * inv_period_ns;
+    // Rounded to the nearest increment (`as` saturates; a non-finite value gives 0).
+    let back = if back >= 0.0 { back + 0.5 } else { back - 0.5 } as i64;
+    position.saturating_sub(back)
 }
 
 impl Captures {
@@ -117,6 +142,28 @@ impl Captures {
         changed
     }
 
+    /// One sample of the touch-probe inputs: an edge is latched at the position of its edge
+    /// time ([`position_at_edge`]). Returns whether anything was latched.
+    pub fn update_probes(
+        &mut self,
+        probes: [ProbeCapture; 2],
+        position: i64,
+        previous: i64,
+        inv_period_ns: f32,
+    ) -> bool {
+        let mut changed = false;
+        for (capture, probe) in self.probes.iter_mut().zip(probes) {
+            if probe.active == capture.level && probe.edge_ns_before_position.is_none() {
+                continue;
+            }
+            let at = probe.edge_ns_before_position.map_or(position, |ns| {
+                position_at_edge(position, previous, ns, inv_period_ns)
+            });
+            changed |= capture.update(probe.active, at);
+        }
+        changed
+    }
+
     /// The captures of a power-on with the switches at `switches`: levels set, no edges.
     pub const fn initial(switches: Switches) -> Self {
         Self {
@@ -127,6 +174,7 @@ impl Captures {
                 count: 0,
                 position: 0,
             },
+            probes: [SwitchCapture::at(false), SwitchCapture::at(false)],
         }
     }
 }
@@ -171,6 +219,50 @@ mod tests {
             }
         );
         assert_eq!(c.positive_limit, SwitchCapture::default());
+    }
+
+    #[test]
+    fn probe_edges_are_latched_at_their_edge_time() {
+        let mut c = Captures::default();
+        // 25 µs periods; the motor moved 1000 → 1400 in the last one; the probe rose 10 µs
+        // before the sample: 1400 − 400 · 10/25 = 1240.
+        let inv = 1.0 / 25_000.0;
+        let rising = ProbeCapture {
+            active: true,
+            edge_ns_before_position: Some(10_000),
+        };
+        assert!(c.update_probes([rising, ProbeCapture::default()], 1400, 1000, inv));
+        assert_eq!(
+            c.probes[0].rising,
+            Latch {
+                count: 1,
+                position: 1240
+            }
+        );
+        assert_eq!(c.probes[1], SwitchCapture::default());
+        // Held: nothing new.
+        let held = ProbeCapture {
+            active: true,
+            edge_ns_before_position: None,
+        };
+        assert!(!c.update_probes([held, ProbeCapture::default()], 1800, 1400, inv));
+        // Falling 1 µs after the position instant (negative): extrapolated, moving backwards.
+        let falling = ProbeCapture {
+            active: false,
+            edge_ns_before_position: Some(-1_000),
+        };
+        assert!(c.update_probes([falling, ProbeCapture::default()], 1000, 1500, inv));
+        assert_eq!(
+            c.probes[0].falling,
+            Latch {
+                count: 1,
+                position: 980
+            }
+        );
+        assert_eq!(
+            position_at_edge(i64::MAX, i64::MIN, i32::MAX, inv),
+            i64::MAX
+        );
     }
 
     #[test]

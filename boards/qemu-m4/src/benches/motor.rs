@@ -16,6 +16,7 @@ use core::hint::black_box;
 
 use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode, Output, Sample};
 use firmware::motor::capture::Switches;
+use hal::io::ProbeCapture;
 use firmware::motor::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
 use firmware::motor::math::{sin_cos, TAU};
 use firmware::motor::servo::{self, Tuning, SERVO_400W};
@@ -215,6 +216,10 @@ const SAMPLE: Sample = Sample {
         home: false,
     },
     index: None,
+    probes: [ProbeCapture {
+        active: false,
+        edge_ns_before_position: None,
+    }; 2],
 };
 
 /// An axis of the servo at `tuning`, brought to Running in CSP through its link, at rest on

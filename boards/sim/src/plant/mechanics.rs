@@ -41,6 +41,9 @@ pub struct SwitchParams {
     /// The end of a home cam: with it, the home switch is active for
     /// `home_rad <= θ <= home_end_rad` only.
     pub home_end_rad: Option<f64>,
+    /// Touch-probe sensors 1 and 2: input n is active for `a <= θ <= b` (a mark passing a
+    /// sensor); their edges are timed within the integration substep.
+    pub probes: [Option<(f64, f64)>; 2],
 }
 
 /// States of the three switches (`true` = actuated).
@@ -63,6 +66,26 @@ impl SwitchParams {
             home: self.home_rad.is_some_and(|l| theta_rad >= l)
                 && self.home_end_rad.is_none_or(|e| theta_rad <= e),
         }
+    }
+
+    /// Whether touch-probe input `n` is active at `theta_rad`.
+    pub fn probe_active(&self, n: usize, theta_rad: f64) -> bool {
+        self.probes
+            .get(n)
+            .copied()
+            .flatten()
+            .is_some_and(|(a, b)| theta_rad >= a && theta_rad <= b)
+    }
+
+    /// The angle at which probe `n`'s input changed to `active` while the rotor moved from
+    /// `from` to `to` (the window edge crossed), `None` if it has no window.
+    pub fn probe_edge(&self, n: usize, active: bool, from: f64, to: f64) -> Option<f64> {
+        let (a, b) = self.probes.get(n).copied().flatten()?;
+        let upward = to >= from;
+        Some(match (active, upward) {
+            (true, true) | (false, false) => a,
+            (true, false) | (false, true) => b,
+        })
     }
 }
 
@@ -226,6 +249,7 @@ mod tests {
             limit_pos_rad: Some(2.0),
             home_rad: Some(0.5),
             home_end_rad: None,
+            probes: [None; 2],
         };
         assert_eq!(
             sw.evaluate(0.0),

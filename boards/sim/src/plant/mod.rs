@@ -332,6 +332,18 @@ pub struct Sample {
     pub limit_pos: bool,
     /// Home switch actuated.
     pub home: bool,
+    /// Touch-probe inputs 1 and 2.
+    pub probes: [ProbeReading; 2],
+}
+
+/// A touch-probe input at a sample: its level and when it last changed since the previous
+/// sample.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ProbeReading {
+    /// Active now.
+    pub active: bool,
+    /// Time (s, plant clock) of the last edge since the previous sample.
+    pub last_edge_s: Option<f64>,
 }
 
 /// Conduction state of the power stage.
@@ -379,6 +391,8 @@ pub struct Plant {
     drive_temperature_c: f64,
     motor_overtemp: bool,
     resistance_scale: f64,
+    /// Touch-probe inputs as of the last substep, with their edges since the last sample.
+    probes: [ProbeReading; 2],
 }
 
 impl Plant {
@@ -405,6 +419,7 @@ impl Plant {
             drive_temperature_c: DEFAULT_DRIVE_TEMPERATURE_C,
             motor_overtemp: false,
             resistance_scale: 1.0,
+            probes: [ProbeReading::default(); 2],
             cfg,
         })
     }
@@ -440,8 +455,33 @@ impl Plant {
             self.mech_substep(0.5 * (te0 + te1), t1 - t0);
             self.encoder
                 .record(t_start + t1, theta_prev, self.mech.theta_rad);
+            self.time_probe_edges(t_start + t0, t_start + t1, theta_prev);
         }
         self.periods += 1;
+    }
+
+    /// Records the touch-probe edges of the substep from `t0` to `t1` (the rotor moved from
+    /// `theta0` to the present angle): the time the window edge was crossed, interpolated
+    /// linearly within the substep.
+    fn time_probe_edges(&mut self, t0: f64, t1: f64, theta0: f64) {
+        let theta1 = self.mech.theta_rad;
+        for n in 0..self.probes.len() {
+            let active = self.cfg.switches.probe_active(n, theta1);
+            let Some(reading) = self.probes.get_mut(n) else {
+                continue;
+            };
+            if active == reading.active {
+                continue;
+            }
+            reading.active = active;
+            let edge = self.cfg.switches.probe_edge(n, active, theta0, theta1);
+            let span = theta1 - theta0;
+            let fraction = match edge {
+                Some(at) if span != 0.0 => ((at - theta0) / span).clamp(0.0, 1.0),
+                _ => 1.0,
+            };
+            reading.last_edge_s = Some(t0 + fraction * (t1 - t0));
+        }
     }
 
     /// Effective phase resistance.
@@ -668,7 +708,17 @@ impl Plant {
             limit_neg: sw.limit_neg,
             limit_pos: sw.limit_pos,
             home: sw.home,
+            probes: self.take_probe_readings(),
         }
+    }
+
+    /// The probe readings of this sample; the edges are reported once.
+    fn take_probe_readings(&mut self) -> [ProbeReading; 2] {
+        let readings = self.probes;
+        for p in &mut self.probes {
+            p.last_edge_s = None;
+        }
+        readings
     }
 
     /// Load torque in N·m, opposing positive rotation (`J·dω/dt = Te − … − T_load`).
@@ -729,6 +779,17 @@ impl Plant {
     /// Places the limit and home switches (the machine around the motor).
     pub fn set_switches(&mut self, switches: SwitchParams) {
         self.cfg.switches = switches;
+        self.settle_probes();
+    }
+
+    /// The probe inputs at the present angle, without edges (a new setup, not a motion).
+    fn settle_probes(&mut self) {
+        for (n, p) in self.probes.iter_mut().enumerate() {
+            *p = ProbeReading {
+                active: self.cfg.switches.probe_active(n, self.mech.theta_rad),
+                last_edge_s: None,
+            };
+        }
     }
 
     /// Moves the rotor to `theta_rad` (mechanical, multi-turn) at rest, e.g. to start a test
@@ -741,6 +802,7 @@ impl Plant {
                 omega_rad_s: self.driven_speed.unwrap_or(0.0),
             };
             self.encoder.reset_history(self.time_s(), theta_rad);
+            self.settle_probes();
         }
     }
 

@@ -619,6 +619,7 @@ fn switches_follow_the_true_angle() {
         limit_pos_rad: Some(1.0),
         home_rad: Some(0.2),
         home_end_rad: None,
+        probes: [None; 2],
     };
     let mut p = plant(c);
     let s = p.sample();

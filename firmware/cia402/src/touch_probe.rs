@@ -1,0 +1,399 @@
+//! Touch probe (CiA402 / IEC 61800-7-201, ETG.6010 §12): 60B8h touch probe function, 60B9h
+//! touch probe status, the latched positions 60BAh–60BDh and the edge counters 60D5h–60D8h, as
+//! a decision function on the edges the axis latched (each at the position of its edge time).
+//!
+//! Per probe (60B8h bits 0–7 for probe 1, 8–15 for probe 2):
+//!
+//! | 60B8h bit | meaning |
+//! |---|---|
+//! | 0 | enable: a rising edge arms both edges and clears the stored flags; 0 clears status bits 0–2 (the values stay) |
+//! | 1 | 0 = single trigger (the first edge after arming, per edge), 1 = continuous (every edge) |
+//! | 2–3 | source: 00 the probe input, 01 the encoder index (every enabled edge latches on it) |
+//! | 4 / 5 | sample the rising / falling edge; a rising edge of the bit re-arms that edge, 0 clears its stored flag |
+//!
+//! 60B9h bits 0 (enabled), 1 (rising edge stored), 2 (falling edge stored), and bits 6–7 as
+//! the profile defines them ([`Rules`]): the SDV3-E shows the trigger source in bit 6 and
+//! toggles bit 7 on every latch (as the Σ-V-SD does), the RSE shows the input level in bit 7.
+
+use crate::homing::{Edges, SwitchSignal};
+
+/// 60B8h bits of one probe (probe 2: shifted by 8).
+pub mod function {
+    /// Enable the probe.
+    pub const ENABLE: u8 = 1 << 0;
+    /// Continuous trigger (else the first event only).
+    pub const CONTINUOUS: u8 = 1 << 1;
+    /// Source selector (bits 2–3).
+    pub const SOURCE_MASK: u8 = 0b11 << 2;
+    /// Source: the encoder index (zero impulse).
+    pub const SOURCE_INDEX: u8 = 0b01 << 2;
+    /// Sample the rising edge.
+    pub const RISING: u8 = 1 << 4;
+    /// Sample the falling edge.
+    pub const FALLING: u8 = 1 << 5;
+}
+
+/// 60B9h bits of one probe (probe 2: shifted by 8).
+pub mod status {
+    /// The probe is enabled.
+    pub const ENABLED: u8 = 1 << 0;
+    /// A rising-edge position is stored.
+    pub const RISING_STORED: u8 = 1 << 1;
+    /// A falling-edge position is stored.
+    pub const FALLING_STORED: u8 = 1 << 2;
+    /// Profile-defined bit 6.
+    pub const BIT6: u8 = 1 << 6;
+    /// Profile-defined bit 7.
+    pub const BIT7: u8 = 1 << 7;
+}
+
+/// What a profile shows in 60B9h bit 7 (15).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Bit7 {
+    /// Nothing (CiA402: user-defined; GHA-E: not supported).
+    #[default]
+    None,
+    /// Toggles on every stored position (SDV3-E, Σ-V-SD).
+    ToggleOnStore,
+    /// The probe input level (RSE).
+    InputLevel,
+}
+
+/// A profile's deviations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rules {
+    /// 60B9h bit 7 (15).
+    pub bit7: Bit7,
+    /// 60B9h bit 6 (14) shows the trigger source (1 = index; SDV3-E).
+    pub bit6_shows_source: bool,
+    /// Probe 1 / 2 is switched off while homing runs (Σ-V-SD §6.9: probe 1, GHA-E §6.8: both).
+    pub off_while_homing: [bool; 2],
+}
+
+/// The inputs of one cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Inputs {
+    /// 60B8h.
+    pub function: u16,
+    /// The probe inputs with their latched edges.
+    pub probes: [SwitchSignal; 2],
+    /// The encoder index pulses.
+    pub index: Edges,
+    /// Homing is running.
+    pub homing: bool,
+}
+
+/// One probe.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Probe {
+    previous_function: u8,
+    /// Armed for the next rising / falling edge (single trigger).
+    armed: [bool; 2],
+    /// A position is stored for the rising / falling edge.
+    stored: [bool; 2],
+    /// The latch counts already looked at: input rising, input falling, index.
+    seen: [u16; 3],
+    toggle: bool,
+    /// Latched positions (rising, falling) and counters.
+    values: [i64; 2],
+    counters: [u16; 2],
+}
+
+impl Probe {
+    fn step(&mut self, f: u8, input: SwitchSignal, index: Edges, rules: &Rules) -> u8 {
+        use function::*;
+        let was = self.previous_function;
+        self.previous_function = f;
+        let counts = [input.rising.count, input.falling.count, index.count];
+        if f & ENABLE == 0 {
+            self.armed = [false; 2];
+            self.stored = [false; 2];
+            self.seen = counts;
+            return self.level_bit(input, rules);
+        }
+        let newly = |bit: u8| f & bit != 0 && (was & bit == 0 || was & ENABLE == 0);
+        if was & ENABLE == 0 {
+            self.stored = [false; 2];
+            self.seen = counts;
+        }
+        for (edge, bit) in [RISING, FALLING].into_iter().enumerate() {
+            if newly(bit) {
+                // Armed (again): the next edge counts; edges before do not.
+                self.set_armed(edge, true);
+                self.set_stored(edge, false);
+            } else if f & bit == 0 {
+                self.set_armed(edge, false);
+                self.set_stored(edge, false);
+            }
+        }
+        let continuous = f & CONTINUOUS != 0;
+        let events: [Option<i64>; 2] = if f & SOURCE_MASK == SOURCE_INDEX {
+            // The index is one pulse: it latches into every enabled edge.
+            let at = (index.count != self.seen[2]).then_some(index.position);
+            [at, at]
+        } else if f & SOURCE_MASK == 0 {
+            [
+                (input.rising.count != self.seen[0]).then_some(input.rising.position),
+                (input.falling.count != self.seen[1]).then_some(input.falling.position),
+            ]
+        } else {
+            // 60D0h sources are not supported: nothing latches.
+            [None, None]
+        };
+        self.seen = counts;
+        for (edge, (event, bit)) in events.into_iter().zip([RISING, FALLING]).enumerate() {
+            let Some(position) = event else { continue };
+            let armed = self.armed.get(edge).copied().unwrap_or(false);
+            if f & bit == 0 || !(armed || continuous) {
+                continue;
+            }
+            if let (Some(v), Some(c)) = (self.values.get_mut(edge), self.counters.get_mut(edge)) {
+                *v = position;
+                *c = c.wrapping_add(1);
+            }
+            self.set_stored(edge, true);
+            self.toggle = !self.toggle;
+            if !continuous {
+                self.set_armed(edge, false);
+            }
+        }
+        let mut s = status::ENABLED;
+        if self.stored[0] {
+            s |= status::RISING_STORED;
+        }
+        if self.stored[1] {
+            s |= status::FALLING_STORED;
+        }
+        if rules.bit6_shows_source && f & SOURCE_MASK == SOURCE_INDEX {
+            s |= status::BIT6;
+        }
+        s | self.level_bit(input, rules)
+    }
+
+    fn set_armed(&mut self, edge: usize, on: bool) {
+        if let Some(a) = self.armed.get_mut(edge) {
+            *a = on;
+        }
+    }
+
+    fn set_stored(&mut self, edge: usize, on: bool) {
+        if let Some(s) = self.stored.get_mut(edge) {
+            *s = on;
+        }
+    }
+
+    fn level_bit(&self, input: SwitchSignal, rules: &Rules) -> u8 {
+        let on = match rules.bit7 {
+            Bit7::None => false,
+            Bit7::ToggleOnStore => self.toggle,
+            Bit7::InputLevel => input.level,
+        };
+        if on {
+            status::BIT7
+        } else {
+            0
+        }
+    }
+}
+
+/// What the probes report this cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Output {
+    /// 60B9h.
+    pub status: u16,
+    /// 60BAh, 60BBh, 60BCh, 60BDh (drive positions).
+    pub values: [i64; 4],
+    /// 60D5h, 60D6h, 60D7h, 60D8h.
+    pub counters: [u16; 4],
+}
+
+/// Both touch probes of a drive.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TouchProbes {
+    probes: [Probe; 2],
+}
+
+impl TouchProbes {
+    /// Off, nothing stored.
+    pub const fn new() -> Self {
+        const OFF: Probe = Probe {
+            previous_function: 0,
+            armed: [false; 2],
+            stored: [false; 2],
+            seen: [0; 3],
+            toggle: false,
+            values: [0; 2],
+            counters: [0; 2],
+        };
+        Self { probes: [OFF; 2] }
+    }
+
+    /// Whether a probe is enabled (the drive then reads the captures every cycle).
+    pub fn enabled(&self) -> bool {
+        self.probes
+            .iter()
+            .any(|p| p.previous_function & function::ENABLE != 0)
+    }
+
+    /// One cycle.
+    pub fn step(&mut self, i: &Inputs, rules: &Rules) -> Output {
+        let [low, high] = i.function.to_le_bytes();
+        let [off1, off2] = rules.off_while_homing.map(|off| off && i.homing);
+        let gate = |f: u8, off: bool| if off { f & !function::ENABLE } else { f };
+        let [p1, p2] = &mut self.probes;
+        let [in1, in2] = i.probes;
+        let s1 = p1.step(gate(low, off1), in1, i.index, rules);
+        let s2 = p2.step(gate(high, off2), in2, i.index, rules);
+        Output {
+            status: u16::from_le_bytes([s1, s2]),
+            values: [p1.values[0], p1.values[1], p2.values[0], p2.values[1]],
+            counters: [
+                p1.counters[0],
+                p1.counters[1],
+                p2.counters[0],
+                p2.counters[1],
+            ],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::function::*;
+    use super::*;
+
+    const CIA402: Rules = Rules {
+        bit7: Bit7::None,
+        bit6_shows_source: false,
+        off_while_homing: [false; 2],
+    };
+
+    /// An input whose edges the test adds.
+    #[derive(Default)]
+    struct Bench {
+        tp: TouchProbes,
+        inputs: Inputs,
+    }
+
+    impl Bench {
+        fn edge(&mut self, probe: usize, rising: bool, position: i64) {
+            let p = &mut self.inputs.probes[probe];
+            let e = if rising {
+                &mut p.rising
+            } else {
+                &mut p.falling
+            };
+            e.count = e.count.wrapping_add(1);
+            e.position = position;
+            p.level = rising;
+        }
+        fn index(&mut self, position: i64) {
+            self.inputs.index.count += 1;
+            self.inputs.index.position = position;
+        }
+        fn step(&mut self, function: u16, rules: &Rules) -> Output {
+            self.inputs.function = function;
+            self.tp.step(&self.inputs, rules)
+        }
+    }
+
+    const TP1_SINGLE_BOTH: u16 = (ENABLE | RISING | FALLING) as u16;
+
+    #[test]
+    fn single_trigger_latches_the_first_edge_of_each_polarity_once() {
+        let mut b = Bench::default();
+        b.edge(0, true, 5); // before enabling: ignored
+        let out = b.step(TP1_SINGLE_BOTH, &CIA402);
+        assert_eq!(out.status, 0x0001, "enabled, nothing stored");
+        b.edge(0, true, 100);
+        let out = b.step(TP1_SINGLE_BOTH, &CIA402);
+        assert_eq!(
+            (out.status, out.values[0], out.counters[0]),
+            (0x0003, 100, 1)
+        );
+        b.edge(0, false, 150);
+        b.edge(0, true, 200); // the second rising edge: not taken (single trigger)
+        let out = b.step(TP1_SINGLE_BOTH, &CIA402);
+        assert_eq!(out.status, 0x0007);
+        assert_eq!((out.values[0], out.values[1]), (100, 150));
+        // Clearing bit 4 clears the rising status, the value stays; setting it re-arms.
+        let out = b.step((ENABLE | FALLING) as u16, &CIA402);
+        assert_eq!((out.status, out.values[0]), (0x0005, 100));
+        b.step(TP1_SINGLE_BOTH, &CIA402);
+        b.edge(0, false, 250);
+        b.edge(0, true, 300);
+        let out = b.step(TP1_SINGLE_BOTH, &CIA402);
+        assert_eq!(
+            (out.values[0], out.values[1], out.status),
+            (300, 150, 0x0007),
+            "re-armed rising; falling was not re-armed"
+        );
+        // Disabled: status 0, values kept.
+        let out = b.step(0, &CIA402);
+        assert_eq!((out.status, out.values[0]), (0, 300));
+    }
+
+    #[test]
+    fn continuous_trigger_takes_every_edge_and_counts() {
+        let mut b = Bench::default();
+        let f = (ENABLE | CONTINUOUS | RISING) as u16;
+        b.step(f, &CIA402);
+        for k in 1..=5 {
+            b.edge(0, true, k * 10);
+            b.edge(0, false, k * 10 + 5);
+            let out = b.step(f, &CIA402);
+            assert_eq!((out.values[0], out.counters[0]), (k * 10, k as u16));
+            assert_eq!(out.counters[1], 0, "falling not enabled");
+        }
+    }
+
+    #[test]
+    fn index_source_and_probe_2() {
+        let mut b = Bench::default();
+        // Probe 2 on the index, rising edge, single.
+        let f = u16::from(ENABLE | SOURCE_INDEX | RISING) << 8;
+        b.step(f, &CIA402);
+        b.edge(1, true, 77); // the input is not the source
+        let out = b.step(f, &CIA402);
+        assert_eq!(out.status, 0x0100);
+        b.index(4096);
+        let out = b.step(f, &CIA402);
+        assert_eq!(
+            (out.status, out.values[2], out.counters[2]),
+            (0x0300, 4096, 1)
+        );
+    }
+
+    #[test]
+    fn profile_bits_6_and_7_and_homing() {
+        let sdv3 = Rules {
+            bit7: Bit7::ToggleOnStore,
+            bit6_shows_source: true,
+            off_while_homing: [false; 2],
+        };
+        let mut b = Bench::default();
+        let f = (ENABLE | CONTINUOUS | SOURCE_INDEX | RISING) as u16;
+        assert_eq!(b.step(f, &sdv3).status, 0x0041, "bit 6: index source");
+        b.index(1);
+        assert_eq!(b.step(f, &sdv3).status, 0x00C3, "bit 7 toggled");
+        b.index(2);
+        assert_eq!(b.step(f, &sdv3).status, 0x0043, "toggled back");
+
+        let rse = Rules {
+            bit7: Bit7::InputLevel,
+            ..CIA402
+        };
+        let mut b = Bench::default();
+        b.edge(0, true, 9);
+        assert_eq!(b.step(0, &rse).status, 0x0080, "input level, even disabled");
+
+        let sigma = Rules {
+            off_while_homing: [true, false],
+            ..CIA402
+        };
+        let mut b = Bench::default();
+        b.inputs.homing = true;
+        let f = (ENABLE | RISING) as u16 | (u16::from(ENABLE | RISING) << 8);
+        assert_eq!(b.step(f, &sigma).status, 0x0100, "probe 1 off while homing");
+    }
+}

@@ -1,0 +1,129 @@
+//! Touch probe (CiA402 60B8h–60BDh, 60D5h–60D8h) on the simulated servo, commanded by ethercrab:
+//! the motor turns at a constant 100 rpm in profile velocity past two probe sensors (marks at
+//! known angles in the simulated plant) and its encoder index (the absolute encoder's
+//! single-turn zero at every whole revolution). The latched positions must equal the positions
+//! of the simulated edges within one encoder count: the edges are taken at their edge time, not
+//! at the next sample or bus cycle (at 100 rpm the motor moves 44 increments per PWM period and
+//! 1748 per bus cycle).
+
+use std::f64::consts::TAU;
+
+use board_sim::plant::SwitchParams;
+use ethercrab::MainDevice;
+use tests_host::{block_on, csp, master};
+
+const CPR: f64 = (1u32 << 20) as f64;
+const ENABLE_OPERATION: u16 = 0x0F;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const PV: i8 = 3;
+/// 60B8h bits of one probe.
+const ENABLE: u16 = 1 << 0;
+const CONTINUOUS: u16 = 1 << 1;
+const SOURCE_INDEX: u16 = 1 << 2;
+const RISING: u16 = 1 << 4;
+const FALLING: u16 = 1 << 5;
+/// Probe 1 sensor active from 0.3 to 0.6 revolutions, probe 2 from 1.45 to 1.55.
+const PROBE1: (f64, f64) = (0.3, 0.6);
+const PROBE2: (f64, f64) = (1.45, 1.55);
+
+fn counts(rev: f64) -> i32 {
+    (rev * CPR).round() as i32
+}
+
+/// Asserts `latched` is within one increment of the edge at `rev` revolutions.
+fn assert_at(latched: i32, rev: f64, what: &str) {
+    let expected = rev * CPR;
+    assert!(
+        (f64::from(latched) - expected).abs() <= 1.0,
+        "{what}: latched {latched}, the edge is at {expected:.1}"
+    );
+}
+
+#[test]
+fn touch_probes_latch_the_edge_positions_of_inputs_and_index() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        {
+            let mut segment = m.shared.segment();
+            segment.drives_mut()[0]
+                .servo
+                .plant
+                .set_switches(SwitchParams {
+                    probes: [
+                        Some((PROBE1.0 * TAU, PROBE1.1 * TAU)),
+                        Some((PROBE2.0 * TAU, PROBE2.1 * TAU)),
+                    ],
+                    ..SwitchParams::default()
+                });
+        }
+        let group = csp::into_op_with_mode(&m, md, PV).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        // Probe 1: single trigger, both edges, its input. Probe 2: continuous, rising, on the
+        // index.
+        let function =
+            (ENABLE | RISING | FALLING) | (ENABLE | CONTINUOUS | SOURCE_INDEX | RISING) << 8;
+        sd.sdo_write(0x60B8, 0, function).await.expect("60B8h");
+        sd.sdo_write(0x60FF, 0, counts(100.0 / 60.0))
+            .await
+            .expect("60FFh");
+        let mut s = csp::phase_locked(&m, md, &group, 0, 0, PV).await;
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 5])
+        {
+            s = csp::phase_locked(&m, md, &group, cw, 0, PV).await;
+        }
+        assert_eq!(s.statusword & STATE_MASK, OPERATION_ENABLED);
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(status, 0x0101, "both probes enabled, nothing stored");
+
+        // 0 → 0.7 rev: probe 1 rises at 0.3 and falls at 0.6.
+        while s.revolutions < 0.7 {
+            s = csp::phase_locked(&m, md, &group, ENABLE_OPERATION, 0, PV).await;
+        }
+        assert!(
+            (s.rpm - 100.0).abs() < 2.0,
+            "constant speed: {:.1} rpm",
+            s.rpm
+        );
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(status, 0x0107, "probe 1: both edges stored");
+        let rising: i32 = sd.sdo_read(0x60BA, 0).await.expect("60BAh");
+        let falling: i32 = sd.sdo_read(0x60BB, 0).await.expect("60BBh");
+        assert_at(rising, PROBE1.0, "60BAh");
+        assert_at(falling, PROBE1.1, "60BBh");
+        // On to 2.2 rev: probe 2 (index, continuous) latches at 1 and at 2 revolutions; probe 2's
+        // own input is not its source; probe 1 (single trigger) has nothing new to take.
+        while s.revolutions < 2.2 {
+            s = csp::phase_locked(&m, md, &group, ENABLE_OPERATION, 0, PV).await;
+        }
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(status, 0x0307);
+        let index: i32 = sd.sdo_read(0x60BC, 0).await.expect("60BCh");
+        assert_at(index, 2.0, "60BCh (index)");
+        let count: u16 = sd.sdo_read(0x60D7, 0).await.expect("60D7h");
+        assert_eq!(count, 2, "60D7h: two index pulses");
+        let counts1: (u16, u16) = (
+            sd.sdo_read(0x60D5, 0).await.expect("60D5h"),
+            sd.sdo_read(0x60D6, 0).await.expect("60D6h"),
+        );
+        assert_eq!(counts1, (1, 1), "single trigger: one edge each");
+        assert_eq!(
+            sd.sdo_read::<i32>(0x60BA, 0).await.expect("60BAh"),
+            rising,
+            "single trigger: kept"
+        );
+        // Switching probe 1 off clears its status, the values stay.
+        sd.sdo_write(0x60B8, 0, function & 0xFF00)
+            .await
+            .expect("60B8h");
+        csp::phase_locked(&m, md, &group, ENABLE_OPERATION, 0, PV).await;
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(status, 0x0300);
+        assert_eq!(sd.sdo_read::<i32>(0x60BB, 0).await.expect("60BBh"), falling);
+    });
+}
