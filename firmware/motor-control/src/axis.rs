@@ -869,12 +869,14 @@ impl Axis {
             self.captures_changed |=
                 self.captures
                     .update(sample.switches, sample.index, self.position);
-            self.captures_changed |= self.captures.update_probes(
-                sample.probes,
-                self.position,
-                previous,
-                self.inv_period_ns,
-            );
+            if self.captures.probes_changed(&sample.probes) {
+                self.captures_changed |= self.captures.update_probes(
+                    sample.probes,
+                    self.position,
+                    previous,
+                    self.inv_period_ns,
+                );
+            }
         } else {
             self.captures = Captures::initial(sample.switches);
             for (capture, probe) in self.captures.probes.iter_mut().zip(sample.probes) {

@@ -142,8 +142,22 @@ impl Captures {
         changed
     }
 
+    /// Whether `probes` show anything new (a level change or an edge): the control interrupt's
+    /// fast path, a few compares per period.
+    #[inline]
+    pub fn probes_changed(&self, probes: &[ProbeCapture; 2]) -> bool {
+        let [a, b] = probes;
+        let [ca, cb] = &self.probes;
+        a.active != ca.level
+            || b.active != cb.level
+            || a.edge_ns_before_position.is_some()
+            || b.edge_ns_before_position.is_some()
+    }
+
     /// One sample of the touch-probe inputs: an edge is latched at the position of its edge
-    /// time ([`position_at_edge`]). Returns whether anything was latched.
+    /// time ([`position_at_edge`]). Returns whether anything was latched. (Rare: called when
+    /// [`Self::probes_changed`].)
+    #[inline(never)]
     pub fn update_probes(
         &mut self,
         probes: [ProbeCapture; 2],
