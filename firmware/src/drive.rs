@@ -241,7 +241,7 @@ impl Drive {
             return;
         };
         let shift = self.position_shift;
-        let feedback = shifted(feedback, shift);
+        let mut feedback = shifted(feedback, shift);
         let vars = self.vars;
         let link = port.link;
         let new_fault = if feedback.trips != port.trips_seen {
@@ -347,6 +347,8 @@ impl Drive {
                 self.position_shift = self.position_shift.saturating_add(delta);
                 self.profile_modes.rebase(delta);
                 set_point.position = set_point.position.saturating_add(delta);
+                // This cycle's actual values already read in the new positions.
+                feedback.position = feedback.position.saturating_add(delta);
             }
         }
         let loop_mode = match set_point.control {

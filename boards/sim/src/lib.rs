@@ -19,5 +19,6 @@ pub mod rawsock;
 pub mod segment;
 pub mod servo;
 pub mod storage;
+pub mod tour;
 
 pub use segment::{Segment, SegmentError, SimDevice};

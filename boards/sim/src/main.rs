@@ -1,9 +1,14 @@
 //! `sim-drive`: the simulated EtherCAT servo drive on a PC.
 //!
 //! ```text
-//! sim-drive [demo] [LINE] [--cycle-us US] [--cycles N] [--free-run]
+//! sim-drive [tour] [--plot FILE]
+//!     the guided tour (the default): one standard drive on a machine with a home switch,
+//!     homed, moved in profile position, then streamed in cyclic synchronous position by the
+//!     built-in ethercrab master; prints every statusword change and writes a plot of position,
+//!     speed and current (default target/sim-drive/tour.svg)
+//! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
-//!     exchange, back to INIT, and print what happened (the default)
+//!     exchange, back to INIT, and print what happened
 //! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
@@ -30,7 +35,8 @@ use board_sim::demo::{self, Scenario};
 use board_sim::{rawsock, Segment};
 
 const USAGE: &str =
-    "usage: sim-drive [demo] [LINE] [--cycle-us US] [--cycles N] [--free-run]
+    "usage: sim-drive [tour] [--plot FILE]
+       sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
        sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K]
        sim-drive list-profiles
        sim-drive plots [--out DIR]
@@ -49,11 +55,14 @@ struct Args {
     free_run: bool,
     drop_mailbox_read: Option<u32>,
     out: String,
+    plot: String,
+    /// A LINE option was given.
+    line_given: bool,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let mut a = Args {
-        command: "demo".into(),
+        command: "tour".into(),
         line: Vec::new(),
         cycle_us: 1000,
         cycles: 1000,
@@ -62,6 +71,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         free_run: false,
         drop_mailbox_read: None,
         out: "docs/plots".into(),
+        plot: "target/sim-drive/tour.svg".into(),
+        line_given: false,
     };
     let mut profile: Option<String> = None;
     let mut drives: Option<usize> = None;
@@ -70,8 +81,11 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     while let Some(arg) = it.next() {
         let mut value = |name: &str| it.next().ok_or_else(|| format!("{name} needs a value"));
         match arg.as_str() {
-            "demo" | "attach" | "list-profiles" | "plots" if first => a.command = arg.clone(),
+            "tour" | "demo" | "attach" | "list-profiles" | "plots" if first => {
+                a.command = arg.clone()
+            }
             "--out" => a.out = value("--out")?,
+            "--plot" => a.plot = value("--plot")?,
             "--profile" => profile = Some(value("--profile")?),
             "--drives" => drives = Some(number(&value("--drives")?, "--drives")?),
             "--drive" => line.push(value("--drive")?),
@@ -91,6 +105,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         }
         first = false;
     }
+    a.line_given = profile.is_some() || drives.is_some() || !line.is_empty();
     a.line = if line.is_empty() {
         let drives = drives.unwrap_or(1);
         if drives == 0 || drives > demo::MAX_DRIVES {
@@ -114,6 +129,12 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     };
     for name in &mut a.line {
         *name = canonical_profile(name)?;
+    }
+    if a.command == "tour" && a.line_given {
+        return Err(
+            "the tour runs one standard drive; for other profiles or lines use `demo` with              --profile / --drives / --drive"
+                .into(),
+        );
     }
     Ok(a)
 }
@@ -160,7 +181,8 @@ fn main() -> ExitCode {
         }
         "attach" => attach(&args),
         "plots" => plots(&args),
-        _ => run_demo(&args),
+        "demo" => run_demo(&args),
+        _ => run_tour(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -169,6 +191,30 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn run_tour(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
+    println!(
+        "sim-drive tour: one simulated standard drive (400 W servo on a machine with a home \
+         switch), built-in ethercrab master"
+    );
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .build()?;
+    let local = tokio::task::LocalSet::new();
+    let path = std::path::Path::new(&args.plot);
+    let report = local.block_on(&rt, async {
+        board_sim::tour::run("standard", path, &mut |line| println!("{line}")).await
+    })?;
+    println!(
+        "done: {:.1} s simulated; plot of position, speed and current: {}",
+        report.samples.last().map_or(0.0, |s| s.t_s),
+        path.display()
+    );
+    println!(
+        "(more: `sim-drive demo --drives 3`, `sim-drive attach --iface IF`, `sim-drive --help`)"
+    );
+    Ok(())
 }
 
 fn plots(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
@@ -240,6 +286,18 @@ mod tests {
             .expect("mixed line");
         assert_eq!(a.command, "attach");
         assert_eq!(a.line, ["sdv3-e", "rse", "sigma-v-sd-2axis"]);
+    }
+
+    #[test]
+    fn the_tour_is_the_default_and_runs_the_standard_drive_only() {
+        let a = args("").expect("no arguments");
+        assert_eq!(
+            (a.command.as_str(), a.plot.as_str()),
+            ("tour", "target/sim-drive/tour.svg")
+        );
+        assert_eq!(args("tour --plot x.svg").expect("plot").plot, "x.svg");
+        let e = args("--drives 3").err().expect("a line without `demo`");
+        assert!(e.contains("use `demo`"), "{e}");
     }
 
     #[test]

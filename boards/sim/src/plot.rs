@@ -218,6 +218,16 @@ impl Plot {
         self
     }
 
+    /// Image width in px.
+    pub fn width(&self) -> f64 {
+        self.width
+    }
+
+    /// Image height in px.
+    pub fn height(&self) -> f64 {
+        self.height
+    }
+
     /// Adds a named series (drawn as one polyline, next colour of the palette).
     pub fn series(mut self, name: &str, points: &[(f64, f64)]) -> Self {
         self.series.push((name.to_string(), points.to_vec()));
