@@ -19,11 +19,13 @@
 use cia402::device::{Device, DeviceRules, Motion};
 use cia402::faults::FaultReport;
 use cia402::homing;
+use cia402::limits::{self, Blocked, SoftwareLimits};
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
 use cia402::touch_probe::{self, Bit7, TouchProbes};
 use cia402::units;
+use cia402::window::WindowTimer;
 use ethercat_slave::od::ErrorReport;
 use ethercat_slave::slave::{AppEvent, Application};
 
@@ -45,6 +47,10 @@ const STANDSTILL_RPM: f32 = 20.0;
 const SECONDS_PER_MINUTE: f32 = 60.0;
 const NS_PER_MS: u64 = 1_000_000;
 const NS_TO_S: f32 = 1e-9;
+/// 6065h value that switches the following-error check off (CiA402).
+const FOLLOWING_ERROR_OFF: u32 = u32::MAX;
+/// Statusword bit 13 in the position modes: following error.
+const FOLLOWING_ERROR: u16 = 1 << 13;
 
 /// An adjustment running on the axis: which service started it and the axis counters then.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -90,6 +96,8 @@ pub struct Drive {
     profile_modes: ProfileModes,
     /// The touch probes (60B8h–60BDh, 60D5h–60D8h).
     touch_probes: TouchProbes,
+    /// How long the following error has been outside 6065h (statusword bit 13).
+    following_error_timer: WindowTimer,
     /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
     /// home position reads as the home offset 607Ch. Every position of the objects and of the
     /// profile modes is a drive position; the axis works on encoder positions.
@@ -120,6 +128,7 @@ impl Drive {
             adjustment: None,
             profile_modes: ProfileModes::new(),
             touch_probes: TouchProbes::new(),
+            following_error_timer: WindowTimer::new(),
             position_shift: 0,
         }
     }
@@ -306,6 +315,11 @@ impl Drive {
         };
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;
+        // Software position limits (607Dh), in drive increments; not while homing looks for
+        // its references.
+        let limits = (mode != Mode::Homing)
+            .then(|| software_limits(ram, vars, position_ratio))
+            .flatten();
         if motion::is_profile_mode(mode) {
             let inputs = profile_inputs(
                 ram,
@@ -317,6 +331,10 @@ impl Drive {
                 (position_ratio, velocity_ratio),
                 rated_nm,
             );
+            let inputs = motion::Inputs {
+                position_range: limits,
+                ..inputs
+            };
             let inputs = if mode == Mode::Homing {
                 // Read only where needed: a seqlock read of the captures.
                 let captures = shifted_captures(link.captures(), self.position_shift);
@@ -351,6 +369,72 @@ impl Drive {
                 feedback.position = feedback.position.saturating_add(delta);
             }
         }
+        let mut motion = motion;
+        if mode != Mode::Homing {
+            if let Some(l) = limits.filter(|_| set_point.control == modes::Loop::Position) {
+                // A position target beyond a software limit is limited to it (bit 11).
+                let (position, limited) = l.clamp(set_point.position);
+                set_point.position = position;
+                if limited {
+                    mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+                }
+            }
+            let switches = feedback.switches;
+            let blocked = Blocked::at(
+                switches.negative_limit,
+                switches.positive_limit,
+                limits,
+                feedback.position,
+            );
+            if blocked.any() {
+                mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+            }
+            let direction = match set_point.control {
+                modes::Loop::Position => {
+                    set_point.position.saturating_sub(feedback.position) as f32
+                }
+                modes::Loop::Velocity => set_point.velocity,
+                modes::Loop::Torque => set_point.torque,
+            };
+            if motion == Motion::Run && blocked.stops(direction) {
+                // Into a limit switch or beyond a software limit: stopped on the quick-stop
+                // ramp and held; the profile generators follow the motor.
+                motion = Motion::Stop(Deceleration::QuickStopRamp);
+                self.profile_modes
+                    .follow(feedback.position, feedback.velocity);
+            }
+        }
+        // Following error (6065h/6066h): statusword bit 13 in the position modes; the axis
+        // trips its fault on the same limits where the profile makes it one.
+        let zero_is_off = self.rules.following_error_zero_window_off;
+        let window = read_u32(ram, vars.following_error_window).map(|w| {
+            if w == FOLLOWING_ERROR_OFF || (w == 0 && zero_is_off) {
+                FOLLOWING_ERROR_OFF
+            } else {
+                let increments = position_ratio.position_to_internal(i64::from(w));
+                u32::try_from(increments).unwrap_or(FOLLOWING_ERROR_OFF - 1)
+            }
+        });
+        let timeout_ms = read_u16(ram, vars.following_error_timeout).unwrap_or(0);
+        let outside = window.is_some_and(|w| {
+            w != FOLLOWING_ERROR_OFF && feedback.following_error.unsigned_abs() > u64::from(w)
+        });
+        let position_mode = matches!(mode, Mode::ProfilePosition | Mode::CyclicPosition);
+        let lagging = self.following_error_timer.step(
+            outside && motion == Motion::Run && position_mode,
+            timeout_ms,
+            cycle_ns,
+        );
+        if lagging && position_mode {
+            mode_statusword |= FOLLOWING_ERROR;
+        }
+        let following_error_limits = window.map(|w| {
+            if self.rules.following_error_fault {
+                (w, timeout_ms)
+            } else {
+                (FOLLOWING_ERROR_OFF, timeout_ms)
+            }
+        });
         let loop_mode = match set_point.control {
             modes::Loop::Position => ControlMode::Position,
             modes::Loop::Velocity => ControlMode::Velocity,
@@ -388,6 +472,7 @@ impl Drive {
             torque: set_point.torque,
             deceleration,
             bus_cycle_ns: cycle_ns,
+            following_error_limits,
         });
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
@@ -399,6 +484,18 @@ impl Drive {
             }
         }
         self.touch_probe(ram, link, position_ratio);
+        let switches = feedback.switches;
+        write_bytes(
+            ram,
+            vars.digital_inputs,
+            limits::digital_inputs(
+                switches.negative_limit,
+                switches.positive_limit,
+                switches.home,
+                self.rules.digital_inputs_limits_swapped,
+            )
+            .to_le_bytes(),
+        );
         // Demand values: what the axis is asked for this cycle.
         write_bytes(
             ram,
@@ -744,7 +841,20 @@ fn profile_inputs(
             velocity(vars.homing_acceleration, 0.0),
         ),
         homing_signals: homing::Signals::default(),
+        // The drive sets the software limits (it reads them once per cycle).
+        position_range: None,
     }
+}
+
+/// The software position limits 607Dh in drive increments, `None` when disabled (min ≥ max)
+/// or absent.
+fn software_limits(ram: &[u8], vars: &AppVars, ratio: units::Ratio) -> Option<SoftwareLimits> {
+    let min = read_i32(ram, vars.software_position_limit_min)?;
+    let max = read_i32(ram, vars.software_position_limit_max)?;
+    SoftwareLimits::new(
+        ratio.position_to_internal(i64::from(min)),
+        ratio.position_to_internal(i64::from(max)),
+    )
 }
 
 /// The axis' switch and index captures as homing sees them.

@@ -14,7 +14,9 @@
 //! halt keeps the profile-position set-points, everything else drops them.
 
 use cia402::homing::{self, Demand, Homing};
+use cia402::limits::SoftwareLimits;
 use cia402::modes::{Loop, Mode, SetPoint};
+use cia402::pds::statusword;
 use cia402::profile_position::{self, ProfilePosition};
 use cia402::units::Ratio;
 use cia402::window::{self, WindowTimer};
@@ -26,8 +28,10 @@ use crate::motor::trajectory::{self, Limits, Trajectory};
 pub const TARGET_REACHED: u16 = 1 << 10;
 /// Statusword bit 12 in profile velocity: "speed" (1 = the speed is zero).
 pub const SPEED_ZERO: u16 = 1 << 12;
-/// The statusword bits the profile modes own (10, 12 and, in homing, 13).
-pub const MODE_BITS: u16 = TARGET_REACHED | SPEED_ZERO | homing::HOMING_ERROR;
+/// The statusword bits the profile modes own (10, 12, 11 for a limited target and, in homing,
+/// 13).
+pub const MODE_BITS: u16 =
+    TARGET_REACHED | SPEED_ZERO | statusword::INTERNAL_LIMIT_ACTIVE | homing::HOMING_ERROR;
 
 /// What the drive read from the objects this cycle, in axis units (increments, increments/s,
 /// N·m) except where noted.
@@ -70,6 +74,8 @@ pub struct Inputs {
     pub homing_speeds: (f32, f32, f32),
     /// Homing: the switches and index pulses (drive positions).
     pub homing_signals: homing::Signals,
+    /// The software position limits: profile-position targets are limited to them.
+    pub position_range: Option<SoftwareLimits>,
 }
 
 /// The set-point of a profile mode and the statusword bits it sets.
@@ -116,6 +122,12 @@ impl ProfileModes {
             speed_zero: WindowTimer::new(),
             homing: Homing::new(),
         }
+    }
+
+    /// The motor is being stopped outside the generators (a limit): they follow it, so a move
+    /// resumes from where the motor is.
+    pub fn follow(&mut self, position: i64, velocity: f32) {
+        self.trajectory = Trajectory::at(position, velocity);
     }
 
     /// The drive positions moved by `delta` (homing made the home read as the home offset):
@@ -239,9 +251,20 @@ impl ProfileModes {
     /// Profile position: the move of the current set-point.
     fn position(&mut self, inputs: &Inputs, dt_s: f32, acknowledge: u16) -> (SetPoint, u16) {
         let ratio = inputs.position_ratio;
+        let clamp = |target: i64| {
+            inputs
+                .position_range
+                .map_or((target, false), |l| l.clamp(target))
+        };
+        // The (last) target beyond a software limit: bit 11 while it stands.
+        let limited = self
+            .set_points
+            .target()
+            .is_some_and(|t| clamp(ratio.position_to_internal(t)).1);
         if inputs.running {
             if let Some(current) = self.set_points.current() {
-                let target = ratio.position_to_internal(current.target);
+                // A target beyond a software limit: the move ends at the limit.
+                let (target, _) = clamp(ratio.position_to_internal(current.target));
                 let end_speed = self.end_speed(current, ratio);
                 if self
                     .trajectory
@@ -265,9 +288,14 @@ impl ProfileModes {
             velocity: self.trajectory.velocity(),
             torque: 0.0,
         };
+        let limit = if limited {
+            statusword::INTERNAL_LIMIT_ACTIVE
+        } else {
+            0
+        };
         (
             set_point,
-            acknowledge | if reached { TARGET_REACHED } else { 0 },
+            acknowledge | limit | if reached { TARGET_REACHED } else { 0 },
         )
     }
 
@@ -382,6 +410,7 @@ mod tests {
             homing_method: None,
             homing_speeds: (0.0, 0.0, 0.0),
             homing_signals: homing::Signals::default(),
+            position_range: None,
         }
     }
 

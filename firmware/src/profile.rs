@@ -116,6 +116,16 @@ pub struct AppVars {
     pub touch_probe_2_positive_count: Option<u16>,
     /// 60D8h touch probe 2 negative edge counter (u16).
     pub touch_probe_2_negative_count: Option<u16>,
+    /// 6065h following error window (u32, position units).
+    pub following_error_window: Option<u16>,
+    /// 6066h following error time out (u16, ms).
+    pub following_error_timeout: Option<u16>,
+    /// 607Dh:01 min position limit (i32, position units).
+    pub software_position_limit_min: Option<u16>,
+    /// 607Dh:02 max position limit (i32, position units).
+    pub software_position_limit_max: Option<u16>,
+    /// 60FDh digital inputs (u32).
+    pub digital_inputs: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -243,6 +253,11 @@ impl AppVars {
         touch_probe_1_negative_count: None,
         touch_probe_2_positive_count: None,
         touch_probe_2_negative_count: None,
+        following_error_window: None,
+        following_error_timeout: None,
+        software_position_limit_min: None,
+        software_position_limit_max: None,
+        digital_inputs: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
     };
@@ -292,6 +307,13 @@ pub struct Cia402Rules {
     pub homing_method_aliases: &'static [(i8, i8)],
     /// The touch probe's deviations (60B9h bits 6/7, probe 1 during homing).
     pub touch_probe: cia402::touch_probe::Rules,
+    /// A following error beyond 6065h for longer than 6066h is a fault (false: statusword bit
+    /// 13 only, the Σ-V-SD).
+    pub following_error_fault: bool,
+    /// 60FDh bit 0 is the positive and bit 1 the negative limit switch (the RSE).
+    pub digital_inputs_limits_swapped: bool,
+    /// 6065h = 0 switches the following-error check off (the GHA-E).
+    pub following_error_zero_window_off: bool,
 }
 
 impl Cia402Rules {

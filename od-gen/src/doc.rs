@@ -1056,6 +1056,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
         && !r.touch_probe_bit6_source
         && !r.touch_probe1_off_while_homing
         && !r.touch_probe2_off_while_homing
+        && r.following_error_fault
+        && !r.digital_inputs_limits_swapped
+        && !r.following_error_zero_window_off
     {
         return;
     }
@@ -1108,6 +1111,15 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     }
     if r.touch_probe2_off_while_homing {
         out.push_str("- Touch probe 2 is switched off while homing runs.\n");
+    }
+    if !r.following_error_fault {
+        out.push_str("- A following error beyond 6065h for longer than 6066h sets statusword bit 13 only (no fault).\n");
+    }
+    if r.following_error_zero_window_off {
+        out.push_str("- 6065h = 0 switches the following-error check off.\n");
+    }
+    if r.digital_inputs_limits_swapped {
+        out.push_str("- 60FDh bit 0 is the positive and bit 1 the negative limit switch (CiA402: the reverse).\n");
     }
     out.push('\n');
 }

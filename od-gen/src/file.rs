@@ -787,6 +787,9 @@ impl Default for Cia402File {
             touch_probe_bit6_source: false,
             touch_probe1_off_while_homing: false,
             touch_probe2_off_while_homing: false,
+            following_error_fault: true,
+            digital_inputs_limits_swapped: false,
+            following_error_zero_window_off: false,
         }
     }
 }
@@ -1024,6 +1027,16 @@ pub struct Cia402File {
     /// Touch probe 2 is switched off while homing runs.
     #[serde(default)]
     pub touch_probe2_off_while_homing: bool,
+    /// A following error beyond 6065h for longer than 6066h is a fault (default true); false:
+    /// statusword bit 13 only.
+    #[serde(default = "yes")]
+    pub following_error_fault: bool,
+    /// 60FDh bit 0 is the positive and bit 1 the negative limit switch (CiA402: the reverse).
+    #[serde(default)]
+    pub digital_inputs_limits_swapped: bool,
+    /// 6065h = 0 switches the following-error check off (CiA402: only FFFF FFFFh does).
+    #[serde(default)]
+    pub following_error_zero_window_off: bool,
 }
 
 fn yes() -> bool {

@@ -454,11 +454,21 @@ pub enum Role {
     TouchProbe2PositiveCount,
     /// 60D8h touch probe 2 negative edge counter (UINT).
     TouchProbe2NegativeCount,
+    /// 6065h following error window (UDINT, position units; FFFF FFFFh = off).
+    FollowingErrorWindow,
+    /// 6066h following error time out (UINT, ms).
+    FollowingErrorTimeout,
+    /// 607Dh:01 min position limit (DINT, position units).
+    SoftwarePositionLimitMin,
+    /// 607Dh:02 max position limit (DINT, position units).
+    SoftwarePositionLimitMax,
+    /// 60FDh digital inputs (UDINT): bits 0 negative limit, 1 positive limit, 2 home switch.
+    DigitalInputs,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 51] = [
+    pub const ALL: [Role; 56] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -510,6 +520,11 @@ impl Role {
         Self::TouchProbe1NegativeCount,
         Self::TouchProbe2PositiveCount,
         Self::TouchProbe2NegativeCount,
+        Self::FollowingErrorWindow,
+        Self::FollowingErrorTimeout,
+        Self::SoftwarePositionLimitMin,
+        Self::SoftwarePositionLimitMax,
+        Self::DigitalInputs,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -565,6 +580,11 @@ impl Role {
             Self::TouchProbe1NegativeCount => "touch_probe_1_negative_count",
             Self::TouchProbe2PositiveCount => "touch_probe_2_positive_count",
             Self::TouchProbe2NegativeCount => "touch_probe_2_negative_count",
+            Self::FollowingErrorWindow => "following_error_window",
+            Self::FollowingErrorTimeout => "following_error_timeout",
+            Self::SoftwarePositionLimitMin => "software_position_limit_min",
+            Self::SoftwarePositionLimitMax => "software_position_limit_max",
+            Self::DigitalInputs => "digital_inputs",
         }
     }
     /// Parses the profile-file spelling.
@@ -600,7 +620,9 @@ impl Role {
             | Self::TouchProbe1Positive
             | Self::TouchProbe1Negative
             | Self::TouchProbe2Positive
-            | Self::TouchProbe2Negative => DataType::Dint,
+            | Self::TouchProbe2Negative
+            | Self::SoftwarePositionLimitMin
+            | Self::SoftwarePositionLimitMax => DataType::Dint,
             Self::TargetTorque | Self::TorqueActualValue | Self::TorqueDemand => DataType::Int,
             Self::PositionWindowTime
             | Self::VelocityWindow
@@ -612,7 +634,8 @@ impl Role {
             | Self::TouchProbe1PositiveCount
             | Self::TouchProbe1NegativeCount
             | Self::TouchProbe2PositiveCount
-            | Self::TouchProbe2NegativeCount => DataType::Uint,
+            | Self::TouchProbe2NegativeCount
+            | Self::FollowingErrorTimeout => DataType::Uint,
             Self::MotorRatedTorque
             | Self::MotorResistance
             | Self::MotorLd
@@ -627,7 +650,9 @@ impl Role {
             | Self::PositionWindow
             | Self::HomingSpeedSwitch
             | Self::HomingSpeedZero
-            | Self::HomingAcceleration => DataType::Udint,
+            | Self::HomingAcceleration
+            | Self::FollowingErrorWindow
+            | Self::DigitalInputs => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode
             | Self::DisableOperationOptionCode
@@ -1687,6 +1712,12 @@ pub struct Cia402Rules {
     pub touch_probe1_off_while_homing: bool,
     /// Touch probe 2 is off while homing runs.
     pub touch_probe2_off_while_homing: bool,
+    /// A following error beyond the window for the timeout is a fault.
+    pub following_error_fault: bool,
+    /// 60FDh bits 0/1 are the positive/negative limit switch.
+    pub digital_inputs_limits_swapped: bool,
+    /// 6065h = 0 switches the following-error check off.
+    pub following_error_zero_window_off: bool,
 }
 
 /// What a profile shows in 60B9h bit 7 (15) (`firmware: cia402::touch_probe::Bit7`).
@@ -1747,6 +1778,9 @@ impl Default for Cia402Rules {
             touch_probe_bit6_source: false,
             touch_probe1_off_while_homing: false,
             touch_probe2_off_while_homing: false,
+            following_error_fault: true,
+            digital_inputs_limits_swapped: false,
+            following_error_zero_window_off: false,
         }
     }
 }

@@ -532,6 +532,9 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         touch_probe_bit6_source: f.cia402.touch_probe_bit6_source,
         touch_probe1_off_while_homing: f.cia402.touch_probe1_off_while_homing,
         touch_probe2_off_while_homing: f.cia402.touch_probe2_off_while_homing,
+        following_error_fault: f.cia402.following_error_fault,
+        digital_inputs_limits_swapped: f.cia402.digital_inputs_limits_swapped,
+        following_error_zero_window_off: f.cia402.following_error_zero_window_off,
     };
     let mut profile = Profile {
         name: f.name.clone(),

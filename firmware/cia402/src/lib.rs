@@ -8,6 +8,7 @@
 //! | [`pds`] | the PDS state machine as a pure decision on the controlword; statusword bits |
 //! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
 //! | [`stop`] | stop reactions of the option codes 605Ah–605Eh and the deceleration ramp |
+//! | [`limits`] | software position limits 607Dh, limit switches: which motions are blocked; 60FDh |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
 //! | [`homing`] | homing mode: the search sequences of the CiA402 homing methods on latched switch edges and index pulses, homing statusword bits |
 //! | [`profile_position`] | the set-point handshake of profile position (controlword bits 4, 5, 6, 9; statusword bit 12; the buffer) |
@@ -23,6 +24,7 @@
 pub mod device;
 pub mod faults;
 pub mod homing;
+pub mod limits;
 pub mod modes;
 pub mod pds;
 pub mod profile_position;

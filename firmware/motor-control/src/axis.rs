@@ -168,6 +168,9 @@ pub struct AxisCommand {
     /// The bus cycle the set-points come at, ns (0: unchanged). A change re-times the
     /// interpolator (a configuration-time computation, once per change).
     pub bus_cycle_ns: u32,
+    /// Following-error window (increments; `u32::MAX` = off) and timeout (ms), CiA402
+    /// 6065h/6066h; `None` keeps the configured ones. Applied when they change.
+    pub following_error_limits: Option<(u32, u16)>,
 }
 
 /// The state of the axis.
@@ -220,6 +223,8 @@ pub struct AxisFeedback {
     pub main_power: bool,
     /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
     pub stopping: bool,
+    /// The limit and home switches at the last sample.
+    pub switches: Switches,
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
@@ -368,6 +373,7 @@ impl AxisLink {
                     torque: 0.0,
                     deceleration: 0.0,
                     bus_cycle_ns: 0,
+                    following_error_limits: None,
                 })
             },
             // SAFETY: as above.
@@ -385,6 +391,11 @@ impl AxisLink {
                     main_power: false,
                     stopping: false,
                     current_limited: false,
+                    switches: Switches {
+                        positive_limit: false,
+                        negative_limit: false,
+                        home: false,
+                    },
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -850,6 +861,11 @@ impl Axis {
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),
             current_limited: self.state == AxisState::Running && self.current_limited,
+            switches: Switches {
+                positive_limit: self.captures.positive_limit.level,
+                negative_limit: self.captures.negative_limit.level,
+                home: self.captures.home.level,
+            },
         });
         if self.captures_changed {
             // Edges are rare: the captures go out only when one happened.
@@ -891,6 +907,11 @@ impl Axis {
         if let Some((command, seq)) = link.commands.read_if_new(self.command_seq) {
             self.command_seq = seq;
             let previous = self.command.mode;
+            if let Some((window, timeout_ms)) = command.following_error_limits {
+                if command.following_error_limits != self.command.following_error_limits {
+                    self.protections.set_following_error(window, timeout_ms);
+                }
+            }
             self.command = command;
             if command.bus_cycle_ns != 0 && command.bus_cycle_ns != self.bus_cycle_ns {
                 self.retime_interpolator(command.bus_cycle_ns);

@@ -197,6 +197,8 @@ const COMMAND: AxisCommand = AxisCommand {
     deceleration: 0.0,
     // Unchanged: the interpolator keeps the bus cycle of the configuration.
     bus_cycle_ns: 0,
+    // As the drive sends them every cycle (6065h/6066h): compared, applied once.
+    following_error_limits: Some((262_144, 20)),
 };
 
 /// The sample of the measurement: no current, 48 V, 25 °C, the encoder at rest.

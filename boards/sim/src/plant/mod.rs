@@ -776,6 +776,17 @@ impl Plant {
         }
     }
 
+    /// Places hard end stops at `(low, high)` mechanical angles (rad), or removes them; ignored
+    /// unless finite with low < high and the rotor between them.
+    pub fn set_end_stops(&mut self, stops: Option<(f64, f64)>) {
+        let valid = stops.is_none_or(|(lo, hi)| {
+            lo.is_finite() && hi.is_finite() && lo < hi && (lo..=hi).contains(&self.mech.theta_rad)
+        });
+        if valid {
+            self.cfg.mechanics.end_stops_rad = stops;
+        }
+    }
+
     /// Places the limit and home switches (the machine around the motor).
     pub fn set_switches(&mut self, switches: SwitchParams) {
         self.cfg.switches = switches;

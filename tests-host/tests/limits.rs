@@ -1,0 +1,183 @@
+//! Position limits and monitoring (CiA402 607Dh software position limits, limit switches,
+//! 60FDh digital inputs, 6065h/6066h following error) on the simulated servo of the standard
+//! profile, commanded by ethercrab over the default PDOs (6040h, 607Ah, 6060h / 6041h, 6064h,
+//! 6061h) in free run:
+//!
+//! - a profile-position target beyond 607Dh:02 ends at the limit, statusword bit 11 set;
+//! - profile velocity into an actuated limit switch stops on the quick-stop ramp and holds
+//!   (bit 11, 60FDh bit 1), moving away is allowed;
+//! - a motor blocked by a hard stop while CSP moves on: the following error passes 6065h for
+//!   longer than 6066h, the drive faults with 0x8611 (the standard profile's following_error).
+
+use std::f64::consts::TAU;
+
+use board_sim::plant::SwitchParams;
+use ethercrab::MainDevice;
+use tests_host::csp::{self, Sample};
+use tests_host::{block_on, master};
+
+const CPR: f64 = (1u32 << 20) as f64;
+const ENABLE_OPERATION: u16 = 0x0F;
+const NEW_SET_POINT: u16 = 1 << 4;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const FAULT_STATE: u16 = 0x08;
+const INTERNAL_LIMIT: u16 = 1 << 11;
+const PP: i8 = 1;
+const PV: i8 = 3;
+const CSP: i8 = 8;
+
+macro_rules! enabled {
+    ($m:expr, $md:expr, $mode:expr) => {{
+        let group = csp::into_op_with_mode(&$m, $md, $mode).await;
+        let mut s = csp::phase_locked(&$m, $md, &group, 0, 0, $mode).await;
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 10])
+        {
+            s = csp::phase_locked(&$m, $md, &group, cw, s.position, $mode).await;
+        }
+        assert_eq!(s.statusword & STATE_MASK, OPERATION_ENABLED);
+        group
+    }};
+}
+
+macro_rules! run {
+    ($m:expr, $md:expr, $group:expr, $cw:expr, $target:expr, $mode:expr, $n:expr) => {{
+        let mut v: Vec<Sample> = Vec::new();
+        for _ in 0..$n {
+            v.push(csp::phase_locked(&$m, $md, &$group, $cw, $target, $mode).await);
+        }
+        v
+    }};
+}
+
+#[test]
+fn standard_software_limit_ends_a_profile_position_move_at_607dh() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = enabled!(m, md, PP);
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x607D, 1, (-CPR) as i32)
+            .await
+            .expect("607Dh:01");
+        sd.sdo_write(0x607D, 2, (2.0 * CPR) as i32)
+            .await
+            .expect("607Dh:02");
+        let beyond = (5.0 * CPR) as i32;
+        run!(
+            m,
+            md,
+            group,
+            ENABLE_OPERATION | NEW_SET_POINT,
+            beyond,
+            PP,
+            3
+        );
+        let s = run!(m, md, group, ENABLE_OPERATION, beyond, PP, 1_000);
+        let last = s.last().unwrap();
+        assert!(
+            (last.revolutions - 2.0).abs() < 1e-3,
+            "stopped at the limit: {} rev",
+            last.revolutions
+        );
+        assert!(
+            s.iter().all(|s| s.revolutions < 2.0 + 1e-3),
+            "never beyond it"
+        );
+        assert_ne!(last.statusword & INTERNAL_LIMIT, 0, "bit 11: at the limit");
+    });
+}
+
+#[test]
+fn standard_limit_switch_stops_motion_into_it_and_frees_motion_away() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        m.shared.segment().drives_mut()[0]
+            .servo
+            .plant
+            .set_switches(SwitchParams {
+                limit_pos_rad: Some(0.5 * TAU),
+                ..SwitchParams::default()
+            });
+        let group = enabled!(m, md, PV);
+        let sd = group.subdevice(md, 0).expect("drive");
+        let rpm = |r: f64| (r / 60.0 * CPR) as i32;
+        sd.sdo_write(0x60FF, 0, rpm(300.0)).await.expect("60FFh");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, PV, 400);
+        let last = s.last().unwrap();
+        assert!(last.rpm.abs() < 2.0, "stopped: {:.1} rpm", last.rpm);
+        // 300 rpm on the quick-stop ramp (6085h: 3000 rpm in 0.1 s) takes 10 ms: 0.025 rev.
+        assert!(
+            (0.5..0.53).contains(&last.revolutions),
+            "stopped just past the switch: {} rev",
+            last.revolutions
+        );
+        assert_ne!(last.statusword & INTERNAL_LIMIT, 0, "bit 11");
+        assert_eq!(last.statusword & STATE_MASK, OPERATION_ENABLED, "no fault");
+        let inputs: u32 = sd.sdo_read(0x60FD, 0).await.expect("60FDh");
+        assert_eq!(inputs & 0b111, 0b010, "60FDh bit 1: positive limit switch");
+        // Away from it: free.
+        sd.sdo_write(0x60FF, 0, rpm(-300.0)).await.expect("60FFh");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, PV, 300);
+        let last = s.last().unwrap();
+        assert!(
+            (last.rpm + 300.0).abs() < 5.0,
+            "moving away: {:.1} rpm",
+            last.rpm
+        );
+        assert_eq!(last.statusword & INTERNAL_LIMIT, 0, "off the switch");
+        let inputs: u32 = sd.sdo_read(0x60FD, 0).await.expect("60FDh");
+        assert_eq!(inputs & 0b111, 0);
+    });
+}
+
+#[test]
+fn standard_following_error_beyond_6065h_for_6066h_is_fault_0x8611() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        // A hard stop at 0.2 rev that the CSP motion runs into.
+        m.shared.segment().drives_mut()[0]
+            .servo
+            .plant
+            .set_end_stops(Some((-TAU, 0.2 * TAU)));
+        let group = enabled!(m, md, CSP);
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x6065, 0, 20_000u32).await.expect("6065h");
+        sd.sdo_write(0x6066, 0, 50u16).await.expect("6066h");
+        // 100 rpm: 1748 increments per cycle.
+        let mut target = 0.0;
+        let mut samples = Vec::new();
+        for _ in 0..500 {
+            target += 100.0 / 60.0 * CPR * 1e-3;
+            let s = csp::phase_locked(&m, md, &group, ENABLE_OPERATION, target as i32, CSP).await;
+            samples.push(s);
+            if s.statusword & STATE_MASK == FAULT_STATE {
+                break;
+            }
+        }
+        let last = samples.last().unwrap();
+        assert_eq!(last.statusword & STATE_MASK, FAULT_STATE, "faulted");
+        let code: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
+        assert_eq!(code, 0x8611, "603Fh following error");
+        // The motor hit the stop at 0.2 rev (120 ms); the error passes 20 000 increments about
+        // 11 ms later, the fault follows 50 ms after that.
+        let hit = samples
+            .iter()
+            .position(|s| s.revolutions > 0.199)
+            .expect("hit the stop");
+        let fault = samples.len() - 1;
+        assert!(
+            (55..=75).contains(&(fault - hit)),
+            "fault {} cycles after the stop",
+            fault - hit
+        );
+    });
+}
