@@ -907,10 +907,8 @@ impl Axis {
         if let Some((command, seq)) = link.commands.read_if_new(self.command_seq) {
             self.command_seq = seq;
             let previous = self.command.mode;
-            if let Some((window, timeout_ms)) = command.following_error_limits {
-                if command.following_error_limits != self.command.following_error_limits {
-                    self.protections.set_following_error(window, timeout_ms);
-                }
+            if command.following_error_limits != self.command.following_error_limits {
+                self.apply_following_error_limits(command.following_error_limits);
             }
             self.command = command;
             if command.bus_cycle_ns != 0 && command.bus_cycle_ns != self.bus_cycle_ns {
@@ -949,6 +947,15 @@ impl Axis {
     }
 
     /// Hands the command's set-point of its mode to the interpolator.
+    /// New following-error limits (6065h/6066h changed; rare: kept out of the hot path).
+    #[cold]
+    #[inline(never)]
+    fn apply_following_error_limits(&mut self, limits: Option<(u32, u16)>) {
+        if let Some((window, timeout_ms)) = limits {
+            self.protections.set_following_error(window, timeout_ms);
+        }
+    }
+
     fn push_setpoint(&mut self) {
         let c = self.command;
         match c.mode {
