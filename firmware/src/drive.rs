@@ -369,6 +369,18 @@ impl Drive {
                 feedback.position = feedback.position.saturating_add(delta);
             }
         }
+        // Torque limits 6072h, 60E0h, 60E1h (‰ of the rated torque): to the speed loop, and a
+        // torque set-point limited here.
+        let torque_limits = torque_limits(ram, vars, rated_nm);
+        if let Some((positive, negative)) = torque_limits {
+            if set_point.control == modes::Loop::Torque {
+                let limited = crate::motor::math::clamp(set_point.torque, -negative, positive);
+                if limited != set_point.torque {
+                    mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+                }
+                set_point.torque = limited;
+            }
+        }
         let mut motion = motion;
         if mode != Mode::Homing {
             if let Some(l) = limits.filter(|_| set_point.control == modes::Loop::Position) {
@@ -473,6 +485,7 @@ impl Drive {
             deceleration,
             bus_cycle_ns: cycle_ns,
             following_error_limits,
+            torque_limits,
         });
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
@@ -844,6 +857,25 @@ fn profile_inputs(
         // The drive sets the software limits (it reads them once per cycle).
         position_range: None,
     }
+}
+
+/// The torque limits (positive, negative magnitudes; N·m) of 6072h and 60E0h/60E1h, the lower
+/// of the general and the direction's limit; `None` when the profile has none of them.
+fn torque_limits(ram: &[u8], vars: &AppVars, rated_nm: f32) -> Option<(f32, f32)> {
+    let permille = |at| read_u16(ram, at);
+    let max = permille(vars.max_torque);
+    let positive = permille(vars.positive_torque_limit);
+    let negative = permille(vars.negative_torque_limit);
+    if max.is_none() && positive.is_none() && negative.is_none() {
+        return None;
+    }
+    let lower = |a: Option<u16>, b: Option<u16>| match (a, b) {
+        (Some(a), Some(b)) => a.min(b),
+        (Some(x), None) | (None, Some(x)) => x,
+        (None, None) => u16::MAX,
+    };
+    let nm = |p: u16| units::torque_from_permille_f32(f32::from(p), rated_nm);
+    Some((nm(lower(max, positive)), nm(lower(max, negative))))
 }
 
 /// The software position limits 607Dh in drive increments, `None` when disabled (min ≥ max)

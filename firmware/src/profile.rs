@@ -126,6 +126,12 @@ pub struct AppVars {
     pub software_position_limit_max: Option<u16>,
     /// 60FDh digital inputs (u32).
     pub digital_inputs: Option<u16>,
+    /// 6072h max torque (u16, ‰ of the rated torque).
+    pub max_torque: Option<u16>,
+    /// 60E0h positive torque limit value (u16, ‰ of the rated torque).
+    pub positive_torque_limit: Option<u16>,
+    /// 60E1h negative torque limit value (u16, ‰ of the rated torque).
+    pub negative_torque_limit: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -258,6 +264,9 @@ impl AppVars {
         software_position_limit_min: None,
         software_position_limit_max: None,
         digital_inputs: None,
+        max_torque: None,
+        positive_torque_limit: None,
+        negative_torque_limit: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
     };

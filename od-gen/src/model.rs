@@ -464,11 +464,17 @@ pub enum Role {
     SoftwarePositionLimitMax,
     /// 60FDh digital inputs (UDINT): bits 0 negative limit, 1 positive limit, 2 home switch.
     DigitalInputs,
+    /// 6072h max torque (UINT, ‰ of the rated torque).
+    MaxTorque,
+    /// 60E0h positive torque limit value (UINT, ‰ of the rated torque).
+    PositiveTorqueLimit,
+    /// 60E1h negative torque limit value (UINT, ‰ of the rated torque).
+    NegativeTorqueLimit,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 56] = [
+    pub const ALL: [Role; 59] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -525,6 +531,9 @@ impl Role {
         Self::SoftwarePositionLimitMin,
         Self::SoftwarePositionLimitMax,
         Self::DigitalInputs,
+        Self::MaxTorque,
+        Self::PositiveTorqueLimit,
+        Self::NegativeTorqueLimit,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -585,6 +594,9 @@ impl Role {
             Self::SoftwarePositionLimitMin => "software_position_limit_min",
             Self::SoftwarePositionLimitMax => "software_position_limit_max",
             Self::DigitalInputs => "digital_inputs",
+            Self::MaxTorque => "max_torque",
+            Self::PositiveTorqueLimit => "positive_torque_limit",
+            Self::NegativeTorqueLimit => "negative_torque_limit",
         }
     }
     /// Parses the profile-file spelling.
@@ -635,7 +647,10 @@ impl Role {
             | Self::TouchProbe1NegativeCount
             | Self::TouchProbe2PositiveCount
             | Self::TouchProbe2NegativeCount
-            | Self::FollowingErrorTimeout => DataType::Uint,
+            | Self::FollowingErrorTimeout
+            | Self::MaxTorque
+            | Self::PositiveTorqueLimit
+            | Self::NegativeTorqueLimit => DataType::Uint,
             Self::MotorRatedTorque
             | Self::MotorResistance
             | Self::MotorLd

@@ -88,12 +88,12 @@ fn derived_object_declared() {
 fn pdo_entry_missing() {
     let (key, e) = invalid(&with(
         "{ index = 0x6060, sub = 0, bits = 8 }",
-        "{ index = 0x6072, sub = 0, bits = 16 }",
+        "{ index = 0x6080, sub = 0, bits = 32 }",
     ));
     assert_eq!(
         e,
         Invalid::PdoEntryMissing {
-            index: 0x6072,
+            index: 0x6080,
             subindex: 0
         }
     );

@@ -181,3 +181,52 @@ fn standard_following_error_beyond_6065h_for_6066h_is_fault_0x8611() {
         );
     });
 }
+
+#[test]
+fn standard_torque_limits_cap_a_torque_set_point_and_the_speed_loop() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        // Profile torque asks 100 % of the rated torque; 6072h allows 20 %.
+        let group = enabled!(m, md, 4);
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x6087, 0, 0u32)
+            .await
+            .expect("6087h: no slope");
+        sd.sdo_write(0x6072, 0, 200u16).await.expect("6072h");
+        sd.sdo_write(0x6071, 0, 1000i16).await.expect("6071h");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, 4, 50);
+        let demand: i16 = sd.sdo_read(0x6074, 0).await.expect("6074h");
+        assert_eq!(demand, 200, "6074h limited to 6072h");
+        assert_ne!(s.last().unwrap().statusword & INTERNAL_LIMIT, 0, "bit 11");
+        let actual: i16 = sd.sdo_read(0x6077, 0).await.expect("6077h");
+        assert!((actual - 200).abs() <= 20, "6077h {actual}‰");
+        sd.sdo_write(0x6071, 0, 0i16).await.expect("6071h");
+        run!(m, md, group, ENABLE_OPERATION, 0, 4, 200);
+    });
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        // Profile velocity to 1000 rpm with 60E0h = 2 %: the acceleration is torque-limited
+        // (statusword bit 11), the torque never above 2 %.
+        let group = enabled!(m, md, PV);
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x60E0, 0, 20u16).await.expect("60E0h");
+        sd.sdo_write(0x60FF, 0, (1000.0 / 60.0 * CPR) as i32)
+            .await
+            .expect("60FFh");
+        let mut limited = false;
+        for _ in 0..100 {
+            let s = csp::phase_locked(&m, md, &group, ENABLE_OPERATION, 0, PV).await;
+            limited |= s.statusword & INTERNAL_LIMIT != 0;
+        }
+        let torque: i16 = sd.sdo_read(0x6077, 0).await.expect("6077h");
+        assert!(
+            torque <= 22 && torque > 10,
+            "6077h {torque}‰ at the 60E0h limit"
+        );
+        assert!(limited, "bit 11 while limited");
+    });
+}

@@ -171,6 +171,10 @@ pub struct AxisCommand {
     /// Following-error window (increments; `u32::MAX` = off) and timeout (ms), CiA402
     /// 6065h/6066h; `None` keeps the configured ones. Applied when they change.
     pub following_error_limits: Option<(u32, u16)>,
+    /// Torque limits in the positive and the negative direction (magnitudes, N·m; CiA402
+    /// 6072h, 60E0h, 60E1h), never above the configured limit; `None`: the configured limit.
+    /// Applied when they change.
+    pub torque_limits: Option<(f32, f32)>,
 }
 
 /// The state of the axis.
@@ -374,6 +378,7 @@ impl AxisLink {
                     deceleration: 0.0,
                     bus_cycle_ns: 0,
                     following_error_limits: None,
+                    torque_limits: None,
                 })
             },
             // SAFETY: as above.
@@ -695,6 +700,8 @@ impl Axis {
             self.current_loop = current_loop;
             self.speed_loop = speed_loop;
             self.model = merged;
+            // The new loop starts at the configured limit: the commanded ones stay.
+            self.apply_torque_limits(self.command.torque_limits);
         }
     }
 
@@ -910,6 +917,9 @@ impl Axis {
             if command.following_error_limits != self.command.following_error_limits {
                 self.apply_following_error_limits(command.following_error_limits);
             }
+            if command.torque_limits != self.command.torque_limits {
+                self.apply_torque_limits(command.torque_limits);
+            }
             self.command = command;
             if command.bus_cycle_ns != 0 && command.bus_cycle_ns != self.bus_cycle_ns {
                 self.retime_interpolator(command.bus_cycle_ns);
@@ -954,6 +964,16 @@ impl Axis {
         if let Some((window, timeout_ms)) = limits {
             self.protections.set_following_error(window, timeout_ms);
         }
+    }
+
+    /// New torque limits (6072h/60E0h/60E1h changed; rare), capped at the configured limit.
+    #[cold]
+    #[inline(never)]
+    fn apply_torque_limits(&mut self, limits: Option<(f32, f32)>) {
+        let cap = self.cfg.speed_loop.torque_limit_nm;
+        let (positive, negative) = limits.unwrap_or((cap, cap));
+        self.speed_loop
+            .set_torque_limits(math::min(positive, cap), math::min(negative, cap));
     }
 
     fn push_setpoint(&mut self) {
@@ -1085,7 +1105,7 @@ impl Axis {
             // The speed loop pins its output at its torque limit; a torque set-point is cut
             // at the current limit.
             self.current_limited =
-                torque.abs() >= self.speed_loop.torque_limit() || iq_request.abs() >= limit;
+                self.speed_loop.at_torque_limit(torque) || iq_request.abs() >= limit;
             self.iq_ref = math::clamp_symmetric(iq_request, limit);
             self.id_ref = 0.0;
         }

@@ -23,7 +23,7 @@
 //! mode) and the margin above 60° with the delays.
 
 use super::filters::{FilterError, TorqueFilterConfig, TorqueFilters};
-use super::math::{clamp, clamp_symmetric, TAU};
+use super::math::{clamp, TAU};
 use super::pi::{Pi, PiGains};
 
 /// Ratio of the crossover frequency to the PI zero used by [`gains_for_bandwidth`].
@@ -78,7 +78,10 @@ pub fn gains_for_bandwidth(bandwidth_hz: f32, inertia_nm_per_inc_s2: f32) -> (f3
 pub struct SpeedLoop {
     pi: Pi,
     inertia: f32,
+    /// Torque limit in the positive direction, N·m (≥ 0).
     limit: f32,
+    /// Torque limit in the negative direction (its magnitude), N·m.
+    limit_negative: f32,
     filters: TorqueFilters,
 }
 
@@ -129,6 +132,7 @@ impl SpeedLoop {
             }),
             inertia: config.inertia_nm_per_inc_s2,
             limit,
+            limit_negative: limit,
             filters,
         })
     }
@@ -145,23 +149,40 @@ impl SpeedLoop {
     pub fn step(&mut self, velocity_ref: f32, velocity: f32, accel_ff: f32, torque_ff: f32) -> f32 {
         let error = finite_or_zero(velocity_ref - velocity);
         let ff = finite_or_zero(self.inertia * accel_ff + torque_ff);
-        let torque = self.pi.update_limited(error, ff, -self.limit, self.limit);
-        clamp_symmetric(self.filters.update(torque), self.limit)
+        let torque = self
+            .pi
+            .update_limited(error, ff, -self.limit_negative, self.limit);
+        clamp(
+            self.filters.update(torque),
+            -self.limit_negative,
+            self.limit,
+        )
     }
 
     /// Changes the torque limit (N·m; negative or NaN → 0, +∞ → `f32::MAX`). The integrator is
     /// pulled inside the new limit at once.
     pub fn set_torque_limit(&mut self, nm: f32) {
-        let limit = sanitise_limit(nm);
-        self.limit = limit;
-        self.pi.gains.out_min = -limit;
-        self.pi.gains.out_max = limit;
+        self.set_torque_limits(nm, nm);
+    }
+
+    /// Changes the torque limits in the positive and the negative direction separately
+    /// (CiA402 60E0h/60E1h; magnitudes in N·m, sanitised as in [`Self::set_torque_limit`]).
+    pub fn set_torque_limits(&mut self, positive_nm: f32, negative_nm: f32) {
+        self.limit = sanitise_limit(positive_nm);
+        self.limit_negative = sanitise_limit(negative_nm);
+        self.pi.gains.out_min = -self.limit_negative;
+        self.pi.gains.out_max = self.limit;
         self.pi.set_integral(self.pi.integral());
     }
 
-    /// The torque limit (N·m).
+    /// The torque limit in the positive direction (N·m).
     pub fn torque_limit(&self) -> f32 {
         self.limit
+    }
+
+    /// Whether `torque` (N·m) is at or beyond a torque limit.
+    pub fn at_torque_limit(&self, torque: f32) -> bool {
+        torque >= self.limit || torque <= -self.limit_negative
     }
 
     /// The integrator (N·m): the torque the loop holds against a constant load.
@@ -388,6 +409,23 @@ mod tests {
             (-2.0f64).exp() * e0
         );
         assert!((plant.velocity - r).abs() < 1e-3 * r);
+    }
+
+    #[test]
+    fn positive_and_negative_torque_limits_are_separate() {
+        let mut sl = SpeedLoop::new(&SpeedLoopConfig {
+            sample_hz: 10_000.0,
+            kp: 1.0,
+            ki: 0.0,
+            inertia_nm_per_inc_s2: 0.0,
+            torque_limit_nm: 5.0,
+            filters: Default::default(),
+        })
+        .expect("valid");
+        sl.set_torque_limits(2.0, 0.5);
+        assert_eq!(sl.step(1e6, 0.0, 0.0, 0.0), 2.0, "positive limit");
+        assert_eq!(sl.step(-1e6, 0.0, 0.0, 0.0), -0.5, "negative limit");
+        assert!(sl.at_torque_limit(2.0) && sl.at_torque_limit(-0.5) && !sl.at_torque_limit(1.0));
     }
 
     #[test]

@@ -16,11 +16,11 @@ use core::hint::black_box;
 
 use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode, Output, Sample};
 use firmware::motor::capture::Switches;
-use hal::io::ProbeCapture;
 use firmware::motor::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
 use firmware::motor::math::{sin_cos, TAU};
 use firmware::motor::servo::{self, Tuning, SERVO_400W};
 use firmware::motor::{Duties, ElectricalAngle};
+use hal::io::ProbeCapture;
 use hal::power::PhaseCurrents;
 
 use crate::harness::Harness;
@@ -199,6 +199,7 @@ const COMMAND: AxisCommand = AxisCommand {
     bus_cycle_ns: 0,
     // As the drive sends them every cycle (6065h/6066h): compared, applied once.
     following_error_limits: Some((262_144, 20)),
+    torque_limits: None,
 };
 
 /// The sample of the measurement: no current, 48 V, 25 °C, the encoder at rest.
