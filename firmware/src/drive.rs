@@ -330,6 +330,7 @@ impl Drive {
                 &feedback,
                 (position_ratio, velocity_ratio),
                 rated_nm,
+                port.counts_per_rev,
             );
             let inputs = motion::Inputs {
                 position_range: limits,
@@ -457,7 +458,14 @@ impl Drive {
             Motion::Run => (true, loop_mode, 0.0),
             Motion::Stop(d) => {
                 let ramp = |at| {
-                    read_u32(ram, at).map_or(0.0, |a| velocity_ratio.velocity_to_internal(a as f32))
+                    read_u32(ram, at).map_or(0.0, |a| {
+                        vars.acceleration_unit.to_internal(
+                            a,
+                            ram,
+                            port.counts_per_rev,
+                            velocity_ratio,
+                        )
+                    })
                 };
                 let deceleration = match d {
                     Deceleration::ProfileRamp => ramp(vars.profile_deceleration),
@@ -798,15 +806,23 @@ fn profile_inputs(
     feedback: &AxisFeedback,
     (position_ratio, velocity_ratio): (units::Ratio, units::Ratio),
     rated_nm: f32,
+    counts_per_rev: u32,
 ) -> motion::Inputs {
     let velocity = |at, default: f32| {
         read_u32(ram, at).map_or(default, |v| velocity_ratio.velocity_to_internal(v as f32))
     };
+    // Accelerations in the profile's acceleration unit.
+    let accel = |at, default: f32| {
+        read_u32(ram, at).map_or(default, |v| {
+            vars.acceleration_unit
+                .to_internal(v, ram, counts_per_rev, velocity_ratio)
+        })
+    };
     let window =
         |at| read_u16(ram, at).map_or(0.0, |v| velocity_ratio.velocity_to_internal(f32::from(v)));
     let max_velocity = velocity(vars.max_profile_velocity, f32::INFINITY);
-    let acceleration = velocity(vars.profile_acceleration, 0.0);
-    let deceleration = velocity(vars.profile_deceleration, acceleration);
+    let acceleration = accel(vars.profile_acceleration, 0.0);
+    let deceleration = accel(vars.profile_deceleration, acceleration);
     let move_velocity = velocity(vars.profile_velocity, 0.0);
     let slope_permille = read_u32(ram, vars.torque_slope).unwrap_or(0);
     motion::Inputs {
@@ -851,7 +867,7 @@ fn profile_inputs(
         homing_speeds: (
             velocity(vars.homing_speed_switch, 0.0),
             velocity(vars.homing_speed_zero, 0.0),
-            velocity(vars.homing_acceleration, 0.0),
+            accel(vars.homing_acceleration, 0.0),
         ),
         homing_signals: homing::Signals::default(),
         // The drive sets the software limits (it reads them once per cycle).

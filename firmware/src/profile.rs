@@ -136,6 +136,42 @@ pub struct AppVars {
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
     pub velocity_factor: Factor,
+    /// What the acceleration objects (6083h–6085h, 609Ah) count: `[units] acceleration`.
+    pub acceleration_unit: AccelerationUnit,
+}
+
+/// What an acceleration object (6083h–6085h, 609Ah) counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AccelerationUnit {
+    /// The velocity unit per second (CiA402's default).
+    VelocityPerSecond,
+    /// Increments/s² per unit (e.g. the Σ-V-SD's 2303h × 10⁴).
+    Factor(Factor),
+    /// The time in ms from 0 to this many rpm (the SDV3-E: "ms from 0 rpm to 2000 rpm"); a
+    /// smaller value is a steeper ramp, 0 the steepest the drive can do.
+    MsToRpm(u32),
+}
+
+/// ms in a second, s in a minute.
+const MS_PER_S: f32 = 1_000.0;
+const S_PER_MIN: f32 = 60.0;
+
+impl AccelerationUnit {
+    /// An acceleration object's `value` in increments/s², with the profile's velocity factor
+    /// `velocity` (for [`Self::VelocityPerSecond`]) and the encoder's `counts_per_rev`. For
+    /// [`Self::MsToRpm`], 0 ms reads as 1 ms.
+    pub fn to_internal(&self, value: u32, ram: &[u8], counts_per_rev: u32, velocity: Ratio) -> f32 {
+        match self {
+            Self::VelocityPerSecond => velocity.velocity_to_internal(value as f32),
+            Self::Factor(f) => f
+                .ratio(ram, counts_per_rev)
+                .velocity_to_internal(value as f32),
+            Self::MsToRpm(rpm) => {
+                let speed = *rpm as f32 / S_PER_MIN * counts_per_rev as f32;
+                speed * MS_PER_S / value.max(1) as f32
+            }
+        }
+    }
 }
 
 /// One side of a unit factor: a constant, or an unsigned object entry in the OD RAM (e.g.
@@ -269,6 +305,7 @@ impl AppVars {
         negative_torque_limit: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
+        acceleration_unit: AccelerationUnit::VelocityPerSecond,
     };
 }
 
@@ -537,5 +574,39 @@ mod homing_rules {
         // GHA-E §5.4.3: 35 is the current position, 37 is not listed.
         assert_eq!(reference("gha-e", 35), Some(Reference::Here));
         assert_eq!(reference("gha-e", 37), None);
+    }
+}
+
+#[cfg(test)]
+mod acceleration_units {
+    use super::*;
+
+    const CPR: u32 = 1 << 20;
+
+    #[test]
+    fn acceleration_objects_convert_in_the_profiles_unit() {
+        let ram = [0u8; 8];
+        // CiA402: the velocity unit per second; in 0.1 rpm, 600 units/s = 60 rpm/s = 1 rev/s².
+        let tenth_rpm = Ratio::new(u64::from(CPR), 600);
+        assert_eq!(
+            AccelerationUnit::VelocityPerSecond.to_internal(600, &ram, CPR, tenth_rpm),
+            CPR as f32
+        );
+        // SDV3-E: 100 ms from 0 to 2000 rpm = 20 000 rpm/s = 333.3 rev/s².
+        let sdv3 = AccelerationUnit::MsToRpm(2000);
+        let expected = 2000.0 / 60.0 * CPR as f32 * 10.0;
+        assert!((sdv3.to_internal(100, &ram, CPR, tenth_rpm) / expected - 1.0).abs() < 1e-6);
+        assert_eq!(
+            sdv3.to_internal(0, &ram, CPR, tenth_rpm),
+            sdv3.to_internal(1, &ram, CPR, tenth_rpm),
+            "0 ms reads as 1 ms"
+        );
+        // Σ-V-SD: 1 Acc. unit = N/D × 10^4 inc/s² (N/D = 1/1 by default).
+        let sigma = AccelerationUnit::Factor(Factor {
+            numerator: Operand::Const(1),
+            denominator: Operand::Const(1),
+            scale: (10_000, 1),
+        });
+        assert_eq!(sigma.to_internal(1000, &ram, CPR, tenth_rpm), 1e7);
     }
 }

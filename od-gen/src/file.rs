@@ -223,6 +223,11 @@ pub struct UnitsFile {
     /// Increments/s per velocity unit.
     #[serde(default)]
     pub velocity: Option<toml::Value>,
+    /// The acceleration unit (6083h–6085h, 609Ah): absent = the velocity unit per second; a
+    /// factor table (increments/s² per unit); or `{ ms_to_rpm = N }` (the time in ms from 0 to
+    /// N rpm).
+    #[serde(default)]
+    pub acceleration: Option<toml::Value>,
 }
 
 /// `[storage]`: what the parameter storage (1010h/1011h) stores beyond the default rule (RAM,

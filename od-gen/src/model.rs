@@ -1473,6 +1473,20 @@ pub struct Units {
     pub position: Factor,
     /// Increments/s per velocity unit.
     pub velocity: Factor,
+    /// The acceleration unit.
+    pub acceleration: Acceleration,
+}
+
+/// What an acceleration object (6083h–6085h, 609Ah) counts (`[units] acceleration`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Acceleration {
+    /// The velocity unit per second (CiA402's default).
+    #[default]
+    VelocityPerSecond,
+    /// Increments/s² per unit.
+    Factor(Factor),
+    /// The time in ms from 0 to this many rpm (the SDV3-E's 6083h/6084h).
+    MsToRpm(u32),
 }
 
 /// What an EMCY message carries for an error: bytes 0–1 and the manufacturer field, bytes 3–7

@@ -563,6 +563,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         units: Units {
             position: Factor::ONE,
             velocity: Factor::ONE,
+            acceleration: crate::model::Acceleration::VelocityPerSecond,
         },
         decisions: f
             .decisions
@@ -614,7 +615,28 @@ fn units(u: &crate::file::UnitsFile, p: &Profile) -> Result<Units, Fault> {
         Some(toml::Value::String(s)) if s == "position" => position,
         Some(v) => factor(v, p, "units.velocity")?,
     };
-    Ok(Units { position, velocity })
+    let acceleration = match &u.acceleration {
+        None => crate::model::Acceleration::VelocityPerSecond,
+        Some(toml::Value::Table(t)) if t.contains_key("ms_to_rpm") => {
+            let rpm = t
+                .get("ms_to_rpm")
+                .and_then(toml::Value::as_integer)
+                .and_then(|v| u32::try_from(v).ok())
+                .filter(|v| *v >= 1 && t.len() == 1);
+            crate::model::Acceleration::MsToRpm(rpm.ok_or_else(|| {
+                fault(
+                    "units.acceleration.ms_to_rpm",
+                    Invalid::Value("the only key, an integer rpm ≥ 1".into()),
+                )
+            })?)
+        }
+        Some(v) => crate::model::Acceleration::Factor(factor(v, p, "units.acceleration")?),
+    };
+    Ok(Units {
+        position,
+        velocity,
+        acceleration,
+    })
 }
 
 fn factor(v: &toml::Value, p: &Profile, key: &str) -> Result<Factor, Fault> {

@@ -169,7 +169,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     if let Some(drive) = target.drive {
         let _ = writeln!(
             out,
-            "    use {drive}::profile::{{AppVars, DriveProfile, Factor, FaultReport, Operand}};\n"
+            "    use {drive}::profile::{{AccelerationUnit, AppVars, DriveProfile, Factor, FaultReport, Operand}};\n"
         );
     }
     let _ = writeln!(out, "    /// Size of the OD RAM in bytes.");
@@ -461,6 +461,16 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             "            velocity_factor: {},",
             factor(p, &layout, &p.units.velocity)
         );
+        let acceleration = match p.units.acceleration {
+            crate::model::Acceleration::VelocityPerSecond => {
+                "AccelerationUnit::VelocityPerSecond".into()
+            }
+            crate::model::Acceleration::Factor(f) => {
+                format!("AccelerationUnit::Factor({})", factor(p, &layout, &f))
+            }
+            crate::model::Acceleration::MsToRpm(rpm) => format!("AccelerationUnit::MsToRpm({rpm})"),
+        };
+        let _ = writeln!(out, "            acceleration_unit: {acceleration},");
         let _ = writeln!(out, "        }},");
         let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
         let drive = target.drive.unwrap_or("crate");

@@ -18,7 +18,7 @@ fn module_shape() {
         "pub fn by_name(name: &str) -> Option<&'static crate::profile::DriveProfile>",
         "    ALL.iter().copied().find(|p| p.od.device.is_profile(name))",
         "use ::ethercat_slave::od::{Access, CoeDetails, DataType, DeviceInfo, Entry, EsmRules, Object, ObjectCode, PdoMappable, Profile, RxMappedWrite, SmLayout, SyncSupport, Value, ValueList};",
-        "use crate::profile::{AppVars, DriveProfile, Factor, FaultReport, Operand};",
+        "use crate::profile::{AccelerationUnit, AppVars, DriveProfile, Factor, FaultReport, Operand};",
         "pub mod standard {",
         "pub const RAM_SIZE: usize = ",
         "pub const OUTPUTS_SIZE: usize = 7;",

@@ -1338,6 +1338,40 @@ fn adjusting_services_are_resolved_and_checked() {
 }
 
 #[test]
+fn acceleration_units_are_a_factor_or_ms_to_rpm() {
+    let with_units = |u: &str| STANDARD.replace("[storage]", &format!("[units]\n{u}\n\n[storage]"));
+    let p = od_gen::parse(&with_units("acceleration = { ms_to_rpm = 2000 }"), "ok").unwrap();
+    assert_eq!(
+        p.units.acceleration,
+        od_gen::model::Acceleration::MsToRpm(2000)
+    );
+    assert!(
+        od_gen::rust::generate(&[p]).contains("acceleration_unit: AccelerationUnit::MsToRpm(2000)")
+    );
+    let p = od_gen::parse(
+        &with_units("acceleration = { numerator = 3, scale = [10000, 1] }"),
+        "ok",
+    )
+    .unwrap();
+    assert!(matches!(
+        p.units.acceleration,
+        od_gen::model::Acceleration::Factor(_)
+    ));
+    let p = od_gen::parse(STANDARD, "ok").unwrap();
+    assert_eq!(
+        p.units.acceleration,
+        od_gen::model::Acceleration::VelocityPerSecond
+    );
+    for bad in [
+        "acceleration = { ms_to_rpm = 0 }",
+        "acceleration = { ms_to_rpm = 2000, numerator = 2 }",
+    ] {
+        let (key, _) = invalid(&with_units(bad));
+        assert_eq!(key, "units.acceleration.ms_to_rpm", "{bad}");
+    }
+}
+
+#[test]
 fn cia402_rules_are_resolved_and_checked() {
     let p = od_gen::parse(
         &appended("[cia402]\nenable_without_mode_error = 0x8800"),

@@ -1,0 +1,130 @@
+//! The profile modes of the vendor profiles on the simulated servo, commanded by ethercrab over
+//! each profile's own default PDOs, in each manual's units:
+//!
+//! - SDV3-E §7.4: profile position with controlword bit 6 "ABS/INC" (1 = absolute, the reverse
+//!   of CiA402), the position factor 6093h (16 increments per unit by default), the profile
+//!   velocity 6081h in 0.1 rpm and the ramps 6083h/6084h as the time in ms from 0 to 2000 rpm.
+
+use ethercrab::MainDevice;
+use tests_host::{block_on, master_for};
+
+const CPR: f64 = (1u32 << 20) as f64;
+const CYCLE_NS: u64 = 1_000_000;
+const ENABLE_OPERATION: u16 = 0x0F;
+const NEW_SET_POINT: u16 = 1 << 4;
+const BIT6: u16 = 1 << 6;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const TARGET_REACHED: u16 = 1 << 10;
+const SET_POINT_ACKNOWLEDGE: u16 = 1 << 12;
+const PP: u8 = 1;
+
+/// One SDV3-E cycle over its default PDOs: outputs 6040h, 607Ah, 60FFh, 6071h, 6060h; inputs
+/// 6041h, 6064h, ...; evaluates to (statusword, 6064h, rotor revolutions, rotor rpm).
+macro_rules! sdv3_cycle {
+    ($m:expr, $md:expr, $group:expr, $cw:expr, $target:expr) => {{
+        let sd = $group.subdevice($md, 0).expect("drive");
+        {
+            let mut out = sd.outputs_raw_mut();
+            out[0..2].copy_from_slice(&($cw as u16).to_le_bytes());
+            out[2..6].copy_from_slice(&($target as i32).to_le_bytes());
+            out[12] = PP;
+        }
+        let since = $m.shared.clock().now();
+        $group.tx_rx($md).await.expect("tx/rx");
+        let spent = $m.shared.clock().now() - since;
+        $m.shared.advance(CYCLE_NS.saturating_sub(spent));
+        let inp = sd.inputs_raw();
+        let segment = $m.shared.segment();
+        let plant = &segment.drives()[0].servo.plant;
+        (
+            u16::from_le_bytes([inp[0], inp[1]]),
+            i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
+            plant.mech_angle_rad() / std::f64::consts::TAU,
+            plant.mech_speed_rad_s() / std::f64::consts::TAU * 60.0,
+        )
+    }};
+}
+
+#[test]
+fn sdv3_e_profile_position_bit6_absolute_in_manual_units() {
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(0x6060, 0, PP as i8).await.expect("6060h");
+            // 1000.0 rpm, 0 → 2000 rpm in 333 ms (6000 rpm/s) both ways.
+            sd.sdo_write(0x6081, 0, 10_000u32).await.expect("6081h");
+            sd.sdo_write(0x6083, 0, 333u32).await.expect("6083h");
+            sd.sdo_write(0x6084, 0, 333u32).await.expect("6084h");
+        }
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        let mut sw = 0;
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 20])
+        {
+            (sw, _, _, _) = sdv3_cycle!(m, md, group, cw, 0);
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        // 6093h = 16/1: 65 536 units per revolution.
+        let units_per_rev = CPR / 16.0;
+        // Bit 6 = 1: absolute, 5 revolutions.
+        let five = (5.0 * units_per_rev) as i32;
+        let cw = ENABLE_OPERATION | BIT6;
+        let mut acknowledged = false;
+        for _ in 0..3 {
+            (sw, _, _, _) = sdv3_cycle!(m, md, group, cw | NEW_SET_POINT, five);
+            acknowledged |= sw & SET_POINT_ACKNOWLEDGE != 0;
+        }
+        assert!(acknowledged, "bit 12");
+        let mut peak = 0.0f64;
+        let mut arrived = None;
+        let (mut position, mut rev) = (0, 0.0);
+        for k in 0..800 {
+            let rpm;
+            (sw, position, rev, rpm) = sdv3_cycle!(m, md, group, cw, five);
+            peak = peak.max(rpm.abs());
+            if arrived.is_none() && (rev - 5.0).abs() < 1e-3 && rpm.abs() < 20.0 {
+                arrived = Some(k);
+            }
+        }
+        assert!((rev - 5.0).abs() < 1e-3, "absolute: at {rev} rev");
+        assert!((position - five).abs() <= 10, "6064h {position} units");
+        assert_ne!(sw & TARGET_REACHED, 0);
+        assert!(
+            (peak - 1000.0).abs() < 30.0,
+            "6081h in 0.1 rpm: peak {peak:.0} rpm"
+        );
+        // 5 rev at 1000 rpm with 6000 rpm/s ramps: 0.467 s.
+        let took = arrived.expect("arrived") as f64 * 1e-3;
+        assert!(
+            (took - 0.467).abs() < 0.04,
+            "6083h/6084h in ms to 2000 rpm: {took:.3} s"
+        );
+        // Bit 6 = 0: incremental, +1 revolution.
+        let one = units_per_rev as i32;
+        for _ in 0..3 {
+            sdv3_cycle!(m, md, group, ENABLE_OPERATION | NEW_SET_POINT, one);
+        }
+        for _ in 0..600 {
+            (sw, position, rev, _) = sdv3_cycle!(m, md, group, ENABLE_OPERATION, one);
+        }
+        assert!((rev - 6.0).abs() < 1e-3, "incremental: at {rev} rev");
+        assert!((position - 6 * one).abs() <= 10, "6064h {position}");
+        assert_ne!(sw & TARGET_REACHED, 0);
+    });
+}
