@@ -3,7 +3,8 @@
 //!
 //! - SDV3-E §7.4: profile position with controlword bit 6 "ABS/INC" (1 = absolute, the reverse
 //!   of CiA402), the position factor 6093h (16 increments per unit by default), the profile
-//!   velocity 6081h in 0.1 rpm and the ramps 6083h/6084h as the time in ms from 0 to 2000 rpm.
+//!   velocity 6081h in 0.1 rpm and the ramps 6083h/6084h as the time in ms from 0 to 2000 rpm;
+//! - RSE 7.11: homing method 19 on a home switch, 6064h = 607Ch at the home.
 
 use ethercrab::MainDevice;
 use tests_host::{block_on, master_for};
@@ -126,5 +127,116 @@ fn sdv3_e_profile_position_bit6_absolute_in_manual_units() {
         assert!((rev - 6.0).abs() < 1e-3, "incremental: at {rev} rev");
         assert!((position - 6 * one).abs() <= 10, "6064h {position}");
         assert_ne!(sw & TARGET_REACHED, 0);
+    });
+}
+
+/// RSE 7.11: homing method 19 (the home switch's edge, approached moving negative; no index
+/// methods in this drive) over its default PDOs (outputs 6040h, 607Ah, 60B8h; inputs 603Fh,
+/// 6041h, 6061h, 6064h, ...), 6060h = 6 by SDO (1600h maps no mode), speeds and acceleration in
+/// command units (6091h 1:1 by default); after homing 6064h = 607Ch at the home (7.11 "the stop
+/// position is the mechanical origin and its coordinate equals 607Ch").
+#[test]
+fn rse_homing_method_19_home_switch_edge() {
+    use board_sim::plant::SwitchParams;
+    use std::f64::consts::TAU;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("rse", 1).expect("rse"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        m.shared.segment().drives_mut()[0]
+            .servo
+            .plant
+            .set_switches(SwitchParams {
+                home_rad: Some(0.4 * TAU),
+                limit_pos_rad: Some(3.0 * TAU),
+                limit_neg_rad: Some(-3.0 * TAU),
+                ..SwitchParams::default()
+            });
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(0x6060, 0, 6i8).await.expect("6060h");
+            sd.sdo_write(0x6098, 0, 19i8).await.expect("6098h");
+            sd.sdo_write(0x607C, 0, 1000i32).await.expect("607Ch");
+            // 300 rpm and 30 rpm in command units/s, 6000 rpm/s.
+            sd.sdo_write(0x6099, 1, (CPR * 5.0) as u32)
+                .await
+                .expect("6099h:01");
+            sd.sdo_write(0x6099, 2, (CPR * 0.5) as u32)
+                .await
+                .expect("6099h:02");
+            sd.sdo_write(0x609A, 0, (CPR * 100.0) as u32)
+                .await
+                .expect("609Ah");
+        }
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        let cycle = |cw: u16| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.outputs_raw_mut()[0..2].copy_from_slice(&cw.to_le_bytes());
+            let m = &m;
+            let group = &group;
+            async move {
+                let since = m.shared.clock().now();
+                group.tx_rx(md).await.expect("tx/rx");
+                let spent = m.shared.clock().now() - since;
+                m.shared.advance(CYCLE_NS.saturating_sub(spent));
+                let sd = group.subdevice(md, 0).expect("drive");
+                let inp = sd.inputs_raw();
+                let rev = m.shared.segment().drives()[0].servo.plant.mech_angle_rad() / TAU;
+                (
+                    u16::from_le_bytes([inp[2], inp[3]]),
+                    inp[4] as i8,
+                    i32::from_le_bytes([inp[5], inp[6], inp[7], inp[8]]),
+                    rev,
+                )
+            }
+        };
+        let mut s = (0, 0, 0, 0.0);
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 20])
+        {
+            s = cycle(cw).await;
+        }
+        assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
+        assert_eq!(s.1, 6, "6061h: homing");
+        let mut done = None;
+        for k in 0..5_000 {
+            s = cycle(ENABLE_OPERATION | NEW_SET_POINT).await;
+            if k > 5 && s.0 & 0x3400 == 0x1400 {
+                done = Some(k);
+                break;
+            }
+        }
+        assert!(
+            done.is_some(),
+            "homing attained + target reached: {:#06x}",
+            s.0
+        );
+        for _ in 0..20 {
+            s = cycle(ENABLE_OPERATION | NEW_SET_POINT).await;
+        }
+        assert!(
+            (s.3 - 0.4).abs() < 1e-3,
+            "home at the switch edge: {} rev",
+            s.3
+        );
+        // 6064h reads 607Ch at the home, plus the rotor's offset from it.
+        let off = (s.3 - 0.4) * CPR;
+        assert!(
+            (f64::from(s.2) - 1000.0 - off).abs() <= 60.0,
+            "6064h = 607Ch = 1000 at the home: {} with the rotor {off:.0} increments off",
+            s.2
+        );
     });
 }
