@@ -312,6 +312,15 @@ impl Drive {
                 read_bytes::<2>(ram, vars.target_torque).map_or(0, i16::from_le_bytes),
                 rated_nm,
             ),
+            position_offset: read_i32(ram, vars.position_offset)
+                .map_or(0, |o| position_ratio.position_to_internal(i64::from(o))),
+            velocity_offset: read_i32(ram, vars.velocity_offset)
+                .map_or(0.0, |v| velocity_ratio.velocity_to_internal(v as f32)),
+            // An INT, or the low half of a DINT (the GHA-E's 60B2h).
+            torque_offset: units::torque_from_permille(
+                read_bytes::<2>(ram, vars.torque_offset).map_or(0, i16::from_le_bytes),
+                rated_nm,
+            ),
         };
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;

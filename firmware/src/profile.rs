@@ -132,6 +132,12 @@ pub struct AppVars {
     pub positive_torque_limit: Option<u16>,
     /// 60E1h negative torque limit value (u16, ‰ of the rated torque).
     pub negative_torque_limit: Option<u16>,
+    /// 60B0h position offset (i32, position units).
+    pub position_offset: Option<u16>,
+    /// 60B1h velocity offset (i32, velocity units).
+    pub velocity_offset: Option<u16>,
+    /// 60B2h torque offset (i16, ‰ of the rated torque).
+    pub torque_offset: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -303,6 +309,9 @@ impl AppVars {
         max_torque: None,
         positive_torque_limit: None,
         negative_torque_limit: None,
+        position_offset: None,
+        velocity_offset: None,
+        torque_offset: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

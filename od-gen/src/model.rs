@@ -470,11 +470,17 @@ pub enum Role {
     PositiveTorqueLimit,
     /// 60E1h negative torque limit value (UINT, ‰ of the rated torque).
     NegativeTorqueLimit,
+    /// 60B0h position offset (DINT, position units): added to the CSP target.
+    PositionOffset,
+    /// 60B1h velocity offset (DINT, velocity units): velocity feed-forward in CSP, added in CSV.
+    VelocityOffset,
+    /// 60B2h torque offset (INT, ‰ of the rated torque): torque feed-forward in CSP/CSV, added in CST.
+    TorqueOffset,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 59] = [
+    pub const ALL: [Role; 62] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -534,6 +540,9 @@ impl Role {
         Self::MaxTorque,
         Self::PositiveTorqueLimit,
         Self::NegativeTorqueLimit,
+        Self::PositionOffset,
+        Self::VelocityOffset,
+        Self::TorqueOffset,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -597,6 +606,9 @@ impl Role {
             Self::MaxTorque => "max_torque",
             Self::PositiveTorqueLimit => "positive_torque_limit",
             Self::NegativeTorqueLimit => "negative_torque_limit",
+            Self::PositionOffset => "position_offset",
+            Self::VelocityOffset => "velocity_offset",
+            Self::TorqueOffset => "torque_offset",
         }
     }
     /// Parses the profile-file spelling.
@@ -613,8 +625,18 @@ impl Role {
                 | Self::TargetPosition
                 | Self::TargetVelocity
                 | Self::TargetTorque
+                | Self::PositionOffset
+                | Self::VelocityOffset
+                | Self::TorqueOffset
         )
     }
+    /// Whether an entry of `data_type` can hold the role: its own type, or for the torque
+    /// offset also a DINT (the GHA-E's 60B2h; the firmware reads the low 16 bits, the value's
+    /// range as a ‰ torque).
+    pub fn accepts(self, data_type: DataType) -> bool {
+        data_type == self.data_type() || (self == Self::TorqueOffset && data_type == DataType::Dint)
+    }
+
     /// The data type the role needs.
     pub fn data_type(self) -> DataType {
         match self {
@@ -634,8 +656,13 @@ impl Role {
             | Self::TouchProbe2Positive
             | Self::TouchProbe2Negative
             | Self::SoftwarePositionLimitMin
-            | Self::SoftwarePositionLimitMax => DataType::Dint,
-            Self::TargetTorque | Self::TorqueActualValue | Self::TorqueDemand => DataType::Int,
+            | Self::SoftwarePositionLimitMax
+            | Self::PositionOffset
+            | Self::VelocityOffset => DataType::Dint,
+            Self::TargetTorque
+            | Self::TorqueActualValue
+            | Self::TorqueDemand
+            | Self::TorqueOffset => DataType::Int,
             Self::PositionWindowTime
             | Self::VelocityWindow
             | Self::VelocityWindowTime

@@ -1189,10 +1189,12 @@ fn entry(subindex: u8, name: &str, a: &EntryAttrs, key: &str) -> Result<Entry, F
         }
     };
     if let Some(r) = role {
-        if r.data_type() != data_type {
+        if !r.accepts(data_type) {
             let expected = match r.data_type() {
                 DataType::Uint => "UINT",
                 DataType::Sint => "SINT",
+                DataType::Int => "INT",
+                DataType::Udint => "UDINT",
                 _ => "DINT",
             };
             return Err(fault(

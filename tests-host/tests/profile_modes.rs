@@ -14,7 +14,9 @@
 //! - halt stops the move on 6084h and the move resumes when halt is released;
 //! - profile velocity: the ramp to 60FFh on 6083h, target reached (606Dh), speed zero (bit 12,
 //!   606Fh), 607Fh limiting 60FFh;
-//! - profile torque: the torque ramp at the slope 6087h, target reached at the end of it.
+//! - profile torque: the torque ramp at the slope 6087h, target reached at the end of it;
+//! - the offsets of the cyclic modes: 60B0h shifts the CSP target, 60B1h drives CSV, 60B2h
+//!   is the CST torque demand.
 
 use ethercrab::MainDevice;
 use tests_host::csp::{self, Sample};
@@ -420,5 +422,40 @@ fn standard_profile_torque_ramps_at_the_torque_slope() {
             s.last().unwrap().rpm > s[0].rpm + 10.0,
             "the torque accelerates the free motor"
         );
+    });
+}
+
+#[test]
+fn standard_csp_offsets_shift_the_target_and_feed_forward() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        const CSP: i8 = 8;
+        let group = enabled!(m, md, CSP, &[]);
+        let sd = group.subdevice(md, 0).expect("drive");
+        // 60B0h: the motor goes to 607Ah + 60B0h.
+        sd.sdo_write(0x60B0, 0, CPR / 2).await.expect("60B0h");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, CSP, 500);
+        let last = s.last().unwrap();
+        assert!(
+            (last.revolutions - 0.5).abs() < 1e-3,
+            "at {} rev",
+            last.revolutions
+        );
+        // CSV with 60FFh = 0: 60B1h alone turns the motor.
+        sd.sdo_write(0x60B1, 0, (300.0 / 60.0 * f64::from(CPR)) as i32)
+            .await
+            .expect("60B1h");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, 9, 200);
+        assert!((s.last().unwrap().rpm - 300.0).abs() < 5.0, "60B1h in CSV");
+        sd.sdo_write(0x60B1, 0, 0i32).await.expect("60B1h");
+        run!(m, md, group, ENABLE_OPERATION, 0, 9, 200);
+        // CST with 6071h = 0: 60B2h alone is the torque demand.
+        sd.sdo_write(0x60B2, 0, 50i16).await.expect("60B2h");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, 10, 3);
+        let demand: i16 = sd.sdo_read(0x6074, 0).await.expect("6074h");
+        assert_eq!(demand, 50, "60B2h in CST");
+        assert_eq!(s.last().unwrap().statusword & STATE_MASK, OPERATION_ENABLED);
     });
 }

@@ -158,7 +158,8 @@ pub struct AxisCommand {
     pub mode: ControlMode,
     /// Target position, increments.
     pub position: i64,
-    /// Target velocity (CSV) or velocity offset (CSP), increments/s.
+    /// Target velocity (CSV) or, with the position, the velocity at it (CSP's 60B1h, a
+    /// profile generator's demand; 0 = none, the interpolator derives it), increments/s.
     pub velocity: f32,
     /// Target torque (CST) or torque offset (CSP/CSV), N·m.
     pub torque: f32,
@@ -979,7 +980,11 @@ impl Axis {
     fn push_setpoint(&mut self) {
         let c = self.command;
         match c.mode {
-            ControlMode::Position => self.interpolator.push_position(c.position, None),
+            // A velocity with the position (60B1h in CSP, a profile generator's demand) is the
+            // segment's end slope; 0 = none given.
+            ControlMode::Position => self
+                .interpolator
+                .push_position(c.position, (c.velocity != 0.0).then_some(c.velocity)),
             ControlMode::Velocity => self.interpolator.push_velocity(c.velocity),
             ControlMode::Torque => self.interpolator.push_torque(c.torque),
             // The ramp, not the master, sets the velocity.
