@@ -101,6 +101,15 @@ macro_rules! run {
     }};
 }
 
+/// Asserts the rotor ended within 1/1000 revolution of `rev`.
+fn assert_rotor_at(s: &Sample, rev: f64) {
+    assert!(
+        (s.revolutions - rev).abs() < 1e-3,
+        "rotor at {} rev, expected {rev}",
+        s.revolutions
+    );
+}
+
 fn peak_rpm(samples: &[Sample]) -> f64 {
     samples.iter().map(|s| s.rpm.abs()).fold(0.0, f64::max)
 }
@@ -177,11 +186,7 @@ fn standard_profile_position_single_set_point() {
             "6064h {}",
             last.position
         );
-        assert!(
-            (last.revolutions - 5.0).abs() < 1e-3,
-            "rotor at {} rev",
-            last.revolutions
-        );
+        assert_rotor_at(last, 5.0);
         assert_ne!(last.statusword & TARGET_REACHED, 0);
     });
 }
@@ -221,11 +226,7 @@ fn standard_profile_position_set_of_set_points_stops_between_moves() {
             .fold(f64::MAX, f64::min);
         assert!(at_first < 30.0, "{at_first:.0} rpm at the first target");
         let last = samples.last().unwrap();
-        assert!(
-            (last.revolutions - 4.0).abs() < 1e-3,
-            "rotor at {} rev",
-            last.revolutions
-        );
+        assert_rotor_at(last, 4.0);
         assert_eq!(last.statusword & BIT12, 0, "buffer empty");
         assert_ne!(last.statusword & TARGET_REACHED, 0);
     });
@@ -280,11 +281,7 @@ fn standard_profile_position_relative_change_immediately_accumulates() {
         run!(m, md, group, cw | NEW_SET_POINT, CPR, PP, 2);
         let samples = run!(m, md, group, cw, 0, PP, 1000);
         let last = samples.last().unwrap();
-        assert!(
-            (last.revolutions - 4.0).abs() < 1e-3,
-            "rotor at {} rev",
-            last.revolutions
-        );
+        assert_rotor_at(last, 4.0);
         assert!((last.position - 4 * CPR).abs() <= 50);
     });
 }
@@ -322,11 +319,7 @@ fn standard_profile_position_halt_stops_and_resumes() {
         );
         let resumed = run!(m, md, group, ENABLE_OPERATION, target, PP, 1000);
         let last = resumed.last().unwrap();
-        assert!(
-            (last.revolutions - 6.0).abs() < 1e-3,
-            "rotor at {} rev",
-            last.revolutions
-        );
+        assert_rotor_at(last, 6.0);
         assert_ne!(last.statusword & TARGET_REACHED, 0);
     });
 }
