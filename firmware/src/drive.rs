@@ -96,6 +96,8 @@ pub struct Drive {
     profile_modes: ProfileModes,
     /// The touch probes (60B8h–60BDh, 60D5h–60D8h).
     touch_probes: TouchProbes,
+    /// The mode of operation the drive runs (6061h): the last supported 6060h value.
+    running_mode: u8,
     /// How long the following error has been outside 6065h (statusword bit 13).
     following_error_timer: WindowTimer,
     /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
@@ -128,6 +130,7 @@ impl Drive {
             adjustment: None,
             profile_modes: ProfileModes::new(),
             touch_probes: TouchProbes::new(),
+            running_mode: 0,
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
         }
@@ -193,7 +196,16 @@ impl Drive {
             halt: read_i16(ram, vars.halt_option_code),
             fault_reaction: read_i16(ram, vars.fault_reaction_option_code),
         };
-        let mode = read_bytes::<1>(ram, vars.modes_of_operation);
+        let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
+            // A mode 6502h does not list is not taken: the drive keeps the mode it runs (and
+            // 6061h shows it).
+            let supported = read_u32(ram, vars.supported_drive_modes)
+                .is_none_or(|s| modes::is_supported(requested as i8, s));
+            if supported {
+                self.running_mode = requested;
+            }
+            [self.running_mode]
+        });
         if let Some(report) = self.rules.enable_without_mode_error {
             // Profile rule: enable operation with no mode selected is refused as an error.
             let no_mode = mode.is_none_or(|[m]| m == 0);

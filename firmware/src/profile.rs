@@ -138,6 +138,8 @@ pub struct AppVars {
     pub velocity_offset: Option<u16>,
     /// 60B2h torque offset (i16, ‰ of the rated torque).
     pub torque_offset: Option<u16>,
+    /// 6502h supported drive modes (u32).
+    pub supported_drive_modes: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -312,6 +314,7 @@ impl AppVars {
         position_offset: None,
         velocity_offset: None,
         torque_offset: None,
+        supported_drive_modes: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

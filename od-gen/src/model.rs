@@ -476,11 +476,13 @@ pub enum Role {
     VelocityOffset,
     /// 60B2h torque offset (INT, ‰ of the rated torque): torque feed-forward in CSP/CSV, added in CST.
     TorqueOffset,
+    /// 6502h supported drive modes (UDINT): bit n−1 for mode n; the standard's bit 16 for mode −1.
+    SupportedDriveModes,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 62] = [
+    pub const ALL: [Role; 63] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -543,6 +545,7 @@ impl Role {
         Self::PositionOffset,
         Self::VelocityOffset,
         Self::TorqueOffset,
+        Self::SupportedDriveModes,
     ];
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
@@ -609,6 +612,7 @@ impl Role {
             Self::PositionOffset => "position_offset",
             Self::VelocityOffset => "velocity_offset",
             Self::TorqueOffset => "torque_offset",
+            Self::SupportedDriveModes => "supported_drive_modes",
         }
     }
     /// Parses the profile-file spelling.
@@ -694,7 +698,8 @@ impl Role {
             | Self::HomingSpeedZero
             | Self::HomingAcceleration
             | Self::FollowingErrorWindow
-            | Self::DigitalInputs => DataType::Udint,
+            | Self::DigitalInputs
+            | Self::SupportedDriveModes => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode
             | Self::DisableOperationOptionCode

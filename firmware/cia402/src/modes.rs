@@ -68,6 +68,21 @@ impl Mode {
     }
 }
 
+/// 6502h bit of the manufacturer-specific mode −1 (motor identification) in the profiles that
+/// have it (CiA402 leaves bits 16–31 to the manufacturer).
+pub const SUPPORTED_IDENTIFICATION: u32 = 1 << 16;
+
+/// Whether 6060h value `mode` is one 6502h `supported` lists: bit n−1 for mode n (1–32),
+/// [`SUPPORTED_IDENTIFICATION`] for −1; 0 (no mode) always is.
+pub fn is_supported(mode: i8, supported: u32) -> bool {
+    match mode {
+        0 => true,
+        IDENTIFICATION => supported & SUPPORTED_IDENTIFICATION != 0,
+        1..=32 => supported & (1 << (mode - 1)) != 0,
+        _ => false,
+    }
+}
+
 /// The loop a set-point closes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -204,6 +219,22 @@ mod tests {
         assert_eq!(
             (sp.control, sp.position, sp.torque),
             (Loop::Torque, 100, 0.5)
+        );
+    }
+
+    #[test]
+    fn supported_modes_follow_6502h() {
+        // The standard profile's 6502h: PP, PV, PT, HM, CSP, CSV, CST and −1.
+        let standard = 0x0001_03AD;
+        for m in [0, 1, 3, 4, 6, 8, 9, 10, -1] {
+            assert!(is_supported(m, standard), "{m}");
+        }
+        for m in [2, 5, 7, 11, -2, i8::MIN, i8::MAX] {
+            assert!(!is_supported(m, standard), "{m}");
+        }
+        assert!(
+            !is_supported(-1, 0x3AD),
+            "a vendor without the identification bit"
         );
     }
 
