@@ -592,13 +592,11 @@ impl Drive {
             return;
         }
         let c = shifted_captures(link.captures(), self.position_shift);
-        let signals = homing_signals(&c);
-        let [p1, p2] = c.probes.map(switch_signal);
         let out = self.touch_probes.step(
             &touch_probe::Inputs {
                 function,
-                probes: [p1, p2],
-                index: signals.index,
+                probes: c.probes.map(switch_signal),
+                index: edges(c.index),
                 homing: self.profile_modes.homing_running(),
             },
             rules,
@@ -906,11 +904,7 @@ fn torque_limits(ram: &[u8], vars: &AppVars, rated_nm: f32) -> Option<(f32, f32)
     if max.is_none() && positive.is_none() && negative.is_none() {
         return None;
     }
-    let lower = |a: Option<u16>, b: Option<u16>| match (a, b) {
-        (Some(a), Some(b)) => a.min(b),
-        (Some(x), None) | (None, Some(x)) => x,
-        (None, None) => u16::MAX,
-    };
+    let lower = |a: Option<u16>, b: Option<u16>| a.into_iter().chain(b).min().unwrap_or(u16::MAX);
     let nm = |p: u16| units::torque_from_permille_f32(f32::from(p), rated_nm);
     Some((nm(lower(max, positive)), nm(lower(max, negative))))
 }

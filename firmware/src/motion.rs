@@ -200,7 +200,7 @@ impl ProfileModes {
                     home_found,
                 };
             }
-            _ => self.position(inputs, dt_s, acknowledge),
+            _ => self.position(inputs, held_user, dt_s, acknowledge),
         };
         Output {
             set_point,
@@ -248,23 +248,27 @@ impl ProfileModes {
         (set_point, out.statusword, out.home_found)
     }
 
-    /// Profile position: the move of the current set-point.
-    fn position(&mut self, inputs: &Inputs, dt_s: f32, acknowledge: u16) -> (SetPoint, u16) {
+    /// Profile position: the move of the current set-point; the drive holds `actual_user`
+    /// (the actual position in user units).
+    fn position(
+        &mut self,
+        inputs: &Inputs,
+        actual_user: i64,
+        dt_s: f32,
+        acknowledge: u16,
+    ) -> (SetPoint, u16) {
         let ratio = inputs.position_ratio;
-        let clamp = |target: i64| {
-            inputs
-                .position_range
-                .map_or((target, false), |l| l.clamp(target))
-        };
-        // The (last) target beyond a software limit: bit 11 while it stands.
-        let limited = self
-            .set_points
-            .target()
-            .is_some_and(|t| clamp(ratio.position_to_internal(t)).1);
+        // The target (the current move's, else the last one) in increments, limited to the
+        // software limits; converted once per cycle (an i128 division with user units).
+        let target = self.set_points.target().map(|t| {
+            let t = ratio.position_to_internal(t);
+            inputs.position_range.map_or((t, false), |l| l.clamp(t))
+        });
+        // A target beyond a software limit: bit 11 while it stands.
+        let limited = target.is_some_and(|(_, limited)| limited);
         if inputs.running {
-            if let Some(current) = self.set_points.current() {
-                // A target beyond a software limit: the move ends at the limit.
-                let (target, _) = clamp(ratio.position_to_internal(current.target));
+            // With a move under way, `target` is its target; the move ends at the limit.
+            if let (Some(current), Some((target, _))) = (self.set_points.current(), target) {
                 let end_speed = self.end_speed(current, ratio);
                 if self
                     .trajectory
@@ -275,7 +279,6 @@ impl ProfileModes {
                 }
             }
         }
-        let actual_user = ratio.position_from_internal(inputs.actual_position);
         let target_user = self.set_points.target().unwrap_or(actual_user);
         let (window, time) = inputs.position_window;
         let inside = !self.set_points.busy()

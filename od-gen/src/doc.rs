@@ -1045,21 +1045,8 @@ fn motor_faults(out: &mut String, p: &Profile) {
 /// `[cia402]`: the CiA402 behaviour the manual adds.
 fn cia402_rules(out: &mut String, p: &Profile) {
     let r = &p.cia402;
-    if r.enable_without_mode_error.is_none()
-        && !r.stops_end_switched_off
-        && !r.switch_on_requires_main_power
-        && !r.pp_bit6_absolute
-        && r.pp_change_on_set_point
-        && r.homing_methods == crate::model::CIA402_HOMING_METHODS
-        && r.homing_method_aliases.is_empty()
-        && r.touch_probe_bit7 == crate::model::TouchProbeBit7::None
-        && !r.touch_probe_bit6_source
-        && !r.touch_probe1_off_while_homing
-        && !r.touch_probe2_off_while_homing
-        && r.following_error_fault
-        && !r.digital_inputs_limits_swapped
-        && !r.following_error_zero_window_off
-    {
+    if *r == crate::model::Cia402Rules::default() {
+        // CiA402 as written: nothing to list.
         return;
     }
     out.push_str("## CiA402 rules\n\n");

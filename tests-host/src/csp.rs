@@ -116,8 +116,7 @@ pub async fn phase_locked(
     }
     let since = m.shared.clock().now();
     group.tx_rx(md).await.expect("tx/rx");
-    let spent = m.shared.clock().now() - since;
-    m.shared.advance(CYCLE_NS.saturating_sub(spent));
+    m.shared.finish_cycle(since, CYCLE_NS);
     let inp = sd.inputs_raw();
     let segment = m.shared.segment();
     let plant = &segment.drives()[0].servo.plant;

@@ -72,8 +72,7 @@ macro_rules! cycle {
         // would now and then send no new target in a cycle: a CSP hold).
         let since = $m.shared.clock().now();
         $group.tx_rx($md).await.expect("tx/rx");
-        let spent = $m.shared.clock().now() - since;
-        $m.shared.advance(CYCLE_NS.saturating_sub(spent));
+        $m.shared.finish_cycle(since, CYCLE_NS);
         let inp = sd.inputs_raw();
         let rpm = $m.shared.segment().drives()[0]
             .servo

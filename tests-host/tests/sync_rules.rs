@@ -152,13 +152,6 @@ async fn into_dc_op(m: &InProcess, md: &MainDevice<'_>, cycle_ns: u64) -> OpGrou
     panic!("no OP: {:?}", al_status(md).await);
 }
 
-/// Advances simulated time to one `cycle_ns` after `since` (the frames of the cycle take wire
-/// time too): the master's cycle stays phase-locked to SYNC0, one SYNC0 per cycle.
-fn finish_cycle(m: &InProcess, since: u64, cycle_ns: u64) {
-    let spent = m.shared.clock().now() - since;
-    m.shared.advance(cycle_ns.saturating_sub(spent));
-}
-
 #[test]
 fn sdv3e_free_run_cycle_is_1c32h_02_and_must_be_1_to_10_ms() {
     let p = profile("sdv3-e");
@@ -287,7 +280,7 @@ fn sigma_v_sd_sync_error(slow_sync0: bool, missed_cycle: fn(usize) -> bool) {
             if !missed_cycle(k) {
                 group.tx_rx_dc(md).await.expect("tx/rx");
             }
-            finish_cycle(&m, since, CYCLE_NS);
+            m.shared.finish_cycle(since, CYCLE_NS);
         }
         assert_eq!(al_status(md).await, (SAFEOP | AL_ERROR, SYNC_ERROR));
         let coe = emergency(&m, md, p.sm.mailbox_in.start, CYCLE_NS).await;
@@ -340,7 +333,7 @@ fn sigma_v_sd_a_single_missing_frame_does_not_trip() {
             if k % 10 != 0 {
                 group.tx_rx_dc(md).await.expect("tx/rx");
             }
-            finish_cycle(&m, since, CYCLE_NS);
+            m.shared.finish_cycle(since, CYCLE_NS);
         }
         assert_eq!(al_status(md).await, (0x08, 0), "still OP");
         let sd = group.subdevice(md, 0).expect("drive");
@@ -696,7 +689,7 @@ fn sdv3e_outputs_lost_p4_03_times_in_a_row_in_csp_are_csd() {
                         sd.outputs_raw_mut()[MODE_BYTE] = mode;
                         group.tx_rx_dc(md).await.expect("tx/rx");
                     }
-                    finish_cycle(m, since, CYCLE_NS);
+                    m.shared.finish_cycle(since, CYCLE_NS);
                 }
             }
         };

@@ -33,8 +33,7 @@ macro_rules! sdv3_cycle {
         }
         let since = $m.shared.clock().now();
         $group.tx_rx($md).await.expect("tx/rx");
-        let spent = $m.shared.clock().now() - since;
-        $m.shared.advance(CYCLE_NS.saturating_sub(spent));
+        $m.shared.finish_cycle(since, CYCLE_NS);
         let inp = sd.inputs_raw();
         let segment = $m.shared.segment();
         let plant = &segment.drives()[0].servo.plant;
@@ -187,8 +186,7 @@ fn rse_homing_method_19_home_switch_edge() {
             async move {
                 let since = m.shared.clock().now();
                 group.tx_rx(md).await.expect("tx/rx");
-                let spent = m.shared.clock().now() - since;
-                m.shared.advance(CYCLE_NS.saturating_sub(spent));
+                m.shared.finish_cycle(since, CYCLE_NS);
                 let sd = group.subdevice(md, 0).expect("drive");
                 let inp = sd.inputs_raw();
                 let rev = m.shared.segment().drives()[0].servo.plant.mech_angle_rad() / TAU;

@@ -228,8 +228,7 @@ async fn run_dc_reading(
             .map(|v| v.to_vec())
             .map_err(abort_code);
         uploads.push(r);
-        let spent = m.shared.clock().now() - since;
-        m.shared.advance(cycle_ns.saturating_sub(spent));
+        m.shared.finish_cycle(since, cycle_ns);
     }
     let sizes = (sd.outputs_raw().len(), sd.inputs_raw().len());
     let _ = group.into_safe_op(md).await.expect("OP -> SAFE-OP");

@@ -69,6 +69,13 @@ impl<D: SimDevice> Shared<D> {
         s.advance(dt_ns);
         self.clock.set(s.now_ns());
     }
+    /// Advances simulated time to one `cycle_ns` after `since_ns` (the time the cycle's frames
+    /// started: their wire time is part of the cycle), so a master's cycle stays phase-locked to
+    /// the drives' SYNC0 or free-run timer.
+    pub fn finish_cycle(&self, since_ns: u64, cycle_ns: u64) {
+        let spent = self.clock.now().saturating_sub(since_ns);
+        self.advance(cycle_ns.saturating_sub(spent));
+    }
     /// The clock.
     pub fn clock(&self) -> SimClock {
         self.clock

@@ -406,14 +406,18 @@ impl Plot {
 
     /// Writes the SVG to `path`, creating missing parent directories.
     pub fn write(&self, path: impl AsRef<Path>) -> std::io::Result<()> {
-        let path = path.as_ref();
-        if let Some(parent) = path.parent() {
-            if !parent.as_os_str().is_empty() {
-                std::fs::create_dir_all(parent)?;
-            }
-        }
-        std::fs::write(path, self.to_svg())
+        write_svg(path.as_ref(), &self.to_svg())
     }
+}
+
+/// Writes `svg` to `path`, creating missing parent directories.
+pub fn write_svg(path: &Path, svg: &str) -> std::io::Result<()> {
+    if let Some(parent) = path.parent() {
+        if !parent.as_os_str().is_empty() {
+            std::fs::create_dir_all(parent)?;
+        }
+    }
+    std::fs::write(path, svg)
 }
 
 #[cfg(test)]

@@ -51,7 +51,7 @@ const HOMING_METHOD: i8 = 19;
 const STEP_LIMIT: usize = 10_000;
 
 /// What the tour saw, one entry per cycle.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TourSample {
     /// Simulated time, s.
     pub t_s: f64,
@@ -280,15 +280,7 @@ impl Tour<'_, '_> {
     }
 
     fn latest(&self) -> TourSample {
-        self.report.samples.last().copied().unwrap_or(TourSample {
-            t_s: 0.0,
-            statusword: 0,
-            position: 0,
-            mode: 0,
-            revolutions: 0.0,
-            rpm: 0.0,
-            iq_a: 0.0,
-        })
+        self.report.samples.last().copied().unwrap_or_default()
     }
 
     /// Cycles with `cw`/`target`/`mode` until `done` holds (at most [`STEP_LIMIT`] cycles).
@@ -332,8 +324,7 @@ impl Tour<'_, '_> {
         let clock = self.m.shared.clock();
         let since = clock.now();
         group.tx_rx(md).await?;
-        let spent = clock.now().saturating_sub(since);
-        self.m.shared.advance(CYCLE_NS.saturating_sub(spent));
+        self.m.shared.finish_cycle(since, CYCLE_NS);
         let inp = sd.inputs_raw();
         let b = |i: usize| inp.get(i).copied().unwrap_or(0);
         let sample = {
@@ -420,11 +411,6 @@ impl StackedPlot {
 
     /// Writes the SVG to `path`, creating missing parent directories.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        if let Some(parent) = path.parent() {
-            if !parent.as_os_str().is_empty() {
-                std::fs::create_dir_all(parent)?;
-            }
-        }
-        std::fs::write(path, self.to_svg())
+        crate::plot::write_svg(path, &self.to_svg())
     }
 }
