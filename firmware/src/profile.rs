@@ -326,12 +326,16 @@ impl AppVars {
 pub struct DriveProfile {
     /// The object dictionary (identity, SM layout, objects, OD RAM defaults).
     pub od: Profile,
-    /// Application variables by role.
-    pub vars: AppVars,
+    /// Application variables by role, one set per axis (at least one, at most [`MAX_AXES`]): a
+    /// further axis has its own copies of the objects (e.g. the Σ-V-SD's 68xxh).
+    pub axes: &'static [AppVars],
     /// The CiA402 error code (603Fh, also the EMCY error code) of each internal motor fault,
     /// indexed by `MotorFault::code() - 1` (profile table `[motor_faults]`); read it with
     /// [`Self::motor_fault_code`].
     pub motor_faults: &'static [FaultReport; MOTOR_FAULT_COUNT],
+    /// The EMCY byte (3–7) that carries the number of the axis (1, 2) a drive error belongs to
+    /// (`[emcy] axis_number_byte`, the Σ-V-SD's byte 7).
+    pub emcy_axis_number_byte: Option<u8>,
     /// The profile's adjusting-service objects (`[[adjusting]]`; at most
     /// [`crate::drive::MAX_ADJUSTING_SERVICES`]).
     pub adjusting: &'static [ServiceSpec],
@@ -397,6 +401,9 @@ impl Cia402Rules {
         }
     }
 }
+
+/// The most axes one drive runs ([`DriveProfile::axes`]).
+pub const MAX_AXES: usize = 2;
 
 /// Number of internal motor faults: the length of [`DriveProfile::motor_faults`].
 pub const MOTOR_FAULT_COUNT: usize = MotorFault::ALL.len();
@@ -620,5 +627,88 @@ mod acceleration_units {
             scale: (10_000, 1),
         });
         assert_eq!(sigma.to_internal(1000, &ram, CPR, tenth_rpm), 1e7);
+    }
+}
+
+#[cfg(test)]
+mod axis_vars {
+    use ethercat_slave::od::Value;
+
+    use super::AppVars;
+    use crate::profiles;
+
+    /// The OD RAM offset of entry `index:subindex` of profile `name`.
+    fn ram_offset(name: &str, index: u16, subindex: u8) -> Option<u16> {
+        let p = profiles::by_name(name)?;
+        let o = p.od.objects.iter().find(|o| o.index == index)?;
+        match o.entries.iter().find(|e| e.subindex == subindex)?.value {
+            Value::Ram(at) => Some(at),
+            _ => None,
+        }
+    }
+
+    fn axes(name: &str) -> &'static [AppVars] {
+        profiles::by_name(name).expect("profile").axes
+    }
+
+    /// Σ-V-SD §2.4: axis 2's CiA402 objects are axis 1's + 800h; §4.5 the user units + 400h.
+    #[test]
+    fn the_two_axis_servopack_binds_axis_2_to_the_68xxh_objects() {
+        let [one, two] = axes("sigma-v-sd-2axis") else {
+            panic!("two axes expected");
+        };
+        let cases = [
+            (one.controlword, two.controlword, 0x6040, 0),
+            (one.statusword, two.statusword, 0x6041, 0),
+            (one.target_position, two.target_position, 0x607A, 0),
+            (
+                one.position_actual_value,
+                two.position_actual_value,
+                0x6064,
+                0,
+            ),
+            (one.modes_of_operation, two.modes_of_operation, 0x6060, 0),
+            (one.error_code, two.error_code, 0x603F, 0),
+            (one.homing_method, two.homing_method, 0x6098, 0),
+            (
+                one.touch_probe_function,
+                two.touch_probe_function,
+                0x60B8,
+                0,
+            ),
+        ];
+        for (first, second, index, sub) in cases {
+            assert_eq!(
+                first,
+                ram_offset("sigma-v-sd-2axis", index, sub),
+                "{index:#06x}"
+            );
+            assert_eq!(
+                second,
+                ram_offset("sigma-v-sd-2axis", index + 0x800, sub),
+                "{:#06x}",
+                index + 0x800
+            );
+            assert_ne!(first, second);
+        }
+        // User units: 2301h:01 for axis 1, 2701h:01 for axis 2.
+        let numerator = |v: &AppVars| match v.position_factor.numerator {
+            super::Operand::Ram { at, .. } => Some(at),
+            _ => None,
+        };
+        assert_eq!(numerator(one), ram_offset("sigma-v-sd-2axis", 0x2301, 1));
+        assert_eq!(numerator(two), ram_offset("sigma-v-sd-2axis", 0x2701, 1));
+    }
+
+    #[test]
+    fn one_axis_profiles_have_one_set_of_variables() {
+        for p in profiles::ALL {
+            let expected = if p.od.device.profile == "sigma-v-sd-2axis" {
+                2
+            } else {
+                1
+            };
+            assert_eq!(p.axes.len(), expected, "{}", p.od.device.profile);
+        }
     }
 }

@@ -38,7 +38,7 @@ pub fn on_sync0<P: EscPdi, const RAM: usize>(
     };
     // 3–6: CiA402 and the axis, on the objects the master just wrote.
     let (drive, ram) = slave.application();
-    let event = drive.cycle(ram, cycle_ns);
+    let events = drive.cycle(ram, cycle_ns);
     // 7–8: EtherCAT.
-    slave.cycle_end(pdi, event, now_ns)
+    slave.cycle_end(pdi, &events, now_ns)
 }

@@ -365,12 +365,21 @@ fn remove_omitted(table: &mut Table, source: &str) -> Result<(), Error> {
     Ok(())
 }
 
+/// Removes the role of a replicated object or entry, keeping its storage in RAM if the role gave
+/// it that (an explicit `storage` stays).
+fn unbind_role(t: &mut Table) {
+    if t.remove("role").is_some() && !t.contains_key("storage") {
+        t.insert("storage".into(), Value::String("ram".into()));
+    }
+}
+
 fn int(t: &Table, key: &str) -> Option<i64> {
     t.get(key).and_then(Value::as_integer)
 }
 
 /// `[[replicate]] { first, last, offset }`: copies of the objects in `first..=last` at
-/// `index + offset`, without roles (the firmware binds its variables to the first axis). An
+/// `index + offset`, without roles (the firmware finds a further axis' variables through the
+/// offsets, `Profile::axis_index`). An
 /// object declared at a target index is merged over the copy (it states what differs on the
 /// second axis). The `[[replicate]]` tables stay in the profile (documentation).
 fn replicate(table: &mut Table, source: &str) -> Result<(), Error> {
@@ -410,10 +419,12 @@ fn replicate(table: &mut Table, source: &str) -> Result<(), Error> {
             }
             let mut copy = object.clone();
             copy.insert("index".into(), Value::Integer(target));
-            copy.remove("role");
+            // The role stays with the first axis; the firmware binds a further axis to the copy
+            // through the rule's offset, so the copy of a role's entry is a RAM variable too.
+            unbind_role(&mut copy);
             if let Some(Value::Array(entries)) = copy.get_mut("entry") {
                 for e in entries.iter_mut().filter_map(Value::as_table_mut) {
-                    e.remove("role");
+                    unbind_role(e);
                 }
             }
             copies.push(Value::Table(copy));

@@ -562,6 +562,12 @@ fn synchronisation(out: &mut String, p: &Profile) {
             },
         ],
         vec![
+            "Axis number in the EMCY".into(),
+            p.emcy
+                .axis_number_byte
+                .map_or("—".into(), |b| format!("byte {b}")),
+        ],
+        vec![
             "Emergency of an AL error".into(),
             format!(
                 "{} [state before, AL status code, state after, 0]",

@@ -633,6 +633,10 @@ pub struct EmcyFile {
     /// ETG.1000.6 "EtherCAT state machine transition").
     #[serde(default = "esm_transition_code")]
     pub al_error_code: u16,
+    /// The EMCY byte (3–7, the manufacturer-specific field) that carries the number of the axis
+    /// (1, 2, ...) a drive error belongs to (the Σ-V-SD's byte 7); none by default.
+    #[serde(default)]
+    pub axis_number_byte: Option<u8>,
 }
 
 fn cia301() -> String {
@@ -651,6 +655,7 @@ impl Default for EmcyFile {
         Self {
             error_register: cia301(),
             al_error_code: ESM_TRANSITION_EMCY,
+            axis_number_byte: None,
         }
     }
 }

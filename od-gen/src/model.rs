@@ -547,6 +547,14 @@ impl Role {
         Self::TorqueOffset,
         Self::SupportedDriveModes,
     ];
+    /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
+    /// commissioned motor data (vendor objects a unit may keep once for all its axes).
+    pub fn per_axis(self) -> bool {
+        !matches!(
+            self,
+            Self::MotorResistance | Self::MotorLd | Self::MotorLq | Self::MotorInertia
+        )
+    }
     /// The `AppVars` field name (also the profile-file spelling).
     pub fn field(self) -> &'static str {
         match self {
@@ -1280,6 +1288,8 @@ pub struct EmcyRules {
     pub register_mask: u8,
     /// Emergency code of an AL error no alarm names.
     pub al_error_code: u16,
+    /// The EMCY byte (3–7) that carries the axis number of a drive error.
+    pub axis_number_byte: Option<u8>,
 }
 
 /// EtherCAT state machine rules of a profile (`[esm]`).
@@ -1605,6 +1615,38 @@ impl Profile {
     /// The entry `index:subindex`.
     pub fn entry(&self, index: u16, subindex: u8) -> Option<&Entry> {
         self.object(index).and_then(|o| o.entry(subindex))
+    }
+    /// The role entry `index:subindex` plays: its own, or on a further axis' copy (e.g. 6841h
+    /// of the Σ-V-SD for two axes) the role of the first axis' original.
+    pub fn role_of(&self, index: u16, subindex: u8) -> Option<Role> {
+        let own = self.entry(index, subindex).and_then(|e| e.role);
+        own.or_else(|| {
+            self.objects.iter().find_map(|o| {
+                let copied = (1..self.axis_count())
+                    .any(|axis| o.index != index && self.axis_index(o.index, axis) == index);
+                copied
+                    .then(|| o.entry(subindex).and_then(|e| e.role))
+                    .flatten()
+            })
+        })
+    }
+    /// The drive's axes (CiA402 channels, `[device] ds402_channels`), at least one.
+    pub fn axis_count(&self) -> u8 {
+        self.device.ds402_channels.max(1)
+    }
+    /// Axis `axis`'s (0 = the first) copy of object `index`: shifted `axis` times by the offset
+    /// of the `[[replicate]]` rule whose range holds `index` (e.g. 607Ah → 687Ah on the
+    /// Σ-V-SD's second axis); `index` itself outside every rule (an object of the whole unit)
+    /// or when the shift leaves the index space.
+    pub fn axis_index(&self, index: u16, axis: u8) -> u16 {
+        self.replicate
+            .iter()
+            .find(|(first, last, _)| (*first..=*last).contains(&index))
+            .and_then(|(_, _, offset)| {
+                let shifted = u32::from(index) + u32::from(*offset) * u32::from(axis);
+                u16::try_from(shifted).ok()
+            })
+            .unwrap_or(index)
     }
     /// Whether `e` of `o` is a stored parameter, a "backup" entry ([`StorageRules::stores`]).
     pub fn is_backup(&self, o: &Object, e: &Entry) -> bool {

@@ -11,6 +11,9 @@ use crate::file::{
 };
 use crate::model::*;
 
+/// The bytes of an emergency message that form its manufacturer-specific field (CiA 301).
+const EMCY_DATA_BYTES: std::ops::RangeInclusive<u8> = 3..=7;
+
 /// Parses TOML text into a checked profile. `source` names the file in error messages.
 /// `dir` is the file's folder (where `extends` looks first), `None` for a built-in profile.
 pub fn parse(text: &str, source: &str, dir: Option<&Path>) -> Result<Profile, Error> {
@@ -278,6 +281,17 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
                 ))
             }
             c => c,
+        },
+        axis_number_byte: match f.emcy.axis_number_byte {
+            Some(b) if !(EMCY_DATA_BYTES).contains(&b) => {
+                return Err(fault(
+                    "emcy.axis_number_byte",
+                    Invalid::Value(format!(
+                        "byte {b} is not in the manufacturer-specific field (bytes 3 to 7)"
+                    )),
+                ))
+            }
+            b => b,
         },
     };
     let kind = match f.kind.as_deref() {

@@ -270,12 +270,19 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "    ];");
     }
 
-    let var = |r: Role| -> String {
+    // The variable of role `r` on axis `axis` (0 = the first): the role's entry, or its copy
+    // on a further axis (validate checked that the copies exist).
+    let var = |r: Role, axis: u8| -> String {
         p.objects
             .iter()
             .flat_map(|o| o.entries.iter().map(move |e| (o.index, e)))
             .find(|(_, e)| e.role == Some(r))
-            .and_then(|(i, e)| layout.offsets.get(&(i, e.subindex)))
+            .and_then(|(i, e)| {
+                layout
+                    .offsets
+                    .get(&(p.axis_index(i, axis), e.subindex))
+                    .or_else(|| layout.offsets.get(&(i, e.subindex)))
+            })
             .map_or("None".into(), |off| format!("Some({off})"))
     };
     let boot = |s: Option<Sm>| s.map_or("None".into(), |s| format!("Some({})", sm(s, s.length)));
@@ -447,32 +454,44 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     }
     if target.drive.is_some() {
         let _ = writeln!(out, "{od_close}");
-        let _ = writeln!(out, "        vars: AppVars {{");
-        for r in Role::ALL {
-            let _ = writeln!(out, "            {}: {},", r.field(), var(r));
+        let _ = writeln!(out, "        axes: &[");
+        for axis in 0..p.axis_count() {
+            let _ = writeln!(out, "            // Axis {}.", axis + 1);
+            let _ = writeln!(out, "            AppVars {{");
+            for r in Role::ALL {
+                let _ = writeln!(out, "                {}: {},", r.field(), var(r, axis));
+            }
+            let _ = writeln!(
+                out,
+                "                position_factor: {},",
+                factor(p, &layout, &p.units.position, axis)
+            );
+            let _ = writeln!(
+                out,
+                "                velocity_factor: {},",
+                factor(p, &layout, &p.units.velocity, axis)
+            );
+            let acceleration = match p.units.acceleration {
+                crate::model::Acceleration::VelocityPerSecond => {
+                    "AccelerationUnit::VelocityPerSecond".into()
+                }
+                crate::model::Acceleration::Factor(f) => {
+                    format!("AccelerationUnit::Factor({})", factor(p, &layout, &f, axis))
+                }
+                crate::model::Acceleration::MsToRpm(rpm) => {
+                    format!("AccelerationUnit::MsToRpm({rpm})")
+                }
+            };
+            let _ = writeln!(out, "                acceleration_unit: {acceleration},");
+            let _ = writeln!(out, "            }},");
         }
-        let _ = writeln!(
-            out,
-            "            position_factor: {},",
-            factor(p, &layout, &p.units.position)
-        );
-        let _ = writeln!(
-            out,
-            "            velocity_factor: {},",
-            factor(p, &layout, &p.units.velocity)
-        );
-        let acceleration = match p.units.acceleration {
-            crate::model::Acceleration::VelocityPerSecond => {
-                "AccelerationUnit::VelocityPerSecond".into()
-            }
-            crate::model::Acceleration::Factor(f) => {
-                format!("AccelerationUnit::Factor({})", factor(p, &layout, &f))
-            }
-            crate::model::Acceleration::MsToRpm(rpm) => format!("AccelerationUnit::MsToRpm({rpm})"),
-        };
-        let _ = writeln!(out, "            acceleration_unit: {acceleration},");
-        let _ = writeln!(out, "        }},");
+        let _ = writeln!(out, "        ],");
         let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
+        let _ = writeln!(
+            out,
+            "        emcy_axis_number_byte: {:?},",
+            p.emcy.axis_number_byte
+        );
         let drive = target.drive.unwrap_or("crate");
         let services: Vec<String> = p
             .adjusting
@@ -532,6 +551,13 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         );
     }
     let _ = writeln!(out, "    }};\n");
+    if let Some(drive) = target.drive {
+        let _ = writeln!(
+            out,
+            "    const _: () = assert!({drive}::profile::MAX_AXES == {}, \"od-gen's axis limit differs from the firmware's\");",
+            crate::validate::MAX_AXES
+        );
+    }
     let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");
     let _ = writeln!(out, "    const _: () = assert!(super::check::objects_sorted(OBJECTS), \"objects not sorted by index\");");
     let _ = writeln!(out, "    const _: () = assert!(super::check::entries_sorted(OBJECTS), \"entries not sorted by subindex\");");
@@ -555,15 +581,17 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
     let _ = writeln!(out, "}}\n");
 }
 
-/// A `[units]` factor as the firmware's `Factor`: entries in the OD RAM by offset and length,
-/// constant entries by their value.
-fn factor(p: &Profile, layout: &RamLayout, f: &crate::model::Factor) -> String {
+/// A `[units]` factor of axis `axis` (0 = the first; its copies of the factor's objects) as the
+/// firmware's `Factor`: entries in the OD RAM by offset and length, constant entries by their
+/// value.
+fn factor(p: &Profile, layout: &RamLayout, f: &crate::model::Factor, axis: u8) -> String {
     use crate::model::Operand as O;
     let side = |o: &O| -> String {
         match *o {
             O::Const(v) => format!("Operand::Const({v})"),
             O::CountsPerRev => "Operand::CountsPerRev".into(),
             O::Entry(index, sub) => {
+                let index = p.axis_index(index, axis);
                 let e = p.entry(index, sub);
                 match (layout.offsets.get(&(index, sub)), e) {
                     (Some(at), Some(e)) => {

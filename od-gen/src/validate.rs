@@ -367,7 +367,12 @@ fn sync(p: &Profile) -> Result<(), Fault> {
     Ok(())
 }
 
+/// The most axes a drive profile may have (`[device] ds402_channels`): the firmware's
+/// `profile::MAX_AXES`, which the generated code asserts to agree.
+pub const MAX_AXES: u8 = 2;
+
 fn roles(p: &Profile) -> Result<(), Fault> {
+    axes(p)?;
     let mut seen = BTreeSet::new();
     for o in &p.objects {
         for e in &o.entries {
@@ -385,6 +390,48 @@ fn roles(p: &Profile) -> Result<(), Fault> {
                     return Err(fault(
                         &format!("object[{:#06x}].role", o.index),
                         Invalid::DuplicateRole(r.field().into()),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A drive with more than one axis: each further axis has its own copy of every CiA402
+/// variable the firmware binds (`[[replicate]]`), at most [`MAX_AXES`] axes.
+fn axes(p: &Profile) -> Result<(), Fault> {
+    if p.kind != ProfileKind::Drive || p.axis_count() == 1 {
+        return Ok(());
+    }
+    if p.axis_count() > MAX_AXES {
+        return Err(fault(
+            "device.ds402_channels",
+            Invalid::Value(format!(
+                "the firmware drives at most {MAX_AXES} axes in one slave"
+            )),
+        ));
+    }
+    for o in &p.objects {
+        for e in o
+            .entries
+            .iter()
+            .filter(|e| e.role.is_some_and(Role::per_axis))
+        {
+            for axis in 1..p.axis_count() {
+                let copy = p.axis_index(o.index, axis);
+                let own_ram = copy != o.index
+                    && p.entry(copy, e.subindex)
+                        .is_some_and(|c| c.storage == Storage::Ram && c.data_type == e.data_type);
+                if !own_ram {
+                    return Err(fault(
+                        "device.ds402_channels",
+                        Invalid::Value(format!(
+                            "axis {} has no copy of {:#06x}:{} (its own RAM entry of the same type, placed by [[replicate]])",
+                            axis + 1,
+                            o.index,
+                            e.subindex
+                        )),
                     ));
                 }
             }

@@ -1442,3 +1442,48 @@ fn cia402_rules_are_resolved_and_checked() {
     let (key, _) = invalid(&appended("[cia402]\nenable_with_mode_error = 1"));
     assert!(key.starts_with("cia402"), "{key}");
 }
+
+/// A second axis needs its own copy of every CiA402 variable (`[[replicate]]`), and the firmware
+/// runs at most two axes (Σ-V-SD §2.4: axis 2 at +800h).
+#[test]
+fn further_axes_need_their_own_variables() {
+    let two = with("ds402_channels = 1", "ds402_channels = 2");
+    let (key, error) = invalid(&two);
+    assert_eq!(key, "device.ds402_channels");
+    assert!(
+        matches!(&error, Invalid::Value(m) if m.contains("axis 2 has no copy of 0x603f:0")),
+        "{error:?}"
+    );
+    let replicated =
+        format!("{two}\n[[replicate]]\nfirst = 0x6000\nlast = 0x67FF\noffset = 0x800\n");
+    let p = od_gen::parse(&replicated, "standard.toml").expect("two axes with copies");
+    assert_eq!(p.axis_count(), 2);
+    assert_eq!(p.axis_index(0x607A, 1), 0x687A);
+    // An object of the unit (outside every rule) is shared.
+    assert_eq!(p.axis_index(0x1018, 1), 0x1018);
+    // The copy of a role's entry is a RAM variable even where the original is read-only.
+    let copy = p.entry(0x6876, 0).expect("6876h");
+    assert_eq!(copy.storage, od_gen::model::Storage::Ram);
+
+    let three = replicated.replacen("ds402_channels = 2", "ds402_channels = 3", 1);
+    let (key, error) = invalid(&three);
+    assert_eq!(key, "device.ds402_channels");
+    assert!(
+        matches!(&error, Invalid::Value(m) if m.contains("at most 2 axes")),
+        "{error:?}"
+    );
+}
+
+#[test]
+fn the_emcy_axis_number_byte_lies_in_the_manufacturer_field() {
+    for (byte, ok) in [(2, false), (3, true), (7, true), (8, false)] {
+        let text = appended(&format!("[emcy]\naxis_number_byte = {byte}"));
+        if ok {
+            let p = od_gen::parse(&text, "standard.toml").expect("valid byte");
+            assert_eq!(p.emcy.axis_number_byte, Some(byte));
+        } else {
+            let (key, _) = invalid(&text);
+            assert_eq!(key, "emcy.axis_number_byte");
+        }
+    }
+}

@@ -119,7 +119,7 @@ pub async fn phase_locked(
     m.shared.finish_cycle(since, CYCLE_NS);
     let inp = sd.inputs_raw();
     let segment = m.shared.segment();
-    let plant = &segment.drives()[0].servo.plant;
+    let plant = &segment.drives()[0].servos[0].plant;
     Sample {
         statusword: u16::from_le_bytes([inp[0], inp[1]]),
         position: i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),

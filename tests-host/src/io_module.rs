@@ -9,7 +9,7 @@
 use board_sim::esc::Et1100;
 use board_sim::SimDevice;
 use ethercat_slave::od::{Profile, Value};
-use ethercat_slave::slave::{AppEvent, Application, Slave, SlaveError, SyncMode};
+use ethercat_slave::slave::{AppEvents, Application, Slave, SlaveError, SyncMode};
 use hal::esc::AlState;
 use hal::pdi::EscSignals;
 
@@ -75,14 +75,14 @@ impl IoModule {
 }
 
 impl Application for IoModule {
-    fn cycle(&mut self, ram: &mut [u8], _cycle_ns: u32) -> AppEvent {
+    fn cycle(&mut self, ram: &mut [u8], _cycle_ns: u32) -> AppEvents {
         // Outputs the master wrote are in the RAM (unpacked only in OP; in SAFEOP 7000h keeps the
         // value the outputs were left at, which `outputs_safe` set).
         self.output_pins = read_u16(ram, self.outputs_at);
         if let Some(dst) = ram.get_mut(self.inputs_at..self.inputs_at + 2) {
             dst.copy_from_slice(&self.input_pins.to_le_bytes());
         }
-        AppEvent::None
+        AppEvents::new()
     }
 
     fn outputs_safe(&mut self, ram: &mut [u8], _cycle_ns: u32) -> bool {

@@ -116,7 +116,7 @@ fn sigma_v_sd_offset_adjustment_is_accepted_executes_and_measures_the_offsets() 
         m.shared.advance(200_000_000);
         assert_eq!(status(md, &group).await, ACCEPTED, "done, no error");
         let mut segment = m.shared.segment();
-        let servo = &mut segment.drives_mut()[0].servo;
+        let servo = &mut segment.drives_mut()[0].servos[0];
         assert_eq!(servo.feedback().offset_calibrations, 1);
         let offsets = servo.axis.current_offsets();
         let truth = servo.plant.config().sensing.offset_a;
@@ -138,7 +138,7 @@ fn sigma_v_sd_offset_adjustment_is_refused_with_main_power_off_or_the_motor_runn
         let md: &MainDevice<'_> = &m.maindevice;
         let group = init(&m).await;
         let servo = |f: &dyn Fn(&mut board_sim::servo::SimServo)| {
-            f(&mut m.shared.segment().drives_mut()[0].servo);
+            f(&mut m.shared.segment().drives_mut()[0].servos[0]);
         };
         // Main circuit power OFF.
         servo(&|s| s.plant.set_bus_voltage(0.0));
@@ -263,8 +263,7 @@ fn sigma_v_sd_offset_adjustment_is_refused_while_the_servo_is_on() {
         .expect("step 3");
         let status = sdo.upload(md, ADJUSTING, STATUS).await.expect("2310h:02");
         assert_eq!(status, [ERROR], "refused with the servo ON");
-        let calibrations = m.shared.segment().drives_mut()[0]
-            .servo
+        let calibrations = m.shared.segment().drives_mut()[0].servos[0]
             .feedback()
             .offset_calibrations;
         assert_eq!(calibrations, 1, "only the one at enable");

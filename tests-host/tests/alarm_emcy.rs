@@ -121,8 +121,7 @@ fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
         let md: &MainDevice<'_> = &m.maindevice;
         let group = into_op!(m, md);
         enable!(m, md, group);
-        m.shared.segment().drives_mut()[0]
-            .servo
+        m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_drive_temperature(120.0);
         let faulted = async {

@@ -76,7 +76,7 @@ macro_rules! home {
         let md: &MainDevice<'_> = &m.maindevice;
         {
             let mut segment = m.shared.segment();
-            let servo = &mut segment.drives_mut()[0].servo;
+            let servo = &mut segment.drives_mut()[0].servos[0];
             servo.plant.set_switches($machine.switches());
             servo.plant.set_rotor_position($start * TAU);
         }

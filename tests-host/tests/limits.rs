@@ -98,8 +98,7 @@ fn standard_limit_switch_stops_motion_into_it_and_frees_motion_away() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        m.shared.segment().drives_mut()[0]
-            .servo
+        m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_switches(SwitchParams {
                 limit_pos_rad: Some(0.5 * TAU),
@@ -144,8 +143,7 @@ fn standard_following_error_beyond_6065h_for_6066h_is_fault_0x8611() {
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
         // A hard stop at 0.2 rev that the CSP motion runs into.
-        m.shared.segment().drives_mut()[0]
-            .servo
+        m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_end_stops(Some((-TAU, 0.2 * TAU)));
         let group = enabled!(m, md, CSP);

@@ -104,7 +104,7 @@ fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
         }
         let rotor = {
             let seg = m.shared.segment();
-            seg.drives()[0].servo.plant.mech_angle_rad()
+            seg.drives()[0].servos[0].plant.mech_angle_rad()
         };
         let rotor_counts = rotor / std::f64::consts::TAU * CPR as f64;
         assert!(
@@ -115,8 +115,7 @@ fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
 
         // The power stage overheats: after the protection's confirmation time the drive is in
         // Fault, the gates are off, 603Fh holds the profile's code and 1001h the temperature bit.
-        m.shared.segment().drives_mut()[0]
-            .servo
+        m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_drive_temperature(120.0);
         let mut cycles_to_fault = None;
@@ -132,7 +131,7 @@ fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
         assert!((95..=110).contains(&k), "fault after {k} ms");
         {
             let seg = m.shared.segment();
-            let servo = &seg.drives()[0].servo;
+            let servo = &seg.drives()[0].servos[0];
             assert!(!servo.latched().gates, "gates off");
         }
         let sd = group.subdevice(md, 0).expect("drive");
@@ -157,8 +156,7 @@ fn csp_moves_the_motor_and_a_motor_fault_reaches_the_master() {
         }
         assert_ne!(sw & FAULT_BIT, 0, "still hot: the fault stays");
         // Cooled down: a reset leaves Fault, 603Fh and 1001h clear.
-        m.shared.segment().drives_mut()[0]
-            .servo
+        m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_drive_temperature(25.0);
         cycle!(m, md, group, 0, quarter);
@@ -222,7 +220,10 @@ fn commissioning_over_ethercat_identifies_stores_and_applies_the_motor_data() {
         assert_eq!(sw & FAULT_BIT, 0, "no fault");
 
         // The results, read by SDO, against the simulated motor's true parameters.
-        let truth = m.shared.segment().drives()[0].servo.plant.config().clone();
+        let truth = m.shared.segment().drives()[0].servos[0]
+            .plant
+            .config()
+            .clone();
         let sd = group.subdevice(md, 0).expect("drive");
         let read = |sub: u8| {
             let sd = &sd;
@@ -265,7 +266,7 @@ fn commissioning_over_ethercat_identifies_stores_and_applies_the_motor_data() {
             }
         }
         m.shared.advance(CYCLE_NS);
-        let model = m.shared.segment().drives()[0].servo.axis.motor_model();
+        let model = m.shared.segment().drives()[0].servos[0].axis.motor_model();
         within(
             "applied R",
             f64::from(model.resistance_ohm),
@@ -292,7 +293,7 @@ fn leaving_op_disables_the_motor() {
         let group = into_op!(m, md);
         power_up!(m, md, group);
         assert!(
-            m.shared.segment().drives()[0].servo.latched().gates,
+            m.shared.segment().drives()[0].servos[0].latched().gates,
             "motor powered"
         );
         // The master takes the drive down to PRE-OP: no more cycles run, the motor must still
@@ -301,7 +302,7 @@ fn leaving_op_disables_the_motor() {
         let _group = group.into_pre_op(md).await.expect("PRE-OP");
         m.shared.advance(5 * CYCLE_NS);
         let seg = m.shared.segment();
-        let servo = &seg.drives()[0].servo;
+        let servo = &seg.drives()[0].servos[0];
         assert!(!servo.latched().gates, "gates off after leaving OP");
     });
 }

@@ -74,8 +74,7 @@ macro_rules! cycle {
         $group.tx_rx($md).await.expect("tx/rx");
         $m.shared.finish_cycle(since, CYCLE_NS);
         let inp = sd.inputs_raw();
-        let rpm = $m.shared.segment().drives()[0]
-            .servo
+        let rpm = $m.shared.segment().drives()[0].servos[0]
             .plant
             .mech_speed_rad_s()
             / TAU
@@ -204,7 +203,7 @@ fn quick_stop_decelerates_on_6085h_in_quick_stop_active_then_disables() {
         );
         let last = *speeds.last().expect("speeds");
         assert!(last.abs() <= STANDSTILL_RPM, "at rest: {last:.1} rpm");
-        let gates = m.shared.segment().drives()[0].servo.latched().gates;
+        let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
         assert!(!gates, "power stage off");
     });
 }
@@ -222,7 +221,7 @@ fn quick_stop_with_605ah_0_disables_at_once_and_the_motor_coasts() {
             (sw, _, _) = cycle!(m, md, group, QUICK_STOP, target as i32);
         }
         assert_eq!(sw & SWITCH_ON_DISABLED_MASK, SWITCH_ON_DISABLED, "at once");
-        let gates = m.shared.segment().drives()[0].servo.latched().gates;
+        let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
         assert!(!gates, "power stage off");
         let mut rpm = 0.0;
         for _ in 0..100 {
@@ -291,7 +290,7 @@ fn quick_stop_with_605ah_6_holds_at_rest_until_enable_operation() {
             "stays in Quick Stop Active"
         );
         assert!(rpm.abs() <= STANDSTILL_RPM, "at rest: {rpm:.1} rpm");
-        let gates = m.shared.segment().drives()[0].servo.latched().gates;
+        let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
         assert!(gates, "holding: the power stage stays on");
         // Transition 16 back to Operation Enabled, at the position it holds.
         let (_, actual, _) = cycle!(m, md, group, QUICK_STOP, target as i32);
@@ -501,8 +500,7 @@ fn sigma_v_sd_switched_on_needs_the_main_power() {
         let md: &MainDevice<'_> = &m.maindevice;
         let group = csp::into_op_with_mode(&m, md, MODE_CSP as i8).await;
         let bus = |v: f64| {
-            m.shared.segment().drives_mut()[0]
-                .servo
+            m.shared.segment().drives_mut()[0].servos[0]
                 .plant
                 .set_bus_voltage(v)
         };

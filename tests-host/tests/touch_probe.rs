@@ -48,8 +48,7 @@ fn touch_probes_latch_the_edge_positions_of_inputs_and_index() {
         let md: &MainDevice<'_> = &m.maindevice;
         {
             let mut segment = m.shared.segment();
-            segment.drives_mut()[0]
-                .servo
+            segment.drives_mut()[0].servos[0]
                 .plant
                 .set_switches(SwitchParams {
                     probes: [

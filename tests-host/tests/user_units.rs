@@ -137,7 +137,9 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
         for _ in 0..100 {
             (_, actual) = cycle(ENABLE_OPERATION, quarter_units, CSP).await;
         }
-        let rotor = m.shared.segment().drives()[0].servo.plant.mech_angle_rad();
+        let rotor = m.shared.segment().drives()[0].servos[0]
+            .plant
+            .mech_angle_rad();
         let rotor_counts = rotor / std::f64::consts::TAU * f64::from(CPR);
         assert!(
             (rotor_counts - f64::from(CPR / 4)).abs() < 300.0,
@@ -148,11 +150,15 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
 
         // CSV: 60FFh = 1800 units/s (half a revolution per second) for 0.4 s.
         sd.sdo_write(0x60FF, 0, 1800i32).await.expect("60FFh");
-        let before = m.shared.segment().drives()[0].servo.plant.mech_angle_rad();
+        let before = m.shared.segment().drives()[0].servos[0]
+            .plant
+            .mech_angle_rad();
         for _ in 0..400 {
             cycle(ENABLE_OPERATION, 0, CSV).await;
         }
-        let after = m.shared.segment().drives()[0].servo.plant.mech_angle_rad();
+        let after = m.shared.segment().drives()[0].servos[0]
+            .plant
+            .mech_angle_rad();
         let turned = (after - before) / std::f64::consts::TAU;
         // 0.5 rev/s for 0.4 s = 0.2 rev, less the acceleration at the start.
         assert!((0.17..=0.21).contains(&turned), "turned {turned:.3} rev");

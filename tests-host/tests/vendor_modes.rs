@@ -36,7 +36,7 @@ macro_rules! sdv3_cycle {
         $m.shared.finish_cycle(since, CYCLE_NS);
         let inp = sd.inputs_raw();
         let segment = $m.shared.segment();
-        let plant = &segment.drives()[0].servo.plant;
+        let plant = &segment.drives()[0].servos[0].plant;
         (
             u16::from_le_bytes([inp[0], inp[1]]),
             i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
@@ -142,8 +142,7 @@ fn rse_homing_method_19_home_switch_edge() {
         let (m, transport) = master_for(board_sim::Segment::new("rse", 1).expect("rse"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        m.shared.segment().drives_mut()[0]
-            .servo
+        m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_switches(SwitchParams {
                 home_rad: Some(0.4 * TAU),
@@ -189,7 +188,10 @@ fn rse_homing_method_19_home_switch_edge() {
                 m.shared.finish_cycle(since, CYCLE_NS);
                 let sd = group.subdevice(md, 0).expect("drive");
                 let inp = sd.inputs_raw();
-                let rev = m.shared.segment().drives()[0].servo.plant.mech_angle_rad() / TAU;
+                let rev = m.shared.segment().drives()[0].servos[0]
+                    .plant
+                    .mech_angle_rad()
+                    / TAU;
                 (
                     u16::from_le_bytes([inp[2], inp[3]]),
                     inp[4] as i8,

@@ -34,9 +34,9 @@ fn profiles() -> Vec<Profile> {
 /// file's default: process values the application writes (roles of the TxPDO side), the
 /// active synchronisation (1C32h/1C33h, ETG.1020: the slave fills them in), the diagnosis
 /// history (10F3h, ETG.1020 §13) and the serial number (1018h:04, set by the board).
-fn is_live(o: &Object, e: &Entry) -> bool {
+fn is_live(p: &Profile, o: &Object, e: &Entry) -> bool {
     let written_by_application = matches!(
-        e.role,
+        p.role_of(o.index, e.subindex),
         Some(
             Role::Statusword
                 | Role::ErrorCode
@@ -97,7 +97,8 @@ fn identity_and_every_object_read_by_sdo_equals_the_profile() {
             let mut read = 0;
             for o in &p.objects {
                 for e in &o.entries {
-                    if !e.access.readable() || e.data_type == DataType::Domain || is_live(o, e) {
+                    if !e.access.readable() || e.data_type == DataType::Domain || is_live(&p, o, e)
+                    {
                         continue;
                     }
                     let got = sd

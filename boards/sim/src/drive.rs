@@ -48,9 +48,10 @@ pub struct SimDrive {
     /// RUN/ERR LEDs, switched every [`LED_PERIOD_NS`] from the firmware's ETG.1300 patterns.
     pub leds: SimLeds,
     next_led_ns: u64,
-    /// The motor, inverter and encoder with the firmware's control interrupt, attached to the
-    /// slave's application; it runs PWM period by PWM period as simulated time passes.
-    pub servo: SimServo,
+    /// The motor, inverter and encoder of each axis with the firmware's control interrupt,
+    /// attached to the slave's application (one per axis of the profile, `servos[0]` the first);
+    /// they run PWM period by PWM period as simulated time passes.
+    pub servos: Vec<SimServo>,
     /// Fault injection for the context split: run a process-data cycle inside every mailbox
     /// round that leaves an SDO transfer half done, as a SYNC0 preempting the event context would
     /// (meaningful in free run: in DC modes SYNC0 comes only from the ESC).
@@ -59,9 +60,11 @@ pub struct SimDrive {
     pub cycles_during_mailbox_transfer: u32,
 }
 
-/// The simulated drive's motor: the 400 W servo with the default tuning.
-fn new_servo() -> SimServo {
-    let plant = PlantConfig::servo_400w();
+/// The simulated drive's motor of axis `axis` (0 = the first): the 400 W servo with the default
+/// tuning; each axis' plant has its own noise seed.
+fn new_servo(axis: usize) -> SimServo {
+    let mut plant = PlantConfig::servo_400w();
+    plant.seed = plant.seed.wrapping_add(axis as u64);
     let cfg = axis_config(&plant, &Tuning::default());
     match SimServo::new(plant, cfg) {
         Ok(servo) => servo,
@@ -89,9 +92,8 @@ impl SimDrive {
         let mut params = ParamStore::new(storage);
         let mut slave = Box::new(firmware::new_slave(profile)?);
         let loaded = slave.load_parameters(&mut params);
-        let servo = new_servo();
-        let (drive, ram) = slave.application();
-        drive.attach_axis(servo.link(), servo.counts_per_rev(), ram);
+        let servos: Vec<SimServo> = (0..profile.axes.len()).map(new_servo).collect();
+        attach_servos(&mut slave, &servos);
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.
         let _ = slave.start(&mut esc);
@@ -106,7 +108,7 @@ impl SimDrive {
             next_poll_ns: BACKGROUND_POLL_PERIOD_NS,
             leds: SimLeds::default(),
             next_led_ns: 0,
-            servo,
+            servos,
             cycle_during_mailbox_transfer: false,
             cycles_during_mailbox_transfer: 0,
         })
@@ -122,9 +124,10 @@ impl SimDrive {
         esc.advance_to(now);
         let mut slave = Box::new(firmware::new_slave(self.profile)?);
         self.loaded = slave.load_parameters(&mut self.params);
-        self.servo.restart_firmware();
-        let (drive, ram) = slave.application();
-        drive.attach_axis(self.servo.link(), self.servo.counts_per_rev(), ram);
+        for servo in &mut self.servos {
+            servo.restart_firmware();
+        }
+        attach_servos(&mut slave, &self.servos);
         // As in `with_storage`: the simulated PDI does not fail.
         let _ = slave.start(&mut esc);
         self.esc = esc;
@@ -170,7 +173,9 @@ impl SimDrive {
     pub fn run_until(&mut self, now_ns: u64) {
         // The control interrupt runs every PWM period up to now, before SYNC0 reads its
         // feedback.
-        self.servo.advance_to(now_ns);
+        for servo in &mut self.servos {
+            servo.advance_to(now_ns);
+        }
         self.esc.advance_to(now_ns);
         if self.esc.take_sync0() {
             self.cycle(now_ns);
@@ -234,6 +239,15 @@ impl SimDrive {
             },
         );
         self.cycles_during_mailbox_transfer += injected;
+    }
+}
+
+/// Attaches the servos to the slave's axes, in order (one per axis of the profile).
+fn attach_servos(slave: &mut DriveSlave<SIM_RAM>, servos: &[SimServo]) {
+    let (drive, ram) = slave.application();
+    for (axis, servo) in servos.iter().enumerate() {
+        // `servos` has one servo per axis of the profile the drive was made for.
+        let _ = drive.attach_axis(axis, servo.link(), servo.counts_per_rev(), ram);
     }
 }
 

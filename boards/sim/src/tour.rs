@@ -138,7 +138,7 @@ pub async fn run(
 ) -> Result<TourReport, Box<dyn std::error::Error>> {
     let mut segment = Segment::new(profile, 1)?;
     {
-        let servo = &mut segment.drives_mut()[0].servo;
+        let servo = &mut segment.drives_mut()[0].servos[0];
         servo.plant.set_switches(SwitchParams {
             limit_neg_rad: Some(-LIMIT_REV * TAU),
             limit_pos_rad: Some(LIMIT_REV * TAU),
@@ -329,7 +329,7 @@ impl Tour<'_, '_> {
         let b = |i: usize| inp.get(i).copied().unwrap_or(0);
         let sample = {
             let segment = self.m.shared.segment();
-            let plant = &segment.drives()[0].servo.plant;
+            let plant = &segment.drives()[0].servos[0].plant;
             TourSample {
                 t_s: clock.now() as f64 * 1e-9,
                 statusword: u16::from_le_bytes([b(0), b(1)]),

@@ -44,11 +44,16 @@ fn write(ram: &mut [u8], at: Option<u16>, bytes: &[u8]) -> bool {
     }
 }
 
+/// The variables of the standard profile's (one) axis.
+fn axis_vars() -> Option<&'static firmware::profile::AppVars> {
+    PROFILE.axes.first()
+}
+
 /// The master's side of the default RxPDO objects of the standard profile as an OD RAM image:
 /// `controlword`, the target position and CSP. Packing it with an Rx copy plan gives the SM2
 /// image, so no image layout is assumed. `None` if the profile lacks one of the variables.
 fn master_outputs(controlword: u16) -> Option<[u8; RAM_SIZE]> {
-    let vars = &PROFILE.vars;
+    let vars = axis_vars()?;
     let mut master = [0; RAM_SIZE];
     let ok = write(&mut master, vars.controlword, &controlword.to_le_bytes())
         && write(

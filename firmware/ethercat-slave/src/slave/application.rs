@@ -22,6 +22,14 @@ pub enum AppEvent {
     ErrorCleared(u16),
 }
 
+/// The most events one cycle reports: a raise and a clear on each of two channels (a two-axis
+/// drive).
+pub const MAX_APP_EVENTS: usize = 4;
+
+/// What the application reports of one cycle, in order (events past [`MAX_APP_EVENTS`] are not
+/// taken: the application's own state still holds the error).
+pub type AppEvents = heapless::Vec<AppEvent, MAX_APP_EVENTS>;
+
 /// The per-cycle application behind the object dictionary.
 ///
 /// The slave calls it with the OD RAM (`ram`, laid out by the profile's generated dictionary):
@@ -29,7 +37,9 @@ pub enum AppEvent {
 pub trait Application {
     /// One process-data cycle (SAFEOP and OP; also once on entering SAFEOP so that the first
     /// inputs are valid). `cycle_ns` is the SYNC0 cycle (1C32h:02), 0 when not synchronised.
-    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvent;
+    /// Returns what happened to its errors (an application with several channels, such as a
+    /// two-axis drive, may raise and clear errors on each).
+    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvents;
 
     /// The EtherCAT state leaves OP: put everything the master's outputs drive into its safe
     /// state at once (no further cycle runs that would do it). Returns whether the application
@@ -75,8 +85,8 @@ pub trait Application {
 pub struct NoApplication;
 
 impl Application for NoApplication {
-    fn cycle(&mut self, _: &mut [u8], _: u32) -> AppEvent {
-        AppEvent::None
+    fn cycle(&mut self, _: &mut [u8], _: u32) -> AppEvents {
+        AppEvents::new()
     }
 
     fn outputs_safe(&mut self, _: &mut [u8], _: u32) -> bool {

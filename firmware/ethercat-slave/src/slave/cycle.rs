@@ -14,8 +14,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let Some(cycle_ns) = self.cycle_begin(pdi, now_ns)? else {
             return Ok(());
         };
-        let event = self.app.cycle(&mut self.ram, cycle_ns);
-        self.cycle_end(pdi, event, now_ns)
+        let events = self.app.cycle(&mut self.ram, cycle_ns);
+        self.cycle_end(pdi, &events, now_ns)
     }
 
     /// First part of a process-data cycle (SAFEOP and OP; `None` below, when no cycle runs):
@@ -95,10 +95,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     pub fn cycle_end<P: EscPdi>(
         &mut self,
         pdi: &mut P,
-        event: AppEvent,
+        events: &[AppEvent],
         now_ns: u64,
     ) -> Result<(), P::Error> {
-        self.report_app_event(event, now_ns);
+        for &event in events {
+            self.report_app_event(event, now_ns);
+        }
         self.write_inputs(pdi)?;
         self.cycles = self.cycles.wrapping_add(1);
         Ok(())
@@ -107,8 +109,10 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// Runs the application's cycle outside the process-data cycle (entering SAFEOP, so that the
     /// first inputs are valid) and reports its errors.
     pub(super) fn run_application(&mut self, now_ns: u64) {
-        let event = self.app.cycle(&mut self.ram, self.sync.cycle_ns);
-        self.report_app_event(event, now_ns);
+        let events = self.app.cycle(&mut self.ram, self.sync.cycle_ns);
+        for event in events {
+            self.report_app_event(event, now_ns);
+        }
     }
 
     /// What the application said about its errors → EMCY, 1001h, 10F3h.

@@ -48,7 +48,7 @@ pub mod esm;
 mod mailbox_side;
 
 use crate::slave::esm::sync::{SyncConfig, SyncMode as Mode};
-pub use application::{AppEvent, Application, NoApplication};
+pub use application::{AppEvent, AppEvents, Application, NoApplication, MAX_APP_EVENTS};
 pub use composite::Slave;
 use esm::transitions::read_sm;
 pub use mailbox_side::MailboxSide;

@@ -1,16 +1,12 @@
-//! The drive application: what the slave stack runs in every process-data cycle. It binds the
-//! objects of the profile (OD RAM, laid out by od-gen) to the CiA402 device and to the axis.
+//! One axis of the drive: its CiA402 device on the axis' objects (OD RAM offsets of
+//! [`AppVars`]), and the exchange with its motor's control interrupt.
 //!
-//! - with a motor attached ([`Drive::attach_axis`]): the set-point of the mode (CSP 607Ah, CSV
-//!   60FFh, CST 6071h, identification) goes to the control interrupt through its
-//!   [`AxisLink`], the actual values (6064h, 606Ch, 6077h) come back from it, and a motor fault
-//!   becomes a CiA402 fault with the profile's 603Fh code for it;
+//! - with a motor attached ([`DriveAxis::attach`]): the set-point of the mode (CSP 607Ah, CSV
+//!   60FFh, CST 6071h, the profile modes, identification) goes to the control interrupt through
+//!   its [`AxisLink`], the actual values (6064h, 606Ch, 6077h) come back from it, and a motor
+//!   fault becomes a CiA402 fault with the profile's 603Fh code for it;
 //! - without one (a board with no power stage, the benchmarks): an ideal axis whose position
 //!   actual value follows the target position while operation is enabled.
-//!
-//! A profile's adjusting services ([`crate::adjust`], e.g. the Σ-V-SD's 2310h) take their
-//! requests from SDO downloads ([`Application::downloaded`]) and are timed in the background
-//! ([`Application::background`]), in every EtherCAT state; the adjustments act on the axis.
 //!
 //! Units at this boundary come from [`cia402::units`]: positions in increments (the 32-bit
 //! objects wrap; the axis works on 64-bit positions), velocities in increments/s, torques in ‰
@@ -26,46 +22,34 @@ use cia402::stop::{Deceleration, OptionCodes};
 use cia402::touch_probe::{self, Bit7, TouchProbes};
 use cia402::units;
 use cia402::window::WindowTimer;
-use ethercat_slave::od::ErrorReport;
-use ethercat_slave::slave::{AppEvent, Application};
 
-use crate::adjust::service::{Progress, Refusal};
-use crate::adjust::{Action, AdjustingService};
+use super::ram::{read_bytes, read_i16, read_i32, read_u16, read_u32, write_bytes, write_u16};
+use crate::adjust::service::Refusal;
+use crate::adjust::Action;
 use crate::motion::{self, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::trajectory::Limits;
 use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, MOTOR_FAULT_COUNT};
 
-/// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
-pub const MAX_ADJUSTING_SERVICES: usize = 2;
-
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
 /// rotation detection level (Pn502, /TGON) default. Neither the adjusting service's "while the
 /// servomotor is running" nor CiA402's "standstill" after a stop gives a figure.
 const STANDSTILL_RPM: f32 = 20.0;
 const SECONDS_PER_MINUTE: f32 = 60.0;
-const NS_PER_MS: u64 = 1_000_000;
 const NS_TO_S: f32 = 1e-9;
 /// 6065h value that switches the following-error check off (CiA402).
 const FOLLOWING_ERROR_OFF: u32 = u32::MAX;
 /// Statusword bit 13 in the position modes: following error.
 const FOLLOWING_ERROR: u16 = 1 << 13;
-
-/// An adjustment running on the axis: which service started it and the axis counters then.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct RunningAdjustment {
-    service: usize,
-    action: Action,
-    offset_calibrations: u32,
-    trips: u32,
-}
+/// The EMCY byte of the first byte of the manufacturer-specific field (CiA 301: bytes 3–7).
+const EMCY_DATA_FIRST_BYTE: usize = 3;
 
 /// The connection to a motor's control interrupt.
-struct AxisPort {
-    link: &'static AxisLink,
+pub(super) struct AxisPort {
+    pub(super) link: &'static AxisLink,
     /// The motor encoder's increments per revolution (unit factors in rpm).
-    counts_per_rev: u32,
+    pub(super) counts_per_rev: u32,
     /// The axis' trip counter at the last fault raised here.
     trips_seen: u32,
     /// The motor model last handed to the axis.
@@ -74,29 +58,32 @@ struct AxisPort {
     results_written: bool,
 }
 
-/// The drive application of one axis.
-pub struct Drive {
-    /// Where the CiA402 variables live (the profile's; a reference, so that reading it in the
-    /// cycle copies a pointer, not the table).
+/// The CiA402 side of one axis.
+pub struct DriveAxis {
+    /// The axis number the profile's EMCY carries (1 = the first axis), at `emcy_axis_byte`.
+    number: u8,
+    /// Where the axis' CiA402 variables live (the profile's; a reference, so that reading it in
+    /// the cycle copies a pointer, not the table).
     vars: &'static AppVars,
     /// 603Fh code and EMCY per motor fault (the profile's `[motor_faults]`).
     fault_codes: &'static [FaultReport; MOTOR_FAULT_COUNT],
     /// The profile's CiA402 rules.
     rules: &'static Cia402Rules,
+    /// The EMCY byte (index into the manufacturer field, bytes 3–7) that carries the axis
+    /// number, when the profile has one (`[emcy] axis_number_byte`).
+    emcy_axis_byte: Option<u8>,
     /// The EMCY code and manufacturer field of the fault the device holds (a motor fault's come
     /// from the profile's alarm; an error the stack raises has its code and no data).
     fault_emcy: (u16, [u8; 5]),
     device: Device,
-    axis: Option<AxisPort>,
-    /// The profile's adjusting services (`None` past its list).
-    adjusting: [Option<AdjustingService>; MAX_ADJUSTING_SERVICES],
-    /// The adjustment running on the axis, if any.
-    adjustment: Option<RunningAdjustment>,
+    pub(super) port: Option<AxisPort>,
+    /// The drive runs an adjustment that measures this axis' current offsets.
+    pub(super) calibrating_offsets: bool,
     /// The set-point generators of the profile modes.
     profile_modes: ProfileModes,
     /// The touch probes (60B8h–60BDh, 60D5h–60D8h).
     touch_probes: TouchProbes,
-    /// The mode of operation the drive runs (6061h): the last supported 6060h value.
+    /// The mode of operation the axis runs (6061h): the last supported 6060h value.
     running_mode: u8,
     /// How long the following error has been outside 6065h (statusword bit 13).
     following_error_timer: WindowTimer,
@@ -106,28 +93,27 @@ pub struct Drive {
     position_shift: i64,
 }
 
-impl Drive {
-    /// The application of `profile` at power-on, without a motor.
-    pub const fn new(profile: &'static DriveProfile) -> Self {
-        let mut adjusting = [None; MAX_ADJUSTING_SERVICES];
-        let mut i = 0;
-        // od-gen allows at most MAX_ADJUSTING_SERVICES.
-        while i < profile.adjusting.len() && i < MAX_ADJUSTING_SERVICES {
-            adjusting[i] = Some(AdjustingService::new(&profile.adjusting[i]));
-            i += 1;
-        }
+impl DriveAxis {
+    /// Axis `index` (0 = the first) of `profile` at power-on, without a motor; `vars` are its
+    /// variables (`profile.axes[index]`).
+    pub(super) const fn new(
+        profile: &'static DriveProfile,
+        index: u8,
+        vars: &'static AppVars,
+    ) -> Self {
         Self {
-            vars: &profile.vars,
+            number: index.saturating_add(1),
+            vars,
             fault_codes: profile.motor_faults,
             rules: &profile.cia402,
+            emcy_axis_byte: profile.emcy_axis_number_byte,
             fault_emcy: (0, [0; 5]),
             device: Device::with_rules(DeviceRules {
                 stops_end_switched_off: profile.cia402.stops_end_switched_off,
                 switch_on_requires_main_power: profile.cia402.switch_on_requires_main_power,
             }),
-            axis: None,
-            adjusting,
-            adjustment: None,
+            port: None,
+            calibrating_offsets: false,
             profile_modes: ProfileModes::new(),
             touch_probes: TouchProbes::new(),
             running_mode: 0,
@@ -141,7 +127,7 @@ impl Drive {
     /// parameters were loaded at power-on). The board calls
     /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `counts_per_rev` is its
     /// encoder's resolution (for profiles whose velocity unit is in rpm).
-    pub fn attach_axis(&mut self, link: &'static AxisLink, counts_per_rev: u32, ram: &[u8]) {
+    pub(super) fn attach(&mut self, link: &'static AxisLink, counts_per_rev: u32, ram: &[u8]) {
         let mut port = AxisPort {
             link,
             counts_per_rev,
@@ -150,7 +136,27 @@ impl Drive {
             results_written: false,
         };
         sync_motor_model(&mut port, self.vars, ram);
-        self.axis = Some(port);
+        self.port = Some(port);
+    }
+
+    /// The EMCY code and manufacturer field of the fault the device holds (or held last).
+    pub(super) fn fault_emcy(&self) -> (u16, [u8; 5]) {
+        self.fault_emcy
+    }
+
+    /// Whether the axis runs under the master's control: Operation Enabled, or a quick stop
+    /// under way or holding.
+    pub(super) fn active(&self) -> bool {
+        matches!(
+            self.device.state(),
+            PdsState::OperationEnabled | PdsState::QuickStopActive
+        )
+    }
+
+    /// CiA402 transition 1 at power-on: Switch On Disabled.
+    pub(super) fn power_on(&mut self, ram: &mut [u8]) {
+        let statusword = self.device.initialised();
+        write_u16(ram, self.vars.statusword, statusword);
     }
 
     /// The PDS state.
@@ -173,8 +179,16 @@ impl Drive {
 
     /// [`Self::fault`] with the profile's report: 603Fh = `report.error_code`, the EMCY the
     /// next cycle announces carries `report.emcy_code` and `report.emcy_data`.
-    fn report_fault(&mut self, report: FaultReport, ram: &mut [u8]) {
-        self.fault_emcy = (report.emcy_code, report.emcy_data);
+    pub(super) fn report_fault(&mut self, report: FaultReport, ram: &mut [u8]) {
+        let mut data = report.emcy_data;
+        // The profile's EMCY names the axis (e.g. the Σ-V-SD's byte 7): bytes 3–7 are data 0–4.
+        let axis_byte = self
+            .emcy_axis_byte
+            .and_then(|b| usize::from(b).checked_sub(EMCY_DATA_FIRST_BYTE));
+        if let Some(byte) = axis_byte.and_then(|i| data.get_mut(i)) {
+            *byte = self.number;
+        }
+        self.fault_emcy = (report.emcy_code, data);
         let code = report.error_code;
         write_u16(ram, self.vars.controlword, 0);
         let statusword = self.device.fault(code);
@@ -188,7 +202,7 @@ impl Drive {
         let vars = self.vars;
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
         // The axis feedback of this cycle, read once (a seqlock read).
-        let feedback = self.axis.as_ref().map(|port| port.link.feedback());
+        let feedback = self.port.as_ref().map(|port| port.link.feedback());
         let options = OptionCodes {
             quick_stop: read_i16(ram, vars.quick_stop_option_code),
             shutdown: read_i16(ram, vars.shutdown_option_code),
@@ -240,7 +254,7 @@ impl Drive {
     /// Whether the motor is at rest by the axis' `feedback`: no stop ramp under way and the
     /// velocity at or below [`STANDSTILL_RPM`].
     fn at_rest(&self, feedback: &AxisFeedback) -> bool {
-        self.axis.as_ref().is_none_or(|port| {
+        self.port.as_ref().is_none_or(|port| {
             !feedback.stopping
                 && feedback.velocity.abs() <= standstill_counts_per_s(port.counts_per_rev)
         })
@@ -258,7 +272,7 @@ impl Drive {
         cycle_ns: u32,
     ) {
         // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
-        let Some(mut port) = self.axis.take() else {
+        let Some(mut port) = self.port.take() else {
             return;
         };
         let shift = self.position_shift;
@@ -506,7 +520,7 @@ impl Drive {
             enable,
             fault_reset: cw & controlword::FAULT_RESET != 0,
             identify: identifying && motion == Motion::Run,
-            calibrate_offsets: self.calibrating_offsets(),
+            calibrate_offsets: self.calibrating_offsets,
             mode: control_mode,
             position: set_point.position.saturating_sub(self.position_shift),
             velocity: set_point.velocity,
@@ -576,7 +590,7 @@ impl Drive {
             vars.torque_actual_value,
             units::torque_to_permille(feedback.torque, rated_nm).to_le_bytes(),
         );
-        self.axis = Some(port);
+        self.port = Some(port);
     }
 
     /// The touch probes: 60B8h in, 60B9h, the positions 60BAh–60BDh (user units) and the
@@ -631,25 +645,20 @@ impl Drive {
         write_u16(ram, self.vars.controlword, 0);
         let statusword = self.device.outputs_lost();
         write_u16(ram, self.vars.statusword, statusword);
-        if let Some(port) = &self.axis {
+        if let Some(port) = &self.port {
             port.link.publish(AxisCommand {
                 enable: false,
-                calibrate_offsets: self.calibrating_offsets(),
+                calibrate_offsets: self.calibrating_offsets,
                 bus_cycle_ns: cycle_ns,
                 ..AxisCommand::default()
             });
         }
     }
 
-    /// Whether the axis is asked to measure its current offsets (an adjustment runs).
-    fn calibrating_offsets(&self) -> bool {
-        self.adjustment
-            .is_some_and(|a| a.action == Action::CurrentOffsetCalibration)
-    }
-
-    /// Whether adjustment `action` may run on `axis` now (§4.5 (8) "Execution Conditions").
-    fn adjustment_allowed(&self, axis: u8, action: Action) -> Result<AxisFeedback, Refusal> {
-        let Some(port) = self.axis.as_ref().filter(|_| axis == 1) else {
+    /// Whether adjustment `action` may run on this axis now (the Σ-V-SD's §4.5 (8) "Execution
+    /// Conditions"); the axis feedback it was decided on.
+    pub(super) fn adjustment_allowed(&self, action: Action) -> Result<AxisFeedback, Refusal> {
+        let Some(port) = self.port.as_ref() else {
             return Err(Refusal::NoAxis);
         };
         let feedback = port.link.feedback();
@@ -676,139 +685,22 @@ impl Drive {
         }
     }
 
-    /// Starts `action` of service `service` on the axis (its conditions were checked).
-    fn start_adjustment(&mut self, service: usize, action: Action, feedback: AxisFeedback) {
-        self.adjustment = Some(RunningAdjustment {
-            service,
-            action,
-            offset_calibrations: feedback.offset_calibrations,
-            trips: feedback.trips,
-        });
-        self.publish_adjustment();
+    /// The motor's feedback now (outside the cycle), `None` without a motor.
+    pub(super) fn motor_feedback(&self) -> Option<AxisFeedback> {
+        self.port.as_ref().map(|port| port.link.feedback())
     }
 
-    /// How the adjustment of service `service` stands.
-    fn adjustment_progress(&self, service: usize) -> Progress {
-        let (Some(a), Some(port)) = (self.adjustment, self.axis.as_ref()) else {
-            return Progress::Failed;
-        };
-        if a.service != service {
-            return Progress::Failed;
-        }
-        let feedback = port.link.feedback();
-        match a.action {
-            Action::CurrentOffsetCalibration => {
-                if feedback.trips != a.trips || feedback.state == AxisState::Faulted {
-                    Progress::Failed
-                } else if feedback.offset_calibrations != a.offset_calibrations {
-                    Progress::Done
-                } else {
-                    Progress::Running
-                }
-            }
-            Action::MultiTurnReset | Action::MultiTurnLimitSetting => Progress::Failed,
-        }
-    }
-
-    /// Tells the axis what the running adjustment needs, outside the cycle (in PREOP no cycle
-    /// runs; in SAFEOP/OP the cycle repeats it). The slave's entry points never overlap, so
-    /// the link keeps a single writer.
-    fn publish_adjustment(&self) {
-        if let Some(port) = &self.axis {
+    /// Asks the motor to measure its current offsets (or stop asking), outside the cycle (in
+    /// PREOP no cycle runs; in SAFEOP/OP the cycle repeats it). The slave's entry points never
+    /// overlap, so the link keeps a single writer.
+    pub(super) fn set_calibrating_offsets(&mut self, calibrate: bool) {
+        self.calibrating_offsets = calibrate;
+        if let Some(port) = &self.port {
             port.link.publish(AxisCommand {
                 enable: false,
-                calibrate_offsets: self.calibrating_offsets(),
+                calibrate_offsets: calibrate,
                 ..AxisCommand::default()
             });
-        }
-    }
-}
-
-/// The slave stack's view of the drive.
-impl Application for Drive {
-    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvent {
-        let before = self.fault_code();
-        self.step(ram, cycle_ns);
-        let (emcy_code, data) = self.fault_emcy;
-        match (before, self.fault_code()) {
-            (Some(_), None) => AppEvent::ErrorCleared(emcy_code),
-            (None, Some(_)) => AppEvent::ErrorRaised {
-                code: emcy_code,
-                data,
-            },
-            _ => AppEvent::None,
-        }
-    }
-
-    fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool {
-        // Active under the master's control: Operation Enabled, or a quick stop under way or
-        // holding (the SDV3-E's ESr names both, §5.2 10).
-        let was_enabled = matches!(
-            self.device.state(),
-            PdsState::OperationEnabled | PdsState::QuickStopActive
-        );
-        self.safe_outputs(ram, cycle_ns);
-        was_enabled
-    }
-
-    fn power_on(&mut self, ram: &mut [u8]) {
-        // CiA402 transition 1: initialisation is done at power-on, in any EtherCAT state, so a
-        // master reads Switch On Disabled in PREOP already (and profile rules that test it,
-        // e.g. the Σ-V-SD's 1010h write condition, see the real state).
-        let statusword = self.device.initialised();
-        write_u16(ram, self.vars.statusword, statusword);
-    }
-
-    fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]) {
-        self.report_fault(
-            FaultReport {
-                error_code: report.error_code,
-                emcy_code: report.emcy_code,
-                emcy_data: report.emcy_data,
-            },
-            ram,
-        );
-    }
-
-    fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
-        let now_ms = now_ns / NS_PER_MS;
-        for i in 0..MAX_ADJUSTING_SERVICES {
-            let Some(mut service) = self.adjusting[i].filter(|s| s.is_request(index, subindex))
-            else {
-                continue;
-            };
-            let axis = service.spec().axis;
-            let mut allowed = None;
-            let start = service.on_request(ram, now_ms, |action| {
-                if self.adjustment.is_some() {
-                    return Err(Refusal::Busy);
-                }
-                let feedback = self.adjustment_allowed(axis, action)?;
-                allowed = Some(feedback);
-                Ok(())
-            });
-            self.adjusting[i] = Some(service);
-            if let (Some(action), Some(feedback)) = (start, allowed) {
-                self.start_adjustment(i, action, feedback);
-            }
-        }
-    }
-
-    fn background(&mut self, ram: &mut [u8], now_ns: u64) {
-        let now_ms = now_ns / NS_PER_MS;
-        for i in 0..MAX_ADJUSTING_SERVICES {
-            let Some(mut service) = self.adjusting[i] else {
-                continue;
-            };
-            let progress = self.adjustment_progress(i);
-            service.on_time(ram, now_ms, progress);
-            self.adjusting[i] = Some(service);
-            let ours = self.adjustment.is_some_and(|a| a.service == i);
-            if ours && service.running().is_none() {
-                // Ended, timed out or aborted: the axis request falls.
-                self.adjustment = None;
-                self.publish_adjustment();
-            }
         }
     }
 }
@@ -988,132 +880,7 @@ fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
     }
 }
 
-// Offsets are u16 (from the generated profile) and N ≤ 4: `at + N` cannot overflow a usize.
-fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
-    let at = usize::from(at?);
-    ram.get(at..at + N)?.try_into().ok()
-}
-
-fn write_bytes<const N: usize>(ram: &mut [u8], at: Option<u16>, v: [u8; N]) {
-    if let Some(at) = at.map(usize::from) {
-        if let Some(dst) = ram.get_mut(at..at + N) {
-            dst.copy_from_slice(&v);
-        }
-    }
-}
-
-fn read_i32(ram: &[u8], at: Option<u16>) -> Option<i32> {
-    read_bytes::<4>(ram, at).map(i32::from_le_bytes)
-}
-
-fn read_u32(ram: &[u8], at: Option<u16>) -> Option<u32> {
-    read_bytes::<4>(ram, at).map(u32::from_le_bytes)
-}
-
-fn read_i16(ram: &[u8], at: Option<u16>) -> Option<i16> {
-    read_bytes(ram, at).map(i16::from_le_bytes)
-}
-
 /// [`STANDSTILL_RPM`] in increments/s for an encoder of `counts_per_rev`.
 fn standstill_counts_per_s(counts_per_rev: u32) -> f32 {
     STANDSTILL_RPM / SECONDS_PER_MINUTE * counts_per_rev as f32
-}
-
-fn read_u16(ram: &[u8], at: Option<u16>) -> Option<u16> {
-    read_bytes::<2>(ram, at).map(u16::from_le_bytes)
-}
-
-fn write_u16(ram: &mut [u8], at: Option<u16>, v: u16) {
-    write_bytes(ram, at, v.to_le_bytes());
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::profiles::standard;
-
-    const VARS: AppVars = AppVars {
-        controlword: Some(0),
-        statusword: Some(2),
-        modes_of_operation: Some(4),
-        modes_of_operation_display: Some(5),
-        target_position: Some(6),
-        position_actual_value: Some(10),
-        error_code: Some(14),
-        ..AppVars::NONE
-    };
-    /// The standard profile with the variables of this test's small RAM.
-    static PROFILE: DriveProfile = DriveProfile {
-        vars: VARS,
-        ..standard::PROFILE
-    };
-
-    #[test]
-    fn actual_position_follows_target_only_when_operation_enabled() {
-        let mut ram = [0u8; 16];
-        let mut app = Drive::new(&PROFILE);
-        ram[6..10].copy_from_slice(&1234i32.to_le_bytes());
-        for cw in [0x00u16, 0x06, 0x07] {
-            ram[0..2].copy_from_slice(&cw.to_le_bytes());
-            app.step(&mut ram, 0);
-        }
-        assert_eq!(&ram[10..14], &[0; 4], "not enabled yet");
-        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
-        app.step(&mut ram, 0);
-        assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x6F, 0x27);
-        assert_eq!(i32::from_le_bytes(ram[10..14].try_into().unwrap()), 1234);
-    }
-
-    #[test]
-    fn power_on_ends_initialisation_in_switch_on_disabled() {
-        // CiA402 transition 1 (automatic): the statusword reads Switch On Disabled
-        // (xxxx xxxx x1xx 0000) before any process-data cycle ran.
-        let mut ram = [0u8; 16];
-        let mut app = Drive::new(&PROFILE);
-        assert_eq!(app.pds_state(), PdsState::NotReadyToSwitchOn);
-        app.power_on(&mut ram);
-        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
-        assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x004F, 0x0040);
-    }
-
-    #[test]
-    fn safe_outputs_disable_the_drive() {
-        let mut ram = [0u8; 16];
-        let mut app = Drive::new(&PROFILE);
-        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
-            ram[0..2].copy_from_slice(&cw.to_le_bytes());
-            app.step(&mut ram, 0);
-        }
-        app.safe_outputs(&mut ram, 0);
-        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
-        assert_eq!(&ram[0..2], &[0, 0]);
-    }
-
-    #[test]
-    fn fault_sets_error_code_and_statusword_until_fault_reset() {
-        let mut ram = [0u8; 16];
-        let mut app = Drive::new(&PROFILE);
-        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
-            ram[0..2].copy_from_slice(&cw.to_le_bytes());
-            app.step(&mut ram, 0);
-        }
-        app.fault(0x8700, &mut ram);
-        assert_eq!(app.pds_state(), PdsState::Fault);
-        assert_eq!(app.fault_code(), Some(0x8700));
-        assert_eq!(u16::from_le_bytes([ram[14], ram[15]]), 0x8700);
-        assert_ne!(
-            u16::from_le_bytes([ram[2], ram[3]]) & 0x08,
-            0,
-            "statusword bit 3"
-        );
-        // Controlword ignored while in Fault; a rising edge of bit 7 resets.
-        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
-        app.step(&mut ram, 0);
-        assert_eq!(app.pds_state(), PdsState::Fault);
-        ram[0..2].copy_from_slice(&0x80u16.to_le_bytes());
-        app.step(&mut ram, 0);
-        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
-        assert_eq!(app.fault_code(), None);
-        assert_eq!(&ram[14..16], &[0, 0]);
-    }
 }

@@ -1,0 +1,408 @@
+//! The drive application: what the slave stack runs in every process-data cycle. It binds the
+//! objects of the profile (OD RAM, laid out by od-gen) to the CiA402 device of each axis and to
+//! the axis' motor.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`axis`] | [`DriveAxis`]: one axis' CiA402 device on its objects, and the exchange with its motor's control interrupt |
+//! | `ram` | the reads and writes of the variables in the OD RAM |
+//!
+//! A profile has one axis or, like the Σ-V-SD for two axes, several in one slave
+//! ([`DriveProfile::axes`]): each runs its own state machine, mode, homing, touch probes and
+//! faults on its own objects; the errors of the unit (an AL error the stack raises) fault every
+//! axis.
+//!
+//! A profile's adjusting services ([`crate::adjust`], e.g. the Σ-V-SD's 2310h) take their
+//! requests from SDO downloads ([`Application::downloaded`]) and are timed in the background
+//! ([`Application::background`]), in every EtherCAT state; the adjustments act on the axis
+//! the service names.
+
+pub mod axis;
+mod ram;
+
+pub use axis::DriveAxis;
+
+use cia402::faults::FaultReport;
+use cia402::pds::PdsState;
+use ethercat_slave::od::ErrorReport;
+use ethercat_slave::slave::{AppEvent, AppEvents, Application};
+
+use crate::adjust::service::{Progress, Refusal};
+use crate::adjust::{Action, AdjustingService};
+use crate::motor::axis::{AxisFeedback, AxisLink, AxisState};
+use crate::profile::{DriveProfile, MAX_AXES};
+
+/// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
+pub const MAX_ADJUSTING_SERVICES: usize = 2;
+
+const NS_PER_MS: u64 = 1_000_000;
+
+/// An adjustment running on an axis: which service started it and the axis counters then.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct RunningAdjustment {
+    service: usize,
+    /// The axis it runs on (index into the drive's axes).
+    axis: usize,
+    action: Action,
+    offset_calibrations: u32,
+    trips: u32,
+}
+
+/// The profile has no axis with this index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoSuchAxis(pub usize);
+
+/// The drive application: its axes and the profile's adjusting services.
+pub struct Drive {
+    /// The profile's axes (`None` past its count).
+    axes: [Option<DriveAxis>; MAX_AXES],
+    /// The profile's adjusting services (`None` past its list).
+    adjusting: [Option<AdjustingService>; MAX_ADJUSTING_SERVICES],
+    /// The adjustment running on an axis, if any.
+    adjustment: Option<RunningAdjustment>,
+}
+
+impl Drive {
+    /// The application of `profile` at power-on, without motors.
+    pub const fn new(profile: &'static DriveProfile) -> Self {
+        let mut adjusting = [None; MAX_ADJUSTING_SERVICES];
+        let mut i = 0;
+        // od-gen allows at most MAX_ADJUSTING_SERVICES.
+        while i < profile.adjusting.len() && i < MAX_ADJUSTING_SERVICES {
+            adjusting[i] = Some(AdjustingService::new(&profile.adjusting[i]));
+            i += 1;
+        }
+        let mut axes = [const { None }; MAX_AXES];
+        let mut a = 0;
+        // od-gen allows at most MAX_AXES (a generated assertion checks the two agree).
+        while a < profile.axes.len() && a < MAX_AXES {
+            axes[a] = Some(DriveAxis::new(profile, a as u8, &profile.axes[a]));
+            a += 1;
+        }
+        Self {
+            axes,
+            adjusting,
+            adjustment: None,
+        }
+    }
+
+    /// Connects the control interrupt of axis `axis`'s motor (0 = the first axis): from now on
+    /// its set-points go to it and its actual values come from it; the commissioned motor data
+    /// in `ram` go to it at once (the parameters were loaded at power-on). The board calls
+    /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `counts_per_rev` is its
+    /// encoder's resolution (for profiles whose velocity unit is in rpm).
+    pub fn attach_axis(
+        &mut self,
+        axis: usize,
+        link: &'static AxisLink,
+        counts_per_rev: u32,
+        ram: &[u8],
+    ) -> Result<(), NoSuchAxis> {
+        let drive_axis = self.axis_mut(axis).ok_or(NoSuchAxis(axis))?;
+        drive_axis.attach(link, counts_per_rev, ram);
+        Ok(())
+    }
+
+    /// The number of axes.
+    pub fn axis_count(&self) -> usize {
+        self.axes.iter().flatten().count()
+    }
+
+    /// Axis `axis` (0 = the first).
+    pub fn axis(&self, axis: usize) -> Option<&DriveAxis> {
+        self.axes.get(axis).and_then(Option::as_ref)
+    }
+
+    /// Axis `axis` (0 = the first), to change.
+    pub fn axis_mut(&mut self, axis: usize) -> Option<&mut DriveAxis> {
+        self.axes.get_mut(axis).and_then(Option::as_mut)
+    }
+
+    /// The PDS state of the first axis.
+    pub fn pds_state(&self) -> PdsState {
+        self.axis(0)
+            .map_or(PdsState::NotReadyToSwitchOn, DriveAxis::pds_state)
+    }
+
+    /// The CiA402 error code (603Fh) of the first axis' active fault.
+    pub fn fault_code(&self) -> Option<u16> {
+        self.axis(0).and_then(DriveAxis::fault_code)
+    }
+
+    /// One cycle of every axis: the CiA402 device on its controlword and option codes, the mode
+    /// display, the axis exchange.
+    pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.step(ram, cycle_ns);
+        }
+    }
+
+    /// Puts the outputs the master drives into their safe state (on leaving OP, on a watchdog):
+    /// every axis is disabled at once. `cycle_ns` is the bus cycle that was running.
+    pub fn safe_outputs(&mut self, ram: &mut [u8], cycle_ns: u32) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.safe_outputs(ram, cycle_ns);
+        }
+    }
+
+    /// Whether another axis than `except` holds a fault announced with EMCY code `code` (its
+    /// error stays active in 1001h until that one is reset too).
+    fn emcy_code_held(&self, code: u16, except: usize) -> bool {
+        self.axes.iter().enumerate().any(|(i, a)| {
+            i != except
+                && a.as_ref()
+                    .is_some_and(|a| a.fault_code().is_some() && a.fault_emcy().0 == code)
+        })
+    }
+
+    /// Starts `action` of service `service` on axis `axis` (its conditions were checked).
+    fn start_adjustment(
+        &mut self,
+        service: usize,
+        axis: usize,
+        action: Action,
+        feedback: AxisFeedback,
+    ) {
+        self.adjustment = Some(RunningAdjustment {
+            service,
+            axis,
+            action,
+            offset_calibrations: feedback.offset_calibrations,
+            trips: feedback.trips,
+        });
+        if let Some(a) = self.axis_mut(axis) {
+            a.set_calibrating_offsets(action == Action::CurrentOffsetCalibration);
+        }
+    }
+
+    /// How the adjustment of service `service` stands.
+    fn adjustment_progress(&self, service: usize) -> Progress {
+        let Some(a) = self.adjustment.filter(|a| a.service == service) else {
+            return Progress::Failed;
+        };
+        let Some(feedback) = self.axis(a.axis).and_then(DriveAxis::motor_feedback) else {
+            return Progress::Failed;
+        };
+        match a.action {
+            Action::CurrentOffsetCalibration => {
+                if feedback.trips != a.trips || feedback.state == AxisState::Faulted {
+                    Progress::Failed
+                } else if feedback.offset_calibrations != a.offset_calibrations {
+                    Progress::Done
+                } else {
+                    Progress::Running
+                }
+            }
+            Action::MultiTurnReset | Action::MultiTurnLimitSetting => Progress::Failed,
+        }
+    }
+}
+
+/// The slave stack's view of the drive.
+impl Application for Drive {
+    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvents {
+        let mut events = AppEvents::new();
+        for i in 0..MAX_AXES {
+            let Some(axis) = self.axis_mut(i) else {
+                continue;
+            };
+            let before = axis.fault_code();
+            axis.step(ram, cycle_ns);
+            let (emcy_code, data) = axis.fault_emcy();
+            let event = match (before, axis.fault_code()) {
+                // The unit's error stays while another axis still holds it.
+                (Some(_), None) if !self.emcy_code_held(emcy_code, i) => {
+                    AppEvent::ErrorCleared(emcy_code)
+                }
+                (None, Some(_)) => AppEvent::ErrorRaised {
+                    code: emcy_code,
+                    data,
+                },
+                _ => continue,
+            };
+            // MAX_APP_EVENTS holds a raise and a clear of every axis; one cycle gives at most one
+            // event per axis.
+            let _ = events.push(event);
+        }
+        events
+    }
+
+    fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool {
+        // Active under the master's control: Operation Enabled, or a quick stop under way or
+        // holding (the SDV3-E's ESr names both, §5.2 10), on any axis.
+        let was_active = self.axes.iter().flatten().any(DriveAxis::active);
+        self.safe_outputs(ram, cycle_ns);
+        was_active
+    }
+
+    fn power_on(&mut self, ram: &mut [u8]) {
+        // CiA402 transition 1: initialisation is done at power-on, in any EtherCAT state, so a
+        // master reads Switch On Disabled in PREOP already (and profile rules that test it,
+        // e.g. the Σ-V-SD's 1010h write condition, see the real state).
+        for axis in self.axes.iter_mut().flatten() {
+            axis.power_on(ram);
+        }
+    }
+
+    fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]) {
+        // An error of the unit (e.g. its EtherCAT communication): every axis faults.
+        for axis in self.axes.iter_mut().flatten() {
+            axis.report_fault(
+                FaultReport {
+                    error_code: report.error_code,
+                    emcy_code: report.emcy_code,
+                    emcy_data: report.emcy_data,
+                },
+                ram,
+            );
+        }
+    }
+
+    fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
+        let now_ms = now_ns / NS_PER_MS;
+        for i in 0..MAX_ADJUSTING_SERVICES {
+            let Some(mut service) = self
+                .adjusting
+                .get(i)
+                .copied()
+                .flatten()
+                .filter(|s| s.is_request(index, subindex))
+            else {
+                continue;
+            };
+            // The service names its axis from 1.
+            let axis = usize::from(service.spec().axis).wrapping_sub(1);
+            let busy = self.adjustment.is_some();
+            let target = self.axis(axis);
+            let mut allowed = None;
+            let start = service.on_request(ram, now_ms, |action| {
+                if busy {
+                    return Err(Refusal::Busy);
+                }
+                let feedback = target.ok_or(Refusal::NoAxis)?.adjustment_allowed(action)?;
+                allowed = Some(feedback);
+                Ok(())
+            });
+            if let Some(slot) = self.adjusting.get_mut(i) {
+                *slot = Some(service);
+            }
+            if let (Some(action), Some(feedback)) = (start, allowed) {
+                self.start_adjustment(i, axis, action, feedback);
+            }
+        }
+    }
+
+    fn background(&mut self, ram: &mut [u8], now_ns: u64) {
+        let now_ms = now_ns / NS_PER_MS;
+        for i in 0..MAX_ADJUSTING_SERVICES {
+            let Some(mut service) = self.adjusting.get(i).copied().flatten() else {
+                continue;
+            };
+            let progress = self.adjustment_progress(i);
+            service.on_time(ram, now_ms, progress);
+            if let Some(slot) = self.adjusting.get_mut(i) {
+                *slot = Some(service);
+            }
+            let ours = self.adjustment.filter(|a| a.service == i);
+            if let Some(a) = ours.filter(|_| service.running().is_none()) {
+                // Ended, timed out or aborted: the axis request falls.
+                self.adjustment = None;
+                if let Some(axis) = self.axis_mut(a.axis) {
+                    axis.set_calibrating_offsets(false);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::profile::AppVars;
+    use crate::profiles::standard;
+
+    const VARS: AppVars = AppVars {
+        controlword: Some(0),
+        statusword: Some(2),
+        modes_of_operation: Some(4),
+        modes_of_operation_display: Some(5),
+        target_position: Some(6),
+        position_actual_value: Some(10),
+        error_code: Some(14),
+        ..AppVars::NONE
+    };
+    /// The standard profile with the variables of this test's small RAM.
+    static PROFILE: DriveProfile = DriveProfile {
+        axes: &[VARS],
+        ..standard::PROFILE
+    };
+
+    #[test]
+    fn actual_position_follows_target_only_when_operation_enabled() {
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        ram[6..10].copy_from_slice(&1234i32.to_le_bytes());
+        for cw in [0x00u16, 0x06, 0x07] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&mut ram, 0);
+        }
+        assert_eq!(&ram[10..14], &[0; 4], "not enabled yet");
+        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
+        app.step(&mut ram, 0);
+        assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x6F, 0x27);
+        assert_eq!(i32::from_le_bytes(ram[10..14].try_into().unwrap()), 1234);
+    }
+
+    #[test]
+    fn power_on_ends_initialisation_in_switch_on_disabled() {
+        // CiA402 transition 1 (automatic): the statusword reads Switch On Disabled
+        // (xxxx xxxx x1xx 0000) before any process-data cycle ran.
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        assert_eq!(app.pds_state(), PdsState::NotReadyToSwitchOn);
+        app.power_on(&mut ram);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x004F, 0x0040);
+    }
+
+    #[test]
+    fn safe_outputs_disable_the_drive() {
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&mut ram, 0);
+        }
+        app.safe_outputs(&mut ram, 0);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(&ram[0..2], &[0, 0]);
+    }
+
+    #[test]
+    fn fault_sets_error_code_and_statusword_until_fault_reset() {
+        let mut ram = [0u8; 16];
+        let mut app = Drive::new(&PROFILE);
+        for cw in [0x00u16, 0x06, 0x07, 0x0F] {
+            ram[0..2].copy_from_slice(&cw.to_le_bytes());
+            app.step(&mut ram, 0);
+        }
+        app.axis_mut(0).expect("axis 1").fault(0x8700, &mut ram);
+        assert_eq!(app.pds_state(), PdsState::Fault);
+        assert_eq!(app.fault_code(), Some(0x8700));
+        assert_eq!(u16::from_le_bytes([ram[14], ram[15]]), 0x8700);
+        assert_ne!(
+            u16::from_le_bytes([ram[2], ram[3]]) & 0x08,
+            0,
+            "statusword bit 3"
+        );
+        // Controlword ignored while in Fault; a rising edge of bit 7 resets.
+        ram[0..2].copy_from_slice(&0x0Fu16.to_le_bytes());
+        app.step(&mut ram, 0);
+        assert_eq!(app.pds_state(), PdsState::Fault);
+        ram[0..2].copy_from_slice(&0x80u16.to_le_bytes());
+        app.step(&mut ram, 0);
+        assert_eq!(app.pds_state(), PdsState::SwitchOnDisabled);
+        assert_eq!(app.fault_code(), None);
+        assert_eq!(&ram[14..16], &[0, 0]);
+    }
+}

@@ -1,0 +1,37 @@
+//! The drive's reads and writes of its variables in the OD RAM: little-endian values at the
+//! offsets od-gen laid out (`None`: the profile has no such variable, reads give `None` and
+//! writes do nothing).
+
+// Offsets are u16 (from the generated profile) and N ≤ 4: `at + N` cannot overflow a usize.
+pub(super) fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
+    let at = usize::from(at?);
+    ram.get(at..at + N)?.try_into().ok()
+}
+
+pub(super) fn write_bytes<const N: usize>(ram: &mut [u8], at: Option<u16>, v: [u8; N]) {
+    if let Some(at) = at.map(usize::from) {
+        if let Some(dst) = ram.get_mut(at..at + N) {
+            dst.copy_from_slice(&v);
+        }
+    }
+}
+
+pub(super) fn read_i32(ram: &[u8], at: Option<u16>) -> Option<i32> {
+    read_bytes::<4>(ram, at).map(i32::from_le_bytes)
+}
+
+pub(super) fn read_u32(ram: &[u8], at: Option<u16>) -> Option<u32> {
+    read_bytes::<4>(ram, at).map(u32::from_le_bytes)
+}
+
+pub(super) fn read_i16(ram: &[u8], at: Option<u16>) -> Option<i16> {
+    read_bytes(ram, at).map(i16::from_le_bytes)
+}
+
+pub(super) fn read_u16(ram: &[u8], at: Option<u16>) -> Option<u16> {
+    read_bytes::<2>(ram, at).map(u16::from_le_bytes)
+}
+
+pub(super) fn write_u16(ram: &mut [u8], at: Option<u16>, v: u16) {
+    write_bytes(ram, at, v.to_le_bytes());
+}
