@@ -79,7 +79,11 @@ impl Cycle {
     fn sent_position(&self) -> Option<i32> {
         let mut master = [0; RAM_SIZE];
         self.tx.unpack(&self.tx_image, &mut master);
-        read::<4>(&master, super::axis_vars().and_then(|v| v.position_actual_value)).map(i32::from_le_bytes)
+        read::<4>(
+            &master,
+            super::axis_vars().and_then(|v| v.position_actual_value),
+        )
+        .map(i32::from_le_bytes)
     }
 }
 

@@ -92,7 +92,8 @@ pub fn run(h: &mut Harness) {
 
     let upload = request(command::UPLOAD_REQUEST, STATUSWORD, [0; 4]);
     let r = server.handle(&mut od, STATE, &upload, response);
-    let statusword = read::<2>(od.ram(), super::axis_vars().and_then(|v| v.statusword)).map(u16::from_le_bytes);
+    let statusword =
+        read::<2>(od.ram(), super::axis_vars().and_then(|v| v.statusword)).map(u16::from_le_bytes);
     if statusword.is_none() || response_u16(r, response, command::UPLOAD_RESPONSE_U16) != statusword
     {
         h.fail("sdo-upload", format_args!("6041h upload was not answered"));
