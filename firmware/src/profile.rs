@@ -140,6 +140,12 @@ pub struct AppVars {
     pub torque_offset: Option<u16>,
     /// 6502h supported drive modes (u32).
     pub supported_drive_modes: Option<u16>,
+    /// 60C1h:01 interpolation data record (i32, position units).
+    pub interpolation_data: Option<u16>,
+    /// 60C2h:01 interpolation time period value (u8).
+    pub interpolation_time_period: Option<u16>,
+    /// 60C2h:02 interpolation time index (i8).
+    pub interpolation_time_index: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -315,6 +321,9 @@ impl AppVars {
         velocity_offset: None,
         torque_offset: None,
         supported_drive_modes: None,
+        interpolation_data: None,
+        interpolation_time_period: None,
+        interpolation_time_index: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

@@ -478,11 +478,18 @@ pub enum Role {
     TorqueOffset,
     /// 6502h supported drive modes (UDINT): bit n−1 for mode n; the standard's bit 16 for mode −1.
     SupportedDriveModes,
+    /// 60C1h:01 interpolation data record (DINT, position units): the interpolated position
+    /// mode's absolute position set-point.
+    InterpolationData,
+    /// 60C2h:01 interpolation time period value (USINT): the period is value × 10^index s.
+    InterpolationTimePeriod,
+    /// 60C2h:02 interpolation time index (SINT).
+    InterpolationTimeIndex,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 63] = [
+    pub const ALL: [Role; 66] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -546,6 +553,9 @@ impl Role {
         Self::VelocityOffset,
         Self::TorqueOffset,
         Self::SupportedDriveModes,
+        Self::InterpolationData,
+        Self::InterpolationTimePeriod,
+        Self::InterpolationTimeIndex,
     ];
     /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
     /// commissioned motor data (vendor objects a unit may keep once for all its axes).
@@ -621,6 +631,9 @@ impl Role {
             Self::VelocityOffset => "velocity_offset",
             Self::TorqueOffset => "torque_offset",
             Self::SupportedDriveModes => "supported_drive_modes",
+            Self::InterpolationData => "interpolation_data",
+            Self::InterpolationTimePeriod => "interpolation_time_period",
+            Self::InterpolationTimeIndex => "interpolation_time_index",
         }
     }
     /// Parses the profile-file spelling.
@@ -640,6 +653,7 @@ impl Role {
                 | Self::PositionOffset
                 | Self::VelocityOffset
                 | Self::TorqueOffset
+                | Self::InterpolationData
         )
     }
     /// Whether an entry of `data_type` can hold the role: its own type, or for the torque
@@ -653,9 +667,11 @@ impl Role {
     pub fn data_type(self) -> DataType {
         match self {
             Self::Controlword | Self::Statusword | Self::ErrorCode => DataType::Uint,
-            Self::ModesOfOperation | Self::ModesOfOperationDisplay | Self::HomingMethod => {
-                DataType::Sint
-            }
+            Self::ModesOfOperation
+            | Self::ModesOfOperationDisplay
+            | Self::HomingMethod
+            | Self::InterpolationTimeIndex => DataType::Sint,
+            Self::InterpolationTimePeriod => DataType::Usint,
             Self::TargetPosition
             | Self::PositionActualValue
             | Self::TargetVelocity
@@ -670,7 +686,8 @@ impl Role {
             | Self::SoftwarePositionLimitMin
             | Self::SoftwarePositionLimitMax
             | Self::PositionOffset
-            | Self::VelocityOffset => DataType::Dint,
+            | Self::VelocityOffset
+            | Self::InterpolationData => DataType::Dint,
             Self::TargetTorque
             | Self::TorqueActualValue
             | Self::TorqueDemand

@@ -221,13 +221,13 @@ stored_pdo_mappable = ["0x2F10", "0x6000-0x60FF"]"#,
         "storage.stored_pdo_mappable[1]",
         "0x6040:00 is the process-data command `controlword`",
     );
-    // Excluded again, the range is fine: 6060h, 6071h, 607Ah, 60B0h-60B2h (the offsets) and
-    // 60FFh are the other commands.
+    // Excluded again, the range is fine: 6060h, 6071h, 607Ah, 60B0h-60B2h (the offsets), 60C1h
+    // (the interpolation data) and 60FFh are the other commands.
     let p = profile(&with_storage(
         STANDARD,
         r#"[storage]
 stored_pdo_mappable = ["0x6000-0x60FF"]
-not_stored = ["0x6040", "0x6060", "0x6071", "0x607A", "0x60B0-0x60B2", "0x60FF"]"#,
+not_stored = ["0x6040", "0x6060", "0x6071", "0x607A", "0x60B0-0x60B2", "0x60C1", "0x60FF"]"#,
     ));
     let o = p.object(0x6040).unwrap();
     assert!(!p.is_backup(o, &o.entries[0]));

@@ -878,7 +878,7 @@ fn units_factors_name_unsigned_entries_or_constants() {
 fn allowed_value_lists_are_checked() {
     let mode = |list: &str| {
         with(
-            "default = 8             # cyclic synchronous position, the mode most EtherCAT masters run\nallowed = [-1, 0, 1, 3, 4, 6, 8, 9, 10]   # 6502h; by PDO an unlisted mode is not taken (6061h)",
+            "default = 8             # cyclic synchronous position, the mode most EtherCAT masters run\nallowed = [-1, 0, 1, 3, 4, 6, 7, 8, 9, 10]   # 6502h; by PDO an unlisted mode is not taken (6061h)",
             &format!("default = 8\nallowed = {list}"),
         )
     };

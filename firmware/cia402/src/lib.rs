@@ -11,6 +11,7 @@
 //! | [`limits`] | software position limits 607Dh, limit switches: which motions are blocked; 60FDh |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
 //! | [`homing`] | homing mode: the search sequences of the CiA402 homing methods on latched switch edges and index pulses, homing statusword bits |
+//! | [`interpolated_position`] | interpolated position mode: controlword bit 4, statusword bit 12, the interpolation period 60C2h |
 //! | [`profile_position`] | the set-point handshake of profile position (controlword bits 4, 5, 6, 9; statusword bit 12; the buffer) |
 //! | [`window`] | "inside a window for a time": target reached, speed zero |
 //! | [`touch_probe`] | touch probe 60B8h/60B9h: single and continuous trigger, input or index source, latched positions 60BAh–60BDh and counters 60D5h–60D8h, the profile's status bits 6/7 |
@@ -24,6 +25,7 @@
 pub mod device;
 pub mod faults;
 pub mod homing;
+pub mod interpolated_position;
 pub mod limits;
 pub mod modes;
 pub mod pds;

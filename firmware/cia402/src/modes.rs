@@ -13,6 +13,8 @@ pub const PV: i8 = 3;
 pub const PT: i8 = 4;
 /// 6060h value of homing.
 pub const HM: i8 = crate::homing::HOMING;
+/// 6060h value of interpolated position.
+pub const IP: i8 = 7;
 /// 6060h value of cyclic synchronous position.
 pub const CSP: i8 = 8;
 /// 6060h value of cyclic synchronous velocity.
@@ -39,6 +41,9 @@ pub enum Mode {
     ProfileTorque,
     /// Homing (6): the drive searches the home position of the homing method 6098h.
     Homing,
+    /// Interpolated position (7): the master's absolute position 60C1h:01 every interpolation
+    /// period ([`crate::interpolated_position`]).
+    InterpolatedPosition,
     /// Cyclic synchronous position (8).
     CyclicPosition,
     /// Cyclic synchronous velocity (9).
@@ -59,6 +64,7 @@ impl Mode {
             PV => Self::ProfileVelocity,
             PT => Self::ProfileTorque,
             HM => Self::Homing,
+            IP => Self::InterpolatedPosition,
             CSP => Self::CyclicPosition,
             CSV => Self::CyclicVelocity,
             CST => Self::CyclicTorque,
@@ -111,6 +117,9 @@ pub struct Targets {
     pub velocity_offset: f32,
     /// Torque offset 60B2h (N·m): the torque feed-forward of CSP/CSV, added to the CST target.
     pub torque_offset: f32,
+    /// Interpolated position: the interpolation data record 60C1h:01 (increments, extended to
+    /// 64 bits) while controlword bit 4 enables the interpolation; `None` holds the position.
+    pub interpolation: Option<i64>,
 }
 
 /// What the mode asks of the axis this cycle.
@@ -138,6 +147,12 @@ pub fn set_point(mode: Mode, targets: Targets, actual_position: i64) -> SetPoint
                 .map_or(actual_position, |p| p.saturating_add(t.position_offset)),
             velocity: t.velocity_offset,
             torque: t.torque_offset,
+        },
+        Mode::InterpolatedPosition => SetPoint {
+            control: Loop::Position,
+            position: t.interpolation.unwrap_or(actual_position),
+            velocity: 0.0,
+            torque: 0.0,
         },
         Mode::CyclicVelocity => SetPoint {
             control: Loop::Velocity,
@@ -178,6 +193,7 @@ mod tests {
         position_offset: 0,
         velocity_offset: 0.0,
         torque_offset: 0.0,
+        interpolation: None,
     };
 
     #[test]
@@ -192,6 +208,22 @@ mod tests {
         assert_eq!(Mode::from_object(4), Mode::ProfileTorque);
         assert_eq!(Mode::from_object(6), Mode::Homing);
         assert_eq!(Mode::from_object(2), Mode::Other(2));
+        assert_eq!(Mode::from_object(7), Mode::InterpolatedPosition);
+    }
+
+    #[test]
+    fn ip_follows_the_interpolation_data_only_while_enabled() {
+        // CiA402 / Σ-V-SD §4.7 (2): bit 4 = 0 "disable interpolation", the motor holds.
+        let held = set_point(Mode::InterpolatedPosition, TARGETS, 100);
+        assert_eq!((held.control, held.position), (Loop::Position, 100));
+        let t = Targets {
+            interpolation: Some(-7_000),
+            ..TARGETS
+        };
+        let sp = set_point(Mode::InterpolatedPosition, t, 100);
+        assert_eq!((sp.control, sp.position), (Loop::Position, -7_000));
+        // The target position 607Ah is not IP's set-point.
+        assert_ne!(sp.position, 5_000);
     }
 
     #[test]
@@ -224,18 +256,19 @@ mod tests {
 
     #[test]
     fn supported_modes_follow_6502h() {
-        // The standard profile's 6502h: PP, PV, PT, HM, CSP, CSV, CST and −1.
-        let standard = 0x0001_03AD;
-        for m in [0, 1, 3, 4, 6, 8, 9, 10, -1] {
+        // The standard profile's 6502h: PP, PV, PT, HM, IP, CSP, CSV, CST and −1.
+        let standard = 0x0001_03ED;
+        for m in [0, 1, 3, 4, 6, 7, 8, 9, 10, -1] {
             assert!(is_supported(m, standard), "{m}");
         }
-        for m in [2, 5, 7, 11, -2, i8::MIN, i8::MAX] {
+        for m in [2, 5, 11, -2, i8::MIN, i8::MAX] {
             assert!(!is_supported(m, standard), "{m}");
         }
         assert!(
             !is_supported(-1, 0x3AD),
             "a vendor without the identification bit"
         );
+        assert!(!is_supported(7, 0x3AD), "a vendor without IP (RSE, GHA-E)");
     }
 
     #[test]

@@ -15,15 +15,21 @@
 use cia402::device::{Device, DeviceRules, Motion};
 use cia402::faults::FaultReport;
 use cia402::homing;
+use cia402::interpolated_position;
 use cia402::limits::{self, Blocked, SoftwareLimits};
 use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
 use cia402::touch_probe::{self, Bit7, TouchProbes};
 use cia402::units;
-use cia402::window::WindowTimer;
+use cia402::window::{self, WindowTimer};
 
-use super::ram::{read_bytes, read_i16, read_i32, read_u16, read_u32, write_bytes, write_u16};
+use ethercat_slave::od::index::{sm_parameter::SUB_SYNC_TYPE, SM_OUTPUT_PARAMETER};
+use ethercat_slave::slave::SyncMode;
+
+use super::ram::{
+    ram_offset, read_bytes, read_i16, read_i32, read_u16, read_u32, write_bytes, write_u16,
+};
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
 use crate::motion::{self, ProfileModes};
@@ -91,6 +97,14 @@ pub struct DriveAxis {
     /// home position reads as the home offset 607Ch. Every position of the objects and of the
     /// profile modes is a drive position; the axis works on encoder positions.
     position_shift: i64,
+    /// Where the slave shows its synchronisation (1C32h:01 sync type), to tell a SYNC0 cycle
+    /// from a free-run one.
+    sync_type_at: Option<u16>,
+    /// Interpolated position: how long the axis has been inside the position window of the
+    /// unchanged set-point (statusword bit 10).
+    ip_target_timer: WindowTimer,
+    /// Interpolated position: the set-point of the previous cycle.
+    ip_last_set_point: Option<i64>,
 }
 
 impl DriveAxis {
@@ -119,6 +133,9 @@ impl DriveAxis {
             running_mode: 0,
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
+            sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
+            ip_target_timer: WindowTimer::new(),
+            ip_last_set_point: None,
         }
     }
 
@@ -347,6 +364,11 @@ impl DriveAxis {
                 read_bytes::<2>(ram, vars.torque_offset).map_or(0, i16::from_le_bytes),
                 rated_nm,
             ),
+            interpolation: (mode == Mode::InterpolatedPosition
+                && cw & interpolated_position::ENABLE_INTERPOLATION != 0)
+                .then(|| read_i32(ram, vars.interpolation_data))
+                .flatten()
+                .map(|t| units::target_position(t, feedback.position, position_ratio)),
         };
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;
@@ -467,7 +489,10 @@ impl DriveAxis {
         let outside = window.is_some_and(|w| {
             w != FOLLOWING_ERROR_OFF && feedback.following_error.unsigned_abs() > u64::from(w)
         });
-        let position_mode = matches!(mode, Mode::ProfilePosition | Mode::CyclicPosition);
+        let position_mode = matches!(
+            mode,
+            Mode::ProfilePosition | Mode::CyclicPosition | Mode::InterpolatedPosition
+        );
         let lagging = self.following_error_timer.step(
             outside && motion == Motion::Run && position_mode,
             timeout_ms,
@@ -526,10 +551,18 @@ impl DriveAxis {
             velocity: set_point.velocity,
             torque: set_point.torque,
             deceleration,
-            bus_cycle_ns: cycle_ns,
+            bus_cycle_ns: if mode == Mode::InterpolatedPosition {
+                self.interpolation_period(ram, cycle_ns)
+            } else {
+                cycle_ns
+            },
             following_error_limits,
             torque_limits,
         });
+        if mode == Mode::InterpolatedPosition {
+            mode_statusword |=
+                self.ip_status(ram, &targets, &feedback, motion, (position_ratio, cycle_ns));
+        }
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
             mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
@@ -591,6 +624,64 @@ impl DriveAxis {
             units::torque_to_permille(feedback.torque, rated_nm).to_le_bytes(),
         );
         self.port = Some(port);
+    }
+
+    /// The period the axis interpolates the set-points of the interpolated position mode over:
+    /// the SYNC0 cycle when the slave runs in a DC mode (shown in 60C2h, as the Σ-V-SD does,
+    /// §4.11 (2)), else the master's interpolation period 60C2h (the drive's own cycle when
+    /// 60C2h holds no valid period).
+    fn interpolation_period(&self, ram: &mut [u8], cycle_ns: u32) -> u32 {
+        let vars = self.vars;
+        let dc = read_bytes::<1>(ram, self.sync_type_at)
+            .is_some_and(|[t]| t == SyncMode::DcSync0 as u8 || t == SyncMode::DcSync1 as u8);
+        if dc {
+            if let Some((value, index)) = interpolated_position::period_object(cycle_ns) {
+                write_bytes(ram, vars.interpolation_time_period, [value]);
+                write_bytes(ram, vars.interpolation_time_index, index.to_le_bytes());
+            }
+            return cycle_ns;
+        }
+        let value = read_bytes::<1>(ram, vars.interpolation_time_period);
+        let index = read_bytes::<1>(ram, vars.interpolation_time_index);
+        value
+            .zip(index)
+            .and_then(|([v], [i])| interpolated_position::period_ns(v, i as i8))
+            .unwrap_or(cycle_ns)
+    }
+
+    /// Statusword bits 12 (ip mode active: the interpolation is enabled while the axis runs)
+    /// and 10 (target reached: the set-point did not change and the motor is inside the
+    /// position window 6067h for 6068h, as in profile position) of the interpolated position
+    /// mode.
+    fn ip_status(
+        &mut self,
+        ram: &[u8],
+        targets: &Targets,
+        feedback: &AxisFeedback,
+        motion: Motion,
+        (ratio, cycle_ns): (units::Ratio, u32),
+    ) -> u16 {
+        let running = motion == Motion::Run;
+        let Some(set_point) = targets.interpolation.filter(|_| running) else {
+            self.ip_last_set_point = None;
+            self.ip_target_timer.step(false, 0, cycle_ns);
+            return 0;
+        };
+        let window = read_u32(ram, self.vars.position_window).unwrap_or(0);
+        let time_ms = read_u16(ram, self.vars.position_window_time).unwrap_or(0);
+        // In position units, as profile position compares.
+        let deviation = i64::from(units::actual_position(set_point, ratio))
+            - i64::from(units::actual_position(feedback.position, ratio));
+        let settled =
+            self.ip_last_set_point == Some(set_point) && window::inside(deviation, window);
+        self.ip_last_set_point = Some(set_point);
+        let reached = self.ip_target_timer.step(settled, time_ms, cycle_ns);
+        interpolated_position::IP_MODE_ACTIVE
+            | if reached {
+                statusword::TARGET_REACHED
+            } else {
+                0
+            }
     }
 
     /// The touch probes: 60B8h in, 60B9h, the positions 60BAh–60BDh (user units) and the

@@ -2,6 +2,32 @@
 //! offsets od-gen laid out (`None`: the profile has no such variable, reads give `None` and
 //! writes do nothing).
 
+use ethercat_slave::od::{Profile, Value};
+
+/// The OD RAM offset of entry `index:subindex` of `od`, `None` when it is not a RAM variable
+/// (a const fn: the drive finds the communication-area entries it reads once, at build time).
+pub(super) const fn ram_offset(od: &Profile, index: u16, subindex: u8) -> Option<u16> {
+    let mut i = 0;
+    while i < od.objects.len() {
+        let o = &od.objects[i];
+        if o.index == index {
+            let mut j = 0;
+            while j < o.entries.len() {
+                let e = &o.entries[j];
+                if e.subindex == subindex {
+                    return match e.value {
+                        Value::Ram(at) => Some(at),
+                        _ => None,
+                    };
+                }
+                j += 1;
+            }
+        }
+        i += 1;
+    }
+    None
+}
+
 // Offsets are u16 (from the generated profile) and N ≤ 4: `at + N` cannot overflow a usize.
 pub(super) fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
     let at = usize::from(at?);
