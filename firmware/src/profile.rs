@@ -146,6 +146,8 @@ pub struct AppVars {
     pub interpolation_time_period: Option<u16>,
     /// 60C2h:02 interpolation time index (i8).
     pub interpolation_time_index: Option<u16>,
+    /// 607Eh polarity (u8).
+    pub polarity: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -324,6 +326,7 @@ impl AppVars {
         interpolation_data: None,
         interpolation_time_period: None,
         interpolation_time_index: None,
+        polarity: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

@@ -485,11 +485,13 @@ pub enum Role {
     InterpolationTimePeriod,
     /// 60C2h:02 interpolation time index (SINT).
     InterpolationTimeIndex,
+    /// 607Eh polarity (USINT): bit 7 position, bit 6 velocity, bit 5 torque objects × −1.
+    Polarity,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 66] = [
+    pub const ALL: [Role; 67] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -556,6 +558,7 @@ impl Role {
         Self::InterpolationData,
         Self::InterpolationTimePeriod,
         Self::InterpolationTimeIndex,
+        Self::Polarity,
     ];
     /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
     /// commissioned motor data (vendor objects a unit may keep once for all its axes).
@@ -634,6 +637,7 @@ impl Role {
             Self::InterpolationData => "interpolation_data",
             Self::InterpolationTimePeriod => "interpolation_time_period",
             Self::InterpolationTimeIndex => "interpolation_time_index",
+            Self::Polarity => "polarity",
         }
     }
     /// Parses the profile-file spelling.
@@ -671,7 +675,7 @@ impl Role {
             | Self::ModesOfOperationDisplay
             | Self::HomingMethod
             | Self::InterpolationTimeIndex => DataType::Sint,
-            Self::InterpolationTimePeriod => DataType::Usint,
+            Self::InterpolationTimePeriod | Self::Polarity => DataType::Usint,
             Self::TargetPosition
             | Self::PositionActualValue
             | Self::TargetVelocity

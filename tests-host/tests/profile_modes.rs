@@ -459,12 +459,12 @@ fn standard_unsupported_mode_is_not_taken() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        // 6060h = 7 (interpolated position) is not in the standard's 6502h: refused by SDO
-        // (0x06090030) and, written by PDO, not taken: 6061h keeps the mode the drive runs.
+        // 6060h = 5 (reserved) is not in the standard's 6502h: refused by SDO (0x06090030)
+        // and, written by PDO, not taken: 6061h keeps the mode the drive runs.
         let group = enabled!(m, md, PV, &[]);
         let sd = group.subdevice(md, 0).expect("drive");
-        assert!(sd.sdo_write(0x6060, 0, 7i8).await.is_err(), "SDO refuses 7");
-        let s = run!(m, md, group, ENABLE_OPERATION, 0, 7, 5);
+        assert!(sd.sdo_write(0x6060, 0, 5i8).await.is_err(), "SDO refuses 5");
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, 5, 5);
         assert_eq!(s.last().unwrap().mode_display, PV, "6061h stays 3");
         let s = run!(m, md, group, ENABLE_OPERATION, 0, PP, 5);
         assert_eq!(

@@ -1,6 +1,7 @@
 //! A profile's user units between the bus and the motor (`[units]` in the profile file): the
 //! GHA-E converts positions with its electronic gear ratio 6091h (increments = instruction units
-//! × 6091h:01 / 6091h:02) and velocities in instruction units/s. Commanded by ethercrab over
+//! × 6091h:01 / 6091h:02) and velocities in instruction units/s; with the polarity 607Eh = 224
+//! the same objects turn the motor the other way. Commanded by ethercrab over
 //! PDOs with DC SYNC0 (the GHA-E runs in DC mode only), the simulated motor turns by the
 //! converted amount and 6064h reads back in user units.
 
@@ -31,6 +32,22 @@ fn mapping(index: u16, sub: u8, bits: u8) -> u32 {
 
 #[test]
 fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
+    gha_e_csp_and_csv(0);
+}
+
+/// GHA-E §5.7.3 2): 607Eh = 224 makes CW the positive direction: the same objects turn the
+/// motor the other way (position, velocity and torque objects × −1), and the actual values read
+/// back in the master's direction.
+#[test]
+fn gha_e_polarity_224_turns_the_motor_the_other_way() {
+    gha_e_csp_and_csv(224);
+}
+
+/// A GHA-E with 6091h = 0.1° per unit and polarity 607Eh = `polarity` (0 or 224): a CSP move of
+/// 900 units and a CSV run at 1800 units/s; the motor turns by the converted amount, against
+/// its own positive direction with 224, and 6064h/606Ch read the objects' values.
+fn gha_e_csp_and_csv(polarity: u8) {
+    let sign = if polarity == 0 { 1.0 } else { -1.0 };
     block_on(async {
         let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
@@ -45,6 +62,7 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
             sd.sdo_write(0x6091, 2, UNITS_PER_REV)
                 .await
                 .expect("6091h:02");
+            sd.sdo_write(0x607E, 0, polarity).await.expect("607Eh");
             // RxPDO: controlword, target position, mode; TxPDO: statusword, position actual.
             for (pdo, assign, entries) in [
                 (
@@ -142,7 +160,7 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
             .mech_angle_rad();
         let rotor_counts = rotor / std::f64::consts::TAU * f64::from(CPR);
         assert!(
-            (rotor_counts - f64::from(CPR / 4)).abs() < 300.0,
+            (rotor_counts - sign * f64::from(CPR / 4)).abs() < 300.0,
             "rotor at {rotor_counts:.0} increments, expected {} (900 units × {CPR}/{UNITS_PER_REV})",
             CPR / 4
         );
@@ -159,7 +177,7 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
         let after = m.shared.segment().drives()[0].servos[0]
             .plant
             .mech_angle_rad();
-        let turned = (after - before) / std::f64::consts::TAU;
+        let turned = sign * (after - before) / std::f64::consts::TAU;
         // 0.5 rev/s for 0.4 s = 0.2 rev, less the acceleration at the start.
         assert!((0.17..=0.21).contains(&turned), "turned {turned:.3} rev");
         let velocity: i32 = sd.sdo_read(0x606C, 0).await.expect("606Ch");

@@ -129,6 +129,66 @@ impl Ratio {
     }
 }
 
+/// Polarity 607Eh (CiA402): bit 7 multiplies the position objects by −1, bit 6 the velocity
+/// objects; bit 5 the torque objects (the GHA-E's, reserved in CiA402). The drive applies it
+/// where an object's value enters or leaves, so that everything inside (axis, profile
+/// generators, homing, limits) works in the motor's direction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Polarity {
+    /// Bit 7: position objects (607Ah, 6064h, 6062h, 60B0h, 60C1h, 607Ch, 607Dh, 60BAh–60BDh).
+    pub position: bool,
+    /// Bit 6: velocity objects (60FFh, 606Ch, 606Bh, 60B1h).
+    pub velocity: bool,
+    /// Bit 5: torque objects (6071h, 6077h, 6074h, 60B2h; 60E0h and 60E1h trade places).
+    pub torque: bool,
+}
+
+impl Polarity {
+    /// No inversion (607Eh = 0).
+    pub const NONE: Self = Self {
+        position: false,
+        velocity: false,
+        torque: false,
+    };
+
+    /// The polarity of 607Eh value `value`.
+    pub const fn from_object(value: u8) -> Self {
+        Self {
+            position: value & 0x80 != 0,
+            velocity: value & 0x40 != 0,
+            torque: value & 0x20 != 0,
+        }
+    }
+
+    /// A position object's value as the drive counts it, or back (its own inverse; the most
+    /// negative value saturates).
+    pub fn position(self, value: i32) -> i32 {
+        if self.position {
+            value.saturating_neg()
+        } else {
+            value
+        }
+    }
+
+    /// A velocity object's value as the drive counts it, or back.
+    pub fn velocity(self, value: i32) -> i32 {
+        if self.velocity {
+            value.saturating_neg()
+        } else {
+            value
+        }
+    }
+
+    /// A torque object's value as the drive counts it, or back.
+    pub fn torque(self, value: i16) -> i16 {
+        if self.torque {
+            value.saturating_neg()
+        } else {
+            value
+        }
+    }
+}
+
 /// A 32-bit target position object (607Ah, user units) as increments: extended to 64 bits
 /// relative to the actual position in user units (so it is right across wraps of the 32-bit
 /// object), then scaled.
@@ -176,6 +236,33 @@ mod tests {
             i64::MAX
         );
         assert_eq!(huge.times(huge), Ratio::new(u64::MAX, 1));
+    }
+
+    #[test]
+    fn polarity_bits_invert_their_objects_and_are_their_own_inverse() {
+        // CiA402 607Eh: bit 7 position, bit 6 velocity; the GHA-E's bit 5 torque (0xE0 = all).
+        let all = Polarity::from_object(0xE0);
+        assert_eq!(
+            (all.position(5), all.velocity(-7), all.torque(300)),
+            (-5, 7, -300)
+        );
+        assert_eq!(all.position(all.position(123_456)), 123_456);
+        assert_eq!(all.position(i32::MIN), i32::MAX, "saturates, no overflow");
+        assert_eq!(all.torque(i16::MIN), i16::MAX);
+        let position_only = Polarity::from_object(0x80);
+        assert_eq!(
+            (
+                position_only.position(5),
+                position_only.velocity(5),
+                position_only.torque(5)
+            ),
+            (-5, 5, 5)
+        );
+        assert_eq!(
+            Polarity::from_object(0x1F),
+            Polarity::NONE,
+            "bits 0-4 reserved"
+        );
     }
 
     #[test]

@@ -21,7 +21,7 @@ use cia402::modes::{self, Mode, Targets};
 use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
 use cia402::touch_probe::{self, Bit7, TouchProbes};
-use cia402::units;
+use cia402::units::{self, Polarity};
 use cia402::window::{self, WindowTimer};
 
 use ethercat_slave::od::index::{sm_parameter::SUB_SYNC_TYPE, SM_OUTPUT_PARAMETER};
@@ -105,6 +105,8 @@ pub struct DriveAxis {
     ip_target_timer: WindowTimer,
     /// Interpolated position: the set-point of the previous cycle.
     ip_last_set_point: Option<i64>,
+    /// The polarity 607Eh in force (taken while the power stage is off).
+    polarity: Polarity,
 }
 
 impl DriveAxis {
@@ -136,6 +138,7 @@ impl DriveAxis {
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
+            polarity: Polarity::NONE,
         }
     }
 
@@ -346,27 +349,36 @@ impl DriveAxis {
         // change applies at once.
         let position_ratio = vars.position_factor.ratio(ram, port.counts_per_rev);
         let velocity_ratio = vars.velocity_factor.ratio(ram, port.counts_per_rev);
+        if motion == Motion::Off {
+            // 607Eh: a new polarity is taken while nothing moves.
+            self.polarity = read_bytes::<1>(ram, vars.polarity)
+                .map_or(Polarity::NONE, |[p]| Polarity::from_object(p));
+        }
+        let pol = self.polarity;
+        // Every object value passes the polarity where it enters or leaves (its own inverse).
+        let position_in = |at| read_i32(ram, at).map(|v| pol.position(v));
+        let velocity_in = |at| {
+            read_i32(ram, at).map_or(0.0, |v| {
+                velocity_ratio.velocity_to_internal(pol.velocity(v) as f32)
+            })
+        };
+        let torque_in = |at| {
+            let permille = read_bytes::<2>(ram, at).map_or(0, i16::from_le_bytes);
+            units::torque_from_permille(pol.torque(permille), rated_nm)
+        };
         let targets = Targets {
-            position: read_i32(ram, vars.target_position)
+            position: position_in(vars.target_position)
                 .map(|t| units::target_position(t, feedback.position, position_ratio)),
-            velocity: read_i32(ram, vars.target_velocity)
-                .map_or(0.0, |v| velocity_ratio.velocity_to_internal(v as f32)),
-            torque: units::torque_from_permille(
-                read_bytes::<2>(ram, vars.target_torque).map_or(0, i16::from_le_bytes),
-                rated_nm,
-            ),
-            position_offset: read_i32(ram, vars.position_offset)
+            velocity: velocity_in(vars.target_velocity),
+            torque: torque_in(vars.target_torque),
+            position_offset: position_in(vars.position_offset)
                 .map_or(0, |o| position_ratio.position_to_internal(i64::from(o))),
-            velocity_offset: read_i32(ram, vars.velocity_offset)
-                .map_or(0.0, |v| velocity_ratio.velocity_to_internal(v as f32)),
+            velocity_offset: velocity_in(vars.velocity_offset),
             // An INT, or the low half of a DINT (the GHA-E's 60B2h).
-            torque_offset: units::torque_from_permille(
-                read_bytes::<2>(ram, vars.torque_offset).map_or(0, i16::from_le_bytes),
-                rated_nm,
-            ),
+            torque_offset: torque_in(vars.torque_offset),
             interpolation: (mode == Mode::InterpolatedPosition
                 && cw & interpolated_position::ENABLE_INTERPOLATION != 0)
-                .then(|| read_i32(ram, vars.interpolation_data))
+                .then(|| position_in(vars.interpolation_data))
                 .flatten()
                 .map(|t| units::target_position(t, feedback.position, position_ratio)),
         };
@@ -375,7 +387,7 @@ impl DriveAxis {
         // Software position limits (607Dh), in drive increments; not while homing looks for
         // its references.
         let limits = (mode != Mode::Homing)
-            .then(|| software_limits(ram, vars, position_ratio))
+            .then(|| software_limits(ram, vars, position_ratio, pol))
             .flatten();
         if motion::is_profile_mode(mode) {
             let inputs = profile_inputs(
@@ -391,6 +403,7 @@ impl DriveAxis {
             );
             let inputs = motion::Inputs {
                 position_range: limits,
+                target_position: pol.position(inputs.target_position),
                 ..inputs
             };
             let inputs = if mode == Mode::Homing {
@@ -416,7 +429,7 @@ impl DriveAxis {
             mode_statusword = out.statusword;
             if let Some(home) = out.home_found {
                 // The home position reads as the home offset from now on.
-                let offset = read_i32(ram, vars.home_offset).unwrap_or(0);
+                let offset = position_in(vars.home_offset).unwrap_or(0);
                 let delta = position_ratio
                     .position_to_internal(i64::from(offset))
                     .saturating_sub(home);
@@ -429,7 +442,15 @@ impl DriveAxis {
         }
         // Torque limits 6072h, 60E0h, 60E1h (‰ of the rated torque): to the speed loop, and a
         // torque set-point limited here.
-        let torque_limits = torque_limits(ram, vars, rated_nm);
+        // 60E0h limits the positive torque the objects name: with the torque polarity, the
+        // drive's negative one.
+        let torque_limits = torque_limits(ram, vars, rated_nm).map(|(positive, negative)| {
+            if pol.torque {
+                (negative, positive)
+            } else {
+                (positive, negative)
+            }
+        });
         if let Some((positive, negative)) = torque_limits {
             if set_point.control == modes::Loop::Torque {
                 let limited = crate::motor::math::clamp(set_point.torque, -negative, positive);
@@ -586,16 +607,22 @@ impl DriveAxis {
             .to_le_bytes(),
         );
         // Demand values: what the axis is asked for this cycle.
+        let position_out = |p: i64| pol.position(units::actual_position(p, position_ratio));
+        let velocity_out = |v: f32| {
+            pol.velocity(units::velocity_object(
+                velocity_ratio.velocity_from_internal(v),
+            ))
+        };
+        let torque_out = |t: f32| pol.torque(units::torque_to_permille(t, rated_nm));
         write_bytes(
             ram,
             vars.position_demand_value,
-            units::actual_position(set_point.position, position_ratio).to_le_bytes(),
+            position_out(set_point.position).to_le_bytes(),
         );
         write_bytes(
             ram,
             vars.velocity_demand_value,
-            units::velocity_object(velocity_ratio.velocity_from_internal(set_point.velocity))
-                .to_le_bytes(),
+            velocity_out(set_point.velocity).to_le_bytes(),
         );
         let torque_demand = if set_point.control == modes::Loop::Torque {
             set_point.torque
@@ -605,23 +632,22 @@ impl DriveAxis {
         write_bytes(
             ram,
             vars.torque_demand,
-            units::torque_to_permille(torque_demand, rated_nm).to_le_bytes(),
+            torque_out(torque_demand).to_le_bytes(),
         );
         write_bytes(
             ram,
             vars.position_actual_value,
-            units::actual_position(feedback.position, position_ratio).to_le_bytes(),
+            position_out(feedback.position).to_le_bytes(),
         );
         write_bytes(
             ram,
             vars.velocity_actual_value,
-            units::velocity_object(velocity_ratio.velocity_from_internal(feedback.velocity))
-                .to_le_bytes(),
+            velocity_out(feedback.velocity).to_le_bytes(),
         );
         write_bytes(
             ram,
             vars.torque_actual_value,
-            units::torque_to_permille(feedback.torque, rated_nm).to_le_bytes(),
+            torque_out(feedback.torque).to_le_bytes(),
         );
         self.port = Some(port);
     }
@@ -714,7 +740,8 @@ impl DriveAxis {
             vars.touch_probe_2_negative,
         ];
         for (at, value) in positions.into_iter().zip(out.values) {
-            write_bytes(ram, at, units::actual_position(value, ratio).to_le_bytes());
+            let object = self.polarity.position(units::actual_position(value, ratio));
+            write_bytes(ram, at, object.to_le_bytes());
         }
         let counters = [
             vars.touch_probe_1_positive_count,
@@ -894,9 +921,20 @@ fn torque_limits(ram: &[u8], vars: &AppVars, rated_nm: f32) -> Option<(f32, f32)
 
 /// The software position limits 607Dh in drive increments, `None` when disabled (min ≥ max)
 /// or absent.
-fn software_limits(ram: &[u8], vars: &AppVars, ratio: units::Ratio) -> Option<SoftwareLimits> {
+fn software_limits(
+    ram: &[u8],
+    vars: &AppVars,
+    ratio: units::Ratio,
+    polarity: Polarity,
+) -> Option<SoftwareLimits> {
     let min = read_i32(ram, vars.software_position_limit_min)?;
     let max = read_i32(ram, vars.software_position_limit_max)?;
+    // With the position polarity the user's minimum is the drive's maximum.
+    let (min, max) = if polarity.position {
+        (polarity.position(max), polarity.position(min))
+    } else {
+        (min, max)
+    };
     SoftwareLimits::new(
         ratio.position_to_internal(i64::from(min)),
         ratio.position_to_internal(i64::from(max)),

@@ -148,14 +148,14 @@ fn od_list_type_4_lists_the_objects_the_parameter_storage_stores() {
     // 605Ah-605Eh, 6076h (motor rated torque), and the PDO-mappable parameters the profile lists
     // in stored_pdo_mappable: the target-reached windows 6067h/6068h/606Dh-6070h, the profile
     // velocities 607Fh/6081h, the ramps 6083h-6085h, the torque slope 6087h, homing (607Ch,
-    // 6098h-609Ah), the following-error limits 6065h/6066h, the software limits 607Dh and the
-    // torque limits 6072h, 60E0h, 60E1h;
+    // 6098h-609Ah), the following-error limits 6065h/6066h, the software limits 607Dh, the
+    // polarity 607Eh, the torque limits 6072h, 60E0h, 60E1h, and the interpolation period 60C2h;
     // not 1010h/1011h, 1C32h/1C33h or process data.
     let backup = [
         0x10F1, 0x10F3, 0x1600, 0x1A00, 0x1C12, 0x1C13, 0x2100, 0x2F00, 0x605A, 0x605B, 0x605C,
         0x605D, 0x605E, 0x6065, 0x6066, 0x6067, 0x6068, 0x606D, 0x606E, 0x606F, 0x6070, 0x6072,
-        0x6076, 0x607C, 0x607D, 0x607F, 0x6081, 0x6083, 0x6084, 0x6085, 0x6087, 0x6098, 0x6099,
-        0x609A, 0x60E0, 0x60E1,
+        0x6076, 0x607C, 0x607D, 0x607E, 0x607F, 0x6081, 0x6083, 0x6084, 0x6085, 0x6087, 0x6098,
+        0x6099, 0x609A, 0x60C2, 0x60E0, 0x60E1,
     ];
     assert_eq!(
         indices(|o| o
