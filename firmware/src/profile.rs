@@ -148,6 +148,10 @@ pub struct AppVars {
     pub interpolation_time_index: Option<u16>,
     /// 607Eh polarity (u8).
     pub polarity: Option<u16>,
+    /// 60FEh:01 physical outputs (u32).
+    pub digital_outputs: Option<u16>,
+    /// 60FEh:02 bit mask (u32).
+    pub digital_outputs_mask: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -327,6 +331,8 @@ impl AppVars {
         interpolation_time_period: None,
         interpolation_time_index: None,
         polarity: None,
+        digital_outputs: None,
+        digital_outputs_mask: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

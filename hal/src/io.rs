@@ -1,4 +1,4 @@
-//! Digital inputs and status LEDs.
+//! Digital inputs and outputs, and status LEDs.
 
 /// Digital inputs of the drive (active = true), as latched at the last PWM-synchronous sample.
 ///
@@ -41,6 +41,14 @@ pub struct ProbeCapture {
     /// capture or the ET1100 latch unit. `None`: no edge. Of two edges in one period only the
     /// last is reported (the inputs' minimum pulse width exceeds a PWM period).
     pub edge_ns_before_position: Option<i32>,
+}
+
+/// Digital outputs of the drive, in the bit layout of CiA402 60FEh:01: bit 0 the holding brake
+/// (1 = brake applied), bits 16–31 the board's general outputs (DO1 = bit 16); a board drives
+/// the bits it has pins for and ignores the others.
+pub trait DigitalOutputs {
+    /// Sets every output to its level in `levels` (1 = on).
+    fn set_outputs(&mut self, levels: u32);
 }
 
 /// The EtherCAT RUN and ERR LEDs (ETG.1300). The firmware computes the blink pattern; the board

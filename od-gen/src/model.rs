@@ -487,11 +487,15 @@ pub enum Role {
     InterpolationTimeIndex,
     /// 607Eh polarity (USINT): bit 7 position, bit 6 velocity, bit 5 torque objects × −1.
     Polarity,
+    /// 60FEh:01 physical outputs (UDINT): the levels the master forces.
+    DigitalOutputs,
+    /// 60FEh:02 bit mask (UDINT): the outputs the master forces.
+    DigitalOutputsMask,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 67] = [
+    pub const ALL: [Role; 69] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -559,6 +563,8 @@ impl Role {
         Self::InterpolationTimePeriod,
         Self::InterpolationTimeIndex,
         Self::Polarity,
+        Self::DigitalOutputs,
+        Self::DigitalOutputsMask,
     ];
     /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
     /// commissioned motor data (vendor objects a unit may keep once for all its axes).
@@ -638,6 +644,8 @@ impl Role {
             Self::InterpolationTimePeriod => "interpolation_time_period",
             Self::InterpolationTimeIndex => "interpolation_time_index",
             Self::Polarity => "polarity",
+            Self::DigitalOutputs => "digital_outputs",
+            Self::DigitalOutputsMask => "digital_outputs_mask",
         }
     }
     /// Parses the profile-file spelling.
@@ -728,6 +736,8 @@ impl Role {
             | Self::HomingAcceleration
             | Self::FollowingErrorWindow
             | Self::DigitalInputs
+            | Self::DigitalOutputs
+            | Self::DigitalOutputsMask
             | Self::SupportedDriveModes => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode

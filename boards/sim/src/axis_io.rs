@@ -17,7 +17,7 @@
 //! stay unknown to the firmware, which calibrates them.
 
 use hal::encoder::{Encoder, EncoderFault};
-use hal::io::{DigitalInputs, ProbeCapture, TouchProbe};
+use hal::io::{DigitalInputs, DigitalOutputs, ProbeCapture, TouchProbe};
 use hal::power::{BusSense, CurrentSense, Inverter, PhaseCurrents};
 
 use crate::plant::{
@@ -324,6 +324,26 @@ impl Encoder for SimEncoder {
     }
 }
 
+/// The digital outputs (60FEh layout: bit 0 the holding brake, DO1… from bit 16) as the board's
+/// pins hold them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SimOutputs {
+    levels: u32,
+}
+
+impl SimOutputs {
+    /// The pins' levels (1 = on).
+    pub fn levels(&self) -> u32 {
+        self.levels
+    }
+}
+
+impl DigitalOutputs for SimOutputs {
+    fn set_outputs(&mut self, levels: u32) {
+        self.levels = levels;
+    }
+}
+
 /// The digital inputs: limit and home switches, the motor's thermal switch and the touch-probe
 /// inputs with their edge times (a timer input capture on the board), as latched.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -400,6 +420,8 @@ pub struct AxisIo {
     pub encoder: SimEncoder,
     /// Digital inputs.
     pub inputs: SimInputs,
+    /// Digital outputs.
+    pub outputs: SimOutputs,
 }
 
 impl AxisIo {
@@ -411,6 +433,7 @@ impl AxisIo {
             bus: SimBusSense::new(&cfg.sensing),
             encoder: SimEncoder::new(cfg.encoder),
             inputs: SimInputs::default(),
+            outputs: SimOutputs::default(),
         }
     }
 

@@ -4,6 +4,7 @@ use firmware::profile::DriveProfile;
 use firmware::profiles;
 use firmware::slave::{SlaveError, SyncMode};
 use firmware::{DriveCore, DriveSlave};
+use hal::io::DigitalOutputs;
 use hal::io::StatusLeds;
 use hal::pdi::EscSignals;
 
@@ -198,6 +199,17 @@ impl SimDrive {
             self.next_poll_ns = now_ns + BACKGROUND_POLL_PERIOD_NS;
         }
         self.service_irq(now_ns);
+        self.drive_outputs();
+    }
+
+    /// The board sets its digital output pins to what each axis of the drive asks.
+    fn drive_outputs(&mut self) {
+        let drive = self.slave.app();
+        for (axis, servo) in self.servos.iter_mut().enumerate() {
+            if let Some(a) = drive.axis(axis) {
+                servo.io_mut().outputs.set_outputs(a.digital_outputs());
+            }
+        }
     }
 
     /// One process-data cycle (see [`run_cycle`]).

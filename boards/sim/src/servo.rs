@@ -201,6 +201,11 @@ impl SimServo {
         &self.io
     }
 
+    /// The board's axis hardware, to drive (e.g. the digital outputs the drive sets).
+    pub fn io_mut(&mut self) -> &mut AxisIo {
+        &mut self.io
+    }
+
     /// One PWM period: sample at the boundary, run the control interrupt, integrate the plant
     /// over the period with the duties latched at its start. A gate-off decision acts at once
     /// (the board's disable is immediate), duties and a gate enable at the next period boundary.

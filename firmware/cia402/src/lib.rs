@@ -9,6 +9,7 @@
 //! | [`device`] | one cycle of the CiA402 device: controlword → state → statusword, mode display, fault and fault reset |
 //! | [`stop`] | stop reactions of the option codes 605Ah–605Eh and the deceleration ramp |
 //! | [`limits`] | software position limits 607Dh, limit switches: which motions are blocked; 60FDh |
+//! | [`outputs`] | digital outputs 60FEh: the master's forced levels under the bit mask, the brake |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
 //! | [`homing`] | homing mode: the search sequences of the CiA402 homing methods on latched switch edges and index pulses, homing statusword bits |
 //! | [`interpolated_position`] | interpolated position mode: controlword bit 4, statusword bit 12, the interpolation period 60C2h |
@@ -28,6 +29,7 @@ pub mod homing;
 pub mod interpolated_position;
 pub mod limits;
 pub mod modes;
+pub mod outputs;
 pub mod pds;
 pub mod profile_position;
 pub mod stop;

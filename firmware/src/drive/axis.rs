@@ -18,6 +18,7 @@ use cia402::homing;
 use cia402::interpolated_position;
 use cia402::limits::{self, Blocked, SoftwareLimits};
 use cia402::modes::{self, Mode, Targets};
+use cia402::outputs;
 use cia402::pds::{controlword, statusword, PdsState};
 use cia402::stop::{Deceleration, OptionCodes};
 use cia402::touch_probe::{self, Bit7, TouchProbes};
@@ -107,6 +108,8 @@ pub struct DriveAxis {
     ip_last_set_point: Option<i64>,
     /// The polarity 607Eh in force (taken while the power stage is off).
     polarity: Polarity,
+    /// The digital output levels of this cycle (60FEh layout, [`outputs`]).
+    output_levels: u32,
 }
 
 impl DriveAxis {
@@ -139,6 +142,7 @@ impl DriveAxis {
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
             polarity: Polarity::NONE,
+            output_levels: outputs::BRAKE,
         }
     }
 
@@ -157,6 +161,13 @@ impl DriveAxis {
         };
         sync_motor_model(&mut port, self.vars, ram);
         self.port = Some(port);
+    }
+
+    /// The digital output levels the board drives (CiA402 60FEh:01 layout: bit 0 the holding
+    /// brake, bits 16–31 the general outputs), from the last cycle: the master's levels where
+    /// 60FEh:02 forces them, the brake applied unless the power stage runs.
+    pub fn digital_outputs(&self) -> u32 {
+        self.output_levels
     }
 
     /// The EMCY code and manufacturer field of the fault the device holds (or held last).
@@ -261,6 +272,11 @@ impl DriveAxis {
         if let Some(mode) = mode {
             write_bytes(ram, vars.modes_of_operation_display, mode);
         }
+        self.output_levels = outputs::levels(
+            read_u32(ram, vars.digital_outputs).unwrap_or(0),
+            read_u32(ram, vars.digital_outputs_mask).unwrap_or(0),
+            step.motion != Motion::Off,
+        );
         if let Some(feedback) = feedback {
             let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
             self.exchange_with_axis(ram, cw, mode, step.motion, feedback, cycle_ns);
@@ -761,6 +777,9 @@ impl DriveAxis {
     /// `cycle_ns` is the bus cycle that was running (the axis keeps its interpolation timing).
     pub fn safe_outputs(&mut self, ram: &mut [u8], cycle_ns: u32) {
         write_u16(ram, self.vars.controlword, 0);
+        // 60FEh's safe state: every forced output off, the brake applied.
+        write_bytes(ram, self.vars.digital_outputs, outputs::BRAKE.to_le_bytes());
+        self.output_levels = outputs::BRAKE;
         let statusword = self.device.outputs_lost();
         write_u16(ram, self.vars.statusword, statusword);
         if let Some(port) = &self.port {
