@@ -322,11 +322,23 @@ fn locked_rotor_trip(servo: &mut SimServo, amps: f64, expected: MotorFault, max_
     n as f64 * servo.plant.period_s()
 }
 
+/// The 400 W servo with the I²t foldback switched off (`foldback_start` 1.0): the models trip.
+fn running_without_foldback(mode: ControlMode) -> SimServo {
+    let mut servo = servo_with(PlantConfig::servo_400w(), |c| {
+        c.protection.motor_i2t.foldback_start = 1.0;
+        c.protection.drive_i2t.foldback_start = 1.0;
+    });
+    start(&mut servo, mode);
+    servo
+}
+
 /// Motor I²t: with the board's levels the motor's model is the first to trip at any current
-/// between the continuous and peak levels; at 28 A it trips at the analytic time within 2 %.
+/// between the continuous and peak levels; at 28 A it trips at the analytic time within 2 %
+/// (the foldback off: with it the drive derates instead, see
+/// `i2t_foldback_derates_to_the_continuous_current_instead_of_tripping`).
 #[test]
 fn motor_i2t_trips_at_the_analytic_time() {
-    let mut servo = running(ControlMode::Torque);
+    let mut servo = running_without_foldback(ControlMode::Torque);
     let p = prot(&servo);
     let amps = 28.0;
     assert!(amps > f64::from(p.motor_i2t.continuous_a) && amps < f64::from(p.motor_i2t.peak_a));
@@ -348,6 +360,7 @@ fn drive_i2t_trips_at_the_analytic_time() {
     let mut servo = servo_with(PlantConfig::servo_400w(), |c| {
         c.protection.motor_i2t.continuous_a = 29.0;
         c.protection.drive_i2t.peak_time_s = 0.5;
+        c.protection.drive_i2t.foldback_start = 1.0;
     });
     start(&mut servo, ControlMode::Torque);
     let p = prot(&servo);
@@ -356,6 +369,46 @@ fn drive_i2t_trips_at_the_analytic_time() {
     let t = locked_rotor_trip(&mut servo, amps, MotorFault::DriveOverload, 1.5 * t_drive);
     println!("drive I²t: {t:.4} s, analytic {t_drive:.4} s");
     assert!((t / t_drive - 1.0).abs() < 0.02, "{t} s vs {t_drive} s");
+}
+
+/// I²t foldback (the board's default: from 80 % of the trip level): a locked rotor asked for
+/// 28 A gets it at first, then the current limit folds back so that the motor's I²t settles at
+/// `FOLDBACK_FULL_LOAD` of its trip level with the q current at the continuous current, and the
+/// axis never trips; meanwhile it reports the torque demand at its limit (CiA402 bit 11).
+#[test]
+fn i2t_foldback_derates_to_the_continuous_current_instead_of_tripping() {
+    let mut servo = running(ControlMode::Torque);
+    let p = prot(&servo);
+    let amps = 28.0;
+    let t_motor = i2t_time(&p.motor_i2t, amps);
+    servo.plant.set_driven_speed(Some(0.0));
+    let command = AxisCommand {
+        torque: torque_for(&servo, amps),
+        ..hold(&servo, ControlMode::Torque)
+    };
+    let cycles = (3.0 * t_motor / (PERIODS_PER_CYCLE as f64 * servo.plant.period_s())) as u64;
+    let mut first = 0.0f64;
+    let mut limited = false;
+    for k in 0..cycles {
+        servo.publish(command);
+        servo.run_periods(PERIODS_PER_CYCLE);
+        let iq = servo.plant.currents_dq().1.abs();
+        if k == 10 {
+            first = iq;
+        }
+        limited |= servo.feedback().current_limited;
+        assert_eq!(servo.feedback().fault, None, "no trip at {k}");
+    }
+    assert!((first - amps).abs() < 1.5, "28 A at first: {first:.2} A");
+    let iq = servo.plant.currents_dq().1.abs();
+    let ic = f64::from(p.motor_i2t.continuous_a);
+    assert!((iq - ic).abs() < 0.3, "derated to I_c = {ic} A: {iq:.2} A");
+    let load = f64::from(servo.axis.protections().motor_load());
+    assert!(
+        (load - f64::from(firmware::motor::protection::FOLDBACK_FULL_LOAD)).abs() < 0.02,
+        "I²t settles at the foldback's full load: {load:.3}"
+    );
+    assert!(limited, "the torque demand at its limit (bit 11)");
 }
 
 // ---- bus voltage -------------------------------------------------------------------------------

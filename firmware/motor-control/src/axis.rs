@@ -628,6 +628,11 @@ impl Axis {
         self.state
     }
 
+    /// The protections (I²t loads, the current limit they allow now).
+    pub fn protections(&self) -> &Protections {
+        &self.protections
+    }
+
     /// The latched fault.
     pub fn fault(&self) -> Option<MotorFault> {
         self.fault
@@ -1105,7 +1110,9 @@ impl Axis {
                         .step(stop_velocity, velocity, acceleration, 0.0)
                 }
             };
-            let limit = self.cfg.current_limit_a;
+            // The I²t models fold the limit back towards the continuous current before they
+            // would trip (motor and drive derate instead of stopping).
+            let limit = math::min(self.cfg.current_limit_a, self.protections.current_limit());
             let iq_request = torque * self.iq_per_nm;
             // The speed loop pins its output at its torque limit; a torque set-point is cut
             // at the current limit.
