@@ -253,13 +253,18 @@ fn over_current_near_short_in_open_loop_trips_in_the_same_period() {
     currents_decay(&mut servo, command, at_trip);
 }
 
-/// A current command above the trip level (a current limit set above the over-current level):
+/// A current command above the trip level (a current limit, and the I²t models' peak that caps
+/// it, set above the over-current level):
 /// the current loop drives the current up at almost full voltage; the trip still acts on the
 /// first sample above the level, and the true current never exceeds the level by more than one
 /// period's rise.
 #[test]
 fn over_current_from_a_fast_current_rise_trips_in_the_same_period() {
-    let mut servo = servo_with(PlantConfig::servo_400w(), |c| c.current_limit_a = 60.0);
+    let mut servo = servo_with(PlantConfig::servo_400w(), |c| {
+        c.current_limit_a = 60.0;
+        c.protection.motor_i2t.peak_a = 60.0;
+        c.protection.drive_i2t.peak_a = 60.0;
+    });
     start(&mut servo, ControlMode::Torque);
     servo.plant.set_driven_speed(Some(0.0));
     let command = AxisCommand {

@@ -103,3 +103,76 @@ fn s_curve_following_error_with_feed_forward() {
     // build the breakaway torque. Bound: 150 increments (0.05°).
     assert!(r.final_error < 150.0, "final error {:.1}", r.final_error);
 }
+
+/// Runs the servo in velocity mode with `load_nm` opposing, ramping to `rpm` in 0.5 s and
+/// holding for 0.3 s; returns (speed rpm, q current A, d current A, peak-to-peak speed over the
+/// last 0.1 s rpm, q-current peak-to-peak over the last 0.1 s A) at the end.
+fn run_loaded(rpm: f64, load_nm: f64) -> (f64, f64, f64, f64, f64) {
+    use board_sim::plant::PlantConfig;
+    use board_sim::servo::Tuning;
+    use firmware::motor::axis::{AxisCommand, ControlMode};
+    let mut servo = board_sim::experiments::running_servo(
+        PlantConfig::servo_400w(),
+        &Tuning::default(),
+        ControlMode::Velocity,
+    );
+    servo.plant.set_load_torque(load_nm);
+    let cycles = 800u32;
+    let (mut lo, mut hi, mut iq_lo, mut iq_hi) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for k in 0..cycles {
+        let v = rpm * f64::from(k.min(500)) / 500.0;
+        servo.publish(AxisCommand {
+            enable: true,
+            mode: ControlMode::Velocity,
+            velocity: (v / 60.0 * COUNTS_PER_RAD * TAU) as f32,
+            bus_cycle_ns: 1_000_000,
+            ..Default::default()
+        });
+        for _ in 0..board_sim::experiments::PERIODS_PER_CYCLE {
+            servo.period();
+            if k >= cycles - 100 {
+                let s = servo.plant.mech_speed_rad_s() * 60.0 / TAU;
+                let iq = servo.plant.currents_dq().1;
+                (lo, hi) = (lo.min(s), hi.max(s));
+                (iq_lo, iq_hi) = (iq_lo.min(iq), iq_hi.max(iq));
+            }
+        }
+        assert_eq!(servo.feedback().fault, None, "no fault at cycle {k}");
+    }
+    let (id, iq) = servo.plant.currents_dq();
+    (
+        servo.plant.mech_speed_rad_s() * 60.0 / TAU,
+        iq,
+        id,
+        hi - lo,
+        iq_hi - iq_lo,
+    )
+}
+
+/// The 400 W servo on 48 V at its rated speed (3000 rpm) with its rated torque (1.27 N·m) and
+/// at its maximum speed (4500 rpm) with the same load: the speed is held within 0.5 % with the
+/// q current steady (current control kept), and above the speed where the back-EMF and the
+/// q-axis drop exceed the voltage the bus gives (|v| = 30.5 V at 4500 rpm against
+/// 0.95·48/√3 = 26.3 V), field weakening (negative d current) makes the room.
+#[test]
+fn rated_torque_at_rated_and_maximum_speed_on_48_v() {
+    const RATED_NM: f64 = 1.27;
+    for rpm in [3000.0, 4500.0] {
+        let (speed, iq, id, ripple, iq_ripple) = run_loaded(rpm, RATED_NM);
+        println!(
+            "{rpm} rpm: {speed:.1} rpm (±{:.1}), iq {iq:.2} A (p-p {iq_ripple:.2}), id {id:.2} A",
+            ripple / 2.0
+        );
+        assert!(
+            (speed - rpm).abs() < 0.005 * rpm,
+            "{rpm} rpm: {speed:.1} rpm"
+        );
+        assert!(ripple < 0.005 * rpm, "{rpm} rpm: ripple {ripple:.1} rpm");
+        // Rated torque 1.27 N·m = 15.7 A of q current (kt = 1.5·4·0.0135 = 0.081 N·m/A).
+        assert!((iq - 15.7).abs() < 1.0, "{rpm} rpm: iq {iq:.2} A");
+        assert!(iq_ripple < 3.0, "{rpm} rpm: q current p-p {iq_ripple:.2} A");
+        if rpm > 4000.0 {
+            assert!(id < -2.0, "field weakening at {rpm} rpm: id {id:.2} A");
+        }
+    }
+}

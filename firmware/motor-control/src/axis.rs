@@ -29,6 +29,7 @@ use super::commissioning::{
     ElectricalIdentConfig, ElectricalIdentification, IdentCommand, IdentMeasurement,
     InertiaIdentConfig, InertiaIdentification, InertiaStep,
 };
+use super::field_weakening::{FieldWeakening, FieldWeakeningConfig};
 use super::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
 use super::handoff::{FeedbackHandoff, SetpointHandoff};
 use super::interpolate::Interpolator;
@@ -103,6 +104,8 @@ pub struct AxisConfig {
     pub alignment: AlignmentConfig,
     /// Bus cycle of the set-points, s (for the interpolator).
     pub bus_cycle_s: f32,
+    /// Field weakening near the voltage limit.
+    pub field_weakening: FieldWeakeningConfig,
 }
 
 /// Why a configuration was refused.
@@ -466,6 +469,9 @@ pub struct Axis {
     velocity: VelocityEstimator,
     interpolator: Interpolator,
     protections: Protections,
+    field_weakening: FieldWeakening,
+    /// The current loop's last voltage vector squared, V² (for the field weakening).
+    last_v2: f32,
     electrical_ident: Option<ElectricalIdentification>,
     inertia_ident: Option<InertiaIdentification>,
     identified: Option<Identification>,
@@ -580,6 +586,11 @@ impl Axis {
             velocity,
             interpolator,
             protections: Protections::new(&cfg.protection, 1.0 / loop_hz),
+            field_weakening: FieldWeakening::new(
+                &cfg.field_weakening,
+                cfg.current_loop.max_modulation,
+            ),
+            last_v2: 0.0,
             electrical_ident: None,
             inertia_ident: None,
             identified: None,
@@ -1038,6 +1049,7 @@ impl Axis {
 
     fn start_running(&mut self) {
         self.speed_loop.reset();
+        self.field_weakening.reset();
         self.velocity.reset(self.position);
         self.velocity_observed = true;
         // Enabled in a stop (e.g. halt set): nothing to decelerate.
@@ -1113,13 +1125,18 @@ impl Axis {
             // The I²t models fold the limit back towards the continuous current before they
             // would trip (motor and drive derate instead of stopping).
             let limit = math::min(self.cfg.current_limit_a, self.protections.current_limit());
+            // Near the voltage limit a negative d current makes room; q gets what the current
+            // vector's limit leaves.
+            let v2_per_vbus2 = self.last_v2 * self.inv_vbus * self.inv_vbus;
+            let id_ref = self.field_weakening.step(v2_per_vbus2);
+            let iq_limit = math::sqrt(math::max(limit * limit - id_ref * id_ref, 0.0));
             let iq_request = torque * self.iq_per_nm;
             // The speed loop pins its output at its torque limit; a torque set-point is cut
             // at the current limit.
             self.current_limited =
-                self.speed_loop.at_torque_limit(torque) || iq_request.abs() >= limit;
-            self.iq_ref = math::clamp_symmetric(iq_request, limit);
-            self.id_ref = 0.0;
+                self.speed_loop.at_torque_limit(torque) || iq_request.abs() >= iq_limit;
+            self.iq_ref = math::clamp_symmetric(iq_request, iq_limit);
+            self.id_ref = id_ref;
         }
         let angle = self.commutation.angle(self.position);
         let (id_ref, iq_ref) = (
@@ -1148,6 +1165,7 @@ impl Axis {
         });
         self.last_id = out.id;
         self.last_iq = out.iq;
+        self.last_v2 = out.vd * out.vd + out.vq * out.vq;
         Output {
             gates: true,
             duties: out.duties,

@@ -28,6 +28,7 @@
 //! | [`pi`] | PI controller with output limits and anti-windup |
 //! | [`svpwm`] | space-vector modulation, over-modulation, dead-time compensation |
 //! | [`foc`] | the current loop: Clarke, Park, d/q PI with decoupling, circle limiter, inverse Park |
+//! | [`field_weakening`] | negative d current when the voltage nears the bus limit |
 //! | [`filters`] | first-order low-pass, biquad low-pass and notch (torque-reference filters) |
 //! | [`velocity`] | velocity estimate from encoder increments |
 //! | [`speed`], [`position`] | the speed and position loops |
@@ -48,6 +49,7 @@ pub mod axis;
 pub mod calibration;
 pub mod capture;
 pub mod commissioning;
+pub mod field_weakening;
 pub mod filters;
 pub mod foc;
 pub mod handoff;

@@ -16,6 +16,7 @@
 
 use super::axis::{AxisConfig, MotorData};
 use super::calibration::AlignmentConfig;
+use super::field_weakening::FieldWeakeningConfig;
 use super::filters::TorqueFilterConfig;
 use super::foc::CurrentLoopConfig;
 use super::math::TAU;
@@ -213,6 +214,13 @@ pub struct ServoSpec {
     pub calibration: CalibrationSpec,
 }
 
+/// Field weakening starts at this fraction of the current loop's voltage circle: enough
+/// headroom for the current loop to correct a disturbance without saturating.
+const FIELD_WEAKENING_VOLTAGE_FRACTION: f32 = 0.95;
+/// Field-weakening integrator gain, A per loop tick and unit of normalised squared voltage
+/// error: a ~3 ms time constant on the 400 W servo (see `field_weakening`).
+const FIELD_WEAKENING_GAIN_A: f32 = 1.0;
+
 /// The reference servo: a 400 W, 3000 rpm (rated torque 1.27 N·m at 15.7 A) PMSM with 4 pole
 /// pairs on a **48 V** bus, 40 kHz PWM with 200 ns dead time, a 20-bit single-turn + 16-bit
 /// multi-turn absolute encoder with a commissioned commutation offset of 0, and a load of the
@@ -329,6 +337,13 @@ pub fn axis_config(spec: &ServoSpec, tuning: &Tuning) -> AxisConfig {
             torque_limit_nm: (kt as f32) * peak_a,
             sample_hz: loop_hz,
             filters: TorqueFilterConfig::OFF,
+        },
+        field_weakening: FieldWeakeningConfig {
+            voltage_fraction: FIELD_WEAKENING_VOLTAGE_FRACTION,
+            gain_a: FIELD_WEAKENING_GAIN_A,
+            // The d current never exceeds the rated current (demagnetisation margin, and the
+            // current vector leaves q at least √(I_p² − I_rated²)).
+            max_d_current_a: m.rated_current_a,
         },
         position_kp: TAU * tuning.speed_hz / 4.0,
         velocity_limit: counts_per_s_at_rpm(m.max_speed_rpm),
