@@ -83,8 +83,8 @@ impl FieldWeakening {
     pub fn step(&mut self, v2_per_vbus2: f32) -> f32 {
         let error = self.level2 - v2_per_vbus2;
         let id = self.id + self.gain_a * error;
-        // Written so that a NaN (a bus reading of 0) gives 0, no weakening.
-        self.id = if !(id < 0.0) {
+        // A NaN (a bus reading of 0) gives 0, no weakening.
+        self.id = if id.is_nan() || id >= 0.0 {
             0.0
         } else if id < self.min_id {
             self.min_id
