@@ -152,6 +152,8 @@ pub struct AppVars {
     pub digital_outputs: Option<u16>,
     /// 60FEh:02 bit mask (u32).
     pub digital_outputs_mask: Option<u16>,
+    /// 6080h max motor speed (u32, velocity units).
+    pub max_motor_speed: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -333,6 +335,7 @@ impl AppVars {
         polarity: None,
         digital_outputs: None,
         digital_outputs_mask: None,
+        max_motor_speed: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

@@ -491,11 +491,14 @@ pub enum Role {
     DigitalOutputs,
     /// 60FEh:02 bit mask (UDINT): the outputs the master forces.
     DigitalOutputsMask,
+    /// 6080h max motor speed (UDINT, the profile's velocity unit): limits every velocity
+    /// set-point.
+    MaxMotorSpeed,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 69] = [
+    pub const ALL: [Role; 70] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -565,6 +568,7 @@ impl Role {
         Self::Polarity,
         Self::DigitalOutputs,
         Self::DigitalOutputsMask,
+        Self::MaxMotorSpeed,
     ];
     /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
     /// commissioned motor data (vendor objects a unit may keep once for all its axes).
@@ -646,6 +650,7 @@ impl Role {
             Self::Polarity => "polarity",
             Self::DigitalOutputs => "digital_outputs",
             Self::DigitalOutputsMask => "digital_outputs_mask",
+            Self::MaxMotorSpeed => "max_motor_speed",
         }
     }
     /// Parses the profile-file spelling.
@@ -738,6 +743,7 @@ impl Role {
             | Self::DigitalInputs
             | Self::DigitalOutputs
             | Self::DigitalOutputsMask
+            | Self::MaxMotorSpeed
             | Self::SupportedDriveModes => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode

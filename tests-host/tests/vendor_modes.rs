@@ -361,3 +361,72 @@ fn sigma_v_sd_interpolated_position_follows_the_interpolation_data() {
         assert!((s.2 - 2.0).abs() < 1e-3, "held at {} rev", s.2);
     });
 }
+
+/// SDV3-E 6080h "Maximal Motor Speed" (0.1 rpm, default 3000.0 rpm): a CSV target of 4000 rpm
+/// over the default PDOs (60FFh at byte 6, 6060h = 9 at byte 12) runs the motor at 3000 rpm
+/// with statusword bit 11 (internal limit active); a target below it is followed exactly and
+/// bit 11 clears.
+#[test]
+fn sdv3_e_max_motor_speed_limits_csv() {
+    const CSV: u8 = 9;
+    const INTERNAL_LIMIT: u16 = 1 << 11;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        let cycle = |cw: u16, rpm: f64| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            {
+                let mut out = sd.outputs_raw_mut();
+                out[0..2].copy_from_slice(&cw.to_le_bytes());
+                out[6..10].copy_from_slice(&((rpm * 10.0) as i32).to_le_bytes());
+                out[12] = CSV;
+            }
+            let (m, group) = (&m, &group);
+            async move {
+                let since = m.shared.clock().now();
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.finish_cycle(since, CYCLE_NS);
+                let sd = group.subdevice(md, 0).expect("drive");
+                let inp = sd.inputs_raw();
+                let rad_s = m.shared.segment().drives()[0].servos[0]
+                    .plant
+                    .mech_speed_rad_s();
+                (
+                    u16::from_le_bytes([inp[0], inp[1]]),
+                    rad_s / std::f64::consts::TAU * 60.0,
+                )
+            }
+        };
+        let mut s = (0, 0.0);
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 20])
+        {
+            s = cycle(cw, 0.0).await;
+        }
+        assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
+        // A ramp to 4000 rpm in 1 s, then 0.3 s there.
+        for k in 0..1300 {
+            s = cycle(ENABLE_OPERATION, 4000.0 * f64::from(k.min(1000)) / 1000.0).await;
+        }
+        assert!((s.1 - 3000.0).abs() < 15.0, "held at 6080h: {:.0} rpm", s.1);
+        assert_ne!(s.0 & INTERNAL_LIMIT, 0, "bit 11 while limited");
+        for _ in 0..500 {
+            s = cycle(ENABLE_OPERATION, 2500.0).await;
+        }
+        assert!((s.1 - 2500.0).abs() < 15.0, "below 6080h: {:.0} rpm", s.1);
+        assert_eq!(s.0 & INTERNAL_LIMIT, 0, "bit 11 clear");
+    });
+}

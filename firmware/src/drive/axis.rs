@@ -36,6 +36,7 @@ use crate::adjust::Action;
 use crate::motion::{self, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
+use crate::motor::math;
 use crate::motor::trajectory::Limits;
 use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, MOTOR_FAULT_COUNT};
 
@@ -456,6 +457,17 @@ impl DriveAxis {
                 feedback.position = feedback.position.saturating_add(delta);
             }
         }
+        // The maximum motor speed 6080h limits a velocity set-point (bit 11 while it does).
+        if let Some(max) = read_u32(ram, vars.max_motor_speed)
+            .filter(|_| set_point.control == modes::Loop::Velocity)
+            .map(|v| velocity_ratio.velocity_to_internal(v as f32))
+        {
+            let limited = math::clamp(set_point.velocity, -max, max);
+            if limited != set_point.velocity {
+                mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+            }
+            set_point.velocity = limited;
+        }
         // Torque limits 6072h, 60E0h, 60E1h (‰ of the rated torque): to the speed loop, and a
         // torque set-point limited here.
         // 60E0h limits the positive torque the objects name: with the torque polarity, the
@@ -469,7 +481,7 @@ impl DriveAxis {
         });
         if let Some((positive, negative)) = torque_limits {
             if set_point.control == modes::Loop::Torque {
-                let limited = crate::motor::math::clamp(set_point.torque, -negative, positive);
+                let limited = math::clamp(set_point.torque, -negative, positive);
                 if limited != set_point.torque {
                     mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
                 }
@@ -868,7 +880,11 @@ fn profile_inputs(
     };
     let window =
         |at| read_u16(ram, at).map_or(0.0, |v| velocity_ratio.velocity_to_internal(f32::from(v)));
-    let max_velocity = velocity(vars.max_profile_velocity, f32::INFINITY);
+    // 607Fh, and the maximum motor speed 6080h above it.
+    let max_velocity = math::min(
+        velocity(vars.max_profile_velocity, f32::INFINITY),
+        velocity(vars.max_motor_speed, f32::INFINITY),
+    );
     let acceleration = accel(vars.profile_acceleration, 0.0);
     let deceleration = accel(vars.profile_deceleration, acceleration);
     let move_velocity = velocity(vars.profile_velocity, 0.0);
