@@ -357,6 +357,9 @@ pub struct DriveProfile {
     /// The EMCY byte (3–7) that carries the number of the axis (1, 2) a drive error belongs to
     /// (`[emcy] axis_number_byte`, the Σ-V-SD's byte 7).
     pub emcy_axis_number_byte: Option<u8>,
+    /// The alarms (`[[alarm]]`: numbers, resettable) and the objects that show them
+    /// (`[alarm_objects]`).
+    pub alarms: crate::alarm_log::AlarmTable,
     /// The profile's adjusting-service objects (`[[adjusting]]`; at most
     /// [`crate::drive::MAX_ADJUSTING_SERVICES`]).
     pub adjusting: &'static [ServiceSpec],

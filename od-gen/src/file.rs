@@ -61,6 +61,9 @@ pub struct ProfileFile {
     /// `[[alarm]]`: the drive's alarm / error table (one per row of the manual).
     #[serde(default, rename = "alarm")]
     pub alarms: Vec<AlarmFile>,
+    /// `[alarm_objects]`: objects that show the alarms by number.
+    #[serde(default)]
+    pub alarm_objects: AlarmObjectsFile,
     /// `[[decision]]`: deviations from the manual, gaps filled and contradictions resolved.
     #[serde(default, rename = "decision")]
     pub decisions: Vec<DecisionFile>,
@@ -180,6 +183,39 @@ pub struct AlarmFile {
 
 fn alarm_resettable() -> bool {
     true
+}
+
+/// `[alarm_objects]`: objects that show the drive's alarms by number: the alarms active now,
+/// the last ones (a list, or records selected one at a time), and the command that clears them.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlarmObjectsFile {
+    /// What an alarm's number is: "error_number" (EMCY byte 3, the default), "display" (the
+    /// digits of its display, e.g. AL.221 → 221) or "error_code" (603Fh).
+    #[serde(default)]
+    pub number: Option<String>,
+    /// An ARRAY whose subindexes 1..n hold the numbers of the active alarms (0: none).
+    #[serde(default)]
+    pub active: Option<String>,
+    /// An object whose subindexes 1..n hold the numbers of the last n alarms, newest at 1.
+    #[serde(default)]
+    pub history: Option<String>,
+    /// An entry that clears the history when 1 is written to it (it reads 0 again).
+    #[serde(default)]
+    pub history_clear: Option<String>,
+    /// An entry that selects the alarm record `history_record` shows: 1 the newest, up to its
+    /// maximum.
+    #[serde(default)]
+    pub history_select: Option<String>,
+    /// A RECORD showing the selected alarm record: subindex i is `history_fields[i - 1]`.
+    #[serde(default)]
+    pub history_record: Option<String>,
+    /// What each subindex of `history_record` shows, from subindex 1: "number", "power_on_hours",
+    /// "running_time" (s below 32768, else 32768 + h), "speed_rpm", "speed_rpm_5ms_before",
+    /// "demand_speed_rpm", "demand_torque_percent", "current_percent", "torque_percent",
+    /// "bus_voltage", "demand_position", "mode", "zero".
+    #[serde(default)]
+    pub history_fields: Vec<String>,
 }
 
 /// `[[decision]]`: a choice the profile makes where the manual is silent, wrong or

@@ -1493,6 +1493,8 @@ pub struct Profile {
     pub motor_faults: [MotorFaultCode; MOTOR_FAULT_COUNT],
     /// The drive's alarm table (`[[alarm]]`).
     pub alarms: Vec<Alarm>,
+    /// Objects that show the alarms by number (`[alarm_objects]`).
+    pub alarm_objects: AlarmObjects,
     /// Unit conversions of the position and velocity objects (`[units]`).
     pub units: Units,
     /// Choices where the manual is silent, wrong or contradicts itself (`[[decision]]`).
@@ -1604,6 +1606,173 @@ pub struct Alarm {
     pub warning: bool,
     /// Cause / manual text.
     pub description: String,
+}
+
+/// What an alarm's number is, in the objects that show alarms by number (`[alarm_objects]`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AlarmNumber {
+    /// EMCY byte 3, the first byte of the manufacturer field (the SDV3-E's error No.).
+    ErrorNumber,
+    /// The digits of the display (the RSE's AL.221 → 221).
+    Display,
+    /// The 603Fh code.
+    ErrorCode,
+}
+
+impl AlarmNumber {
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "error_number" => Some(Self::ErrorNumber),
+            "display" => Some(Self::Display),
+            "error_code" => Some(Self::ErrorCode),
+            _ => None,
+        }
+    }
+
+    /// `alarm`'s number (`None`: its display has no digits).
+    pub fn of(self, alarm: &Alarm) -> Option<u32> {
+        match self {
+            Self::ErrorNumber => Some(u32::from(alarm.emcy.data[0])),
+            Self::ErrorCode => Some(u32::from(alarm.error_code)),
+            Self::Display => {
+                let digits: String = alarm.display.chars().filter(char::is_ascii_digit).collect();
+                digits.parse().ok()
+            }
+        }
+    }
+}
+
+/// What one subindex of an alarm record shows (`[alarm_objects] history_fields`); the names are
+/// the firmware's `alarm_log::RecordField` variants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RecordField {
+    /// The alarm's number.
+    Number,
+    /// Hours the drive had been powered at the alarm.
+    PowerOnHours,
+    /// How long the motor had been running (power stage on): s below 32768, else 32768 + h.
+    RunningTime,
+    /// Motor speed at the alarm, rpm.
+    SpeedRpm,
+    /// Motor speed 5 ms before the alarm, rpm.
+    SpeedRpm5msBefore,
+    /// Speed demand at the alarm, rpm.
+    DemandSpeedRpm,
+    /// Torque demand at the alarm, % of the rated torque.
+    DemandTorquePercent,
+    /// Motor current at the alarm, % of the rated current.
+    CurrentPercent,
+    /// Actual torque at the alarm, % of the rated torque.
+    TorquePercent,
+    /// DC-link voltage at the alarm, V.
+    BusVoltage,
+    /// Position demand at the alarm, position units.
+    DemandPosition,
+    /// The mode of operation at the alarm (6061h).
+    Mode,
+    /// Always 0 (a reserved field, or one the drive does not measure).
+    Zero,
+}
+
+impl RecordField {
+    /// Every field, in the order of the firmware's enum.
+    pub const ALL: [Self; 13] = [
+        Self::Number,
+        Self::PowerOnHours,
+        Self::RunningTime,
+        Self::SpeedRpm,
+        Self::SpeedRpm5msBefore,
+        Self::DemandSpeedRpm,
+        Self::DemandTorquePercent,
+        Self::CurrentPercent,
+        Self::TorquePercent,
+        Self::BusVoltage,
+        Self::DemandPosition,
+        Self::Mode,
+        Self::Zero,
+    ];
+
+    /// The profile-file spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Number => "number",
+            Self::PowerOnHours => "power_on_hours",
+            Self::RunningTime => "running_time",
+            Self::SpeedRpm => "speed_rpm",
+            Self::SpeedRpm5msBefore => "speed_rpm_5ms_before",
+            Self::DemandSpeedRpm => "demand_speed_rpm",
+            Self::DemandTorquePercent => "demand_torque_percent",
+            Self::CurrentPercent => "current_percent",
+            Self::TorquePercent => "torque_percent",
+            Self::BusVoltage => "bus_voltage",
+            Self::DemandPosition => "demand_position",
+            Self::Mode => "mode",
+            Self::Zero => "zero",
+        }
+    }
+
+    /// The firmware's variant name.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::Number => "Number",
+            Self::PowerOnHours => "PowerOnHours",
+            Self::RunningTime => "RunningTime",
+            Self::SpeedRpm => "SpeedRpm",
+            Self::SpeedRpm5msBefore => "SpeedRpm5msBefore",
+            Self::DemandSpeedRpm => "DemandSpeedRpm",
+            Self::DemandTorquePercent => "DemandTorquePercent",
+            Self::CurrentPercent => "CurrentPercent",
+            Self::TorquePercent => "TorquePercent",
+            Self::BusVoltage => "BusVoltage",
+            Self::DemandPosition => "DemandPosition",
+            Self::Mode => "Mode",
+            Self::Zero => "Zero",
+        }
+    }
+
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.name() == s)
+    }
+}
+
+/// Objects that show the alarms by number (`[alarm_objects]`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AlarmObjects {
+    /// What an alarm's number is.
+    pub number: AlarmNumber,
+    /// The ARRAY of the active alarms' numbers.
+    pub active: Option<u16>,
+    /// The object of the last alarms' numbers, newest at subindex 1.
+    pub history: Option<u16>,
+    /// The entry that clears the history when 1 is written.
+    pub history_clear: Option<(u16, u8)>,
+    /// The record selector entry, the record object and its fields.
+    pub history_record: Option<HistoryRecord>,
+}
+
+impl Default for AlarmObjects {
+    fn default() -> Self {
+        Self {
+            number: AlarmNumber::ErrorNumber,
+            active: None,
+            history: None,
+            history_clear: None,
+            history_record: None,
+        }
+    }
+}
+
+/// Alarm records shown one at a time (`history_select` + `history_record`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct HistoryRecord {
+    /// The selector entry (1 = the newest record).
+    pub select: (u16, u8),
+    /// The RECORD object.
+    pub object: u16,
+    /// What its subindexes 1.. show.
+    pub fields: Vec<RecordField>,
 }
 
 /// A documented choice of the profile (`[[decision]]`).

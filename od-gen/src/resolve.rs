@@ -573,6 +573,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         emcy,
         kind,
         motor_faults,
+        alarm_objects: alarm_objects(&f.alarm_objects)?,
         alarms,
         units: Units {
             position: Factor::ONE,
@@ -763,6 +764,66 @@ pub(crate) fn parse_index(s: &str) -> Option<u16> {
     let s = s.trim();
     let hex = s.strip_prefix("0x").or(s.strip_prefix("0X"))?;
     u16::from_str_radix(hex, 16).ok()
+}
+
+/// `[alarm_objects]` → [`AlarmObjects`]; the objects and what every alarm's number needs are
+/// checked by `validate`.
+fn alarm_objects(f: &crate::file::AlarmObjectsFile) -> Result<AlarmObjects, Fault> {
+    let index = |s: &Option<String>, key: &str| -> Result<Option<u16>, Fault> {
+        s.as_deref()
+            .map(|s| {
+                parse_index(s)
+                    .ok_or_else(|| fault(key, Invalid::Value(format!("`{s}` is not \"0xIIII\""))))
+            })
+            .transpose()
+    };
+    let number = match f.number.as_deref() {
+        None => AlarmNumber::ErrorNumber,
+        Some(s) => AlarmNumber::parse(s).ok_or_else(|| {
+            fault(
+                "alarm_objects.number",
+                Invalid::Value(format!("`{s}` is not error_number, display or error_code")),
+            )
+        })?,
+    };
+    let select = entry_ref(f.history_select.as_deref(), "alarm_objects.history_select")?;
+    let record = index(&f.history_record, "alarm_objects.history_record")?;
+    let history_record = match (select, record) {
+        (None, None) if f.history_fields.is_empty() => None,
+        (Some(select), Some(object)) => {
+            let fields = f
+                .history_fields
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    RecordField::parse(s).ok_or_else(|| {
+                        fault(
+                            &format!("alarm_objects.history_fields[{i}]"),
+                            Invalid::Value(format!("`{s}` is not a record field")),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Some(HistoryRecord {
+                select,
+                object,
+                fields,
+            })
+        }
+        _ => {
+            return Err(fault(
+                "alarm_objects.history_record",
+                Invalid::Missing("history_select, history_record and history_fields together"),
+            ))
+        }
+    };
+    Ok(AlarmObjects {
+        number,
+        active: index(&f.active, "alarm_objects.active")?,
+        history: index(&f.history, "alarm_objects.history")?,
+        history_clear: entry_ref(f.history_clear.as_deref(), "alarm_objects.history_clear")?,
+        history_record,
+    })
 }
 
 /// `[[alarm]]` → [`Alarm`]s; `display` must be unique and non-empty.

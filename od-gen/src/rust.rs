@@ -487,6 +487,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         }
         let _ = writeln!(out, "        ],");
         let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
+        alarm_table(out, p, &layout, target.drive.unwrap_or("crate"));
         let _ = writeln!(
             out,
             "        emcy_axis_number_byte: {:?},",
@@ -557,6 +558,12 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             "    const _: () = assert!({drive}::profile::MAX_AXES == {}, \"od-gen's axis limit differs from the firmware's\");",
             crate::validate::MAX_AXES
         );
+        let _ = writeln!(
+            out,
+            "    const _: () = assert!({drive}::alarm_log::MAX_RECORDS == {} && {drive}::alarm_log::MAX_FIELDS == {}, \"od-gen's alarm record limits differ from the firmware's\");",
+            crate::validate::MAX_ALARM_RECORDS,
+            crate::validate::MAX_ALARM_FIELDS
+        );
     }
     let _ = writeln!(out, "    const _: () = assert!(DEFAULTS.len() == RAM_SIZE, \"RAM_SIZE differs from the defaults\");");
     let _ = writeln!(out, "    const _: () = assert!(super::check::objects_sorted(OBJECTS), \"objects not sorted by index\");");
@@ -579,6 +586,103 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         "    const _: () = assert!(super::check::capabilities_agree(OBJECTS, DEFAULTS, &STORAGE), \"the defaults of 1010h differ from params::store_capabilities\");"
     );
     let _ = writeln!(out, "}}\n");
+}
+
+/// `alarms: AlarmTable { .. }`: every `[[alarm]]` with its number and whether a fault reset
+/// clears it, and the RAM places of the `[alarm_objects]`.
+fn alarm_table(out: &mut String, p: &Profile, layout: &RamLayout, drive: &str) {
+    let a = &p.alarm_objects;
+    let slot = |index: u16, sub: u8| -> Option<String> {
+        let e = p.entry(index, sub)?;
+        let at = layout.offsets.get(&(index, sub))?;
+        Some(format!(
+            "{drive}::alarm_log::Slot {{ at: {at}, len: {} }}",
+            e.byte_len()
+        ))
+    };
+    let slots = |index: Option<u16>| -> String {
+        let list: Vec<String> = index
+            .and_then(|i| p.object(i))
+            .map(|o| {
+                o.entries
+                    .iter()
+                    // The clear command may sit in the history object (the RSE's 200Bh:0Bh).
+                    .filter(|e| e.subindex >= 1 && a.history_clear != Some((o.index, e.subindex)))
+                    .filter_map(|e| slot(o.index, e.subindex))
+                    .collect()
+            })
+            .unwrap_or_default();
+        format!("&[{}]", list.join(", "))
+    };
+    let entries: Vec<String> = p
+        .alarms
+        .iter()
+        .map(|alarm| {
+            let d = alarm.emcy.data;
+            format!(
+                "{drive}::alarm_log::AlarmEntry {{ report: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }}, number: {}, resettable: {} }}",
+                alarm.error_code,
+                alarm.emcy.code,
+                d[0], d[1], d[2], d[3], d[4],
+                // validate checked that the numbers of a profile with alarm objects fit.
+                a.number.of(alarm).and_then(|n| u16::try_from(n).ok()).unwrap_or(0),
+                alarm.resettable
+            )
+        })
+        .collect();
+    let entry_ref = |(index, sub): (u16, u8)| -> Option<String> {
+        slot(index, sub).map(|s| {
+            format!(
+                "{drive}::alarm_log::EntryRef {{ index: {index:#06x}, subindex: {sub:#04x}, slot: {s} }}"
+            )
+        })
+    };
+    let clear = a
+        .history_clear
+        .and_then(entry_ref)
+        .map_or("None".into(), |s| format!("Some({s})"));
+    let record = a.history_record.as_ref().map_or("None".into(), |r| {
+        let fields: Vec<String> = p
+            .object(r.object)
+            .map(|o| {
+                o.entries
+                    .iter()
+                    .filter(|e| e.subindex >= 1)
+                    .zip(&r.fields)
+                    .filter_map(|(e, f)| {
+                        slot(r.object, e.subindex).map(|s| {
+                            format!("({drive}::alarm_log::RecordField::{}, {s})", f.rust_variant())
+                        })
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        let records = p
+            .entry(r.select.0, r.select.1)
+            .and_then(|e| {
+                let mut b = [0u8; 4];
+                for (d, s) in b.iter_mut().zip(&e.max) {
+                    *d = *s;
+                }
+                u8::try_from(u32::from_le_bytes(b)).ok()
+            })
+            .unwrap_or(1);
+        // validate checked that the selector is a RAM entry.
+        match entry_ref(r.select) {
+            Some(select) => format!(
+                "Some({drive}::alarm_log::RecordSpec {{ select: {select}, records: {records}, fields: &[{}] }})",
+                fields.join(", ")
+            ),
+            None => "None".into(),
+        }
+    });
+    let _ = writeln!(
+        out,
+        "        alarms: {drive}::alarm_log::AlarmTable {{ entries: &[{}], active: {}, history: {}, history_clear: {clear}, record: {record} }},",
+        entries.join(", "),
+        slots(a.active),
+        slots(a.history)
+    );
 }
 
 /// A `[units]` factor of axis `axis` (0 = the first; its copies of the factor's objects) as the

@@ -15,6 +15,7 @@ pub(crate) fn check(p: &Profile) -> Result<(), Fault> {
     sync(p)?;
     sm_parameters(p)?;
     roles(p)?;
+    alarm_objects(p)?;
     settings(p)?;
     esm(p)?;
     motor_faults(p)?;
@@ -438,6 +439,177 @@ fn axes(p: &Profile) -> Result<(), Fault> {
         }
     }
     Ok(())
+}
+
+/// The most alarm records a drive keeps (`[alarm_objects] history_select`'s maximum, the
+/// history list's length): the firmware's `alarm_log::MAX_RECORDS`, which the generated code
+/// asserts to agree.
+pub const MAX_ALARM_RECORDS: usize = 20;
+
+/// The most fields of an alarm record: the firmware's `alarm_log::MAX_FIELDS`.
+pub const MAX_ALARM_FIELDS: usize = 16;
+
+/// `[alarm_objects]`: every object a RAM variable the firmware can write (integers of 1, 2 or
+/// 4 bytes), every alarm's number non-zero (0 shows "none") and within each list's type, the
+/// clear command and the selector writable, at most [`MAX_ALARM_RECORDS`] records.
+fn alarm_objects(p: &Profile) -> Result<(), Fault> {
+    let a = &p.alarm_objects;
+    let uses_numbers = a.active.is_some() || a.history.is_some() || a.history_record.is_some();
+    if !uses_numbers {
+        // Neither numbers nor records: only the clear command could be given, and it needs a
+        // history.
+        if a.history_clear.is_some() {
+            return Err(fault(
+                "alarm_objects.history_clear",
+                Invalid::Missing("history or history_record"),
+            ));
+        }
+        return Ok(());
+    }
+    let slots = |key: &str, index: u16, first: u8| -> Result<Vec<&Entry>, Fault> {
+        let o = p.object(index).ok_or_else(|| {
+            fault(
+                key,
+                Invalid::Value(format!("{index:#06x} is not in the dictionary")),
+            )
+        })?;
+        // The clear command may sit in the history object (the RSE's 200Bh:0Bh).
+        let entries: Vec<&Entry> = o
+            .entries
+            .iter()
+            .filter(|e| e.subindex >= first && a.history_clear != Some((index, e.subindex)))
+            .collect();
+        if entries.is_empty() {
+            return Err(fault(
+                key,
+                Invalid::Value(format!("{index:#06x} has no subindex {first} or above")),
+            ));
+        }
+        for e in &entries {
+            let ok = e.storage == Storage::Ram
+                && e.data_type.int_range().is_some()
+                && matches!(e.byte_len(), 1 | 2 | 4);
+            if !ok {
+                return Err(fault(
+                    key,
+                    Invalid::Value(format!(
+                        "{index:#06x}:{} must be an integer RAM variable of 1, 2 or 4 bytes",
+                        e.subindex
+                    )),
+                ));
+            }
+        }
+        Ok(entries)
+    };
+    let numbers: Vec<(String, u32)> = p
+        .alarms
+        .iter()
+        .map(|alarm| {
+            a.number
+                .of(alarm)
+                .filter(|n| *n != 0)
+                .map(|n| (alarm.display.clone(), n))
+                .ok_or_else(|| {
+                    fault(
+                        "alarm_objects.number",
+                        Invalid::Value(format!("alarm {} has no non-zero number", alarm.display)),
+                    )
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let fits = |key: &str, e: &Entry| -> Result<(), Fault> {
+        let (_, max) = e.data_type.int_range().unwrap_or((0, 0));
+        match numbers.iter().find(|(_, n)| i128::from(*n) > max) {
+            Some((display, n)) => Err(fault(
+                key,
+                Invalid::Value(format!(
+                    "alarm {display}'s number {n} does not fit {:?}",
+                    e.data_type
+                )),
+            )),
+            None => Ok(()),
+        }
+    };
+    for (key, index) in [
+        ("alarm_objects.active", a.active),
+        ("alarm_objects.history", a.history),
+    ] {
+        if let Some(index) = index {
+            let entries = slots(key, index, 1)?;
+            if entries.len() > MAX_ALARM_RECORDS {
+                return Err(fault(
+                    key,
+                    Invalid::Value(format!("more than {MAX_ALARM_RECORDS} entries")),
+                ));
+            }
+            for e in entries {
+                fits(key, e)?;
+            }
+        }
+    }
+    let writable = |key: &str, (index, sub): (u16, u8)| -> Result<&Entry, Fault> {
+        p.entry(index, sub)
+            .filter(|e| {
+                e.storage == Storage::Ram
+                    && e.access.writable()
+                    && e.data_type.int_range().is_some()
+            })
+            .ok_or_else(|| {
+                fault(
+                    key,
+                    Invalid::Value(format!(
+                        "{index:#06x}:{sub} must be a writable integer RAM entry"
+                    )),
+                )
+            })
+    };
+    if let Some(clear) = a.history_clear {
+        writable("alarm_objects.history_clear", clear)?;
+    }
+    if let Some(r) = &a.history_record {
+        let select = writable("alarm_objects.history_select", r.select)?;
+        let records = entry_max(select).unwrap_or(0);
+        if !(1..=MAX_ALARM_RECORDS as i128).contains(&records) {
+            return Err(fault(
+                "alarm_objects.history_select",
+                Invalid::Value(format!(
+                    "its max (the number of records) must be 1 to {MAX_ALARM_RECORDS}"
+                )),
+            ));
+        }
+        let key = "alarm_objects.history_record";
+        let entries = slots(key, r.object, 1)?;
+        if entries.len() != r.fields.len() || r.fields.len() > MAX_ALARM_FIELDS {
+            return Err(fault(
+                "alarm_objects.history_fields",
+                Invalid::Value(format!(
+                    "{} fields for {} subindexes of {:#06x} (at most {MAX_ALARM_FIELDS})",
+                    r.fields.len(),
+                    entries.len(),
+                    r.object
+                )),
+            ));
+        }
+        for (e, f) in entries.iter().zip(&r.fields) {
+            if *f == RecordField::Number {
+                fits(key, e)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An integer entry's maximum (its `max`, else its type's).
+fn entry_max(e: &Entry) -> Option<i128> {
+    let (_, type_max) = e.data_type.int_range()?;
+    if e.max.is_empty() {
+        return Some(type_max);
+    }
+    let mut bytes = [0u8; 16];
+    for (d, s) in bytes.iter_mut().zip(&e.max) {
+        *d = *s;
+    }
+    Some(i128::from_le_bytes(bytes))
 }
 
 fn strings(p: &Profile) -> Result<(), Fault> {

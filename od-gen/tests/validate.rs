@@ -1487,3 +1487,46 @@ fn the_emcy_axis_number_byte_lies_in_the_manufacturer_field() {
         }
     }
 }
+
+/// `[alarm_objects]`: the objects must be integer RAM entries, the numbers fit them, the clear
+/// command needs a history.
+#[test]
+fn alarm_objects_are_checked() {
+    let sdv3 = include_str!("../profiles/sdv3-e.toml");
+    let p = od_gen::parse(sdv3, "sdv3-e.toml").expect("sdv3-e");
+    assert_eq!(p.alarm_objects.active, Some(0x3202));
+    let r = p.alarm_objects.history_record.as_ref().expect("records");
+    assert_eq!(
+        (r.select, r.object, r.fields.len()),
+        ((0x3200, 0), 0x3201, 14)
+    );
+    // An active list in an object that does not exist.
+    let bad = sdv3.replacen("active = \"0x3202\"", "active = \"0x3209\"", 1);
+    let (key, _) = invalid_named(&bad, "sdv3-e.toml");
+    assert_eq!(key, "alarm_objects.active");
+    // Numbers by 603Fh do not fit 3202h's USINT entries.
+    let bad = sdv3.replacen("number = \"error_number\"", "number = \"error_code\"", 1);
+    let (key, error) = invalid_named(&bad, "sdv3-e.toml");
+    assert_eq!(key, "alarm_objects.active");
+    assert!(
+        matches!(&error, Invalid::Value(m) if m.contains("does not fit")),
+        "{error:?}"
+    );
+    // A field list that does not cover 3201h.
+    let mode = "    \"mode\",                   # 14";
+    assert!(sdv3.contains(mode), "test setup");
+    let bad = sdv3.replacen(mode, "    # 14", 1);
+    let (key, _) = invalid_named(&bad, "sdv3-e.toml");
+    assert_eq!(key, "alarm_objects.history_fields");
+    // A clear command without a history.
+    let (key, _) = invalid(&appended("[alarm_objects]\nhistory_clear = \"0x6040:0\""));
+    assert_eq!(key, "alarm_objects.history_clear");
+}
+
+fn invalid_named(text: &str, name: &str) -> (String, Invalid) {
+    match od_gen::parse(text, name) {
+        Err(Error::Invalid { key, error, .. }) => (key, error),
+        Err(e) => panic!("expected a validation error, got: {e}"),
+        Ok(_) => panic!("expected a validation error, the profile loaded"),
+    }
+}

@@ -3,6 +3,10 @@
 //! auxiliary code 8003h), leaving OP while enabled is alarm ESr (8801h, 39h, 801Ch); each sets
 //! 603Fh and sends an emergency whose manufacturer field carries error No. and auxiliary code
 //! (Table 3-15: byte 3, bytes 4–5). No emergency is queued in Init (§3.6).
+//!
+//! The alarms by number: the SDV3-E's active alarms 3202h and alarm records 3200h/3201h
+//! (§6.3.3), its non-resettable alarms (Table 5-1 reset column), the RSE's fault history 200Bh
+//! and its clear command (7.3.12).
 
 use board_sim::Segment;
 use ethercrab::{Command, MainDevice};
@@ -51,8 +55,10 @@ macro_rules! cycle {
             out[0..2].copy_from_slice(&($cw as u16).to_le_bytes());
             out[12] = CSP;
         }
+        // Phase-locked to the drive's free-run cycle: every controlword is seen.
+        let since = $m.shared.clock().now();
         $group.tx_rx($md).await.expect("tx/rx");
-        $m.shared.advance(CYCLE_NS);
+        $m.shared.finish_cycle(since, CYCLE_NS);
         let inp = sd.inputs_raw();
         u16::from_le_bytes([inp[0], inp[1]])
     }};
@@ -205,5 +211,226 @@ fn leaving_op_while_enabled_raises_the_profiles_alarm() {
         );
         let sd = group.subdevice(md, 0).expect("drive");
         assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), 0x8801);
+    });
+}
+
+/// SDV3-E §6.3.3: the alarms by number. Alarm AH (drive overheating, error No. 26h) shows in
+/// 3202h:01 while active, and as the newest record of 3201h (3200h = 1) with the drive's state
+/// at the alarm (DC link 48 V, mode of operation 8); a fault reset once it cooled clears it from
+/// 3202h, the record stays.
+#[test]
+fn sdv3_e_active_alarms_and_alarm_records() {
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = into_op!(m, md);
+        enable!(m, md, group);
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01"), 0);
+        assert_eq!(
+            sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"),
+            0,
+            "no record yet"
+        );
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_drive_temperature(120.0);
+        let mut faulted = false;
+        for _ in 0..300 {
+            if cycle!(m, md, group, ENABLE_OPERATION) & FAULT_BIT != 0 {
+                faulted = true;
+                break;
+            }
+        }
+        assert!(faulted);
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(
+            sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01"),
+            0x26,
+            "AH active"
+        );
+        assert_eq!(sd.sdo_read::<u8>(0x3202, 2).await.expect("3202h:02"), 0);
+        sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
+        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+        let volts = sd.sdo_read::<i32>(0x3201, 11).await.expect("3201h:11");
+        assert!((volts - 48).abs() <= 1, "DC link {volts} V");
+        assert_eq!(
+            sd.sdo_read::<i32>(0x3201, 14).await.expect("3201h:14"),
+            i32::from(CSP)
+        );
+        // The second record does not exist yet.
+        sd.sdo_write(0x3200, 0, 2u8).await.expect("3200h = 2");
+        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0);
+
+        // Cooled down: a fault reset clears AH (resettable) from 3202h; the record stays.
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_drive_temperature(40.0);
+        for cw in [0x80u16, 0x00, 0x80] {
+            let _ = cycle!(m, md, group, cw);
+        }
+        let sw = cycle!(m, md, group, 0x00);
+        assert_eq!(sw & FAULT_BIT, 0, "reset");
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01"), 0);
+        sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
+        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+    });
+}
+
+/// SDV3-E Table 5-1: encoder error ET1 cannot be reset ("No" in the reset column): after the
+/// encoder fault the drive stays in Fault with 603Fh = 7305h through fault resets.
+#[test]
+fn sdv3_e_a_non_resettable_alarm_holds_through_fault_resets() {
+    use board_sim::plant::EncoderFaultInjection;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = into_op!(m, md);
+        enable!(m, md, group);
+        // A position jump: encoder error ET1 (Table 5-1: reset "No").
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_encoder_fault(Some(EncoderFaultInjection::Jump { counts: 1 << 19 }));
+        let mut faulted = false;
+        for _ in 0..300 {
+            if cycle!(m, md, group, ENABLE_OPERATION) & FAULT_BIT != 0 {
+                faulted = true;
+                break;
+            }
+        }
+        assert!(faulted, "encoder fault");
+        let sd = group.subdevice(md, 0).expect("drive");
+        let code = sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh");
+        let number = sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01");
+        let p = od_gen::builtin("sdv3-e").expect("profile");
+        let alarm = p
+            .alarms
+            .iter()
+            .find(|a| a.error_code == code && a.emcy.data[0] == number)
+            .expect("the alarm 603Fh and 3202h name");
+        assert_eq!(alarm.display, "ET1");
+        assert!(!alarm.resettable);
+        for _ in 0..20 {
+            let _ = cycle!(m, md, group, 0x00);
+        }
+        for cw in [0x80u16, 0x00, 0x80, 0x00] {
+            let _ = cycle!(m, md, group, cw);
+        }
+        let sw = cycle!(m, md, group, 0x00);
+        assert_ne!(sw & FAULT_BIT, 0, "ET1 holds through fault resets");
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), code);
+        assert_eq!(
+            sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01"),
+            number,
+            "still active"
+        );
+    });
+}
+
+/// RSE 7.3.12: the fault history 200Bh:01-0A holds the AL numbers, newest at 01; 200Bh:0B = 1
+/// clears it and reads 0 again.
+#[test]
+fn rse_fault_history_and_its_clear_command() {
+    // 7.2: 1C32h:02 factory setting 4 ms, the free-run cycle.
+    const RSE_CYCLE_NS: u64 = 4_000_000;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("rse", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        // RSE 1600h: 6040h first (and 607Ah, 60B8h); 1A00h: 603Fh, then 6041h.
+        let rse_cycle = |cw: u16| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.outputs_raw_mut()[0..2].copy_from_slice(&cw.to_le_bytes());
+            let (m, group) = (&m, &group);
+            async move {
+                // Phase-locked to the drive's free-run cycle (1C32h:02, 4 ms by default): every
+                // controlword is seen.
+                let since = m.shared.clock().now();
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.finish_cycle(since, RSE_CYCLE_NS);
+                let sd = group.subdevice(md, 0).expect("drive");
+                let inp = sd.inputs_raw();
+                u16::from_le_bytes([inp[2], inp[3]])
+            }
+        };
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            sw = rse_cycle(cw).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        let hot = |c: f64| {
+            m.shared.segment().drives_mut()[0].servos[0]
+                .plant
+                .set_drive_temperature(c)
+        };
+        // Two faults (drive over-temperature, AL.248), reset in between.
+        for round in 0..2 {
+            hot(120.0);
+            let mut faulted = false;
+            for _ in 0..300 {
+                if rse_cycle(ENABLE_OPERATION).await & FAULT_BIT != 0 {
+                    faulted = true;
+                    break;
+                }
+            }
+            assert!(faulted, "round {round}");
+            // Fault Reaction Active until the reaction has ended, then Fault.
+            for _ in 0..100 {
+                sw = rse_cycle(0x00).await;
+                if sw & 0x4F == FAULT_BIT {
+                    break;
+                }
+            }
+            assert_eq!(sw & 0x4F, FAULT_BIT, "Fault");
+
+            hot(40.0);
+            for cw in [0x00u16, 0x80, 0x00] {
+                sw = rse_cycle(cw).await;
+            }
+            for cw in [SHUTDOWN; 5]
+                .into_iter()
+                .chain([SWITCH_ON; 5])
+                .chain([ENABLE_OPERATION; 30])
+            {
+                sw = rse_cycle(cw).await;
+            }
+            assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "round {round}");
+        }
+        let sd = group.subdevice(md, 0).expect("drive");
+        let record = |sub: u8| sd.sdo_read::<u16>(0x200B, sub);
+        assert_eq!(
+            record(1).await.expect("200Bh:01"),
+            248,
+            "AL.248, the newest"
+        );
+        assert_eq!(record(2).await.expect("200Bh:02"), 248);
+        assert_eq!(record(3).await.expect("200Bh:03"), 0);
+        sd.sdo_write(0x200B, 0x0B, 1u16).await.expect("clear");
+        assert_eq!(record(0x0B).await.expect("200Bh:0B"), 0, "reads 0 again");
+        for sub in 1..=10 {
+            assert_eq!(
+                record(sub).await.expect("record"),
+                0,
+                "200Bh:{sub:02X} cleared"
+            );
+        }
     });
 }

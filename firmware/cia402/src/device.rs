@@ -36,6 +36,9 @@ pub struct Device {
     state: PdsState,
     previous_controlword: u16,
     fault: Option<u16>,
+    /// The active fault stays until power-off: a fault reset does not clear it (a profile's
+    /// alarm that is not resettable).
+    fault_permanent: bool,
     /// The stop under way (Operation Enabled waiting for transition 5 or 8, Quick Stop Active,
     /// Fault Reaction Active) and the state Operation Enabled leaves to at rest.
     stop: Option<Reaction>,
@@ -92,6 +95,7 @@ impl Device {
             state: PdsState::NotReadyToSwitchOn,
             previous_controlword: 0,
             fault: None,
+            fault_permanent: false,
             stop: None,
             leave_to: None,
             options: OptionCodes {
@@ -157,6 +161,10 @@ impl Device {
     pub fn step(&mut self, cw: u16, options: OptionCodes, at_rest: bool) -> Step {
         self.options = options;
         let mut requested = pds::next(self.state, cw, self.previous_controlword);
+        if self.state == PdsState::Fault && self.fault_permanent {
+            // Not resettable: only a power cycle leaves Fault.
+            requested = PdsState::Fault;
+        }
         if self.rules.switch_on_requires_main_power && !self.main_power {
             requested = match (self.state, requested) {
                 (PdsState::ReadyToSwitchOn, PdsState::SwitchedOn) => PdsState::ReadyToSwitchOn,
@@ -309,6 +317,13 @@ impl Device {
     /// motor has come to rest. The controlword counts as 0 from here, so that a fault reset
     /// needs a new rising edge of bit 7. Returns the statusword.
     pub fn fault(&mut self, code: u16) -> u16 {
+        self.fault_with(code, true)
+    }
+
+    /// [`Self::fault`] for a fault a fault reset clears (`resettable`) or not (it holds until
+    /// the drive is switched off and on, e.g. a profile's encoder alarm).
+    pub fn fault_with(&mut self, code: u16, resettable: bool) -> u16 {
+        self.fault_permanent = !resettable;
         self.previous_controlword = 0;
         let was_powered = self.drive_function_enabled();
         self.state = pds::fault(self.state);
@@ -408,6 +423,21 @@ mod tests {
         assert_eq!(d.state(), PdsState::SwitchOnDisabled);
         assert_eq!(d.fault_code(), None);
         assert_eq!(step.statusword & sw::FAULT, 0);
+    }
+
+    #[test]
+    fn a_fault_that_is_not_resettable_holds_through_fault_resets() {
+        // A profile's alarm that needs a power cycle (e.g. the SDV3-E's encoder alarms):
+        // rising edges of bit 7 leave the drive in Fault with its code.
+        let mut d = enabled(NO_OBJECTS);
+        d.fault_with(0x7305, false);
+        for cw in [cw::FAULT_RESET, 0, cw::FAULT_RESET, 0] {
+            let step = d.step(cw, NO_OBJECTS, true);
+            assert_eq!(step.fault_cleared, None);
+            assert_eq!(d.state(), PdsState::Fault);
+            assert_ne!(step.statusword & sw::FAULT, 0);
+        }
+        assert_eq!(d.fault_code(), Some(0x7305));
     }
 
     #[test]

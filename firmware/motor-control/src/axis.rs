@@ -229,6 +229,8 @@ pub struct AxisFeedback {
     pub offset_calibrations: u32,
     /// The main circuit is powered: the bus voltage is at or above the under-voltage level.
     pub main_power: bool,
+    /// The DC-link voltage, V.
+    pub bus_voltage: f32,
     /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
     pub stopping: bool,
     /// The limit and home switches at the last sample.
@@ -398,6 +400,7 @@ impl AxisLink {
                     trips: 0,
                     offset_calibrations: 0,
                     main_power: false,
+                    bus_voltage: 0.0,
                     stopping: false,
                     current_limited: false,
                     switches: Switches {
@@ -881,6 +884,7 @@ impl Axis {
             trips: self.trips,
             offset_calibrations: self.offset_calibrations,
             main_power: self.vbus >= self.cfg.protection.bus_under_voltage_v,
+            bus_voltage: self.vbus,
             stopping: self.state == AxisState::Running
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),

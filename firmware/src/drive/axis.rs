@@ -33,6 +33,7 @@ use super::ram::{
 };
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
+use crate::alarm_log::{AlarmTable, Conditions};
 use crate::motion::{self, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
@@ -111,7 +112,36 @@ pub struct DriveAxis {
     polarity: Polarity,
     /// The digital output levels of this cycle (60FEh layout, [`outputs`]).
     output_levels: u32,
+    /// The profile's alarms (numbers, resettable).
+    alarm_table: &'static AlarmTable,
+    /// The alarm number of the fault the device holds, if the profile lists it.
+    fault_number: Option<u16>,
+    /// What the axis did in the last cycles, for an alarm record.
+    recent: Recent,
 }
+
+/// What an alarm record shows of the axis: the last cycle's values, the speed a few ms back,
+/// the time the power stage has been on.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Recent {
+    rpm: f32,
+    demand_rpm: f32,
+    demand_torque_percent: f32,
+    torque_percent: f32,
+    bus_voltage: f32,
+    demand_position: i32,
+    /// Speeds sampled every [`SPEED_SAMPLE_NS`], the newest at `speeds[newest]`.
+    speeds: [f32; SPEED_SAMPLES],
+    newest: usize,
+    since_sample_ns: u32,
+    running_ns: u64,
+}
+
+/// The record's "speed 5 ms before": samples 1 ms apart, the oldest of them 5 ms back.
+const SPEED_SAMPLES: usize = 6;
+const SPEED_SAMPLE_NS: u32 = 1_000_000;
+const PERCENT: f32 = 100.0;
+const NS_PER_S: u64 = 1_000_000_000;
 
 impl DriveAxis {
     /// Axis `index` (0 = the first) of `profile` at power-on, without a motor; `vars` are its
@@ -144,6 +174,20 @@ impl DriveAxis {
             ip_last_set_point: None,
             polarity: Polarity::NONE,
             output_levels: outputs::BRAKE,
+            alarm_table: &profile.alarms,
+            fault_number: None,
+            recent: Recent {
+                rpm: 0.0,
+                demand_rpm: 0.0,
+                demand_torque_percent: 0.0,
+                torque_percent: 0.0,
+                bus_voltage: 0.0,
+                demand_position: 0,
+                speeds: [0.0; SPEED_SAMPLES],
+                newest: 0,
+                since_sample_ns: 0,
+                running_ns: 0,
+            },
         }
     }
 
@@ -169,6 +213,32 @@ impl DriveAxis {
     /// 60FEh:02 forces them, the brake applied unless the power stage runs.
     pub fn digital_outputs(&self) -> u32 {
         self.output_levels
+    }
+
+    /// The alarm number of the fault the device holds, if the profile lists the alarm.
+    pub(super) fn alarm_number(&self) -> Option<u16> {
+        self.fault_number
+            .filter(|_| self.device.fault_code().is_some())
+    }
+
+    /// The axis' state for an alarm record: the last cycle's values, the speed 5 ms back, the
+    /// power stage's on time, with the drive's `power_on_hours`.
+    pub(super) fn alarm_conditions(&self, power_on_hours: u32) -> Conditions {
+        let r = &self.recent;
+        // The sample 5 ms back: the oldest of the ring.
+        let oldest = (r.newest + 1) % SPEED_SAMPLES;
+        Conditions {
+            power_on_hours,
+            running_s: u32::try_from(r.running_ns / NS_PER_S).unwrap_or(u32::MAX),
+            speed_rpm: r.rpm,
+            speed_rpm_5ms_before: r.speeds.get(oldest).copied().unwrap_or(0.0),
+            demand_speed_rpm: r.demand_rpm,
+            demand_torque_percent: r.demand_torque_percent,
+            torque_percent: r.torque_percent,
+            bus_voltage: r.bus_voltage,
+            demand_position: r.demand_position,
+            mode: self.running_mode as i8,
+        }
     }
 
     /// The EMCY code and manufacturer field of the fault the device holds (or held last).
@@ -212,6 +282,10 @@ impl DriveAxis {
     /// [`Self::fault`] with the profile's report: 603Fh = `report.error_code`, the EMCY the
     /// next cycle announces carries `report.emcy_code` and `report.emcy_data`.
     pub(super) fn report_fault(&mut self, report: FaultReport, ram: &mut [u8]) {
+        // The profile's alarm: its number and whether a fault reset clears it.
+        let alarm = self.alarm_table.entry(&report);
+        self.fault_number = alarm.map(|a| a.number);
+        let resettable = alarm.is_none_or(|a| a.resettable);
         let mut data = report.emcy_data;
         // The profile's EMCY names the axis (e.g. the Σ-V-SD's byte 7): bytes 3–7 are data 0–4.
         let axis_byte = self
@@ -223,7 +297,7 @@ impl DriveAxis {
         self.fault_emcy = (report.emcy_code, data);
         let code = report.error_code;
         write_u16(ram, self.vars.controlword, 0);
-        let statusword = self.device.fault(code);
+        let statusword = self.device.fault_with(code, resettable);
         write_u16(ram, self.vars.error_code, code);
         write_u16(ram, self.vars.statusword, statusword);
     }
@@ -677,7 +751,48 @@ impl DriveAxis {
             vars.torque_actual_value,
             torque_out(feedback.torque).to_le_bytes(),
         );
+        self.remember(
+            &feedback,
+            &set_point,
+            (torque_demand, rated_nm),
+            position_out(set_point.position),
+            (enable, cycle_ns),
+        );
         self.port = Some(port);
+    }
+
+    /// Keeps what an alarm record shows of this cycle (a few stores; the speed ring every ms).
+    fn remember(
+        &mut self,
+        feedback: &AxisFeedback,
+        set_point: &modes::SetPoint,
+        (torque_demand, rated_nm): (f32, f32),
+        demand_position: i32,
+        (running, cycle_ns): (bool, u32),
+    ) {
+        let rpm_per_count_s = self
+            .port
+            .as_ref()
+            .map_or(0.0, |p| SECONDS_PER_MINUTE / p.counts_per_rev.max(1) as f32);
+        let percent_per_nm = PERCENT / rated_nm;
+        let r = &mut self.recent;
+        r.rpm = feedback.velocity * rpm_per_count_s;
+        r.demand_rpm = set_point.velocity * rpm_per_count_s;
+        r.demand_torque_percent = torque_demand * percent_per_nm;
+        r.torque_percent = feedback.torque * percent_per_nm;
+        r.bus_voltage = feedback.bus_voltage;
+        r.demand_position = demand_position;
+        if running {
+            r.running_ns = r.running_ns.saturating_add(u64::from(cycle_ns));
+        }
+        r.since_sample_ns = r.since_sample_ns.saturating_add(cycle_ns);
+        if r.since_sample_ns >= SPEED_SAMPLE_NS {
+            r.since_sample_ns = 0;
+            r.newest = (r.newest + 1) % SPEED_SAMPLES;
+            if let Some(s) = r.speeds.get_mut(r.newest) {
+                *s = r.rpm;
+            }
+        }
     }
 
     /// The period the axis interpolates the set-points of the interpolated position mode over:

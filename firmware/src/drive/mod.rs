@@ -29,6 +29,7 @@ use ethercat_slave::slave::{AppEvent, AppEvents, Application};
 
 use crate::adjust::service::{Progress, Refusal};
 use crate::adjust::{Action, AdjustingService};
+use crate::alarm_log::{AlarmLog, AlarmTable};
 use crate::motor::axis::{AxisFeedback, AxisLink, AxisState};
 use crate::profile::{DriveProfile, MAX_AXES};
 
@@ -36,6 +37,7 @@ use crate::profile::{DriveProfile, MAX_AXES};
 pub const MAX_ADJUSTING_SERVICES: usize = 2;
 
 const NS_PER_MS: u64 = 1_000_000;
+const NS_PER_HOUR: u64 = 3_600_000_000_000;
 
 /// An adjustment running on an axis: which service started it and the axis counters then.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +62,12 @@ pub struct Drive {
     adjusting: [Option<AdjustingService>; MAX_ADJUSTING_SERVICES],
     /// The adjustment running on an axis, if any.
     adjustment: Option<RunningAdjustment>,
+    /// The profile's alarms and the objects that show them.
+    alarm_table: &'static AlarmTable,
+    /// The alarm records.
+    alarm_log: AlarmLog,
+    /// Board time of the last ESC-event round, ns since power-on (the records' power-on time).
+    now_ns: u64,
 }
 
 impl Drive {
@@ -83,6 +91,9 @@ impl Drive {
             axes,
             adjusting,
             adjustment: None,
+            alarm_table: &profile.alarms,
+            alarm_log: AlarmLog::new(),
+            now_ns: 0,
         }
     }
 
@@ -143,6 +154,43 @@ impl Drive {
         for axis in self.axes.iter_mut().flatten() {
             axis.safe_outputs(ram, cycle_ns);
         }
+    }
+
+    /// An alarm of axis `axis` was raised: a record of it (with the axis' state) and the active
+    /// alarms shown.
+    fn alarm_raised(&mut self, axis: usize, ram: &mut [u8]) {
+        let hours = u32::try_from(self.now_ns / NS_PER_HOUR).unwrap_or(u32::MAX);
+        if let Some((number, conditions)) = self
+            .axis(axis)
+            .and_then(|a| Some((a.alarm_number()?, a.alarm_conditions(hours))))
+        {
+            self.alarm_log
+                .raised(self.alarm_table, ram, number, &conditions);
+        }
+        self.show_active_alarms(ram);
+    }
+
+    /// Shows the numbers of the alarms the axes hold (each once).
+    fn show_active_alarms(&self, ram: &mut [u8]) {
+        if self.alarm_table.active.is_empty() {
+            return;
+        }
+        let mut numbers = [0u16; MAX_AXES];
+        let mut n = 0;
+        for number in self
+            .axes
+            .iter()
+            .flatten()
+            .filter_map(DriveAxis::alarm_number)
+        {
+            if !numbers.get(..n).is_some_and(|seen| seen.contains(&number)) {
+                if let Some(slot) = numbers.get_mut(n) {
+                    *slot = number;
+                    n += 1;
+                }
+            }
+        }
+        AlarmLog::show_active(self.alarm_table, ram, numbers.get(..n).unwrap_or(&[]));
     }
 
     /// Whether another axis than `except` holds a fault announced with EMCY code `code` (its
@@ -210,14 +258,21 @@ impl Application for Drive {
             axis.step(ram, cycle_ns);
             let (emcy_code, data) = axis.fault_emcy();
             let event = match (before, axis.fault_code()) {
-                // The unit's error stays while another axis still holds it.
-                (Some(_), None) if !self.emcy_code_held(emcy_code, i) => {
+                (Some(_), None) => {
+                    self.show_active_alarms(ram);
+                    // The unit's error stays while another axis still holds it.
+                    if self.emcy_code_held(emcy_code, i) {
+                        continue;
+                    }
                     AppEvent::ErrorCleared(emcy_code)
                 }
-                (None, Some(_)) => AppEvent::ErrorRaised {
-                    code: emcy_code,
-                    data,
-                },
+                (None, Some(_)) => {
+                    self.alarm_raised(i, ram);
+                    AppEvent::ErrorRaised {
+                        code: emcy_code,
+                        data,
+                    }
+                }
                 _ => continue,
             };
             // MAX_APP_EVENTS holds a raise and a clear of every axis; one cycle gives at most one
@@ -245,7 +300,9 @@ impl Application for Drive {
     }
 
     fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]) {
-        // An error of the unit (e.g. its EtherCAT communication): every axis faults.
+        // An error of the unit (e.g. its EtherCAT communication): every axis faults; one
+        // record of it.
+        let new = self.axes.iter().flatten().any(|a| a.fault_code().is_none());
         for axis in self.axes.iter_mut().flatten() {
             axis.report_fault(
                 FaultReport {
@@ -256,9 +313,19 @@ impl Application for Drive {
                 ram,
             );
         }
+        if new {
+            self.alarm_raised(0, ram);
+        }
     }
 
     fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
+        self.now_ns = now_ns;
+        if self
+            .alarm_log
+            .downloaded(self.alarm_table, ram, index, subindex)
+        {
+            return;
+        }
         let now_ms = now_ns / NS_PER_MS;
         for i in 0..MAX_ADJUSTING_SERVICES {
             let Some(mut service) = self
@@ -293,6 +360,7 @@ impl Application for Drive {
     }
 
     fn background(&mut self, ram: &mut [u8], now_ns: u64) {
+        self.now_ns = now_ns;
         let now_ms = now_ns / NS_PER_MS;
         for i in 0..MAX_ADJUSTING_SERVICES {
             let Some(mut service) = self.adjusting.get(i).copied().flatten() else {
