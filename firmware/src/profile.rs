@@ -160,6 +160,10 @@ pub struct AppVars {
     pub velocity_factor: Factor,
     /// What the acceleration objects (6083h–6085h, 609Ah) count: `[units] acceleration`.
     pub acceleration_unit: AccelerationUnit,
+    /// Increments/s per unit of the velocity window 606Dh and threshold 606Fh:
+    /// `[units] velocity_window` (the velocity factor unless the profile counts them apart,
+    /// e.g. in whole rpm).
+    pub velocity_window_factor: Factor,
 }
 
 /// What an acceleration object (6083h–6085h, 609Ah) counts.
@@ -339,6 +343,7 @@ impl AppVars {
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,
+        velocity_window_factor: Factor::ONE,
     };
 }
 

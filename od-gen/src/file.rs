@@ -264,6 +264,10 @@ pub struct UnitsFile {
     /// N rpm).
     #[serde(default)]
     pub acceleration: Option<toml::Value>,
+    /// Increments/s per unit of the velocity window 606Dh and threshold 606Fh: absent = the
+    /// velocity unit; a factor table (e.g. whole rpm: the SDV3-E's, the RSE's).
+    #[serde(default)]
+    pub velocity_window: Option<toml::Value>,
 }
 
 /// `[storage]`: what the parameter storage (1010h/1011h) stores beyond the default rule (RAM,

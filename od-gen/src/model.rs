@@ -1556,6 +1556,8 @@ pub struct Units {
     pub velocity: Factor,
     /// The acceleration unit.
     pub acceleration: Acceleration,
+    /// Increments/s per unit of the velocity window 606Dh and threshold 606Fh.
+    pub velocity_window: Factor,
 }
 
 /// What an acceleration object (6083h–6085h, 609Ah) counts (`[units] acceleration`).

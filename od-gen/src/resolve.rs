@@ -579,6 +579,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             position: Factor::ONE,
             velocity: Factor::ONE,
             acceleration: crate::model::Acceleration::VelocityPerSecond,
+            velocity_window: Factor::ONE,
         },
         decisions: f
             .decisions
@@ -647,10 +648,15 @@ fn units(u: &crate::file::UnitsFile, p: &Profile) -> Result<Units, Fault> {
         }
         Some(v) => crate::model::Acceleration::Factor(factor(v, p, "units.acceleration")?),
     };
+    let velocity_window = match &u.velocity_window {
+        None => velocity,
+        Some(v) => factor(v, p, "units.velocity_window")?,
+    };
     Ok(Units {
         position,
         velocity,
         acceleration,
+        velocity_window,
     })
 }
 

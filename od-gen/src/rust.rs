@@ -483,6 +483,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                 }
             };
             let _ = writeln!(out, "                acceleration_unit: {acceleration},");
+            let _ = writeln!(
+                out,
+                "                velocity_window_factor: {},",
+                factor(p, &layout, &p.units.velocity_window, axis)
+            );
             let _ = writeln!(out, "            }},");
         }
         let _ = writeln!(out, "        ],");

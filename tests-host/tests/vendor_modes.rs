@@ -430,3 +430,83 @@ fn sdv3_e_max_motor_speed_limits_csv() {
         assert_eq!(s.0 & INTERNAL_LIMIT, 0, "bit 11 clear");
     });
 }
+
+/// SDV3-E Table 6-2: the velocity window 606Dh counts whole rpm (default 50), the velocities
+/// 0.1 rpm. In profile velocity to 1000 rpm (60FFh = 10000), statusword bit 10 "speed arrival"
+/// comes on when the motor is within 50 rpm of the target, not within 5.
+#[test]
+fn sdv3_e_velocity_window_in_whole_rpm() {
+    const PV: u8 = 3;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            // 0 → 2000 rpm in 2000 ms: 1000 rpm/s, 1 rpm per 1 ms cycle.
+            sd.sdo_write(0x6083, 0, 2000u32).await.expect("6083h");
+            sd.sdo_write(0x6084, 0, 2000u32).await.expect("6084h");
+        }
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        let cycle = |cw: u16, rpm: f64| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            {
+                let mut out = sd.outputs_raw_mut();
+                out[0..2].copy_from_slice(&cw.to_le_bytes());
+                out[6..10].copy_from_slice(&((rpm * 10.0) as i32).to_le_bytes());
+                out[12] = PV;
+            }
+            let (m, group) = (&m, &group);
+            async move {
+                let since = m.shared.clock().now();
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.finish_cycle(since, CYCLE_NS);
+                let sd = group.subdevice(md, 0).expect("drive");
+                let inp = sd.inputs_raw();
+                let rad_s = m.shared.segment().drives()[0].servos[0]
+                    .plant
+                    .mech_speed_rad_s();
+                (
+                    u16::from_le_bytes([inp[0], inp[1]]),
+                    rad_s / std::f64::consts::TAU * 60.0,
+                )
+            }
+        };
+        let mut s = (0, 0.0);
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 20])
+        {
+            s = cycle(cw, 0.0).await;
+        }
+        assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
+        let mut arrived_at = None;
+        let mut left = false;
+        for _ in 0..1_500 {
+            s = cycle(ENABLE_OPERATION, 1000.0).await;
+            // At rest on the old target 0 bit 10 is set; it clears with the new target.
+            left |= s.0 & TARGET_REACHED == 0;
+            if left && s.0 & TARGET_REACHED != 0 {
+                arrived_at = Some(s.1);
+                break;
+            }
+        }
+        // The statusword is the previous cycle's: the motor gained up to 2 rpm since.
+        let rpm = arrived_at.expect("bit 10 during the ramp");
+        assert!(
+            (948.0..=956.0).contains(&rpm),
+            "bit 10 at {rpm:.1} rpm: within 50 rpm (606Dh in rpm)"
+        );
+    });
+}

@@ -993,8 +993,10 @@ fn profile_inputs(
                 .to_internal(v, ram, counts_per_rev, velocity_ratio)
         })
     };
+    // 606Dh/606Fh in their own unit where the profile counts them apart (e.g. whole rpm).
+    let window_ratio = vars.velocity_window_factor.ratio(ram, counts_per_rev);
     let window =
-        |at| read_u16(ram, at).map_or(0.0, |v| velocity_ratio.velocity_to_internal(f32::from(v)));
+        |at| read_u16(ram, at).map_or(0.0, |v| window_ratio.velocity_to_internal(f32::from(v)));
     // 607Fh, and the maximum motor speed 6080h above it.
     let max_velocity = math::min(
         velocity(vars.max_profile_velocity, f32::INFINITY),
