@@ -94,6 +94,67 @@ pub enum RecordField {
     Zero,
 }
 
+/// A drive condition a profile reports as a warning (statusword bit 7, 603Fh and an EMCY
+/// while no fault holds; od-gen's `WarningCondition`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WarningCondition {
+    /// The motor's I²t load at or above `percent` of its trip level.
+    MotorOverload {
+        /// % of the trip level.
+        percent: u8,
+    },
+    /// The power stage's I²t load at or above `percent` of its trip level.
+    DriveOverload {
+        /// % of the trip level.
+        percent: u8,
+    },
+    /// The positive limit switch is actuated.
+    PositiveLimit,
+    /// The negative limit switch is actuated.
+    NegativeLimit,
+}
+
+/// What the drive sees of the warning conditions in a cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WarningInputs {
+    /// The motor's I²t load, 0..=1 of its trip level.
+    pub motor_load: f32,
+    /// The power stage's I²t load, 0..=1.
+    pub drive_load: f32,
+    /// The positive limit switch.
+    pub positive_limit: bool,
+    /// The negative limit switch.
+    pub negative_limit: bool,
+}
+
+const PERCENT: f32 = 100.0;
+
+impl WarningCondition {
+    /// Whether the condition holds.
+    pub fn holds(self, i: &WarningInputs) -> bool {
+        match self {
+            Self::MotorOverload { percent } => i.motor_load * PERCENT >= f32::from(percent),
+            Self::DriveOverload { percent } => i.drive_load * PERCENT >= f32::from(percent),
+            Self::PositiveLimit => i.positive_limit,
+            Self::NegativeLimit => i.negative_limit,
+        }
+    }
+}
+
+/// One `[warnings]` row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Warning {
+    /// When it holds.
+    pub condition: WarningCondition,
+    /// 603Fh and the EMCY while it holds.
+    pub report: FaultReport,
+}
+
+/// The first of `warnings` (the profile's order) whose condition holds.
+pub fn active_warning(warnings: &[Warning], inputs: &WarningInputs) -> Option<Warning> {
+    warnings.iter().find(|w| w.condition.holds(inputs)).copied()
+}
+
 /// Alarm records shown one at a time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RecordSpec {
@@ -476,6 +537,41 @@ mod tests {
         assert_eq!(ACTIVE.map(|s| u(&ram, s)), [0x26, 0]);
         AlarmLog::show_active(&TABLE, &mut ram, &[]);
         assert_eq!(ACTIVE.map(|s| u(&ram, s)), [0, 0]);
+    }
+
+    #[test]
+    fn the_first_warning_that_holds_is_reported() {
+        let report = |c| FaultReport::code(c);
+        let warnings = [
+            Warning {
+                condition: WarningCondition::MotorOverload { percent: 80 },
+                report: report(0x2351),
+            },
+            Warning {
+                condition: WarningCondition::PositiveLimit,
+                report: report(0xFF48),
+            },
+        ];
+        let none = WarningInputs::default();
+        assert_eq!(active_warning(&warnings, &none), None);
+        let hot = WarningInputs {
+            motor_load: 0.8,
+            positive_limit: true,
+            ..none
+        };
+        assert_eq!(
+            active_warning(&warnings, &hot).map(|w| w.report.error_code),
+            Some(0x2351)
+        );
+        let below = WarningInputs {
+            motor_load: 0.79,
+            ..hot
+        };
+        assert_eq!(
+            active_warning(&warnings, &below).map(|w| w.report.error_code),
+            Some(0xFF48)
+        );
+        assert!(!WarningCondition::DriveOverload { percent: 50 }.holds(&below));
     }
 
     #[test]

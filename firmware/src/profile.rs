@@ -365,6 +365,9 @@ pub struct DriveProfile {
     /// The alarms (`[[alarm]]`: numbers, resettable) and the objects that show them
     /// (`[alarm_objects]`).
     pub alarms: crate::alarm_log::AlarmTable,
+    /// The drive conditions reported as warnings (`[warnings]`, statusword bit 7), in order of
+    /// precedence.
+    pub warnings: &'static [crate::alarm_log::Warning],
     /// The profile's adjusting-service objects (`[[adjusting]]`; at most
     /// [`crate::drive::MAX_ADJUSTING_SERVICES`]).
     pub adjusting: &'static [ServiceSpec],

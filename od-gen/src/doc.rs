@@ -1007,6 +1007,51 @@ fn alarms(out: &mut String, p: &Profile) {
         ],
         &rows,
     );
+    let a = &p.alarm_objects;
+    let mut shown = Vec::new();
+    if let Some(i) = a.active {
+        shown.push(format!("the active alarms in {}", hex16(i)));
+    }
+    if let Some(i) = a.history {
+        shown.push(format!("the last alarms in {}, newest first", hex16(i)));
+    }
+    if let Some((i, s)) = a.history_clear {
+        shown.push(format!("cleared by 1 in {}:{s:02X}h", hex16(i)));
+    }
+    if let Some(r) = &a.history_record {
+        shown.push(format!(
+            "records selected by {}:{:02X}h in {} ({})",
+            hex16(r.select.0),
+            r.select.1,
+            hex16(r.object),
+            r.fields
+                .iter()
+                .map(|f| f.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    if !shown.is_empty() {
+        let _ = writeln!(
+            out,
+            "Alarms by number ({:?}): {}.\n",
+            a.number,
+            shown.join("; ")
+        );
+    }
+}
+
+fn warnings(out: &mut String, p: &Profile) {
+    if p.warnings.is_empty() {
+        return;
+    }
+    out.push_str("## Warnings\n\nConditions reported with statusword bit 7, 603Fh (while no fault holds) and an EMCY, without a state change.\n\n");
+    let rows: Vec<Vec<String>> = p
+        .warnings
+        .iter()
+        .map(|w| vec![format!("{:?}", w.condition), error_report(&w.report)])
+        .collect();
+    md_table(out, &["condition", "603Fh / EMCY"], &rows);
 }
 
 fn motor_faults(out: &mut String, p: &Profile) {
@@ -1317,6 +1362,7 @@ pub fn markdown(p: &Profile) -> String {
     parameter_storage(&mut out, p);
     modes(&mut out, p);
     alarms(&mut out, p);
+    warnings(&mut out, p);
     motor_faults(&mut out, p);
     adjusting(&mut out, p);
     cia402_rules(&mut out, p);

@@ -64,6 +64,9 @@ pub struct ProfileFile {
     /// `[alarm_objects]`: objects that show the alarms by number.
     #[serde(default)]
     pub alarm_objects: AlarmObjectsFile,
+    /// `[warnings]`: drive conditions reported as warnings (statusword bit 7), by condition.
+    #[serde(default)]
+    pub warnings: BTreeMap<String, WarningFile>,
     /// `[[decision]]`: deviations from the manual, gaps filled and contradictions resolved.
     #[serde(default, rename = "decision")]
     pub decisions: Vec<DecisionFile>,
@@ -183,6 +186,18 @@ pub struct AlarmFile {
 
 fn alarm_resettable() -> bool {
     true
+}
+
+/// One `[warnings]` row: the code reported while the condition holds (a CiA402 code or an
+/// `[[alarm]]` display) and, for the overload conditions, the load that starts it.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WarningFile {
+    /// The error code (603Fh, EMCY) or an `[[alarm]]` display.
+    pub report: MotorFaultFile,
+    /// Overloads: the I²t load, % of the trip level, from which the warning holds.
+    #[serde(default)]
+    pub load_percent: Option<u8>,
 }
 
 /// `[alarm_objects]`: objects that show the drive's alarms by number: the alarms active now,

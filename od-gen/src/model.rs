@@ -1495,6 +1495,9 @@ pub struct Profile {
     pub alarms: Vec<Alarm>,
     /// Objects that show the alarms by number (`[alarm_objects]`).
     pub alarm_objects: AlarmObjects,
+    /// Drive conditions reported as warnings (`[warnings]`), in the order of
+    /// [`WarningCondition::KEYS`].
+    pub warnings: Vec<Warning>,
     /// Unit conversions of the position and velocity objects (`[units]`).
     pub units: Units,
     /// Choices where the manual is silent, wrong or contradicts itself (`[[decision]]`).
@@ -1737,6 +1740,55 @@ impl RecordField {
     pub fn parse(s: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|f| f.name() == s)
     }
+}
+
+/// A drive condition a profile reports as a warning (`[warnings]`; the firmware's
+/// `alarm_log::WarningCondition`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WarningCondition {
+    /// The motor's I²t load at or above `percent` of its trip level.
+    MotorOverload {
+        /// % of the trip level.
+        percent: u8,
+    },
+    /// The drive's (power stage) I²t load at or above `percent` of its trip level.
+    DriveOverload {
+        /// % of the trip level.
+        percent: u8,
+    },
+    /// The positive limit switch is actuated.
+    PositiveLimit,
+    /// The negative limit switch is actuated.
+    NegativeLimit,
+}
+
+impl WarningCondition {
+    /// The profile-file keys.
+    pub const KEYS: [&'static str; 4] = [
+        "motor_overload",
+        "drive_overload",
+        "positive_limit",
+        "negative_limit",
+    ];
+
+    /// The firmware's value.
+    pub fn rust_value(self) -> String {
+        match self {
+            Self::MotorOverload { percent } => format!("MotorOverload {{ percent: {percent} }}"),
+            Self::DriveOverload { percent } => format!("DriveOverload {{ percent: {percent} }}"),
+            Self::PositiveLimit => "PositiveLimit".into(),
+            Self::NegativeLimit => "NegativeLimit".into(),
+        }
+    }
+}
+
+/// One `[warnings]` row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Warning {
+    /// When it holds.
+    pub condition: WarningCondition,
+    /// 603Fh and EMCY while it holds.
+    pub report: MotorFaultCode,
 }
 
 /// Objects that show the alarms by number (`[alarm_objects]`).

@@ -574,6 +574,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         kind,
         motor_faults,
         alarm_objects: alarm_objects(&f.alarm_objects)?,
+        warnings: warnings(f, &alarms)?,
         alarms,
         units: Units {
             position: Factor::ONE,
@@ -770,6 +771,66 @@ pub(crate) fn parse_index(s: &str) -> Option<u16> {
     let s = s.trim();
     let hex = s.strip_prefix("0x").or(s.strip_prefix("0X"))?;
     u16::from_str_radix(hex, 16).ok()
+}
+
+/// `[warnings]` → [`Warning`]s: known conditions, a load percentage (1–100) for the overloads
+/// and none for the switches, an alarm named by display must be a warning (`warning = true`).
+fn warnings(f: &ProfileFile, alarms: &[Alarm]) -> Result<Vec<Warning>, Fault> {
+    for key in f.warnings.keys() {
+        if !WarningCondition::KEYS.contains(&key.as_str()) {
+            return Err(fault(
+                &format!("warnings.{key}"),
+                Invalid::Value(format!("not one of {}", WarningCondition::KEYS.join(", "))),
+            ));
+        }
+    }
+    let mut out = Vec::new();
+    for key in WarningCondition::KEYS {
+        let Some(w) = f.warnings.get(key) else {
+            continue;
+        };
+        let at = format!("warnings.{key}");
+        let percent = || {
+            w.load_percent
+                .filter(|p| (1..=100).contains(p))
+                .ok_or_else(|| {
+                    fault(
+                        &at,
+                        Invalid::Value("load_percent 1 to 100 is needed".into()),
+                    )
+                })
+        };
+        let switch = |c: WarningCondition| {
+            if w.load_percent.is_some() {
+                Err(fault(&at, Invalid::NotAllowed("load_percent")))
+            } else {
+                Ok(c)
+            }
+        };
+        let condition = match key {
+            "motor_overload" => WarningCondition::MotorOverload {
+                percent: percent()?,
+            },
+            "drive_overload" => WarningCondition::DriveOverload {
+                percent: percent()?,
+            },
+            "positive_limit" => switch(WarningCondition::PositiveLimit)?,
+            _ => switch(WarningCondition::NegativeLimit)?,
+        };
+        if let MotorFaultFile::Alarm(display) = &w.report {
+            if alarms.iter().any(|a| a.display == *display && !a.warning) {
+                return Err(fault(
+                    &at,
+                    Invalid::Value(format!("[[alarm]] `{display}` is not a warning")),
+                ));
+            }
+        }
+        out.push(Warning {
+            condition,
+            report: fault_report(&w.report, alarms, &at)?,
+        });
+    }
+    Ok(out)
 }
 
 /// `[alarm_objects]` → [`AlarmObjects`]; the objects and what every alarm's number needs are

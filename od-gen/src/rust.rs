@@ -493,6 +493,22 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        ],");
         let _ = writeln!(out, "        motor_faults: &MOTOR_FAULTS,");
         alarm_table(out, p, &layout, target.drive.unwrap_or("crate"));
+        let drive = target.drive.unwrap_or("crate");
+        let warnings: Vec<String> = p
+            .warnings
+            .iter()
+            .map(|w| {
+                let d = w.report.emcy.data;
+                format!(
+                    "{drive}::alarm_log::Warning {{ condition: {drive}::alarm_log::WarningCondition::{}, report: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }} }}",
+                    w.condition.rust_value(),
+                    w.report.error_code,
+                    w.report.emcy.code,
+                    d[0], d[1], d[2], d[3], d[4]
+                )
+            })
+            .collect();
+        let _ = writeln!(out, "        warnings: &[{}],", warnings.join(", "));
         let _ = writeln!(
             out,
             "        emcy_axis_number_byte: {:?},",

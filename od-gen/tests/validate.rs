@@ -1530,3 +1530,41 @@ fn invalid_named(text: &str, name: &str) -> (String, Invalid) {
         Ok(_) => panic!("expected a validation error, the profile loaded"),
     }
 }
+
+/// `[warnings]`: known conditions, a load for the overloads only, alarms that are warnings.
+#[test]
+fn warnings_are_checked() {
+    const ROW: &str = "motor_overload = { report = 0x2351, load_percent = 80 }";
+    let p = od_gen::parse(STANDARD, "standard.toml").expect("valid");
+    assert_eq!(
+        p.warnings[0].condition,
+        od_gen::model::WarningCondition::MotorOverload { percent: 80 }
+    );
+    for (bad, key) in [
+        ("brake_worn = { report = 0x2351 }", "warnings.brake_worn"),
+        (
+            "drive_overload = { report = 0x2351 }",
+            "warnings.drive_overload",
+        ),
+        (
+            "drive_overload = { report = 0x2351, load_percent = 0 }",
+            "warnings.drive_overload",
+        ),
+        (
+            "positive_limit = { report = 0x8612, load_percent = 80 }",
+            "warnings.positive_limit",
+        ),
+    ] {
+        let (k, _) = invalid(&with(ROW, bad));
+        assert_eq!(k, key, "{bad}");
+    }
+    // A fault alarm is not a warning (RSE AL.248 drive over temperature).
+    let rse = include_str!("../profiles/rse.toml");
+    let bad = rse.replacen("report = \"AL.460\"", "report = \"AL.248\"", 1);
+    let (k, error) = invalid_named(&bad, "rse.toml");
+    assert_eq!(k, "warnings.motor_overload");
+    assert!(
+        matches!(&error, Invalid::Value(m) if m.contains("not a warning")),
+        "{error:?}"
+    );
+}

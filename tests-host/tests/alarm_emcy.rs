@@ -79,6 +79,53 @@ macro_rules! enable {
     }};
 }
 
+/// The RSE's free-run cycle (7.2: 1C32h:02 factory setting 4 ms).
+const RSE_CYCLE_NS: u64 = 4_000_000;
+
+/// One RSE cycle with controlword `cw`, phase-locked to its free-run cycle (every controlword
+/// is seen) over its default PDOs (1600h: 6040h first; 1A00h: 603Fh, 6041h); evaluates to
+/// (603Fh, statusword).
+macro_rules! rse_cycle {
+    ($m:expr, $md:expr, $group:expr, $cw:expr) => {{
+        let sd = $group.subdevice($md, 0).expect("drive");
+        sd.outputs_raw_mut()[0..2].copy_from_slice(&($cw as u16).to_le_bytes());
+        let since = $m.shared.clock().now();
+        $group.tx_rx($md).await.expect("tx/rx");
+        $m.shared.finish_cycle(since, RSE_CYCLE_NS);
+        let inp = sd.inputs_raw();
+        (
+            u16::from_le_bytes([inp[0], inp[1]]),
+            u16::from_le_bytes([inp[2], inp[3]]),
+        )
+    }};
+}
+
+/// The RSE from INIT to OP (free run) and Operation Enabled; evaluates to the group.
+macro_rules! rse_enabled {
+    ($m:expr, $md:expr) => {{
+        let group = $md
+            .init_single_group::<4, 64>($m.shared.clock().now_fn())
+            .await
+            .expect("init")
+            .into_safe_op($md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op($md)
+            .await
+            .expect("OP");
+        let mut sw = 0;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            sw = rse_cycle!($m, $md, group, cw).1;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        group
+    }};
+}
+
 /// Waits (cycling) until SM1 holds a mailbox and reads it whole, as SOEM does; evaluates to the
 /// CoE part (after the 6-byte mailbox header): CoE header, EMCY code, 1001h, manufacturer field.
 macro_rules! emergency {
@@ -335,47 +382,12 @@ fn sdv3_e_a_non_resettable_alarm_holds_through_fault_resets() {
 /// clears it and reads 0 again.
 #[test]
 fn rse_fault_history_and_its_clear_command() {
-    // 7.2: 1C32h:02 factory setting 4 ms, the free-run cycle.
-    const RSE_CYCLE_NS: u64 = 4_000_000;
     block_on(async {
         let (m, transport) = master_for(Segment::new("rse", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("OP");
-        // RSE 1600h: 6040h first (and 607Ah, 60B8h); 1A00h: 603Fh, then 6041h.
-        let rse_cycle = |cw: u16| {
-            let sd = group.subdevice(md, 0).expect("drive");
-            sd.outputs_raw_mut()[0..2].copy_from_slice(&cw.to_le_bytes());
-            let (m, group) = (&m, &group);
-            async move {
-                // Phase-locked to the drive's free-run cycle (1C32h:02, 4 ms by default): every
-                // controlword is seen.
-                let since = m.shared.clock().now();
-                group.tx_rx(md).await.expect("tx/rx");
-                m.shared.finish_cycle(since, RSE_CYCLE_NS);
-                let sd = group.subdevice(md, 0).expect("drive");
-                let inp = sd.inputs_raw();
-                u16::from_le_bytes([inp[2], inp[3]])
-            }
-        };
+        let group = rse_enabled!(m, md);
         let mut sw = 0;
-        for cw in [SHUTDOWN; 5]
-            .into_iter()
-            .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 30])
-        {
-            sw = rse_cycle(cw).await;
-        }
-        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
         let hot = |c: f64| {
             m.shared.segment().drives_mut()[0].servos[0]
                 .plant
@@ -386,7 +398,7 @@ fn rse_fault_history_and_its_clear_command() {
             hot(120.0);
             let mut faulted = false;
             for _ in 0..300 {
-                if rse_cycle(ENABLE_OPERATION).await & FAULT_BIT != 0 {
+                if rse_cycle!(m, md, group, ENABLE_OPERATION).1 & FAULT_BIT != 0 {
                     faulted = true;
                     break;
                 }
@@ -394,7 +406,7 @@ fn rse_fault_history_and_its_clear_command() {
             assert!(faulted, "round {round}");
             // Fault Reaction Active until the reaction has ended, then Fault.
             for _ in 0..100 {
-                sw = rse_cycle(0x00).await;
+                sw = rse_cycle!(m, md, group, 0x00).1;
                 if sw & 0x4F == FAULT_BIT {
                     break;
                 }
@@ -403,14 +415,14 @@ fn rse_fault_history_and_its_clear_command() {
 
             hot(40.0);
             for cw in [0x00u16, 0x80, 0x00] {
-                sw = rse_cycle(cw).await;
+                sw = rse_cycle!(m, md, group, cw).1;
             }
             for cw in [SHUTDOWN; 5]
                 .into_iter()
                 .chain([SWITCH_ON; 5])
                 .chain([ENABLE_OPERATION; 30])
             {
-                sw = rse_cycle(cw).await;
+                sw = rse_cycle!(m, md, group, cw).1;
             }
             assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "round {round}");
         }
@@ -432,5 +444,58 @@ fn rse_fault_history_and_its_clear_command() {
                 "200Bh:{sub:02X} cleared"
             );
         }
+    });
+}
+
+/// RSE 9 / 6.2.2: AL.480 "positive limit valid" is a warning: while the positive limit switch is
+/// actuated, statusword bit 7 is set and 603Fh shows its code (8612h) with an EMCY, the drive
+/// stays in Operation Enabled; released, bit 7 and 603Fh clear.
+#[test]
+fn rse_a_limit_switch_is_a_warning_not_a_fault() {
+    use board_sim::plant::SwitchParams;
+    const WARNING: u16 = 1 << 7;
+    let p = od_gen::builtin("rse").expect("profile");
+    let alarm = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "AL.480")
+        .expect("AL.480");
+    assert!(alarm.warning);
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("rse", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = rse_enabled!(m, md);
+        let (code, sw) = rse_cycle!(m, md, group, ENABLE_OPERATION);
+        assert_eq!((code, sw & WARNING), (0, 0), "no warning yet");
+        // The positive limit switch actuated where the motor stands.
+        let switches = |limit: Option<f64>| {
+            m.shared.segment().drives_mut()[0].servos[0]
+                .plant
+                .set_switches(SwitchParams {
+                    limit_pos_rad: limit,
+                    ..SwitchParams::default()
+                })
+        };
+        switches(Some(-0.1));
+        let mut s = (0, 0);
+        for _ in 0..5 {
+            s = rse_cycle!(m, md, group, ENABLE_OPERATION);
+        }
+        assert_ne!(s.1 & WARNING, 0, "bit 7: {:#06x}", s.1);
+        assert_eq!(s.0, alarm.error_code, "603Fh = AL.480's code");
+        assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED, "still enabled");
+        let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
+        assert_eq!(
+            u16::from_le_bytes([coe[2], coe[3]]),
+            alarm.emcy.code,
+            "EMCY"
+        );
+        switches(None);
+        for _ in 0..5 {
+            s = rse_cycle!(m, md, group, ENABLE_OPERATION);
+        }
+        assert_eq!((s.0, s.1 & WARNING), (0, 0), "cleared: {:#06x}", s.1);
+        assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED);
     });
 }

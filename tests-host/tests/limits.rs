@@ -228,3 +228,61 @@ fn standard_torque_limits_cap_a_torque_set_point_and_the_speed_loop() {
         assert!(limited, "bit 11 while limited");
     });
 }
+
+/// The standard profile's I²t warning (`[warnings] motor_overload`, CiA402 2351h "load level
+/// warning"): a locked rotor asked for 28 A in cyclic synchronous torque heats the motor's I²t
+/// model; from 80 % of its trip level statusword bit 7 is set and 603Fh shows 2351h while the
+/// drive stays in Operation Enabled (the current folds back instead of tripping); with the
+/// torque removed the model cools and both clear.
+#[test]
+fn standard_motor_overload_warning_in_bit_7_and_603fh() {
+    const CST: i8 = 10;
+    const WARNING: u16 = 1 << 7;
+    const LOAD_LEVEL_WARNING: u16 = 0x2351;
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = enabled!(m, md, CST);
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_driven_speed(Some(0.0));
+        let sd = group.subdevice(md, 0).expect("drive");
+        // 6071h in ‰ of 6076h (1.27 N·m = 15.7 A): 28 A = 1783 ‰.
+        sd.sdo_write(0x6071, 0, 1783i16).await.expect("6071h");
+        let mut warned = None;
+        for k in 0..5_000 {
+            let s = csp::phase_locked(&m, md, &group, ENABLE_OPERATION, 0, CST).await;
+            assert_eq!(
+                s.statusword & STATE_MASK,
+                OPERATION_ENABLED,
+                "no trip at {k}"
+            );
+            if s.statusword & WARNING != 0 {
+                warned = Some(k);
+                break;
+            }
+        }
+        // From cold at 28 A the trip level is reached after (30² − 15.7²)·3 s / (28² − 15.7²)
+        // = 3.65 s: 80 % of it after 2.92 s.
+        let k = warned.expect("bit 7") as f64 * 1e-3;
+        assert!((k - 2.92).abs() < 0.15, "warning after {k:.2} s");
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(
+            sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"),
+            LOAD_LEVEL_WARNING
+        );
+        sd.sdo_write(0x6071, 0, 0i16).await.expect("6071h");
+        let mut cleared = false;
+        for _ in 0..5_000 {
+            let s = csp::phase_locked(&m, md, &group, ENABLE_OPERATION, 0, CST).await;
+            if s.statusword & WARNING == 0 {
+                cleared = true;
+                break;
+            }
+        }
+        assert!(cleared, "the model cools below 80 %");
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), 0);
+    });
+}

@@ -56,6 +56,8 @@ pub mod statusword {
     pub const QUICK_STOP: u16 = 1 << 5;
     /// Bit 6: switch on disabled.
     pub const SWITCH_ON_DISABLED: u16 = 1 << 6;
+    /// Bit 7: warning (a condition that does not change the state).
+    pub const WARNING: u16 = 1 << 7;
     /// Bit 9: remote (controlword is processed).
     pub const REMOTE: u16 = 1 << 9;
     /// Bit 10: target reached (operation-mode specific; with halt set: the motor is at rest).

@@ -231,6 +231,10 @@ pub struct AxisFeedback {
     pub main_power: bool,
     /// The DC-link voltage, V.
     pub bus_voltage: f32,
+    /// The motor's I²t load, 0..=1 of its trip level.
+    pub motor_load: f32,
+    /// The power stage's I²t load, 0..=1 of its trip level.
+    pub drive_load: f32,
     /// A stop's deceleration ramp ([`ControlMode::Stop`]) has not reached zero yet.
     pub stopping: bool,
     /// The limit and home switches at the last sample.
@@ -401,6 +405,8 @@ impl AxisLink {
                     offset_calibrations: 0,
                     main_power: false,
                     bus_voltage: 0.0,
+                    motor_load: 0.0,
+                    drive_load: 0.0,
                     stopping: false,
                     current_limited: false,
                     switches: Switches {
@@ -885,6 +891,8 @@ impl Axis {
             offset_calibrations: self.offset_calibrations,
             main_power: self.vbus >= self.cfg.protection.bus_under_voltage_v,
             bus_voltage: self.vbus,
+            motor_load: self.protections.motor_load(),
+            drive_load: self.protections.drive_load(),
             stopping: self.state == AxisState::Running
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),

@@ -33,7 +33,7 @@ use super::ram::{
 };
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
-use crate::alarm_log::{AlarmTable, Conditions};
+use crate::alarm_log::{self, AlarmTable, Conditions, Warning, WarningInputs};
 use crate::motion::{self, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
@@ -118,6 +118,10 @@ pub struct DriveAxis {
     fault_number: Option<u16>,
     /// What the axis did in the last cycles, for an alarm record.
     recent: Recent,
+    /// The profile's warnings.
+    warnings: &'static [Warning],
+    /// The warning that holds.
+    warning: Option<Warning>,
 }
 
 /// What an alarm record shows of the axis: the last cycle's values, the speed a few ms back,
@@ -175,6 +179,8 @@ impl DriveAxis {
             polarity: Polarity::NONE,
             output_levels: outputs::BRAKE,
             alarm_table: &profile.alarms,
+            warnings: profile.warnings,
+            warning: None,
             fault_number: None,
             recent: Recent {
                 rpm: 0.0,
@@ -213,6 +219,18 @@ impl DriveAxis {
     /// 60FEh:02 forces them, the brake applied unless the power stage runs.
     pub fn digital_outputs(&self) -> u32 {
         self.output_levels
+    }
+
+    /// An EMCY manufacturer field with this axis' number where the profile puts it (e.g. the
+    /// Σ-V-SD's byte 7; bytes 3–7 are data 0–4).
+    fn with_axis_number(&self, mut data: [u8; 5]) -> [u8; 5] {
+        let axis_byte = self
+            .emcy_axis_byte
+            .and_then(|b| usize::from(b).checked_sub(EMCY_DATA_FIRST_BYTE));
+        if let Some(byte) = axis_byte.and_then(|i| data.get_mut(i)) {
+            *byte = self.number;
+        }
+        data
     }
 
     /// The alarm number of the fault the device holds, if the profile lists the alarm.
@@ -286,15 +304,7 @@ impl DriveAxis {
         let alarm = self.alarm_table.entry(&report);
         self.fault_number = alarm.map(|a| a.number);
         let resettable = alarm.is_none_or(|a| a.resettable);
-        let mut data = report.emcy_data;
-        // The profile's EMCY names the axis (e.g. the Σ-V-SD's byte 7): bytes 3–7 are data 0–4.
-        let axis_byte = self
-            .emcy_axis_byte
-            .and_then(|b| usize::from(b).checked_sub(EMCY_DATA_FIRST_BYTE));
-        if let Some(byte) = axis_byte.and_then(|i| data.get_mut(i)) {
-            *byte = self.number;
-        }
-        self.fault_emcy = (report.emcy_code, data);
+        self.fault_emcy = (report.emcy_code, self.with_axis_number(report.emcy_data));
         let code = report.error_code;
         write_u16(ram, self.vars.controlword, 0);
         let statusword = self.device.fault_with(code, resettable);
@@ -360,6 +370,46 @@ impl DriveAxis {
                 write_bytes(ram, vars.position_actual_value, target);
             }
         }
+        if !self.warnings.is_empty() {
+            self.update_warning(ram, feedback.as_ref());
+        }
+    }
+
+    /// The profile's warnings (`[warnings]`): the first whose condition holds sets statusword
+    /// bit 7 and, while no fault holds, shows its code in 603Fh (0 again when it ends).
+    fn update_warning(&mut self, ram: &mut [u8], feedback: Option<&AxisFeedback>) {
+        let vars = self.vars;
+        let warning = feedback.and_then(|f| {
+            alarm_log::active_warning(
+                self.warnings,
+                &WarningInputs {
+                    motor_load: f.motor_load,
+                    drive_load: f.drive_load,
+                    positive_limit: f.switches.positive_limit,
+                    negative_limit: f.switches.negative_limit,
+                },
+            )
+        });
+        if warning.is_some() {
+            if let Some(sw) = read_u16(ram, vars.statusword) {
+                write_u16(ram, vars.statusword, sw | statusword::WARNING);
+            }
+        }
+        if self.device.fault_code().is_none() {
+            let code = warning.map_or(0, |w| w.report.error_code);
+            write_u16(ram, vars.error_code, code);
+        }
+        self.warning = warning;
+    }
+
+    /// The warning that holds (its 603Fh code and EMCY), if any.
+    pub(super) fn warning(&self) -> Option<(u16, [u8; 5])> {
+        self.warning.map(|w| {
+            (
+                w.report.emcy_code,
+                self.with_axis_number(w.report.emcy_data),
+            )
+        })
     }
 
     /// Whether the motor is at rest by the axis' `feedback`: no stop ramp under way and the

@@ -255,7 +255,21 @@ impl Application for Drive {
                 continue;
             };
             let before = axis.fault_code();
+            let warning_before = axis.warning();
             axis.step(ram, cycle_ns);
+            let warning_after = axis.warning();
+            if warning_after != warning_before {
+                // A warning ends or begins: its EMCY (1001h holds it while it lasts).
+                if let Some((code, _)) = warning_before {
+                    let _ = events.push(AppEvent::ErrorCleared(code));
+                }
+                if let Some((code, data)) = warning_after {
+                    let _ = events.push(AppEvent::ErrorRaised { code, data });
+                }
+            }
+            let Some(axis) = self.axis_mut(i) else {
+                continue;
+            };
             let (emcy_code, data) = axis.fault_emcy();
             let event = match (before, axis.fault_code()) {
                 (Some(_), None) => {

@@ -22,9 +22,9 @@ pub enum AppEvent {
     ErrorCleared(u16),
 }
 
-/// The most events one cycle reports: a raise and a clear on each of two channels (a two-axis
-/// drive).
-pub const MAX_APP_EVENTS: usize = 4;
+/// The most events one cycle reports: a fault and a warning raised or cleared on each of two
+/// channels (a two-axis drive).
+pub const MAX_APP_EVENTS: usize = 8;
 
 /// What the application reports of one cycle, in order (events past [`MAX_APP_EVENTS`] are not
 /// taken: the application's own state still holds the error).
