@@ -670,7 +670,10 @@ fn motor_over_temperature_input_trips_after_the_confirmation_time() {
 // ---- following error ---------------------------------------------------------------------------
 
 /// A CSP move into a hard end stop: the following error grows past the window and
-/// `FollowingError` trips once it has stayed above the window for longer than the timeout.
+/// `FollowingError` is reported once it has stayed above the window for longer than the
+/// timeout. The motor is still under control (`MotorFault::allows_controlled_stop`): the axis
+/// keeps running for the drive's fault reaction, and goes to `Faulted` with the gates off when
+/// the command drops the enable.
 #[test]
 fn following_error_trips_at_a_hard_end_stop() {
     let stop_rad = 1.0;
@@ -701,7 +704,7 @@ fn following_error_trips_at_a_hard_end_stop() {
         }
         servo.period();
         k += 1;
-        if servo.axis.state() == AxisState::Faulted {
+        if servo.feedback().fault.is_some() {
             break;
         }
         if first_above.is_none() && servo.feedback().following_error.abs() > window {
@@ -710,7 +713,12 @@ fn following_error_trips_at_a_hard_end_stop() {
         assert!(k < 40_000, "no trip: {:?}", servo.feedback());
     }
     assert_eq!(servo.axis.fault(), Some(MotorFault::FollowingError));
-    assert!(!servo.latched().gates);
+    assert_eq!(
+        servo.axis.state(),
+        AxisState::Running,
+        "still under control"
+    );
+    assert!(servo.latched().gates, "gates on for the fault reaction");
     let above = first_above.expect("the error exceeded the window before the trip");
     // Feedback is published per loop sample: the first sample above the window is seen in the
     // period after it. The trip comes at the (timeout + 1)-th sample above.
@@ -725,6 +733,15 @@ fn following_error_trips_at_a_hard_end_stop() {
         (rad - stop_rad).abs() < 1e-9,
         "rotor at {rad} rad, not at the stop"
     );
+    // The drive's reaction ends with the enable dropped: Faulted, gates off, until a reset.
+    let off = AxisCommand {
+        enable: false,
+        ..hold(&servo, ControlMode::Position)
+    };
+    servo.publish(off);
+    servo.run_periods(PERIODS_PER_CYCLE);
+    assert_eq!(servo.axis.state(), AxisState::Faulted);
+    stays_faulted(&mut servo, off, MotorFault::FollowingError, 200);
 }
 
 // ---- latching and reset ------------------------------------------------------------------------

@@ -817,7 +817,12 @@ impl Axis {
         {
             self.electrical_ident = None;
             self.inertia_ident = None;
-            self.state = AxisState::Disabled;
+            // A fault recorded during a controlled stop holds until its reset.
+            self.state = if self.fault.is_some() {
+                AxisState::Faulted
+            } else {
+                AxisState::Disabled
+            };
             return Output::OFF;
         }
         if loop_tick {
@@ -854,19 +859,30 @@ impl Axis {
                 enabled,
             });
             if let Some(fault) = fault {
-                return self.trip(fault, link);
+                if !(fault.allows_controlled_stop() && self.state == AxisState::Running) {
+                    return self.trip(fault, link);
+                }
+                // Reported, and the motor stays under control: the drive's fault reaction
+                // decelerates it (ControlMode::Stop) and then disables it.
+                self.record(fault);
             }
             self.publish(link);
         }
         output
     }
 
-    /// Latches `fault` (the first one stays until a reset) and stops: gates off.
-    fn latch(&mut self, fault: MotorFault) {
+    /// Records `fault` (the first one stays until a reset) without stopping: a fault that
+    /// allows a controlled stop.
+    fn record(&mut self, fault: MotorFault) {
         if self.fault.is_none() {
             self.fault = Some(fault);
             self.trips = self.trips.wrapping_add(1);
         }
+    }
+
+    /// Latches `fault` (the first one stays until a reset) and stops: gates off.
+    fn latch(&mut self, fault: MotorFault) {
+        self.record(fault);
         self.state = AxisState::Faulted;
     }
 

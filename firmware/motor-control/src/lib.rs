@@ -151,6 +151,14 @@ impl MotorFault {
         self as u8
     }
 
+    /// Whether the motor is still under control after the fault, so that the drive's fault
+    /// reaction (CiA402 605Eh) can decelerate it before the power stage goes off: a following
+    /// error (the loops, sensors and power stage are sound). Every other fault cuts the gates
+    /// at once.
+    pub const fn allows_controlled_stop(self) -> bool {
+        matches!(self, MotorFault::FollowingError)
+    }
+
     /// The name used in profile files (`[motor_faults]`).
     pub const fn name(self) -> &'static str {
         match self {

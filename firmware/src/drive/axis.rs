@@ -455,8 +455,11 @@ impl DriveAxis {
             ) {
                 self.report_fault(report, ram);
             }
-            // The axis tripped with its gates off: no fault reaction ramp can run.
-            self.device.power_stage_lost();
+            if feedback.state == AxisState::Faulted {
+                // The axis tripped with its gates off: no fault reaction ramp can run (a
+                // following error leaves the motor under control: the reaction decelerates it).
+                self.device.power_stage_lost();
+            }
         }
         let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
         sync_motor_model(&mut port, vars, ram);
