@@ -112,6 +112,8 @@ pub enum WarningCondition {
     PositiveLimit,
     /// The negative limit switch is actuated.
     NegativeLimit,
+    /// The last homing run failed (statusword bit 13).
+    HomingError,
 }
 
 /// What the drive sees of the warning conditions in a cycle.
@@ -125,6 +127,8 @@ pub struct WarningInputs {
     pub positive_limit: bool,
     /// The negative limit switch.
     pub negative_limit: bool,
+    /// The last homing run failed.
+    pub homing_error: bool,
 }
 
 const PERCENT: f32 = 100.0;
@@ -137,6 +141,7 @@ impl WarningCondition {
             Self::DriveOverload { percent } => i.drive_load * PERCENT >= f32::from(percent),
             Self::PositiveLimit => i.positive_limit,
             Self::NegativeLimit => i.negative_limit,
+            Self::HomingError => i.homing_error,
         }
     }
 }

@@ -74,6 +74,8 @@ pub struct Inputs {
     pub homing_speeds: (f32, f32, f32),
     /// Homing: the switches and index pulses (drive positions).
     pub homing_signals: homing::Signals,
+    /// Homing: the profile's time limit of a run, ms (`None` or 0: none).
+    pub homing_timeout_ms: Option<u32>,
     /// The software position limits: profile-position targets are limited to them.
     pub position_range: Option<SoftwareLimits>,
 }
@@ -140,6 +142,11 @@ impl ProfileModes {
     /// Whether a homing run is under way.
     pub fn homing_running(&self) -> bool {
         self.homing.running()
+    }
+
+    /// Whether the last homing run failed (statusword bit 13).
+    pub fn homing_failed(&self) -> bool {
+        self.homing.failed()
     }
 
     /// The demand position and velocity (6062h, 606Bh) and torque (6074h in profile torque).
@@ -211,6 +218,13 @@ impl ProfileModes {
 
     /// Homing: the demand of the search.
     fn home(&mut self, inputs: &Inputs, dt_s: f32) -> (SetPoint, u16, Option<i64>) {
+        // Target reached (bit 10) needs the demand at rest and the motor inside the position
+        // window 6067h around it (the Σ-V-SD's 0/1/0 "attained, target not reached" until then).
+        let ratio = inputs.position_ratio;
+        let lag = ratio
+            .position_from_internal(self.trajectory.position())
+            .saturating_sub(ratio.position_from_internal(inputs.actual_position));
+        let settled = window::inside(lag, inputs.position_window.0);
         let out = self.homing.step(&homing::Inputs {
             controlword: inputs.controlword,
             running: inputs.running,
@@ -218,6 +232,9 @@ impl ProfileModes {
             signals: inputs.homing_signals,
             demand_position: self.trajectory.position(),
             demand_at_rest: self.trajectory.velocity() == 0.0,
+            at_target: self.trajectory.velocity() == 0.0 && settled,
+            timeout_ms: inputs.homing_timeout_ms,
+            cycle_ns: seconds_to_ns(dt_s),
         });
         let (switch_speed, zero_speed, acceleration) = inputs.homing_speeds;
         let ramp = |velocity| Limits {
@@ -413,6 +430,7 @@ mod tests {
             homing_method: None,
             homing_speeds: (0.0, 0.0, 0.0),
             homing_signals: homing::Signals::default(),
+            homing_timeout_ms: None,
             position_range: None,
         }
     }

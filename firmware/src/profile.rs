@@ -154,6 +154,8 @@ pub struct AppVars {
     pub digital_outputs_mask: Option<u16>,
     /// 6080h max motor speed (u32, velocity units).
     pub max_motor_speed: Option<u16>,
+    /// The profile's homing time limit (u16, ms; 0 = none), e.g. the RSE's 2006h:03 (P03.45).
+    pub homing_timeout: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -340,6 +342,7 @@ impl AppVars {
         digital_outputs: None,
         digital_outputs_mask: None,
         max_motor_speed: None,
+        homing_timeout: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

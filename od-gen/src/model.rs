@@ -494,11 +494,14 @@ pub enum Role {
     /// 6080h max motor speed (UDINT, the profile's velocity unit): limits every velocity
     /// set-point.
     MaxMotorSpeed,
+    /// A vendor's homing time limit (UINT, ms; 0 = none; the RSE's 2006h:03 P03.45): a run
+    /// that takes longer ends in a homing error.
+    HomingTimeout,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 70] = [
+    pub const ALL: [Role; 71] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -569,6 +572,7 @@ impl Role {
         Self::DigitalOutputs,
         Self::DigitalOutputsMask,
         Self::MaxMotorSpeed,
+        Self::HomingTimeout,
     ];
     /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
     /// commissioned motor data (vendor objects a unit may keep once for all its axes).
@@ -651,6 +655,7 @@ impl Role {
             Self::DigitalOutputs => "digital_outputs",
             Self::DigitalOutputsMask => "digital_outputs_mask",
             Self::MaxMotorSpeed => "max_motor_speed",
+            Self::HomingTimeout => "homing_timeout",
         }
     }
     /// Parses the profile-file spelling.
@@ -723,7 +728,8 @@ impl Role {
             | Self::FollowingErrorTimeout
             | Self::MaxTorque
             | Self::PositiveTorqueLimit
-            | Self::NegativeTorqueLimit => DataType::Uint,
+            | Self::NegativeTorqueLimit
+            | Self::HomingTimeout => DataType::Uint,
             Self::MotorRatedTorque
             | Self::MotorResistance
             | Self::MotorLd
@@ -1760,13 +1766,16 @@ pub enum WarningCondition {
     PositiveLimit,
     /// The negative limit switch is actuated.
     NegativeLimit,
+    /// The last homing run failed (statusword bit 13).
+    HomingError,
 }
 
 impl WarningCondition {
     /// The profile-file keys.
-    pub const KEYS: [&'static str; 4] = [
+    pub const KEYS: [&'static str; 5] = [
         "motor_overload",
         "drive_overload",
+        "homing_error",
         "positive_limit",
         "negative_limit",
     ];
@@ -1778,6 +1787,7 @@ impl WarningCondition {
             Self::DriveOverload { percent } => format!("DriveOverload {{ percent: {percent} }}"),
             Self::PositiveLimit => "PositiveLimit".into(),
             Self::NegativeLimit => "NegativeLimit".into(),
+            Self::HomingError => "HomingError".into(),
         }
     }
 }

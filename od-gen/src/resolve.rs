@@ -815,6 +815,7 @@ fn warnings(f: &ProfileFile, alarms: &[Alarm]) -> Result<Vec<Warning>, Fault> {
                 percent: percent()?,
             },
             "positive_limit" => switch(WarningCondition::PositiveLimit)?,
+            "homing_error" => switch(WarningCondition::HomingError)?,
             _ => switch(WarningCondition::NegativeLimit)?,
         };
         if let MotorFaultFile::Alarm(display) = &w.report {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs inside `unshare --user --map-root-user --net` (no real root needed): makes a veth pair,
 # attaches the simulated drive(s) to one end with the documented command, and runs the SOEM
-# (pysoem) scenario on the other end. Everything vanishes with the namespace.
+# (pysoem) scenario on the other end (arguments: the master's interface, DRIVES and PROFILE).
+# Everything vanishes with the namespace.
 #
 # Environment: PYTHON (venv python with pysoem), WORKSPACE, SCRIPT (in tests-host/soem),
 # SIM_ARGS (extra sim-drive attach arguments), PROFILE (empty: drives from SIM_ARGS), DRIVES,
@@ -36,4 +37,4 @@ for _ in $(seq 1 6000); do
     sleep 0.1
 done
 [ "$ready" = 1 ] || { echo "sim-drive did not come up within 600 s:"; cat "$SIM_LOG"; exit 3; }
-"$PYTHON" "$WORKSPACE/tests-host/soem/${SCRIPT:-scenario.py}" ecm0 "$DRIVES" >"$RESULT"
+"$PYTHON" "$WORKSPACE/tests-host/soem/${SCRIPT:-scenario.py}" ecm0 "$DRIVES" "${PROFILE:-}" >"$RESULT"

@@ -107,9 +107,10 @@ pub fn run_line(script: &str, profiles: &[&str]) -> Result<(serde_json::Value, S
     run_script(script, "", profiles.len(), &args)
 }
 
-/// Runs the python script `tests-host/soem/<script>` (argument: the master's interface and the
-/// number of drives; it prints one JSON object) against `drives` simulated drives of `profile`
-/// attached with `sim-drive attach` plus `sim_args`; returns the JSON and the simulator's log.
+/// Runs the python script `tests-host/soem/<script>` (arguments: the master's interface, the
+/// number of drives and `profile`; it prints one JSON object) against `drives` simulated drives
+/// of `profile` attached with `sim-drive attach` plus `sim_args`; returns the JSON and the
+/// simulator's log.
 pub fn run_script(
     script: &str,
     profile: &str,

@@ -510,3 +510,92 @@ fn sdv3_e_velocity_window_in_whole_rpm() {
         );
     });
 }
+
+/// RSE App A P03.45 (2006h:03): the homing time limit. Method 19 on a machine without a home
+/// switch searches until the limit (300 ms), then the run ends in a homing error (6041h bits
+/// 13/12 = 1/0) and the drive shows warning AL.420 (bit 7, 603Fh = its code) while enabled.
+#[test]
+fn rse_homing_time_limit_ends_in_a_homing_error_and_al_420() {
+    const HOMING_ERROR: u16 = 1 << 13;
+    const HOMING_ATTAINED: u16 = 1 << 12;
+    const WARNING: u16 = 1 << 7;
+    const RSE_CYCLE_NS: u64 = 4_000_000;
+    let p = od_gen::builtin("rse").expect("profile");
+    let al420 = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "AL.420")
+        .expect("AL.420");
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("rse", 1).expect("rse"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(0x6060, 0, 6i8).await.expect("6060h");
+            sd.sdo_write(0x6098, 0, 19i8).await.expect("6098h");
+            sd.sdo_write(0x2006, 3, 300u16).await.expect("2006h:03");
+            sd.sdo_write(0x6099, 1, (CPR * 1.0) as u32)
+                .await
+                .expect("6099h:01");
+            sd.sdo_write(0x609A, 0, (CPR * 100.0) as u32)
+                .await
+                .expect("609Ah");
+        }
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        // RSE 1600h: 6040h first; 1A00h: 603Fh, 6041h.
+        let cycle = |cw: u16| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.outputs_raw_mut()[0..2].copy_from_slice(&cw.to_le_bytes());
+            let (m, group) = (&m, &group);
+            async move {
+                let since = m.shared.clock().now();
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.finish_cycle(since, RSE_CYCLE_NS);
+                let sd = group.subdevice(md, 0).expect("drive");
+                let inp = sd.inputs_raw();
+                (
+                    u16::from_le_bytes([inp[0], inp[1]]),
+                    u16::from_le_bytes([inp[2], inp[3]]),
+                )
+            }
+        };
+        let mut s = (0, 0);
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 10])
+        {
+            s = cycle(cw).await;
+        }
+        assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED);
+        let mut error_after = None;
+        for k in 0..200 {
+            s = cycle(ENABLE_OPERATION | NEW_SET_POINT).await;
+            if s.1 & HOMING_ERROR != 0 {
+                error_after = Some(k);
+                break;
+            }
+        }
+        // 4 ms cycles: the limit after 75 cycles, seen one cycle later.
+        let k = error_after.expect("homing error");
+        assert!((74..=78).contains(&k), "homing error after {k} cycles");
+        assert_eq!(s.1 & HOMING_ATTAINED, 0);
+        for _ in 0..3 {
+            s = cycle(ENABLE_OPERATION | NEW_SET_POINT).await;
+        }
+        assert_ne!(s.1 & WARNING, 0, "AL.420 is a warning: bit 7");
+        assert_eq!(s.0, al420.error_code, "603Fh = AL.420");
+        assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED, "still enabled");
+    });
+}

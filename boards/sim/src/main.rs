@@ -9,7 +9,7 @@
 //! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
 //!     exchange, back to INIT, and print what happened
-//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K]
+//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K] [MACHINE]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
@@ -22,27 +22,37 @@
 //! LINE, the drives in ring order (default: one drive of the standard profile), either
 //!     [--profile NAME] [--drives N]      N drives (default 1) of one profile, or
 //!     --drive NAME [--drive NAME ...]    one drive per --drive, profiles mixed in that order
+//!
+//! MACHINE, switches around the motor of every axis (in motor revolutions; the rotor starts at 0):
+//!     --home-switch-rev X                a home switch, active from X revolutions upward
+//!     --limit-switches-rev N,P           limit switches, negative active at or below N,
+//!                                        positive at or above P (N < 0 < P)
 //! ```
 //!
 //! Profile names are the built-in profiles of `list-profiles` (`sdv3-e` and `sdv3_e` are the
 //! same). An unknown profile, `--drive` together with `--profile`/`--drives`, or any other
 //! usage error exits with code 2.
 
+use std::f64::consts::TAU;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use board_sim::demo::{self, Scenario};
+use board_sim::plant::SwitchParams;
 use board_sim::{rawsock, Segment};
 
-const USAGE: &str =
-    "usage: sim-drive [tour] [--plot FILE]
+const USAGE: &str = "usage: sim-drive [tour] [--plot FILE]
        sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
-       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K]
+       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K] [MACHINE]
        sim-drive list-profiles
        sim-drive plots [--out DIR]
 LINE (the drives in ring order; default one standard drive):
        [--profile NAME] [--drives N]     N drives of one profile
-       --drive NAME [--drive NAME ...]   one drive per --drive, in that order (profiles may differ)";
+       --drive NAME [--drive NAME ...]   one drive per --drive, in that order (profiles may differ)
+MACHINE (attach; switches around every axis's motor, in revolutions, the rotor starting at 0):
+       --home-switch-rev X               a home switch, active from X revolutions upward
+       --limit-switches-rev N,P          limits: negative at or below N, positive at or above P,
+                                         N < 0 < P";
 
 struct Args {
     command: String,
@@ -58,6 +68,10 @@ struct Args {
     plot: String,
     /// A LINE option was given.
     line_given: bool,
+    /// `--home-switch-rev`: where the home switch becomes active, in revolutions.
+    home_switch_rev: Option<f64>,
+    /// `--limit-switches-rev`: the negative and positive limit switches, in revolutions.
+    limit_switches_rev: Option<(f64, f64)>,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -73,6 +87,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         out: "docs/plots".into(),
         plot: "target/sim-drive/tour.svg".into(),
         line_given: false,
+        home_switch_rev: None,
+        limit_switches_rev: None,
     };
     let mut profile: Option<String> = None;
     let mut drives: Option<usize> = None;
@@ -100,6 +116,15 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                 )?)
             }
             "--seconds" => a.seconds = Some(number(&value("--seconds")?, "--seconds")?),
+            "--home-switch-rev" => {
+                a.home_switch_rev = Some(revolutions(
+                    &value("--home-switch-rev")?,
+                    "--home-switch-rev",
+                )?)
+            }
+            "--limit-switches-rev" => {
+                a.limit_switches_rev = Some(limit_switches(&value("--limit-switches-rev")?)?)
+            }
             "-h" | "--help" => return Err(String::new()),
             other => return Err(format!("unknown argument {other:?}")),
         }
@@ -130,6 +155,9 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     for name in &mut a.line {
         *name = canonical_profile(name)?;
     }
+    if a.command != "attach" && a.machine().is_some() {
+        return Err("--home-switch-rev and --limit-switches-rev are options of `attach`".into());
+    }
     if a.command == "tour" && a.line_given {
         return Err(
             "the tour runs one standard drive; for other profiles or lines use `demo` with              --profile / --drives / --drive"
@@ -155,6 +183,50 @@ fn canonical_profile(name: &str) -> Result<String, String> {
 fn number<T: std::str::FromStr>(s: &str, name: &str) -> Result<T, String> {
     s.parse()
         .map_err(|_| format!("{name}: {s:?} is not a valid number"))
+}
+
+/// A finite number of revolutions.
+fn revolutions(s: &str, name: &str) -> Result<f64, String> {
+    let x: f64 = number(s, name)?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(format!(
+            "{name}: {s:?} is not a finite number of revolutions"
+        ))
+    }
+}
+
+/// `N,P` of `--limit-switches-rev`: the negative limit below the rotor's start at 0, the positive
+/// one above it.
+fn limit_switches(s: &str) -> Result<(f64, f64), String> {
+    const NAME: &str = "--limit-switches-rev";
+    let (n, p) = s
+        .split_once(',')
+        .ok_or_else(|| format!("{NAME}: {s:?} is not N,P (two revolutions, e.g. -3,3)"))?;
+    let (n, p) = (revolutions(n.trim(), NAME)?, revolutions(p.trim(), NAME)?);
+    if n < 0.0 && p > 0.0 {
+        Ok((n, p))
+    } else {
+        Err(format!(
+            "{NAME}: {s:?} must have N < 0 < P (the rotor starts at 0 between the limits)"
+        ))
+    }
+}
+
+impl Args {
+    /// The switches of the MACHINE options, `None` when none was given.
+    fn machine(&self) -> Option<SwitchParams> {
+        if self.home_switch_rev.is_none() && self.limit_switches_rev.is_none() {
+            return None;
+        }
+        Some(SwitchParams {
+            limit_neg_rad: self.limit_switches_rev.map(|(n, _)| n * TAU),
+            limit_pos_rad: self.limit_switches_rev.map(|(_, p)| p * TAU),
+            home_rad: self.home_switch_rev.map(|x| x * TAU),
+            ..SwitchParams::default()
+        })
+    }
 }
 
 fn main() -> ExitCode {
@@ -229,7 +301,16 @@ fn plots(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 
 fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let iface = args.iface.as_deref().ok_or("attach needs --iface IFNAME")?;
-    let segment = Segment::line(&args.line)?;
+    let mut segment = Segment::line(&args.line)?;
+    if let Some(switches) = args.machine() {
+        for servo in segment
+            .drives_mut()
+            .iter_mut()
+            .flat_map(|d| d.servos.iter_mut())
+        {
+            servo.plant.set_switches(switches);
+        }
+    }
     let faults = rawsock::Faults {
         drop_mailbox_read: args.drop_mailbox_read,
     };
@@ -328,6 +409,38 @@ mod tests {
             for name in od_gen::builtin_names() {
                 assert!(e.contains(name), "{e} lacks {name}");
             }
+        }
+    }
+
+    #[test]
+    fn attach_places_home_and_limit_switches_in_revolutions() {
+        let a = args("attach --iface e --home-switch-rev 0.4 --limit-switches-rev -0.7,3")
+            .expect("machine");
+        let sw = a.machine().expect("switches");
+        assert_eq!(sw.home_rad, Some(0.4 * TAU));
+        assert_eq!(
+            (sw.limit_neg_rad, sw.limit_pos_rad),
+            (Some(-0.7 * TAU), Some(3.0 * TAU))
+        );
+        assert_eq!(sw.home_end_rad, None);
+        assert!(args("attach --iface e").expect("bare").machine().is_none());
+    }
+
+    #[test]
+    fn bad_switch_positions_are_usage_errors() {
+        for (bad, says) in [
+            ("attach --home-switch-rev x", "not a valid number"),
+            ("attach --home-switch-rev NaN", "not a finite number"),
+            ("attach --home-switch-rev", "needs a value"),
+            ("attach --limit-switches-rev 3", "is not N,P"),
+            ("attach --limit-switches-rev 1,3", "N < 0 < P"),
+            ("attach --limit-switches-rev -1,-0.5", "N < 0 < P"),
+            ("attach --limit-switches-rev -1,inf", "not a finite number"),
+            ("demo --home-switch-rev 0.4", "options of `attach`"),
+            ("--limit-switches-rev -1,1", "options of `attach`"),
+        ] {
+            let e = args(bad).err().expect(bad);
+            assert!(e.contains(says), "{bad}: {e}");
         }
     }
 

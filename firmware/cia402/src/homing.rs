@@ -260,7 +260,11 @@ pub struct Homing {
     phase: Phase,
     reference: Option<Reference>,
     previous_start: bool,
+    /// How long the run has been under way, ns.
+    elapsed_ns: u64,
 }
+
+const NS_PER_MS: u64 = 1_000_000;
 
 impl Default for Homing {
     fn default() -> Self {
@@ -283,6 +287,14 @@ pub struct Inputs {
     pub demand_position: i64,
     /// The demand velocity is 0.
     pub demand_at_rest: bool,
+    /// The motor is at the demand (at rest and inside the position window): statusword bit 10
+    /// "target reached".
+    pub at_target: bool,
+    /// The longest a run may take, ms (a profile's homing time limit; `None` or 0: no limit):
+    /// past it the run ends in a homing error.
+    pub timeout_ms: Option<u32>,
+    /// The cycle time, ns (the run's clock).
+    pub cycle_ns: u32,
 }
 
 impl Homing {
@@ -292,7 +304,13 @@ impl Homing {
             phase: Phase::Idle,
             reference: None,
             previous_start: false,
+            elapsed_ns: 0,
         }
+    }
+
+    /// Whether the last run failed (homing error).
+    pub fn failed(&self) -> bool {
+        self.phase == Phase::Error
     }
 
     /// Whether a homing run is under way (the mode and the method may not change, some
@@ -315,6 +333,7 @@ impl Homing {
         let mut home_found = None;
         if rising && i.running {
             self.reference = i.method;
+            self.elapsed_ns = 0;
             self.phase = match i.method {
                 None => Phase::Error,
                 Some(Reference::Here) => {
@@ -344,6 +363,17 @@ impl Homing {
             self.phase = Phase::Idle;
         } else {
             home_found = self.advance(i);
+            if self.running() {
+                self.elapsed_ns = self.elapsed_ns.saturating_add(u64::from(i.cycle_ns));
+                let limit_ns = i
+                    .timeout_ms
+                    .filter(|ms| *ms > 0)
+                    .map(|ms| u64::from(ms) * NS_PER_MS);
+                if limit_ns.is_some_and(|limit| self.elapsed_ns >= limit) {
+                    // The profile's homing time limit: the run ends in an error.
+                    self.phase = Phase::Error;
+                }
+            }
         }
         Output {
             demand: self.demand(),
@@ -499,7 +529,7 @@ impl Homing {
     }
 
     fn statusword(&self, i: &Inputs) -> u16 {
-        let at_rest = if i.demand_at_rest { TARGET_REACHED } else { 0 };
+        let at_rest = if i.at_target { TARGET_REACHED } else { 0 };
         match self.phase {
             Phase::Idle => at_rest,
             Phase::Done { .. } => HOMING_ATTAINED | at_rest,
@@ -621,6 +651,9 @@ mod tests {
                 signals: axis.signals,
                 demand_position: axis.position,
                 demand_at_rest: axis.velocity == 0,
+                at_target: axis.velocity == 0,
+                timeout_ms: None,
+                cycle_ns: 1_000_000,
             });
             if phases.last() != Some(&h.phase) {
                 phases.push(h.phase);
@@ -756,10 +789,14 @@ mod tests {
             signals: Signals::default(),
             demand_position: 0,
             demand_at_rest: true,
+            at_target: true,
+            timeout_ms: None,
+            cycle_ns: 1_000_000,
         };
         assert_eq!(h.step(&i).statusword, TARGET_REACHED, "not started");
         i.controlword = 0x1F;
         i.demand_at_rest = false;
+        i.at_target = false;
         let out = h.step(&i);
         assert_eq!((out.demand, out.statusword), (Demand::Creep(1), 0));
         assert!(h.running());
@@ -768,6 +805,41 @@ mod tests {
         assert_eq!(out.demand, Demand::Stop, "bit 4 cleared: interrupted");
         assert!(!h.running());
         i.demand_at_rest = true;
+        i.at_target = true;
         assert_eq!(h.step(&i).statusword, TARGET_REACHED);
+    }
+
+    #[test]
+    fn a_run_past_the_time_limit_ends_in_a_homing_error() {
+        // Method 34 with no index pulse ever: the search goes on until the limit (a profile's
+        // homing time limit, e.g. the RSE's P03.45), then bit 13 homing error.
+        let mut h = Homing::new();
+        let mut i = Inputs {
+            controlword: 0x1F,
+            running: true,
+            method: method(34),
+            signals: Signals::default(),
+            demand_position: 0,
+            demand_at_rest: false,
+            at_target: false,
+            timeout_ms: Some(100),
+            cycle_ns: 1_000_000,
+        };
+        // The starting cycle, then 99 ms of search.
+        for k in 0..100 {
+            h.step(&i);
+            assert!(h.running(), "running at {k} ms");
+        }
+        let out = h.step(&i);
+        assert!(h.failed(), "the limit");
+        assert_eq!(out.demand, Demand::Stop);
+        assert_eq!(out.statusword & HOMING_ERROR, HOMING_ERROR);
+        // 0 is no limit.
+        let mut h = Homing::new();
+        i.timeout_ms = Some(0);
+        for _ in 0..1_000 {
+            h.step(&i);
+        }
+        assert!(h.running() && !h.failed());
     }
 }

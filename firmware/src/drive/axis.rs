@@ -387,6 +387,7 @@ impl DriveAxis {
                     drive_load: f.drive_load,
                     positive_limit: f.switches.positive_limit,
                     negative_limit: f.switches.negative_limit,
+                    homing_error: self.profile_modes.homing_failed(),
                 },
             )
         });
@@ -1101,9 +1102,11 @@ fn profile_inputs(
         homing_speeds: (
             velocity(vars.homing_speed_switch, 0.0),
             velocity(vars.homing_speed_zero, 0.0),
-            accel(vars.homing_acceleration, 0.0),
+            // A profile without 609Ah (the SDV3-E) homes on its profile acceleration 6083h.
+            accel(vars.homing_acceleration, acceleration),
         ),
         homing_signals: homing::Signals::default(),
+        homing_timeout_ms: read_u16(ram, vars.homing_timeout).map(u32::from),
         // The drive sets the software limits (it reads them once per cycle).
         position_range: None,
     }
