@@ -156,6 +156,9 @@ pub struct AppVars {
     pub max_motor_speed: Option<u16>,
     /// The profile's homing time limit (u16, ms; 0 = none), e.g. the RSE's 2006h:03 (P03.45).
     pub homing_timeout: Option<u16>,
+    /// The command that makes the unit factors take effect (u32; the Σ-V-SD's 2300h): with it
+    /// the factors are read at power-on and on its command, not every cycle.
+    pub units_apply: Option<u16>,
     /// Increments per position unit (607Ah, 6064h): the profile's `[units] position`.
     pub position_factor: Factor,
     /// Increments/s per velocity unit (60FFh, 606Ch): the profile's `[units] velocity`.
@@ -184,20 +187,70 @@ pub enum AccelerationUnit {
 const MS_PER_S: f32 = 1_000.0;
 const S_PER_MIN: f32 = 60.0;
 
+/// How an acceleration object's value converts at a moment (its factors read).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AccelerationRatio {
+    /// Increments/s² per unit.
+    PerUnit(Ratio),
+    /// The value is the time in ms to reach this speed (increments/s) from rest.
+    MsToSpeed(f32),
+}
+
+impl AccelerationRatio {
+    /// An acceleration object's `value` in increments/s² (a time of 0 ms reads as 1 ms).
+    pub fn to_internal(self, value: u32) -> f32 {
+        match self {
+            Self::PerUnit(r) => r.velocity_to_internal(value as f32),
+            Self::MsToSpeed(speed) => speed * MS_PER_S / value.max(1) as f32,
+        }
+    }
+}
+
 impl AccelerationUnit {
+    /// The conversion now: with the profile's velocity factor `velocity` (for
+    /// [`Self::VelocityPerSecond`]), the factor's objects in `ram` and the encoder's
+    /// `counts_per_rev`.
+    pub fn ratio(&self, ram: &[u8], counts_per_rev: u32, velocity: Ratio) -> AccelerationRatio {
+        match self {
+            Self::VelocityPerSecond => AccelerationRatio::PerUnit(velocity),
+            Self::Factor(f) => AccelerationRatio::PerUnit(f.ratio(ram, counts_per_rev)),
+            Self::MsToRpm(rpm) => {
+                AccelerationRatio::MsToSpeed(*rpm as f32 / S_PER_MIN * counts_per_rev as f32)
+            }
+        }
+    }
+
     /// An acceleration object's `value` in increments/s², with the profile's velocity factor
     /// `velocity` (for [`Self::VelocityPerSecond`]) and the encoder's `counts_per_rev`. For
     /// [`Self::MsToRpm`], 0 ms reads as 1 ms.
     pub fn to_internal(&self, value: u32, ram: &[u8], counts_per_rev: u32, velocity: Ratio) -> f32 {
-        match self {
-            Self::VelocityPerSecond => velocity.velocity_to_internal(value as f32),
-            Self::Factor(f) => f
-                .ratio(ram, counts_per_rev)
-                .velocity_to_internal(value as f32),
-            Self::MsToRpm(rpm) => {
-                let speed = *rpm as f32 / S_PER_MIN * counts_per_rev as f32;
-                speed * MS_PER_S / value.max(1) as f32
-            }
+        self.ratio(ram, counts_per_rev, velocity).to_internal(value)
+    }
+}
+
+/// The unit conversions of one axis at a moment: the `[units]` factors with their objects read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnitRatios {
+    /// Increments per position unit.
+    pub position: Ratio,
+    /// Increments/s per velocity unit.
+    pub velocity: Ratio,
+    /// The acceleration objects' conversion.
+    pub acceleration: AccelerationRatio,
+    /// Increments/s per unit of 606Dh/606Fh.
+    pub velocity_window: Ratio,
+}
+
+impl AppVars {
+    /// The axis' unit conversions from the factors' objects in `ram` now, with the encoder's
+    /// `counts_per_rev`.
+    pub fn unit_ratios(&self, ram: &[u8], counts_per_rev: u32) -> UnitRatios {
+        let velocity = self.velocity_factor.ratio(ram, counts_per_rev);
+        UnitRatios {
+            position: self.position_factor.ratio(ram, counts_per_rev),
+            velocity,
+            acceleration: self.acceleration_unit.ratio(ram, counts_per_rev, velocity),
+            velocity_window: self.velocity_window_factor.ratio(ram, counts_per_rev),
         }
     }
 }
@@ -343,6 +396,7 @@ impl AppVars {
         digital_outputs_mask: None,
         max_motor_speed: None,
         homing_timeout: None,
+        units_apply: None,
         position_factor: Factor::ONE,
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,

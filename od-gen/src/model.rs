@@ -497,11 +497,15 @@ pub enum Role {
     /// A vendor's homing time limit (UINT, ms; 0 = none; the RSE's 2006h:03 P03.45): a run
     /// that takes longer ends in a homing error.
     HomingTimeout,
+    /// The command that makes the `[units]` factors take effect (UDINT; the Σ-V-SD's 2300h):
+    /// with it the factors are read at power-on and when 1 is written to it in Switch On
+    /// Disabled, not every cycle.
+    UnitsApply,
 }
 
 impl Role {
     /// All roles.
-    pub const ALL: [Role; 71] = [
+    pub const ALL: [Role; 72] = [
         Self::Controlword,
         Self::Statusword,
         Self::ModesOfOperation,
@@ -573,6 +577,7 @@ impl Role {
         Self::DigitalOutputsMask,
         Self::MaxMotorSpeed,
         Self::HomingTimeout,
+        Self::UnitsApply,
     ];
     /// Whether every axis of a multi-axis drive needs its own entry for the role: all but the
     /// commissioned motor data (vendor objects a unit may keep once for all its axes).
@@ -656,6 +661,7 @@ impl Role {
             Self::DigitalOutputsMask => "digital_outputs_mask",
             Self::MaxMotorSpeed => "max_motor_speed",
             Self::HomingTimeout => "homing_timeout",
+            Self::UnitsApply => "units_apply",
         }
     }
     /// Parses the profile-file spelling.
@@ -750,6 +756,7 @@ impl Role {
             | Self::DigitalOutputs
             | Self::DigitalOutputsMask
             | Self::MaxMotorSpeed
+            | Self::UnitsApply
             | Self::SupportedDriveModes => DataType::Udint,
             Self::QuickStopOptionCode
             | Self::ShutdownOptionCode

@@ -184,3 +184,86 @@ fn gha_e_csp_and_csv(polarity: u8) {
         assert!((velocity - 1800).abs() < 60, "606Ch {velocity} units/s");
     });
 }
+
+/// Σ-V-SD §4.5 (2): new user units (2301h) take effect only when 1 is written to 2300h in
+/// Switch On Disabled (2300h then reads 0); written while the drive runs they change nothing.
+/// 6064h follows the unit in force; a CSP move in the new unit turns the motor by the converted
+/// amount.
+#[test]
+fn sigma_v_sd_user_units_take_effect_on_2300h() {
+    use tests_host::csp;
+    const SIGMA_CSP: i8 = 8;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = csp::into_op_with_mode(&m, md, SIGMA_CSP).await;
+        let rotor = || {
+            m.shared.segment().drives()[0].servos[0]
+                .plant
+                .mech_angle_rad()
+                / std::f64::consts::TAU
+                * f64::from(CPR)
+        };
+        let (_, before) = csp::cycle(&m, md, &group, 0, 0).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        // 1 Pos. unit = 2 increments, written but not yet in force.
+        sd.sdo_write(0x2301, 1, 2u32).await.expect("2301h:01");
+        let (_, still) = csp::cycle(&m, md, &group, 0, 0).await;
+        assert!(
+            (still - before).abs() <= 2,
+            "not in force yet: {before} -> {still}"
+        );
+        sd.sdo_write(0x2300, 0, 1u32).await.expect("2300h = 1");
+        assert_eq!(
+            sd.sdo_read::<u32>(0x2300, 0).await.expect("2300h"),
+            0,
+            "done"
+        );
+        let (_, halved) = csp::cycle(&m, md, &group, 0, 0).await;
+        assert!(
+            (f64::from(halved) - f64::from(before) / 2.0).abs() <= 2.0,
+            "6064h in the new unit: {before} -> {halved}"
+        );
+        // Enable and move 1000 units = 2000 increments.
+        let mut position = halved;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 20])
+        {
+            (_, position) = csp::cycle(&m, md, &group, cw, position).await;
+        }
+        let start_units = position;
+        let start_rotor = rotor();
+        for k in 0..=200 {
+            csp::cycle(
+                &m,
+                md,
+                &group,
+                ENABLE_OPERATION,
+                start_units + 1000 * k / 200,
+            )
+            .await;
+        }
+        for _ in 0..100 {
+            (_, position) = csp::cycle(&m, md, &group, ENABLE_OPERATION, start_units + 1000).await;
+        }
+        let moved = rotor() - start_rotor;
+        assert!((moved - 2000.0).abs() < 30.0, "moved {moved:.0} increments");
+        assert!(
+            (position - start_units - 1000).abs() <= 10,
+            "6064h {position}"
+        );
+        // While enabled a new unit and 2300h = 1 change nothing (2300h still reads 0 again).
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x2301, 1, 4u32).await.expect("2301h:01");
+        sd.sdo_write(0x2300, 0, 1u32).await.expect("2300h = 1");
+        assert_eq!(sd.sdo_read::<u32>(0x2300, 0).await.expect("2300h"), 0);
+        let (_, after) = csp::cycle(&m, md, &group, ENABLE_OPERATION, start_units + 1000).await;
+        assert!(
+            (after - position).abs() <= 10,
+            "unit unchanged while enabled: {after}"
+        );
+    });
+}

@@ -39,7 +39,7 @@ use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, Control
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::math;
 use crate::motor::trajectory::Limits;
-use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, MOTOR_FAULT_COUNT};
+use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, UnitRatios, MOTOR_FAULT_COUNT};
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
 /// rotation detection level (Pn502, /TGON) default. Neither the adjusting service's "while the
@@ -118,6 +118,9 @@ pub struct DriveAxis {
     fault_number: Option<u16>,
     /// What the axis did in the last cycles, for an alarm record.
     recent: Recent,
+    /// The unit factors in force where the profile makes them take effect on a command (the
+    /// Σ-V-SD's 2300h, `AppVars::units_apply`): read at power-on and on the command.
+    latched_units: Option<UnitRatios>,
     /// The profile's warnings.
     warnings: &'static [Warning],
     /// The warning that holds.
@@ -181,6 +184,7 @@ impl DriveAxis {
             alarm_table: &profile.alarms,
             warnings: profile.warnings,
             warning: None,
+            latched_units: None,
             fault_number: None,
             recent: Recent {
                 rpm: 0.0,
@@ -211,7 +215,36 @@ impl DriveAxis {
             results_written: false,
         };
         sync_motor_model(&mut port, self.vars, ram);
+        if self.vars.units_apply.is_some() {
+            // The factors stored at power-on take effect now (the parameters were loaded).
+            self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
+        }
         self.port = Some(port);
+    }
+
+    /// The unit conversions this cycle: the factors in force (latched where the profile makes
+    /// them take effect on a command), or the factors' objects read now.
+    fn unit_ratios(&self, ram: &[u8], counts_per_rev: u32) -> UnitRatios {
+        self.latched_units
+            .unwrap_or_else(|| self.vars.unit_ratios(ram, counts_per_rev))
+    }
+
+    /// Whether `at` (an OD RAM offset) is this axis' command that makes the unit factors take
+    /// effect.
+    pub(super) fn is_units_apply(&self, at: u16) -> bool {
+        self.vars.units_apply == Some(at)
+    }
+
+    /// The unit-factor command was written (the Σ-V-SD's 2300h, §4.5 (2)): 1 in Switch On
+    /// Disabled makes the factors' objects as they are now take effect; the command reads 0
+    /// again when it is done (anything else, or another state, is not acted on).
+    pub(super) fn apply_units(&mut self, ram: &mut [u8]) {
+        let command = read_u32(ram, self.vars.units_apply);
+        let ready = self.device.state() == PdsState::SwitchOnDisabled;
+        if let (Some(1), true, Some(port)) = (command, ready, self.port.as_ref()) {
+            self.latched_units = Some(self.vars.unit_ratios(ram, port.counts_per_rev));
+        }
+        write_bytes(ram, self.vars.units_apply, 0u32.to_le_bytes());
     }
 
     /// The digital output levels the board drives (CiA402 60FEh:01 layout: bit 0 the holding
@@ -492,8 +525,8 @@ impl DriveAxis {
         }
         // The profile's user units (e.g. 6091h gear ratio): read each cycle, so a master's
         // change applies at once.
-        let position_ratio = vars.position_factor.ratio(ram, port.counts_per_rev);
-        let velocity_ratio = vars.velocity_factor.ratio(ram, port.counts_per_rev);
+        let units = self.unit_ratios(ram, port.counts_per_rev);
+        let (position_ratio, velocity_ratio) = (units.position, units.velocity);
         if motion == Motion::Off {
             // 607Eh: a new polarity is taken while nothing moves.
             self.polarity = read_bytes::<1>(ram, vars.polarity)
@@ -535,17 +568,8 @@ impl DriveAxis {
             .then(|| software_limits(ram, vars, position_ratio, pol))
             .flatten();
         if motion::is_profile_mode(mode) {
-            let inputs = profile_inputs(
-                ram,
-                vars,
-                cw,
-                motion,
-                &targets,
-                &feedback,
-                (position_ratio, velocity_ratio),
-                rated_nm,
-                port.counts_per_rev,
-            );
+            let inputs =
+                profile_inputs(ram, vars, cw, motion, &targets, &feedback, &units, rated_nm);
             let inputs = motion::Inputs {
                 position_range: limits,
                 target_position: pol.position(inputs.target_position),
@@ -694,16 +718,8 @@ impl DriveAxis {
         let (enable, control_mode, deceleration) = match motion {
             Motion::Run => (true, loop_mode, 0.0),
             Motion::Stop(d) => {
-                let ramp = |at| {
-                    read_u32(ram, at).map_or(0.0, |a| {
-                        vars.acceleration_unit.to_internal(
-                            a,
-                            ram,
-                            port.counts_per_rev,
-                            velocity_ratio,
-                        )
-                    })
-                };
+                let ramp =
+                    |at| read_u32(ram, at).map_or(0.0, |a| units.acceleration.to_internal(a));
                 let deceleration = match d {
                     Deceleration::ProfileRamp => ramp(vars.profile_deceleration),
                     Deceleration::QuickStopRamp => ramp(vars.quick_stop_deceleration),
@@ -1033,22 +1049,18 @@ fn profile_inputs(
     motion: Motion,
     targets: &Targets,
     feedback: &AxisFeedback,
-    (position_ratio, velocity_ratio): (units::Ratio, units::Ratio),
+    units: &UnitRatios,
     rated_nm: f32,
-    counts_per_rev: u32,
 ) -> motion::Inputs {
+    let (position_ratio, velocity_ratio) = (units.position, units.velocity);
     let velocity = |at, default: f32| {
         read_u32(ram, at).map_or(default, |v| velocity_ratio.velocity_to_internal(v as f32))
     };
     // Accelerations in the profile's acceleration unit.
-    let accel = |at, default: f32| {
-        read_u32(ram, at).map_or(default, |v| {
-            vars.acceleration_unit
-                .to_internal(v, ram, counts_per_rev, velocity_ratio)
-        })
-    };
+    let accel =
+        |at, default: f32| read_u32(ram, at).map_or(default, |v| units.acceleration.to_internal(v));
     // 606Dh/606Fh in their own unit where the profile counts them apart (e.g. whole rpm).
-    let window_ratio = vars.velocity_window_factor.ratio(ram, counts_per_rev);
+    let window_ratio = units.velocity_window;
     let window =
         |at| read_u16(ram, at).map_or(0.0, |v| window_ratio.velocity_to_internal(f32::from(v)));
     // 607Fh, and the maximum motor speed 6080h above it.

@@ -68,6 +68,8 @@ pub struct Drive {
     alarm_log: AlarmLog,
     /// Board time of the last ESC-event round, ns since power-on (the records' power-on time).
     now_ns: u64,
+    /// The object dictionary (to find the variable an SDO download wrote).
+    od: &'static ethercat_slave::od::Profile,
 }
 
 impl Drive {
@@ -94,6 +96,7 @@ impl Drive {
             alarm_table: &profile.alarms,
             alarm_log: AlarmLog::new(),
             now_ns: 0,
+            od: &profile.od,
         }
     }
 
@@ -339,6 +342,17 @@ impl Application for Drive {
             .downloaded(self.alarm_table, ram, index, subindex)
         {
             return;
+        }
+        if let Some(at) = ram::ram_offset(self.od, index, subindex) {
+            if let Some(axis) = self
+                .axes
+                .iter_mut()
+                .flatten()
+                .find(|a| a.is_units_apply(at))
+            {
+                axis.apply_units(ram);
+                return;
+            }
         }
         let now_ms = now_ns / NS_PER_MS;
         for i in 0..MAX_ADJUSTING_SERVICES {
