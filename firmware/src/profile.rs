@@ -439,6 +439,9 @@ pub struct Cia402Rules {
     /// drive refuses and raises this error (the SDV3-E's oPE, §5.2 9); `None`: it enables and
     /// holds the position.
     pub enable_without_mode_error: Option<FaultReport>,
+    /// A change of 6060h while homing runs is refused and raises this error (the SDV3-E's oPE,
+    /// §5.2 9); `None`: the new mode is taken.
+    pub mode_change_while_homing_error: Option<FaultReport>,
     /// Shutdown (605Bh) and disable operation (605Ch) end in Switch On Disabled after their
     /// stop (the Σ-V-SD's option code texts) instead of CiA402's Ready to Switch On / Switched
     /// On.

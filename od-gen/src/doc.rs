@@ -1108,6 +1108,13 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             error_report(c)
         );
     }
+    if let Some(c) = &r.mode_change_while_homing_error {
+        let _ = writeln!(
+            out,
+            "- A 6060h change while homing runs is refused: Fault, {}.",
+            error_report(c)
+        );
+    }
     if r.stops_end_switched_off {
         out.push_str("- Shutdown and disable operation end in Switch On Disabled after their stop (605Bh/605Ch).\n");
     }

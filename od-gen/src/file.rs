@@ -842,6 +842,7 @@ impl Default for Cia402File {
     fn default() -> Self {
         Self {
             enable_without_mode_error: None,
+            mode_change_while_homing_error: None,
             stops_end_switched_off: false,
             switch_on_requires_main_power: false,
             pp_bit6_absolute: false,
@@ -1059,6 +1060,10 @@ pub struct Cia402File {
     /// display; the SDV3-E's oPE); absent: the drive enables and holds the position.
     #[serde(default)]
     pub enable_without_mode_error: Option<MotorFaultFile>,
+    /// A change of 6060h while a homing run is under way is refused and raises this error (a
+    /// CiA402 code or an `[[alarm]]` display; the SDV3-E's oPE); absent: the new mode is taken.
+    #[serde(default)]
+    pub mode_change_while_homing_error: Option<MotorFaultFile>,
     /// Shutdown and disable operation end in Switch On Disabled after their stop (default
     /// false: CiA402's Ready to Switch On / Switched On).
     #[serde(default)]

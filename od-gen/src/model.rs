@@ -2072,6 +2072,8 @@ impl ErrLed {
 pub struct Cia402Rules {
     /// The error raised when enable operation is requested with no mode selected.
     pub enable_without_mode_error: Option<MotorFaultCode>,
+    /// A 6060h change during a homing run raises this error.
+    pub mode_change_while_homing_error: Option<MotorFaultCode>,
     /// Shutdown and disable operation end in Switch On Disabled.
     pub stops_end_switched_off: bool,
     /// Switched On needs the main power.
@@ -2148,6 +2150,7 @@ impl Default for Cia402Rules {
     fn default() -> Self {
         Self {
             enable_without_mode_error: None,
+            mode_change_while_homing_error: None,
             stops_end_switched_off: false,
             switch_on_requires_main_power: false,
             pp_bit6_absolute: false,

@@ -520,6 +520,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .as_ref()
             .map(|r| fault_report(r, &alarms, "cia402.enable_without_mode_error"))
             .transpose()?,
+        mode_change_while_homing_error: f
+            .cia402
+            .mode_change_while_homing_error
+            .as_ref()
+            .map(|r| fault_report(r, &alarms, "cia402.mode_change_while_homing_error"))
+            .transpose()?,
         stops_end_switched_off: f.cia402.stops_end_switched_off,
         switch_on_requires_main_power: f.cia402.switch_on_requires_main_power,
         pp_bit6_absolute: f.cia402.pp_bit6_absolute,

@@ -549,9 +549,16 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {} }},",
             p.cia402
                 .enable_without_mode_error
+                .as_ref()
+                .map_or("None".into(), |c| format!(
+                    "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
+                    c.error_code, c.emcy.code, c.emcy.data
+                )),
+            p.cia402
+                .mode_change_while_homing_error
                 .as_ref()
                 .map_or("None".into(), |c| format!(
                     "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",

@@ -474,3 +474,61 @@ fn standard_unsupported_mode_is_not_taken() {
         );
     });
 }
+
+/// CiA402 §6.2: the mode of operation may change while the motor moves. Profile velocity at
+/// 600 rpm, then cyclic synchronous velocity with the same 60FFh, then cyclic synchronous
+/// position with targets that go on at 600 rpm from where the motor is: 6061h follows each
+/// change and the speed holds (no stop, no jump) through both switches.
+#[test]
+fn standard_switches_mode_while_moving() {
+    const CSV: i8 = 9;
+    const CSP: i8 = 8;
+    const RPM: f64 = 600.0;
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = enabled!(m, md, PV, &[(0x60FF, counts_per_s(RPM))]);
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, PV, 400);
+        let last = *s.last().expect("samples");
+        assert!((last.rpm - RPM).abs() < 10.0, "PV at {:.0} rpm", last.rpm);
+        let s = run!(m, md, group, ENABLE_OPERATION, 0, CSV, 200);
+        assert_eq!(s.last().expect("samples").mode_display, CSV, "6061h = 9");
+        let slowest = s.iter().map(|x| x.rpm).fold(f64::MAX, f64::min);
+        let fastest = s.iter().map(|x| x.rpm).fold(f64::MIN, f64::max);
+        assert!(
+            slowest > RPM - 15.0 && fastest < RPM + 15.0,
+            "PV → CSV: {slowest:.0}..{fastest:.0} rpm"
+        );
+        // CSP: the target goes on from the position the drive reports, at the same speed. 6064h
+        // is the previous cycle's and a target takes effect a cycle after it arrives: the
+        // stream starts three cycles ahead of it.
+        let step = f64::from(counts_per_s(RPM)) * CYCLE_S;
+        let mut target = f64::from(s.last().expect("samples").position) + 3.0 * step;
+        let mut samples = Vec::new();
+        for _ in 0..300 {
+            samples.push(
+                csp::phase_locked(&m, md, &group, ENABLE_OPERATION, target as i32, CSP).await,
+            );
+            target += step;
+        }
+        assert_eq!(
+            samples.last().expect("samples").mode_display,
+            CSP,
+            "6061h = 8"
+        );
+        let slowest = samples.iter().map(|x| x.rpm).fold(f64::MAX, f64::min);
+        let fastest = samples.iter().map(|x| x.rpm).fold(f64::MIN, f64::max);
+        // The drive takes over the moving motor: no stop, less than 50 rpm of disturbance.
+        assert!(
+            slowest > RPM - 50.0 && fastest < RPM + 50.0,
+            "CSV → CSP: {slowest:.0}..{fastest:.0} rpm"
+        );
+        assert!(
+            samples
+                .iter()
+                .all(|x| x.statusword & STATE_MASK == OPERATION_ENABLED),
+            "Operation Enabled throughout"
+        );
+    });
+}

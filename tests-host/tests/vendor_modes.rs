@@ -599,3 +599,90 @@ fn rse_homing_time_limit_ends_in_a_homing_error_and_al_420() {
         assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED, "still enabled");
     });
 }
+
+/// SDV3-E §5.2 9: changing 6060h while homing runs raises oPE (603Fh 8800h): the drive faults,
+/// 6061h never shows the new mode during the run, and the motor stops.
+#[test]
+fn sdv3_e_a_mode_change_while_homing_is_ope() {
+    use board_sim::plant::SwitchParams;
+    const HM: u8 = 6;
+    const CSP: u8 = 8;
+    const FAULT: u16 = 0x08;
+    const OPE: u16 = 0x8800;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        // A home switch far away: the search goes on.
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_switches(SwitchParams {
+                home_rad: Some(50.0),
+                ..SwitchParams::default()
+            });
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("init");
+        {
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(0x6098, 0, 20i8).await.expect("6098h");
+            // 6099h:01 in 0.1 rpm: 60 rpm.
+            sd.sdo_write(0x6099, 1, 600u32).await.expect("6099h:01");
+        }
+        let group = group
+            .into_safe_op(md)
+            .await
+            .expect("SAFE-OP")
+            .request_into_op(md)
+            .await
+            .expect("OP");
+        // Default PDOs: 6040h at byte 0, 6060h at byte 12; 6041h at 0, 6061h at byte 12.
+        let cycle = |cw: u16, mode: u8| {
+            let sd = group.subdevice(md, 0).expect("drive");
+            {
+                let mut out = sd.outputs_raw_mut();
+                out[0..2].copy_from_slice(&cw.to_le_bytes());
+                out[12] = mode;
+            }
+            let (m, group) = (&m, &group);
+            async move {
+                let since = m.shared.clock().now();
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.finish_cycle(since, CYCLE_NS);
+                let sd = group.subdevice(md, 0).expect("drive");
+                let inp = sd.inputs_raw();
+                (u16::from_le_bytes([inp[0], inp[1]]), inp[12])
+            }
+        };
+        let mut s = (0, 0);
+        for cw in [0x06u16; 5]
+            .into_iter()
+            .chain([0x07; 5])
+            .chain([ENABLE_OPERATION; 20])
+        {
+            s = cycle(cw, HM).await;
+        }
+        assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
+        for _ in 0..100 {
+            s = cycle(ENABLE_OPERATION | NEW_SET_POINT, HM).await;
+        }
+        assert_eq!(s.0 & 0x3400, 0, "homing in progress: {:#06x}", s.0);
+        let mut seen_modes = Vec::new();
+        for _ in 0..20 {
+            s = cycle(ENABLE_OPERATION | NEW_SET_POINT, CSP).await;
+            seen_modes.push(s.1);
+            if s.0 & FAULT != 0 {
+                break;
+            }
+        }
+        assert_ne!(s.0 & FAULT, 0, "oPE: {:#06x}", s.0);
+        // Up to the cycle that refused it (and faulted), 6061h shows homing.
+        assert!(
+            seen_modes.iter().all(|m| *m == HM),
+            "6061h did not take CSP during the run: {seen_modes:?}"
+        );
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), OPE);
+    });
+}

@@ -978,6 +978,12 @@ impl Axis {
                     // set-points resume from where the motor is.
                     self.interpolator.reset(self.position);
                     self.position_loop.reset();
+                } else if command.mode == ControlMode::Position && previous != command.mode {
+                    // A position stream takes over a motor the speed or torque loop ran (a
+                    // mode change while moving): from where it is, at its speed.
+                    self.interpolator
+                        .reset_moving(self.position, self.last_velocity);
+                    self.position_loop.reset();
                 }
                 self.push_setpoint();
             }

@@ -245,6 +245,17 @@ impl Interpolator {
         self.out_fraction = 0.0;
     }
 
+    /// [`Self::reset`] at `position` for a motor moving at `velocity` (increments/s): the next
+    /// position set-point starts a segment with that slope and ends it on the secant, so a
+    /// position stream that takes over a moving motor (a change into CSP) does not stop it
+    /// first.
+    pub fn reset_moving(&mut self, position: i64, velocity: f32) {
+        self.reset(position);
+        if velocity.is_finite() {
+            self.out.velocity = velocity;
+        }
+    }
+
     /// Starts the next segment's time base if a set-point of `mode` arrives about one cycle
     /// after the previous one (true); else (first set-point, other mode, more than a tick
     /// early or late) restarts the time base for a re-anchored segment (false).

@@ -1,10 +1,11 @@
 //! One axis of the drive: its CiA402 device on the axis' objects (OD RAM offsets of
 //! [`AppVars`]), and the exchange with its motor's control interrupt.
 //!
-//! - with a motor attached ([`DriveAxis::attach`]): the set-point of the mode (CSP 607Ah, CSV
-//!   60FFh, CST 6071h, the profile modes, identification) goes to the control interrupt through
-//!   its [`AxisLink`], the actual values (6064h, 606Ch, 6077h) come back from it, and a motor
-//!   fault becomes a CiA402 fault with the profile's 603Fh code for it;
+//! - with a motor attached ([`Drive::attach_axis`](super::Drive::attach_axis)): the set-point
+//!   of the mode (CSP 607Ah, CSV 60FFh, CST 6071h, the profile modes, identification) goes to
+//!   the control interrupt through its [`AxisLink`], the actual values (6064h, 606Ch, 6077h)
+//!   come back from it, and a motor fault becomes a CiA402 fault with the profile's 603Fh code
+//!   for it;
 //! - without one (a board with no power stage, the benchmarks): an ideal axis whose position
 //!   actual value follows the target position while operation is enabled.
 //!
@@ -359,16 +360,31 @@ impl DriveAxis {
             halt: read_i16(ram, vars.halt_option_code),
             fault_reaction: read_i16(ram, vars.fault_reaction_option_code),
         };
+        let mut refused_during_homing = false;
         let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
             // A mode 6502h does not list is not taken: the drive keeps the mode it runs (and
             // 6061h shows it).
             let supported = read_u32(ram, vars.supported_drive_modes)
                 .is_none_or(|s| modes::is_supported(requested as i8, s));
-            if supported {
+            // Profile rule: no mode change while homing runs (the SDV3-E's oPE).
+            let locked = self.rules.mode_change_while_homing_error.is_some()
+                && self.profile_modes.homing_running()
+                && requested != self.running_mode;
+            refused_during_homing = locked;
+            if supported && !locked {
                 self.running_mode = requested;
             }
             [self.running_mode]
         });
+        if let Some(report) = self
+            .rules
+            .mode_change_while_homing_error
+            .filter(|_| refused_during_homing)
+        {
+            // The fault counts the controlword as 0 (report_fault writes it so).
+            self.report_fault(report, ram);
+            cw = 0;
+        }
         if let Some(report) = self.rules.enable_without_mode_error {
             // Profile rule: enable operation with no mode selected is refused as an error.
             let no_mode = mode.is_none_or(|[m]| m == 0);
