@@ -4,11 +4,10 @@
 //! sized for one drive.
 
 use board_sim::inproc::InProcess;
-use ethercrab::subdevice_group::Op;
-use ethercrab::{DefaultLock, MainDevice, SubDeviceGroup};
+use ethercrab::MainDevice;
 
 /// A group of one drive in OP.
-pub type OpGroup = SubDeviceGroup<4, 64, DefaultLock, Op>;
+pub type OpGroup = crate::vendor::Group;
 
 /// Simulated time per cycle (free run).
 pub const CYCLE_NS: u64 = 1_000_000;
@@ -17,23 +16,12 @@ const MODES_OF_OPERATION: u16 = 0x6060;
 
 /// INIT → OP in free run, with 6060h = `mode` written by SDO in PREOP.
 pub async fn into_op_with_mode(m: &InProcess, md: &MainDevice<'_>, mode: i8) -> OpGroup {
-    let group = md
-        .init_single_group::<4, 64>(m.shared.clock().now_fn())
-        .await
-        .expect("init");
-    group
-        .subdevice(md, 0)
-        .expect("drive")
-        .sdo_write(MODES_OF_OPERATION, 0, mode)
-        .await
-        .expect("6060h");
-    group
-        .into_safe_op(md)
-        .await
-        .expect("SAFE-OP")
-        .request_into_op(md)
-        .await
-        .expect("request OP")
+    crate::vendor::into_op(
+        m,
+        md,
+        &[crate::vendor::Sdo::I8(MODES_OF_OPERATION, 0, mode)],
+    )
+    .await
 }
 
 /// One cycle with controlword `cw` and target position `target`; returns the statusword and

@@ -79,6 +79,21 @@ macro_rules! enable {
     }};
 }
 
+/// Cycles (the SDV3-E's `cycle!`) in Operation Enabled until the statusword shows a fault;
+/// asserts it does within 300 cycles.
+macro_rules! until_fault {
+    ($m:expr, $md:expr, $group:expr) => {{
+        let mut faulted = false;
+        for _ in 0..300 {
+            if cycle!($m, $md, $group, ENABLE_OPERATION) & FAULT_BIT != 0 {
+                faulted = true;
+                break;
+            }
+        }
+        assert!(faulted, "the drive faults");
+    }};
+}
+
 /// The RSE's free-run cycle (7.2: 1C32h:02 factory setting 4 ms).
 const RSE_CYCLE_NS: u64 = 4_000_000;
 
@@ -177,15 +192,7 @@ fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
         m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_drive_temperature(120.0);
-        let faulted = async {
-            for _ in 0..300 {
-                if cycle!(m, md, group, ENABLE_OPERATION) & FAULT_BIT != 0 {
-                    return true;
-                }
-            }
-            false
-        };
-        assert!(faulted.await, "the drive faults");
+        until_fault!(m, md, group);
         let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
         assert_eq!(
             u16::from_le_bytes([coe[2], coe[3]]),
@@ -283,14 +290,7 @@ fn sdv3_e_active_alarms_and_alarm_records() {
         m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_drive_temperature(120.0);
-        let mut faulted = false;
-        for _ in 0..300 {
-            if cycle!(m, md, group, ENABLE_OPERATION) & FAULT_BIT != 0 {
-                faulted = true;
-                break;
-            }
-        }
-        assert!(faulted);
+        until_fault!(m, md, group);
         let sd = group.subdevice(md, 0).expect("drive");
         assert_eq!(
             sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01"),
@@ -341,14 +341,7 @@ fn sdv3_e_a_non_resettable_alarm_holds_through_fault_resets() {
         m.shared.segment().drives_mut()[0].servos[0]
             .plant
             .set_encoder_fault(Some(EncoderFaultInjection::Jump { counts: 1 << 19 }));
-        let mut faulted = false;
-        for _ in 0..300 {
-            if cycle!(m, md, group, ENABLE_OPERATION) & FAULT_BIT != 0 {
-                faulted = true;
-                break;
-            }
-        }
-        assert!(faulted, "encoder fault");
+        until_fault!(m, md, group);
         let sd = group.subdevice(md, 0).expect("drive");
         let code = sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh");
         let number = sd.sdo_read::<u8>(0x3202, 1).await.expect("3202h:01");

@@ -7,6 +7,7 @@
 //! - RSE 7.11: homing method 19 on a home switch, 6064h = 607Ch at the home.
 
 use ethercrab::MainDevice;
+use tests_host::vendor::{self, Sdo};
 use tests_host::{block_on, master_for};
 
 const CPR: f64 = (1u32 << 20) as f64;
@@ -362,10 +363,45 @@ fn sigma_v_sd_interpolated_position_follows_the_interpolation_data() {
     });
 }
 
+/// SDV3-E default PDOs (Table 6-5): 6040h at byte 0, 60FFh at byte 6, 6060h at byte 12 of the
+/// outputs; 6041h at byte 0, 6061h at byte 12 of the inputs.
+const SDV3_CW: usize = 0;
+const SDV3_TARGET_VELOCITY: usize = 6;
+const SDV3_MODE: usize = 12;
+
+/// One SDV3-E cycle with controlword `cw`, target velocity `rpm` and mode `mode`; evaluates to
+/// (statusword, 6061h, the motor's speed in rpm).
+async fn sdv3_cycle(
+    m: &board_sim::inproc::InProcess,
+    md: &MainDevice<'_>,
+    group: &vendor::Group,
+    cw: u16,
+    rpm: f64,
+    mode: u8,
+) -> (u16, u8, f64) {
+    let velocity = ((rpm * 10.0) as i32).to_le_bytes();
+    let inputs = vendor::exchange(
+        m,
+        md,
+        group,
+        &[
+            (SDV3_CW, &cw.to_le_bytes()),
+            (SDV3_TARGET_VELOCITY, &velocity),
+            (SDV3_MODE, &[mode]),
+        ],
+        CYCLE_NS,
+    )
+    .await;
+    (
+        vendor::u16_at(&inputs, 0),
+        inputs[SDV3_MODE],
+        vendor::motor(m).0,
+    )
+}
+
 /// SDV3-E 6080h "Maximal Motor Speed" (0.1 rpm, default 3000.0 rpm): a CSV target of 4000 rpm
-/// over the default PDOs (60FFh at byte 6, 6060h = 9 at byte 12) runs the motor at 3000 rpm
-/// with statusword bit 11 (internal limit active); a target below it is followed exactly and
-/// bit 11 clears.
+/// over the default PDOs runs the motor at 3000 rpm with statusword bit 11 (internal limit
+/// active); a target below it is followed exactly and bit 11 clears.
 #[test]
 fn sdv3_e_max_motor_speed_limits_csv() {
     const CSV: u8 = 9;
@@ -374,59 +410,23 @@ fn sdv3_e_max_motor_speed_limits_csv() {
         let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("OP");
-        let cycle = |cw: u16, rpm: f64| {
-            let sd = group.subdevice(md, 0).expect("drive");
-            {
-                let mut out = sd.outputs_raw_mut();
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[6..10].copy_from_slice(&((rpm * 10.0) as i32).to_le_bytes());
-                out[12] = CSV;
-            }
-            let (m, group) = (&m, &group);
-            async move {
-                let since = m.shared.clock().now();
-                group.tx_rx(md).await.expect("tx/rx");
-                m.shared.finish_cycle(since, CYCLE_NS);
-                let sd = group.subdevice(md, 0).expect("drive");
-                let inp = sd.inputs_raw();
-                let rad_s = m.shared.segment().drives()[0].servos[0]
-                    .plant
-                    .mech_speed_rad_s();
-                (
-                    u16::from_le_bytes([inp[0], inp[1]]),
-                    rad_s / std::f64::consts::TAU * 60.0,
-                )
-            }
-        };
-        let mut s = (0, 0.0);
-        for cw in [0x06u16; 5]
-            .into_iter()
-            .chain([0x07; 5])
-            .chain([ENABLE_OPERATION; 20])
-        {
-            s = cycle(cw, 0.0).await;
+        let group = vendor::into_op(&m, md, &[]).await;
+        let mut s = (0, 0, 0.0);
+        for cw in vendor::enable_sequence(20) {
+            s = sdv3_cycle(&m, md, &group, cw, 0.0, CSV).await;
         }
         assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
         // A ramp to 4000 rpm in 1 s, then 0.3 s there.
         for k in 0..1300 {
-            s = cycle(ENABLE_OPERATION, 4000.0 * f64::from(k.min(1000)) / 1000.0).await;
+            let rpm = 4000.0 * f64::from(k.min(1000)) / 1000.0;
+            s = sdv3_cycle(&m, md, &group, ENABLE_OPERATION, rpm, CSV).await;
         }
-        assert!((s.1 - 3000.0).abs() < 15.0, "held at 6080h: {:.0} rpm", s.1);
+        assert!((s.2 - 3000.0).abs() < 15.0, "held at 6080h: {:.0} rpm", s.2);
         assert_ne!(s.0 & INTERNAL_LIMIT, 0, "bit 11 while limited");
         for _ in 0..500 {
-            s = cycle(ENABLE_OPERATION, 2500.0).await;
+            s = sdv3_cycle(&m, md, &group, ENABLE_OPERATION, 2500.0, CSV).await;
         }
-        assert!((s.1 - 2500.0).abs() < 15.0, "below 6080h: {:.0} rpm", s.1);
+        assert!((s.2 - 2500.0).abs() < 15.0, "below 6080h: {:.0} rpm", s.2);
         assert_eq!(s.0 & INTERNAL_LIMIT, 0, "bit 11 clear");
     });
 }
@@ -441,64 +441,22 @@ fn sdv3_e_velocity_window_in_whole_rpm() {
         let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            // 0 → 2000 rpm in 2000 ms: 1000 rpm/s, 1 rpm per 1 ms cycle.
-            sd.sdo_write(0x6083, 0, 2000u32).await.expect("6083h");
-            sd.sdo_write(0x6084, 0, 2000u32).await.expect("6084h");
-        }
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("OP");
-        let cycle = |cw: u16, rpm: f64| {
-            let sd = group.subdevice(md, 0).expect("drive");
-            {
-                let mut out = sd.outputs_raw_mut();
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[6..10].copy_from_slice(&((rpm * 10.0) as i32).to_le_bytes());
-                out[12] = PV;
-            }
-            let (m, group) = (&m, &group);
-            async move {
-                let since = m.shared.clock().now();
-                group.tx_rx(md).await.expect("tx/rx");
-                m.shared.finish_cycle(since, CYCLE_NS);
-                let sd = group.subdevice(md, 0).expect("drive");
-                let inp = sd.inputs_raw();
-                let rad_s = m.shared.segment().drives()[0].servos[0]
-                    .plant
-                    .mech_speed_rad_s();
-                (
-                    u16::from_le_bytes([inp[0], inp[1]]),
-                    rad_s / std::f64::consts::TAU * 60.0,
-                )
-            }
-        };
-        let mut s = (0, 0.0);
-        for cw in [0x06u16; 5]
-            .into_iter()
-            .chain([0x07; 5])
-            .chain([ENABLE_OPERATION; 20])
-        {
-            s = cycle(cw, 0.0).await;
+        // 0 → 2000 rpm in 2000 ms: 1000 rpm/s, 1 rpm per 1 ms cycle.
+        let setup = [Sdo::U32(0x6083, 0, 2000), Sdo::U32(0x6084, 0, 2000)];
+        let group = vendor::into_op(&m, md, &setup).await;
+        let mut s = (0, 0, 0.0);
+        for cw in vendor::enable_sequence(20) {
+            s = sdv3_cycle(&m, md, &group, cw, 0.0, PV).await;
         }
         assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
         let mut arrived_at = None;
         let mut left = false;
         for _ in 0..1_500 {
-            s = cycle(ENABLE_OPERATION, 1000.0).await;
+            s = sdv3_cycle(&m, md, &group, ENABLE_OPERATION, 1000.0, PV).await;
             // At rest on the old target 0 bit 10 is set; it clears with the new target.
             left |= s.0 & TARGET_REACHED == 0;
             if left && s.0 & TARGET_REACHED != 0 {
-                arrived_at = Some(s.1);
+                arrived_at = Some(s.2);
                 break;
             }
         }
@@ -519,6 +477,7 @@ fn rse_homing_time_limit_ends_in_a_homing_error_and_al_420() {
     const HOMING_ERROR: u16 = 1 << 13;
     const HOMING_ATTAINED: u16 = 1 << 12;
     const WARNING: u16 = 1 << 7;
+    // 7.2: 1C32h:02 factory setting 4 ms, the free-run cycle.
     const RSE_CYCLE_NS: u64 = 4_000_000;
     let p = od_gen::builtin("rse").expect("profile");
     let al420 = p
@@ -530,52 +489,25 @@ fn rse_homing_time_limit_ends_in_a_homing_error_and_al_420() {
         let (m, transport) = master_for(board_sim::Segment::new("rse", 1).expect("rse"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            sd.sdo_write(0x6060, 0, 6i8).await.expect("6060h");
-            sd.sdo_write(0x6098, 0, 19i8).await.expect("6098h");
-            sd.sdo_write(0x2006, 3, 300u16).await.expect("2006h:03");
-            sd.sdo_write(0x6099, 1, (CPR * 1.0) as u32)
-                .await
-                .expect("6099h:01");
-            sd.sdo_write(0x609A, 0, (CPR * 100.0) as u32)
-                .await
-                .expect("609Ah");
-        }
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("OP");
+        let setup = [
+            Sdo::I8(0x6060, 0, 6),
+            Sdo::I8(0x6098, 0, 19),
+            Sdo::U16(0x2006, 3, 300),
+            Sdo::U32(0x6099, 1, CPR as u32),
+            Sdo::U32(0x609A, 0, (CPR * 100.0) as u32),
+        ];
+        let group = vendor::into_op(&m, md, &setup).await;
         // RSE 1600h: 6040h first; 1A00h: 603Fh, 6041h.
         let cycle = |cw: u16| {
-            let sd = group.subdevice(md, 0).expect("drive");
-            sd.outputs_raw_mut()[0..2].copy_from_slice(&cw.to_le_bytes());
             let (m, group) = (&m, &group);
             async move {
-                let since = m.shared.clock().now();
-                group.tx_rx(md).await.expect("tx/rx");
-                m.shared.finish_cycle(since, RSE_CYCLE_NS);
-                let sd = group.subdevice(md, 0).expect("drive");
-                let inp = sd.inputs_raw();
-                (
-                    u16::from_le_bytes([inp[0], inp[1]]),
-                    u16::from_le_bytes([inp[2], inp[3]]),
-                )
+                let inputs =
+                    vendor::exchange(m, md, group, &[(0, &cw.to_le_bytes())], RSE_CYCLE_NS).await;
+                (vendor::u16_at(&inputs, 0), vendor::u16_at(&inputs, 2))
             }
         };
         let mut s = (0, 0);
-        for cw in [0x06u16; 5]
-            .into_iter()
-            .chain([0x07; 5])
-            .chain([ENABLE_OPERATION; 10])
-        {
+        for cw in vendor::enable_sequence(10) {
             s = cycle(cw).await;
         }
         assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED);
@@ -620,57 +552,21 @@ fn sdv3_e_a_mode_change_while_homing_is_ope() {
                 home_rad: Some(50.0),
                 ..SwitchParams::default()
             });
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            sd.sdo_write(0x6098, 0, 20i8).await.expect("6098h");
-            // 6099h:01 in 0.1 rpm: 60 rpm.
-            sd.sdo_write(0x6099, 1, 600u32).await.expect("6099h:01");
-        }
-        let group = group
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("OP");
-        // Default PDOs: 6040h at byte 0, 6060h at byte 12; 6041h at 0, 6061h at byte 12.
-        let cycle = |cw: u16, mode: u8| {
-            let sd = group.subdevice(md, 0).expect("drive");
-            {
-                let mut out = sd.outputs_raw_mut();
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[12] = mode;
-            }
-            let (m, group) = (&m, &group);
-            async move {
-                let since = m.shared.clock().now();
-                group.tx_rx(md).await.expect("tx/rx");
-                m.shared.finish_cycle(since, CYCLE_NS);
-                let sd = group.subdevice(md, 0).expect("drive");
-                let inp = sd.inputs_raw();
-                (u16::from_le_bytes([inp[0], inp[1]]), inp[12])
-            }
-        };
-        let mut s = (0, 0);
-        for cw in [0x06u16; 5]
-            .into_iter()
-            .chain([0x07; 5])
-            .chain([ENABLE_OPERATION; 20])
-        {
-            s = cycle(cw, HM).await;
+        // Method 20 at 60 rpm (6099h:01 in 0.1 rpm).
+        let setup = [Sdo::I8(0x6098, 0, 20), Sdo::U32(0x6099, 1, 600)];
+        let group = vendor::into_op(&m, md, &setup).await;
+        let mut s = (0, 0, 0.0);
+        for cw in vendor::enable_sequence(20) {
+            s = sdv3_cycle(&m, md, &group, cw, 0.0, HM).await;
         }
         assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED);
         for _ in 0..100 {
-            s = cycle(ENABLE_OPERATION | NEW_SET_POINT, HM).await;
+            s = sdv3_cycle(&m, md, &group, ENABLE_OPERATION | NEW_SET_POINT, 0.0, HM).await;
         }
         assert_eq!(s.0 & 0x3400, 0, "homing in progress: {:#06x}", s.0);
         let mut seen_modes = Vec::new();
         for _ in 0..20 {
-            s = cycle(ENABLE_OPERATION | NEW_SET_POINT, CSP).await;
+            s = sdv3_cycle(&m, md, &group, ENABLE_OPERATION | NEW_SET_POINT, 0.0, CSP).await;
             seen_modes.push(s.1);
             if s.0 & FAULT != 0 {
                 break;

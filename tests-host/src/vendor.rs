@@ -1,0 +1,119 @@
+//! A master for the vendor-profile scenarios: one drive taken to OP in free run with the
+//! profile's default PDOs and the SDO writes a scenario needs in PREOP, then cycles
+//! phase-locked to the drive's free-run timer (every output is seen) over byte offsets of the
+//! process images, which each scenario takes from its manual's default mapping.
+
+use board_sim::inproc::InProcess;
+use ethercrab::subdevice_group::{Op, PreOp};
+use ethercrab::{DefaultLock, MainDevice, SubDeviceGroup};
+
+/// A group of one drive in OP.
+pub type Group = SubDeviceGroup<4, 64, DefaultLock, Op>;
+
+/// CiA402 controlwords of the enable sequence (Table 5): shutdown, switch on, enable operation.
+pub const SHUTDOWN: u16 = 0x06;
+/// Switch on.
+pub const SWITCH_ON: u16 = 0x07;
+/// Enable operation.
+pub const ENABLE_OPERATION: u16 = 0x0F;
+
+/// The controlwords that take a drive from Switch On Disabled to Operation Enabled: shutdown and
+/// switch on 5 cycles each, then enable operation for `enable` cycles.
+pub fn enable_sequence(enable: usize) -> impl Iterator<Item = u16> {
+    std::iter::repeat_n(SHUTDOWN, 5)
+        .chain(std::iter::repeat_n(SWITCH_ON, 5))
+        .chain(std::iter::repeat_n(ENABLE_OPERATION, enable))
+}
+
+/// An SDO download of a scenario's set-up.
+#[derive(Clone, Copy, Debug)]
+pub enum Sdo {
+    /// An INTEGER8.
+    I8(u16, u8, i8),
+    /// An UNSIGNED8.
+    U8(u16, u8, u8),
+    /// An INTEGER16.
+    I16(u16, u8, i16),
+    /// An UNSIGNED16.
+    U16(u16, u8, u16),
+    /// An INTEGER32.
+    I32(u16, u8, i32),
+    /// An UNSIGNED32.
+    U32(u16, u8, u32),
+}
+
+/// Writes `sdo` to the first drive of `group` in PREOP.
+async fn write(group: &SubDeviceGroup<4, 64, DefaultLock, PreOp>, md: &MainDevice<'_>, sdo: Sdo) {
+    let sd = group.subdevice(md, 0).expect("drive");
+    let r = match sdo {
+        Sdo::I8(i, s, v) => sd.sdo_write(i, s, v).await,
+        Sdo::U8(i, s, v) => sd.sdo_write(i, s, v).await,
+        Sdo::I16(i, s, v) => sd.sdo_write(i, s, v).await,
+        Sdo::U16(i, s, v) => sd.sdo_write(i, s, v).await,
+        Sdo::I32(i, s, v) => sd.sdo_write(i, s, v).await,
+        Sdo::U32(i, s, v) => sd.sdo_write(i, s, v).await,
+    };
+    r.unwrap_or_else(|e| panic!("SDO {sdo:?}: {e:?}"));
+}
+
+/// INIT → OP in free run with `setup` written in PREOP.
+pub async fn into_op(m: &InProcess, md: &MainDevice<'_>, setup: &[Sdo]) -> Group {
+    let group = md
+        .init_single_group::<4, 64>(m.shared.clock().now_fn())
+        .await
+        .expect("init");
+    for &sdo in setup {
+        write(&group, md, sdo).await;
+    }
+    group
+        .into_safe_op(md)
+        .await
+        .expect("SAFE-OP")
+        .request_into_op(md)
+        .await
+        .expect("OP")
+}
+
+/// One cycle of `cycle_ns` phase-locked to the drive's free-run timer: `outputs` (byte offset,
+/// little-endian bytes) written into the output image, the frame exchanged; the input image the
+/// drive sent back.
+pub async fn exchange(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &Group,
+    outputs: &[(usize, &[u8])],
+    cycle_ns: u64,
+) -> Vec<u8> {
+    let sd = group.subdevice(md, 0).expect("drive");
+    {
+        let mut image = sd.outputs_raw_mut();
+        for (at, bytes) in outputs {
+            image[*at..*at + bytes.len()].copy_from_slice(bytes);
+        }
+    }
+    let since = m.shared.clock().now();
+    group.tx_rx(md).await.expect("tx/rx");
+    m.shared.finish_cycle(since, cycle_ns);
+    let inputs = sd.inputs_raw().to_vec();
+    inputs
+}
+
+/// The little-endian u16 at byte `at` of an image.
+pub fn u16_at(image: &[u8], at: usize) -> u16 {
+    u16::from_le_bytes([image[at], image[at + 1]])
+}
+
+/// The little-endian i32 at byte `at` of an image.
+pub fn i32_at(image: &[u8], at: usize) -> i32 {
+    i32::from_le_bytes([image[at], image[at + 1], image[at + 2], image[at + 3]])
+}
+
+/// The simulated motor of the first drive: its speed, rpm, and angle, revolutions.
+pub fn motor(m: &InProcess) -> (f64, f64) {
+    let segment = m.shared.segment();
+    let plant = &segment.drives()[0].servos[0].plant;
+    (
+        plant.mech_speed_rad_s() / std::f64::consts::TAU * 60.0,
+        plant.mech_angle_rad() / std::f64::consts::TAU,
+    )
+}
