@@ -1,0 +1,432 @@
+//! Every mode of operation of every profile moves the simulated motor, commanded by ethercrab
+//! over one PDO layout each drive accepts (1600h: 6040h, 6060h, 607Ah, 60FFh, 6071h; 1A00h:
+//! 6041h, 6061h, 6064h, 606Ch, 6077h; every manual allows 1600h/1A00h to be remapped in PREOP)
+//! with DC SYNC0 at 1 ms, in each profile's own units (its `[units]` with their defaults):
+//!
+//! - cyclic synchronous position: a ramp of one revolution, the motor follows;
+//! - profile position: an absolute set-point two revolutions on (controlword bit 6 with the
+//!   profile's polarity), acknowledged (bit 12), then target reached (bit 10) on the target;
+//! - profile velocity and cyclic synchronous velocity: the motor turns at the target speed;
+//! - cyclic synchronous torque and profile torque: a torque the motor accelerates with.
+//!
+//! The mode changes while the drive stays in Operation Enabled; 6061h shows each mode. Homing is
+//! covered per profile by `homing.rs`, `vendor_modes.rs`, `two_axes.rs` and `motion_soem.rs`.
+
+use std::time::Duration;
+
+use board_sim::inproc::InProcess;
+use board_sim::Segment;
+use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op};
+use ethercrab::{DcSync, DefaultLock, MainDevice, SubDeviceGroup};
+use od_gen::model::{Acceleration, Factor, Operand, Profile};
+use tests_host::vendor::{enable_sequence, i32_at, motor, u16_at, ENABLE_OPERATION};
+use tests_host::{block_on, master_for};
+
+const CYCLE_NS: u64 = 1_000_000;
+/// Increments per revolution of the simulated servo's encoder.
+const CPR: f64 = (1u32 << 20) as f64;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const NEW_SET_POINT: u16 = 1 << 4;
+const ABS_REL: u16 = 1 << 6;
+const TARGET_REACHED: u16 = 1 << 10;
+const SET_POINT_ACKNOWLEDGE: u16 = 1 << 12;
+/// 6060h values (CiA402).
+const PP: i8 = 1;
+const PV: i8 = 3;
+const PT: i8 = 4;
+const CSP: i8 = 8;
+const CSV: i8 = 9;
+const CST: i8 = 10;
+/// Motion of the scenario: rev/s, rev/s², ‰ of the rated torque.
+const PROFILE_SPEED: f64 = 10.0;
+const ACCELERATION: f64 = 100.0;
+const TORQUE_PERMILLE: i16 = 50;
+
+/// The process images' layout (byte offsets).
+const RX: [(u16, u8); 5] = [
+    (0x6040, 16),
+    (0x6060, 8),
+    (0x607A, 32),
+    (0x60FF, 32),
+    (0x6071, 16),
+];
+const TX: [(u16, u8); 5] = [
+    (0x6041, 16),
+    (0x6061, 8),
+    (0x6064, 32),
+    (0x606C, 32),
+    (0x6077, 16),
+];
+const RX_CW: usize = 0;
+const RX_MODE: usize = 2;
+const RX_POSITION: usize = 3;
+const RX_VELOCITY: usize = 7;
+const RX_TORQUE: usize = 11;
+const TX_SW: usize = 0;
+const TX_MODE: usize = 2;
+const TX_POSITION: usize = 3;
+
+type Group = SubDeviceGroup<4, 64, DefaultLock, Op, HasDc>;
+
+/// A factor's value with its objects' defaults.
+fn factor(p: &Profile, f: &Factor) -> f64 {
+    let value = |o: Operand| match o {
+        Operand::Const(c) => f64::from(c),
+        Operand::CountsPerRev => CPR,
+        Operand::Entry(index, sub) => {
+            let bytes = p.entry(index, sub).expect("factor entry").initial_bytes();
+            let mut v = [0u8; 4];
+            for (d, s) in v.iter_mut().zip(&bytes) {
+                *d = *s;
+            }
+            f64::from(u32::from_le_bytes(v).max(1))
+        }
+    };
+    value(f.numerator) / value(f.denominator) * f64::from(f.scale.0) / f64::from(f.scale.1)
+}
+
+/// The profile's units: increments per position unit, increments/s per velocity unit, and the
+/// object value of an acceleration in rev/s².
+struct Units {
+    position: f64,
+    velocity: f64,
+    acceleration: Box<dyn Fn(f64) -> u32>,
+}
+
+fn units(p: &Profile) -> Units {
+    let position = factor(p, &p.units.position);
+    let velocity = factor(p, &p.units.velocity);
+    let acceleration: Box<dyn Fn(f64) -> u32> = match p.units.acceleration {
+        Acceleration::VelocityPerSecond => Box::new(move |a| (a * CPR / velocity) as u32),
+        Acceleration::Factor(f) => {
+            let per_unit = factor(p, &f);
+            Box::new(move |a| (a * CPR / per_unit) as u32)
+        }
+        // The time in ms from 0 to `rpm`.
+        Acceleration::MsToRpm(rpm) => {
+            Box::new(move |a| (f64::from(rpm) / 60.0 / a * 1000.0) as u32)
+        }
+    };
+    Units {
+        position,
+        velocity,
+        acceleration,
+    }
+}
+
+fn mapping((index, bits): (u16, u8)) -> u32 {
+    u32::from(index) << 16 | u32::from(bits)
+}
+
+/// INIT → OP with DC SYNC0 at 1 ms, the layout mapped and the profile-mode objects set.
+async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, u: &Units) -> Group {
+    let mut group = md
+        .init_single_group::<4, 64>(m.shared.clock().now_fn())
+        .await
+        .expect("init");
+    {
+        let sd = group.subdevice(md, 0).expect("drive");
+        for (pdo, assign, entries) in [(0x1600u16, 0x1C12u16, RX), (0x1A00, 0x1C13, TX)] {
+            sd.sdo_write(assign, 0, 0u8).await.expect("assign :00 = 0");
+            sd.sdo_write(pdo, 0, 0u8).await.expect("map :00 = 0");
+            for (i, e) in entries.into_iter().enumerate() {
+                sd.sdo_write(pdo, (i + 1) as u8, mapping(e))
+                    .await
+                    .unwrap_or_else(|err| panic!("{}: {pdo:#06x}:{}: {err:?}", p.name, i + 1));
+            }
+            sd.sdo_write(pdo, 0, entries.len() as u8)
+                .await
+                .expect("map :00");
+            sd.sdo_write(assign, 1, pdo).await.expect("assign :01");
+            sd.sdo_write(assign, 0, 1u8).await.expect("assign :00 = 1");
+        }
+        let speed = (PROFILE_SPEED * CPR / u.velocity) as u32;
+        let accel = (u.acceleration)(ACCELERATION);
+        for (index, value) in [
+            (0x607F, 2 * speed),
+            (0x6081, speed),
+            (0x6083, accel),
+            (0x6084, accel),
+            (0x6087, 10_000),
+        ] {
+            // Only the objects the profile has (the SDV3-E has no 6087h).
+            if p.entry(index, 0).is_some() {
+                sd.sdo_write(index, 0, value)
+                    .await
+                    .unwrap_or_else(|err| panic!("{}: {index:#06x}: {err:?}", p.name));
+            }
+        }
+        // A position window of 0 (the GHA-E's default) asks for the exact increment: 1/1000
+        // revolution instead.
+        let window = p.entry(0x6067, 0).map(|e| e.initial_bytes());
+        if window.is_some_and(|b| b.iter().all(|x| *x == 0)) {
+            let units = (CPR / 1000.0 / u.position).ceil() as u32;
+            sd.sdo_write(0x6067, 0, units).await.expect("6067h");
+        }
+    }
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP");
+    for _ in 0..100 {
+        group.tx_rx_sync_system_time(md).await.expect("time");
+        m.shared.advance(CYCLE_NS);
+    }
+    group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_millis(10),
+                sync0_period: Duration::from_nanos(CYCLE_NS),
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .expect("DC")
+        .into_safe_op(md)
+        .await
+        .expect("SAFE-OP")
+        .request_into_op(md)
+        .await
+        .expect("OP")
+}
+
+/// What one cycle brought back: statusword, 6061h, 6064h, and the motor's speed (rpm) and
+/// angle (revolutions).
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    sw: u16,
+    mode: i8,
+    position: i32,
+    rpm: f64,
+    rev: f64,
+}
+
+/// The outputs of one cycle.
+#[derive(Clone, Copy, Debug, Default)]
+struct Command {
+    cw: u16,
+    mode: i8,
+    position: i32,
+    velocity: i32,
+    torque: i16,
+}
+
+async fn cycle(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command) -> Sample {
+    let sd = group.subdevice(md, 0).expect("drive");
+    {
+        let mut out = sd.outputs_raw_mut();
+        out[RX_CW..RX_CW + 2].copy_from_slice(&c.cw.to_le_bytes());
+        out[RX_MODE] = c.mode as u8;
+        out[RX_POSITION..RX_POSITION + 4].copy_from_slice(&c.position.to_le_bytes());
+        out[RX_VELOCITY..RX_VELOCITY + 4].copy_from_slice(&c.velocity.to_le_bytes());
+        out[RX_TORQUE..RX_TORQUE + 2].copy_from_slice(&c.torque.to_le_bytes());
+    }
+    group.tx_rx_dc(md).await.expect("tx/rx");
+    m.shared.advance(CYCLE_NS);
+    let inp = sd.inputs_raw();
+    let (rpm, rev) = motor(m);
+    Sample {
+        sw: u16_at(&inp, TX_SW),
+        mode: inp[TX_MODE] as i8,
+        position: i32_at(&inp, TX_POSITION),
+        rpm,
+        rev,
+    }
+}
+
+/// Runs `n` cycles of `c`; the last sample.
+async fn run(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command, n: usize) -> Sample {
+    let mut s = None;
+    for _ in 0..n {
+        s = Some(cycle(m, md, group, c).await);
+    }
+    s.expect("at least one cycle")
+}
+
+fn every_mode_moves_the_motor(name: &str) {
+    let p = od_gen::builtin(name).expect("profile");
+    let u = units(&p);
+    let rpm_to_object = |rpm: f64| (rpm / 60.0 * CPR / u.velocity) as i32;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new(name, 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = into_op(&m, md, &p, &u).await;
+        let mut s = cycle(&m, md, &group, Command::default()).await;
+        // The first SYNC0s after the request: hold the enable sequence long enough.
+        for cw in std::iter::repeat_n(0u16, 40).chain(enable_sequence(30)) {
+            let c = Command {
+                cw,
+                mode: CSP,
+                position: s.position,
+                ..Command::default()
+            };
+            s = cycle(&m, md, &group, c).await;
+        }
+        assert_eq!(
+            s.sw & STATE_MASK,
+            OPERATION_ENABLED,
+            "{name}: {:#06x}",
+            s.sw
+        );
+
+        // CSP: one revolution in 500 ms.
+        let (start, rev0) = (s.position, s.rev);
+        let one_rev = (CPR / u.position) as i32;
+        for k in 0..=600 {
+            let c = Command {
+                cw: ENABLE_OPERATION,
+                mode: CSP,
+                position: start + one_rev * k.min(500) / 500,
+                ..Command::default()
+            };
+            s = cycle(&m, md, &group, c).await;
+        }
+        assert_eq!(s.mode, CSP, "{name}: 6061h");
+        assert!(
+            (s.rev - rev0 - 1.0).abs() < 2e-3,
+            "{name} CSP: {} rev",
+            s.rev - rev0
+        );
+
+        // PP: two revolutions on, absolute.
+        let (from, rev0) = (s.position, s.rev);
+        let target = from + 2 * one_rev;
+        let absolute = if p.cia402.pp_bit6_absolute {
+            ABS_REL
+        } else {
+            0
+        };
+        let pp = |cw| Command {
+            cw: ENABLE_OPERATION | absolute | cw,
+            mode: PP,
+            position: target,
+            ..Command::default()
+        };
+        let mut acknowledged = false;
+        for _ in 0..10 {
+            s = cycle(&m, md, &group, pp(NEW_SET_POINT)).await;
+            acknowledged |= s.sw & SET_POINT_ACKNOWLEDGE != 0;
+        }
+        assert!(acknowledged, "{name} PP: bit 12");
+        let mut reached = None;
+        for k in 0..2_000 {
+            s = cycle(&m, md, &group, pp(0)).await;
+            if k > 20 && s.sw & TARGET_REACHED != 0 {
+                reached = Some(k);
+                break;
+            }
+        }
+        s = run(&m, md, &group, pp(0), 50).await;
+        assert_eq!(s.mode, PP, "{name}: 6061h");
+        assert!(reached.is_some(), "{name} PP: bit 10: {:#06x}", s.sw);
+        assert!(
+            (s.rev - rev0 - 2.0).abs() < 2e-3,
+            "{name} PP: {} rev",
+            s.rev - rev0
+        );
+
+        // PV 300 rpm, then CSV 600 rpm.
+        let pv = Command {
+            cw: ENABLE_OPERATION,
+            mode: PV,
+            velocity: rpm_to_object(300.0),
+            ..Command::default()
+        };
+        s = run(&m, md, &group, pv, 600).await;
+        assert_eq!(s.mode, PV, "{name}: 6061h");
+        assert!((s.rpm - 300.0).abs() < 10.0, "{name} PV: {:.0} rpm", s.rpm);
+        let csv = Command {
+            mode: CSV,
+            velocity: rpm_to_object(600.0),
+            ..pv
+        };
+        for k in 0..=400 {
+            let ramp = 300.0 + 300.0 * f64::from(k.min(200)) / 200.0;
+            let c = Command {
+                velocity: rpm_to_object(ramp),
+                ..csv
+            };
+            s = cycle(&m, md, &group, c).await;
+        }
+        assert_eq!(s.mode, CSV, "{name}: 6061h");
+        assert!((s.rpm - 600.0).abs() < 10.0, "{name} CSV: {:.0} rpm", s.rpm);
+        // Back to rest in CSV.
+        for k in 0..=400 {
+            let ramp = 600.0 * (1.0 - f64::from(k.min(300)) / 300.0);
+            let c = Command {
+                velocity: rpm_to_object(ramp),
+                ..csv
+            };
+            s = cycle(&m, md, &group, c).await;
+        }
+        assert!(s.rpm.abs() < 10.0, "{name}: at rest, {:.0} rpm", s.rpm);
+
+        // CST and PT: 5 % of the rated torque accelerates the free motor.
+        for mode in [CST, PT] {
+            let torque = Command {
+                cw: ENABLE_OPERATION,
+                mode,
+                torque: TORQUE_PERMILLE,
+                ..Command::default()
+            };
+            let before = s.rpm;
+            s = run(&m, md, &group, torque, 100).await;
+            assert_eq!(s.mode, mode, "{name}: 6061h");
+            assert!(
+                s.rpm > before + 100.0,
+                "{name} mode {mode}: {:.0} rpm",
+                s.rpm
+            );
+            // Stop again in CSV.
+            let top = s.rpm.max(0.0);
+            for k in 0..=600 {
+                let ramp = top * (1.0 - f64::from(k.min(500)) / 500.0);
+                let c = Command {
+                    velocity: rpm_to_object(ramp),
+                    ..csv
+                };
+                s = cycle(&m, md, &group, c).await;
+            }
+            assert!(s.rpm.abs() < 10.0, "{name}: at rest, {:.0} rpm", s.rpm);
+        }
+        assert_eq!(
+            s.sw & STATE_MASK,
+            OPERATION_ENABLED,
+            "{name}: {:#06x}",
+            s.sw
+        );
+    });
+}
+
+#[test]
+fn standard_every_mode_moves_the_motor() {
+    every_mode_moves_the_motor("standard");
+}
+
+#[test]
+fn sdv3_e_every_mode_moves_the_motor() {
+    every_mode_moves_the_motor("sdv3-e");
+}
+
+#[test]
+fn osd_g_e_every_mode_moves_the_motor() {
+    every_mode_moves_the_motor("osd-g-e");
+}
+
+#[test]
+fn rse_every_mode_moves_the_motor() {
+    every_mode_moves_the_motor("rse");
+}
+
+#[test]
+fn gha_e_every_mode_moves_the_motor() {
+    every_mode_moves_the_motor("gha-e");
+}
+
+#[test]
+fn sigma_v_sd_every_mode_moves_the_motor() {
+    every_mode_moves_the_motor("sigma-v-sd");
+}
