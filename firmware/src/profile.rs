@@ -468,6 +468,9 @@ pub struct Cia402Rules {
     pub digital_inputs_limits_swapped: bool,
     /// 6065h = 0 switches the following-error check off (the GHA-E).
     pub following_error_zero_window_off: bool,
+    /// The home offset 607Ch is added to every position object, not only set at the home
+    /// (the GHA-E: 6064h = 6063h / ratio + 607Ch).
+    pub home_offset_added: bool,
 }
 
 impl Cia402Rules {

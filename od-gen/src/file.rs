@@ -856,6 +856,7 @@ impl Default for Cia402File {
             following_error_fault: true,
             digital_inputs_limits_swapped: false,
             following_error_zero_window_off: false,
+            home_offset_added: false,
         }
     }
 }
@@ -1107,6 +1108,10 @@ pub struct Cia402File {
     /// 6065h = 0 switches the following-error check off (CiA402: only FFFF FFFFh does).
     #[serde(default)]
     pub following_error_zero_window_off: bool,
+    /// The home offset 607Ch is added to every position object (6064h = 6063h / ratio + 607Ch)
+    /// instead of only setting the home's position.
+    #[serde(default)]
+    pub home_offset_added: bool,
 }
 
 fn yes() -> bool {

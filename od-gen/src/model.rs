@@ -2100,6 +2100,8 @@ pub struct Cia402Rules {
     pub digital_inputs_limits_swapped: bool,
     /// 6065h = 0 switches the following-error check off.
     pub following_error_zero_window_off: bool,
+    /// 607Ch is added to every position object.
+    pub home_offset_added: bool,
 }
 
 /// What a profile shows in 60B9h bit 7 (15) (`firmware: cia402::touch_probe::Bit7`).
@@ -2164,6 +2166,7 @@ impl Default for Cia402Rules {
             following_error_fault: true,
             digital_inputs_limits_swapped: false,
             following_error_zero_window_off: false,
+            home_offset_added: false,
         }
     }
 }

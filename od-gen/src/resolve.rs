@@ -555,6 +555,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         following_error_fault: f.cia402.following_error_fault,
         digital_inputs_limits_swapped: f.cia402.digital_inputs_limits_swapped,
         following_error_zero_window_off: f.cia402.following_error_zero_window_off,
+        home_offset_added: f.cia402.home_offset_added,
     };
     let mut profile = Profile {
         name: f.name.clone(),

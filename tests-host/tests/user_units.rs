@@ -32,7 +32,7 @@ fn mapping(index: u16, sub: u8, bits: u8) -> u32 {
 
 #[test]
 fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
-    gha_e_csp_and_csv(0);
+    gha_e_csp_and_csv(0, 0);
 }
 
 /// GHA-E §5.7.3 2): 607Eh = 224 makes CW the positive direction: the same objects turn the
@@ -40,13 +40,26 @@ fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
 /// back in the master's direction.
 #[test]
 fn gha_e_polarity_224_turns_the_motor_the_other_way() {
-    gha_e_csp_and_csv(224);
+    gha_e_csp_and_csv(224, 0);
 }
 
-/// A GHA-E with 6091h = 0.1° per unit and polarity 607Eh = `polarity` (0 or 224): a CSP move of
-/// 900 units and a CSV run at 1800 units/s; the motor turns by the converted amount, against
-/// its own positive direction with 224, and 6064h/606Ch read the objects' values.
-fn gha_e_csp_and_csv(polarity: u8) {
+/// GHA-E §5.7.3: 6064h = 6063h / (6091h:01 / 6091h:02) + 607Ch, and §5.4.3: 6064h = 607Ch at
+/// the home: the home offset is added to every position object, before homing too, and a new
+/// 607Ch shifts 6064h at once. Absolute CSP targets are in the same frame: target 607Ch + 900
+/// units turns the motor 90° from where 6064h read 607Ch. With the polarity 224 as well, the
+/// offset is added after the direction flip (the motor turns the other way, 6064h still reads
+/// 607Ch + 900).
+#[test]
+fn gha_e_home_offset_is_added_to_every_position() {
+    gha_e_csp_and_csv(0, 5000);
+    gha_e_csp_and_csv(224, -7000);
+}
+
+/// A GHA-E with 6091h = 0.1° per unit, polarity 607Eh = `polarity` (0 or 224) and home offset
+/// 607Ch = `home_offset`: a CSP move of 900 units from 607Ch and a CSV run at 1800 units/s; the
+/// motor turns by the converted amount, against its own positive direction with 224, and
+/// 6064h/606Ch read the objects' values.
+fn gha_e_csp_and_csv(polarity: u8, home_offset: i32) {
     let sign = if polarity == 0 { 1.0 } else { -1.0 };
     block_on(async {
         let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
@@ -63,6 +76,9 @@ fn gha_e_csp_and_csv(polarity: u8) {
                 .await
                 .expect("6091h:02");
             sd.sdo_write(0x607E, 0, polarity).await.expect("607Eh");
+            sd.sdo_write(0x607C, 0, home_offset / 2)
+                .await
+                .expect("607Ch");
             // RxPDO: controlword, target position, mode; TxPDO: statusword, position actual.
             for (pdo, assign, entries) in [
                 (
@@ -136,24 +152,40 @@ fn gha_e_csp_and_csv(polarity: u8) {
                 )
             }
         };
+        // The motor at its power-on position: 6064h reads 607Ch, and a new 607Ch at once.
+        let mut actual = 0;
+        // Past the SYNC0 start delay (10 ms).
+        for _ in 0..20 {
+            cycle(SHUTDOWN, home_offset / 2, CSP).await;
+        }
+        for offset in [home_offset / 2, home_offset] {
+            sd.sdo_write(0x607C, 0, offset).await.expect("607Ch");
+            // Inputs of a cycle show the previous SYNC0's values.
+            for _ in 0..2 {
+                (_, actual) = cycle(SHUTDOWN, offset, CSP).await;
+            }
+            assert!(
+                (actual - offset).abs() <= 1,
+                "6064h {actual} units at the start, 607Ch = {offset}"
+            );
+        }
         let mut sw = 0;
         for cw in [SHUTDOWN; 20]
             .into_iter()
             .chain([SWITCH_ON; 10])
             .chain([ENABLE_OPERATION; 40])
         {
-            (sw, _) = cycle(cw, 0, CSP).await;
+            (sw, _) = cycle(cw, home_offset, CSP).await;
         }
         assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
 
-        // CSP: 900 units (90°) in 300 ms, then hold.
+        // CSP: 900 units (90°) from 607Ch in 300 ms, then hold.
         let quarter_units = (UNITS_PER_REV / 4) as i32;
-        let mut actual = 0;
         for k in 0..=300 {
-            (_, actual) = cycle(ENABLE_OPERATION, quarter_units * k / 300, CSP).await;
+            (_, actual) = cycle(ENABLE_OPERATION, home_offset + quarter_units * k / 300, CSP).await;
         }
         for _ in 0..100 {
-            (_, actual) = cycle(ENABLE_OPERATION, quarter_units, CSP).await;
+            (_, actual) = cycle(ENABLE_OPERATION, home_offset + quarter_units, CSP).await;
         }
         let rotor = m.shared.segment().drives()[0].servos[0]
             .plant
@@ -164,7 +196,10 @@ fn gha_e_csp_and_csv(polarity: u8) {
             "rotor at {rotor_counts:.0} increments, expected {} (900 units × {CPR}/{UNITS_PER_REV})",
             CPR / 4
         );
-        assert!((actual - quarter_units).abs() <= 1, "6064h {actual} units");
+        assert!(
+            (actual - home_offset - quarter_units).abs() <= 1,
+            "6064h {actual} units, 607Ch = {home_offset}"
+        );
 
         // CSV: 60FFh = 1800 units/s (half a revolution per second) for 0.4 s.
         sd.sdo_write(0x60FF, 0, 1800i32).await.expect("60FFh");

@@ -98,9 +98,13 @@ pub struct DriveAxis {
     /// How long the following error has been outside 6065h (statusword bit 13).
     following_error_timer: WindowTimer,
     /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
-    /// home position reads as the home offset 607Ch. Every position of the objects and of the
+    /// home position reads as the home offset 607Ch (and moved with 607Ch where the profile
+    /// adds it to every position). Every position of the objects and of the
     /// profile modes is a drive position; the axis works on encoder positions.
     position_shift: i64,
+    /// The part of `position_shift` that is the home offset 607Ch (increments) where the
+    /// profile adds it to every position (`Cia402Rules::home_offset_added`); 0 otherwise.
+    home_offset_shift: i64,
     /// Where the slave shows its synchronisation (1C32h:01 sync type), to tell a SYNC0 cycle
     /// from a free-run one.
     sync_type_at: Option<u16>,
@@ -177,6 +181,7 @@ impl DriveAxis {
             running_mode: 0,
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
+            home_offset_shift: 0,
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
@@ -549,6 +554,20 @@ impl DriveAxis {
                 .map_or(Polarity::NONE, |[p]| Polarity::from_object(p));
         }
         let pol = self.polarity;
+        if self.rules.home_offset_added {
+            // The GHA-E's 6064h = position from the home + 607Ch, before homing too and at once
+            // when 607Ch changes: the offset is part of the drive positions' shift, so every
+            // position object (targets, limits, probes, demand, actual) carries it.
+            let offset = read_i32(ram, vars.home_offset).unwrap_or(0);
+            let wanted = position_ratio.position_to_internal(i64::from(pol.position(offset)));
+            let delta = wanted.saturating_sub(self.home_offset_shift);
+            if delta != 0 {
+                self.home_offset_shift = wanted;
+                self.position_shift = self.position_shift.saturating_add(delta);
+                self.profile_modes.rebase(delta);
+                feedback.position = feedback.position.saturating_add(delta);
+            }
+        }
         // Every object value passes the polarity where it enters or leaves (its own inverse).
         let position_in = |at| read_i32(ram, at).map(|v| pol.position(v));
         let velocity_in = |at| {
