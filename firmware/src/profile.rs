@@ -3,7 +3,7 @@
 //! generates one [`DriveProfile`] per profile file (`crate::profiles`).
 
 pub use cia402::faults::FaultReport;
-use cia402::units::Ratio;
+use cia402::units::{Ratio, Scale};
 use ethercat_slave::mailbox::emcy;
 use ethercat_slave::od::Profile;
 
@@ -191,7 +191,7 @@ const S_PER_MIN: f32 = 60.0;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AccelerationRatio {
     /// Increments/s² per unit.
-    PerUnit(Ratio),
+    PerUnit(Scale),
     /// The value is the time in ms to reach this speed (increments/s) from rest.
     MsToSpeed(f32),
 }
@@ -210,10 +210,10 @@ impl AccelerationUnit {
     /// The conversion now: with the profile's velocity factor `velocity` (for
     /// [`Self::VelocityPerSecond`]), the factor's objects in `ram` and the encoder's
     /// `counts_per_rev`.
-    pub fn ratio(&self, ram: &[u8], counts_per_rev: u32, velocity: Ratio) -> AccelerationRatio {
+    pub fn ratio(&self, ram: &[u8], counts_per_rev: u32, velocity: Scale) -> AccelerationRatio {
         match self {
             Self::VelocityPerSecond => AccelerationRatio::PerUnit(velocity),
-            Self::Factor(f) => AccelerationRatio::PerUnit(f.ratio(ram, counts_per_rev)),
+            Self::Factor(f) => AccelerationRatio::PerUnit(f.ratio(ram, counts_per_rev).scale()),
             Self::MsToRpm(rpm) => {
                 AccelerationRatio::MsToSpeed(*rpm as f32 / S_PER_MIN * counts_per_rev as f32)
             }
@@ -223,7 +223,7 @@ impl AccelerationUnit {
     /// An acceleration object's `value` in increments/s², with the profile's velocity factor
     /// `velocity` (for [`Self::VelocityPerSecond`]) and the encoder's `counts_per_rev`. For
     /// [`Self::MsToRpm`], 0 ms reads as 1 ms.
-    pub fn to_internal(&self, value: u32, ram: &[u8], counts_per_rev: u32, velocity: Ratio) -> f32 {
+    pub fn to_internal(&self, value: u32, ram: &[u8], counts_per_rev: u32, velocity: Scale) -> f32 {
         self.ratio(ram, counts_per_rev, velocity).to_internal(value)
     }
 }
@@ -234,23 +234,103 @@ pub struct UnitRatios {
     /// Increments per position unit.
     pub position: Ratio,
     /// Increments/s per velocity unit.
-    pub velocity: Ratio,
+    pub velocity: Scale,
     /// The acceleration objects' conversion.
     pub acceleration: AccelerationRatio,
     /// Increments/s per unit of 606Dh/606Fh.
-    pub velocity_window: Ratio,
+    pub velocity_window: Scale,
+}
+
+/// The values the unit factors are made of at a moment (their objects read, the encoder's
+/// resolution): [`UnitRatios`] change only when these do, so a cycle compares them instead of
+/// building the ratios afresh. (Every operand is at most 32 bits wide.)
+#[derive(Clone, Copy, Debug)]
+pub struct UnitFactorValues([u32; 9]);
+
+/// Compared word by word, without the byte-wise library comparison a derived `==` of an array
+/// becomes.
+impl PartialEq for UnitFactorValues {
+    fn eq(&self, other: &Self) -> bool {
+        self.0
+            .iter()
+            .zip(other.0.iter())
+            .fold(0, |differ, (a, b)| differ | (a ^ b))
+            == 0
+    }
+}
+
+impl Eq for UnitFactorValues {}
+
+impl Factor {
+    /// The current values of the numerator and denominator.
+    fn values(&self, ram: &[u8], counts_per_rev: u32) -> [u32; 2] {
+        [
+            self.numerator.value(ram, counts_per_rev),
+            self.denominator.value(ram, counts_per_rev),
+        ]
+    }
+}
+
+impl Operand {
+    /// Whether the value can change (an object entry; the encoder's resolution is fixed once
+    /// the motor is attached).
+    const fn varies(&self) -> bool {
+        matches!(self, Self::Ram { .. })
+    }
+}
+
+impl Factor {
+    /// Whether an operand can change.
+    const fn varies(&self) -> bool {
+        self.numerator.varies() || self.denominator.varies()
+    }
 }
 
 impl AppVars {
+    /// Whether the unit factors are read from objects (else they are fixed for a motor, and
+    /// [`Self::unit_ratios`] need to be made only once).
+    pub const fn unit_factors_vary(&self) -> bool {
+        let acceleration = match &self.acceleration_unit {
+            AccelerationUnit::Factor(f) => f.varies(),
+            AccelerationUnit::VelocityPerSecond | AccelerationUnit::MsToRpm(_) => false,
+        };
+        self.position_factor.varies()
+            || self.velocity_factor.varies()
+            || acceleration
+            || self.velocity_window_factor.varies()
+    }
+
+    /// What [`Self::unit_ratios`] would be made of now.
+    pub fn unit_factor_values(&self, ram: &[u8], counts_per_rev: u32) -> UnitFactorValues {
+        let [p0, p1] = self.position_factor.values(ram, counts_per_rev);
+        let [v0, v1] = self.velocity_factor.values(ram, counts_per_rev);
+        let [a0, a1] = match &self.acceleration_unit {
+            AccelerationUnit::Factor(f) => f.values(ram, counts_per_rev),
+            AccelerationUnit::VelocityPerSecond | AccelerationUnit::MsToRpm(_) => [0, 0],
+        };
+        let [w0, w1] = self.velocity_window_factor.values(ram, counts_per_rev);
+        UnitFactorValues([
+            p0,
+            p1,
+            v0,
+            v1,
+            a0,
+            a1,
+            w0,
+            w1,
+            counts_per_rev,
+        ])
+    }
+
     /// The axis' unit conversions from the factors' objects in `ram` now, with the encoder's
     /// `counts_per_rev`.
     pub fn unit_ratios(&self, ram: &[u8], counts_per_rev: u32) -> UnitRatios {
-        let velocity = self.velocity_factor.ratio(ram, counts_per_rev);
+        let velocity = self.velocity_factor.ratio(ram, counts_per_rev).scale();
         UnitRatios {
             position: self.position_factor.ratio(ram, counts_per_rev),
             velocity,
             acceleration: self.acceleration_unit.ratio(ram, counts_per_rev, velocity),
-            velocity_window: self.velocity_window_factor.ratio(ram, counts_per_rev),
+            velocity_window: self.velocity_window_factor.ratio(ram, counts_per_rev).scale(),
         }
     }
 }
@@ -275,17 +355,17 @@ pub enum Operand {
 impl Operand {
     /// The value; an entry outside the RAM reads 0, an unknown encoder resolution too (which
     /// [`Ratio::new`] turns into 1:1).
-    pub fn value(self, ram: &[u8], counts_per_rev: u32) -> u64 {
+    pub fn value(self, ram: &[u8], counts_per_rev: u32) -> u32 {
         match self {
-            Self::Const(v) => u64::from(v),
-            Self::CountsPerRev => u64::from(counts_per_rev),
+            Self::Const(v) => v,
+            Self::CountsPerRev => counts_per_rev,
             Self::Ram { at, len } => {
                 let start = usize::from(at);
                 let bytes = ram.get(start..start + usize::from(len.min(4)));
                 bytes.map_or(0, |b| {
                     b.iter()
                         .rev()
-                        .fold(0u64, |acc, &byte| acc << 8 | u64::from(byte))
+                        .fold(0u32, |acc, &byte| acc << 8 | u32::from(byte))
                 })
             }
         }
@@ -315,8 +395,8 @@ impl Factor {
     /// The ratio with the current values of its entries and the motor encoder's resolution.
     pub fn ratio(&self, ram: &[u8], counts_per_rev: u32) -> Ratio {
         Ratio::new(
-            self.numerator.value(ram, counts_per_rev),
-            self.denominator.value(ram, counts_per_rev),
+            u64::from(self.numerator.value(ram, counts_per_rev)),
+            u64::from(self.denominator.value(ram, counts_per_rev)),
         )
         .times(Ratio::new(u64::from(self.scale.0), u64::from(self.scale.1)))
     }
@@ -701,7 +781,7 @@ mod acceleration_units {
     fn acceleration_objects_convert_in_the_profiles_unit() {
         let ram = [0u8; 8];
         // CiA402: the velocity unit per second; in 0.1 rpm, 600 units/s = 60 rpm/s = 1 rev/s².
-        let tenth_rpm = Ratio::new(u64::from(CPR), 600);
+        let tenth_rpm = Ratio::new(u64::from(CPR), 600).scale();
         assert_eq!(
             AccelerationUnit::VelocityPerSecond.to_internal(600, &ram, CPR, tenth_rpm),
             CPR as f32

@@ -18,7 +18,7 @@
 //! Timing budget (DESIGN.md §6, measured in `benchmarks/REPORT.md`): ≤ 2,000 Cortex-M4
 //! instructions without the PDI bus time, so that a 31.25 µs DC cycle fits.
 
-use ethercat_slave::slave::Application;
+use ethercat_slave::slave::{AppEvents, Application};
 use hal::pdi::EscPdi;
 
 use crate::DriveCore;
@@ -38,7 +38,8 @@ pub fn on_sync0<P: EscPdi, const RAM: usize>(
     };
     // 3–6: CiA402 and the axis, on the objects the master just wrote.
     let (drive, ram) = slave.application();
-    let events = drive.cycle(ram, cycle_ns);
+    let mut events = AppEvents::new();
+    drive.cycle(ram, cycle_ns, &mut events);
     // 7–8: EtherCAT.
     slave.cycle_end(pdi, &events, now_ns)
 }

@@ -75,14 +75,13 @@ impl IoModule {
 }
 
 impl Application for IoModule {
-    fn cycle(&mut self, ram: &mut [u8], _cycle_ns: u32) -> AppEvents {
+    fn cycle(&mut self, ram: &mut [u8], _cycle_ns: u32, _events: &mut AppEvents) {
         // Outputs the master wrote are in the RAM (unpacked only in OP; in SAFEOP 7000h keeps the
         // value the outputs were left at, which `outputs_safe` set).
         self.output_pins = read_u16(ram, self.outputs_at);
         if let Some(dst) = ram.get_mut(self.inputs_at..self.inputs_at + 2) {
             dst.copy_from_slice(&self.input_pins.to_le_bytes());
         }
-        AppEvents::new()
     }
 
     fn outputs_safe(&mut self, ram: &mut [u8], _cycle_ns: u32) -> bool {

@@ -62,11 +62,42 @@ pub fn to_object_units(value: f32, unit: f32) -> u32 {
 
 /// The factor between a profile's user unit and the drive's internal unit (DESIGN.md §4:
 /// increments, increments/s): internal = value × numerator / denominator, e.g. the gear ratio
-/// 6091h or the position factor 6093h. Built fresh every cycle from the objects that hold it.
+/// 6091h or the position factor 6093h. Positions convert exactly (integer arithmetic);
+/// velocities in floating point, best through the ratio's [`Scale`] (made once: a 64-bit
+/// integer to float conversion is a library call on the Cortex-M4, too slow to repeat per
+/// value).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ratio {
     numerator: u64,
     denominator: u64,
+}
+
+/// A [`Ratio`] as the floating-point factors of velocity-like quantities (increments/s,
+/// increments/s²): converts with one multiplication either way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scale {
+    /// numerator / denominator.
+    to_internal: f32,
+    /// denominator / numerator.
+    from_internal: f32,
+}
+
+impl Scale {
+    /// 1:1.
+    pub const ONE: Self = Self {
+        to_internal: 1.0,
+        from_internal: 1.0,
+    };
+
+    /// A velocity in user units/s as increments/s.
+    pub fn velocity_to_internal(self, user: f32) -> f32 {
+        user * self.to_internal
+    }
+
+    /// Increments/s as a velocity in user units/s.
+    pub fn velocity_from_internal(self, increments_per_s: f32) -> f32 {
+        increments_per_s * self.from_internal
+    }
 }
 
 impl Ratio {
@@ -90,6 +121,15 @@ impl Ratio {
         }
     }
 
+    /// The floating-point factors of this ratio.
+    pub fn scale(self) -> Scale {
+        let (n, d) = (self.numerator as f32, self.denominator as f32);
+        Scale {
+            to_internal: n / d,
+            from_internal: d / n,
+        }
+    }
+
     /// This ratio times `other` (e.g. a position factor times a constant per-second scale),
     /// saturating.
     pub fn times(self, other: Self) -> Self {
@@ -104,8 +144,7 @@ impl Ratio {
         if self == Self::ONE {
             return user;
         }
-        let wide = i128::from(user) * i128::from(self.numerator) / i128::from(self.denominator);
-        i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
+        scale(user, self.numerator, self.denominator)
     }
 
     /// Increments as a position in user units (rounded toward zero), saturating.
@@ -113,20 +152,32 @@ impl Ratio {
         if self == Self::ONE {
             return increments;
         }
-        let wide =
-            i128::from(increments) * i128::from(self.denominator) / i128::from(self.numerator);
-        i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
+        scale(increments, self.denominator, self.numerator)
     }
 
     /// A velocity in user units/s as increments/s.
     pub fn velocity_to_internal(self, user: f32) -> f32 {
-        user * (self.numerator as f32 / self.denominator as f32)
+        self.scale().velocity_to_internal(user)
     }
 
     /// Increments/s as a velocity in user units/s.
     pub fn velocity_from_internal(self, increments_per_s: f32) -> f32 {
-        increments_per_s * (self.denominator as f32 / self.numerator as f32)
+        self.scale().velocity_from_internal(increments_per_s)
     }
+}
+
+/// `value × multiplier / divisor` (`divisor` > 0) rounded toward zero, saturating at the i64
+/// range: in 64 bits when the product fits (the common case, a short library division on the
+/// Cortex-M4), else in 128.
+fn scale(value: i64, multiplier: u64, divisor: u64) -> i64 {
+    let narrow = i64::try_from(multiplier)
+        .ok()
+        .zip(i64::try_from(divisor).ok())
+        .and_then(|(m, d)| value.checked_mul(m).map(|p| p / d));
+    narrow.unwrap_or_else(|| {
+        let wide = i128::from(value) * i128::from(multiplier) / i128::from(divisor);
+        i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
+    })
 }
 
 /// Polarity 607Eh (CiA402): bit 7 multiplies the position objects by −1, bit 6 the velocity
@@ -236,6 +287,19 @@ mod tests {
             i64::MAX
         );
         assert_eq!(huge.times(huge), Ratio::new(u64::MAX, 1));
+    }
+
+    #[test]
+    fn a_product_beyond_64_bits_still_converts_exactly() {
+        // 2^40 × 2^30 overflows i64; the quotient 2^50 does not.
+        let r = Ratio::new(1 << 30, 1 << 20);
+        assert_eq!(r.position_to_internal(1 << 40), 1 << 50);
+        assert_eq!(r.position_to_internal(-(1 << 40)), -(1 << 50));
+        assert_eq!(r.position_from_internal(1 << 50), 1 << 40);
+        // Near the boundary both ways agree with the exact quotient, rounded toward zero.
+        let third = Ratio::new(i64::MAX as u64, 3);
+        assert_eq!(third.position_to_internal(1), i64::MAX / 3);
+        assert_eq!(third.position_to_internal(-2), -(i64::MAX / 3 * 2));
     }
 
     #[test]

@@ -88,7 +88,7 @@ impl Trajectory {
     pub fn move_to(&mut self, target: i64, end_speed: f32, limits: Limits, dt_s: f32) -> bool {
         let limits = limits.sane();
         let end_speed = math::clamp(end_speed, 0.0, limits.velocity);
-        let remaining = target.wrapping_sub(self.position) as f32 - self.fraction;
+        let remaining = math::i64_to_f32(target.wrapping_sub(self.position)) - self.fraction;
         let direction = math::sign(remaining);
         let distance = remaining.abs();
         // Speed toward the target (negative while moving away from it).
@@ -165,7 +165,7 @@ impl Trajectory {
         let total = self.fraction + distance;
         let whole = floor(total);
         self.position = self.position.saturating_add(whole);
-        self.fraction = math::clamp(total - whole as f32, 0.0, 0.999_999_94);
+        self.fraction = math::clamp(total - math::i64_to_f32(whole), 0.0, 0.999_999_94);
     }
 }
 
@@ -185,8 +185,8 @@ pub fn slew(value: f32, target: f32, step: f32) -> f32 {
 
 /// ⌊x⌋ as an integer, saturating (`core` has no `f32::floor`).
 fn floor(x: f32) -> i64 {
-    let t = x as i64;
-    if (t as f32) > x {
+    let t = math::f32_to_i64(x);
+    if math::i64_to_f32(t) > x {
         t.saturating_sub(1)
     } else {
         t

@@ -40,7 +40,7 @@ use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, Control
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::math;
 use crate::motor::trajectory::Limits;
-use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, UnitRatios, MOTOR_FAULT_COUNT};
+use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, UnitFactorValues, UnitRatios, MOTOR_FAULT_COUNT};
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
 /// rotation detection level (Pn502, /TGON) default. Neither the adjusting service's "while the
@@ -56,6 +56,7 @@ const FOLLOWING_ERROR: u16 = 1 << 13;
 const EMCY_DATA_FIRST_BYTE: usize = 3;
 
 /// The connection to a motor's control interrupt.
+#[derive(Clone)]
 pub(super) struct AxisPort {
     pub(super) link: &'static AxisLink,
     /// The motor encoder's increments per revolution (unit factors in rpm).
@@ -69,6 +70,7 @@ pub(super) struct AxisPort {
 }
 
 /// The CiA402 side of one axis.
+#[derive(Clone)]
 pub struct DriveAxis {
     /// The axis number the profile's EMCY carries (1 = the first axis), at `emcy_axis_byte`.
     number: u8,
@@ -126,6 +128,9 @@ pub struct DriveAxis {
     /// The unit factors in force where the profile makes them take effect on a command (the
     /// Σ-V-SD's 2300h, `AppVars::units_apply`): read at power-on and on the command.
     latched_units: Option<UnitRatios>,
+    /// The unit conversions of the last cycle and what they were made of (they are rebuilt
+    /// only when a factor's object changes).
+    units_cache: Option<(UnitFactorValues, UnitRatios)>,
     /// The profile's warnings.
     warnings: &'static [Warning],
     /// The warning that holds.
@@ -191,6 +196,7 @@ impl DriveAxis {
             warnings: profile.warnings,
             warning: None,
             latched_units: None,
+            units_cache: None,
             fault_number: None,
             recent: Recent {
                 rpm: 0.0,
@@ -221,6 +227,7 @@ impl DriveAxis {
             results_written: false,
         };
         sync_motor_model(&mut port, self.vars, ram);
+        self.units_cache = None;
         if self.vars.units_apply.is_some() {
             // The factors stored at power-on take effect now (the parameters were loaded).
             self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
@@ -230,9 +237,21 @@ impl DriveAxis {
 
     /// The unit conversions this cycle: the factors in force (latched where the profile makes
     /// them take effect on a command), or the factors' objects read now.
-    fn unit_ratios(&self, ram: &[u8], counts_per_rev: u32) -> UnitRatios {
-        self.latched_units
-            .unwrap_or_else(|| self.vars.unit_ratios(ram, counts_per_rev))
+    fn unit_ratios(&mut self, ram: &[u8], counts_per_rev: u32) -> UnitRatios {
+        if let Some(latched) = self.latched_units {
+            return latched;
+        }
+        let varies = self.vars.unit_factors_vary();
+        if let Some((cached, ratios)) = &self.units_cache {
+            // Fixed factors are made once per motor (attaching one drops the cache).
+            if !varies || *cached == self.vars.unit_factor_values(ram, counts_per_rev) {
+                return *ratios;
+            }
+        }
+        let values = self.vars.unit_factor_values(ram, counts_per_rev);
+        let ratios = self.vars.unit_ratios(ram, counts_per_rev);
+        self.units_cache = Some((values, ratios));
+        ratios
     }
 
     /// Whether `at` (an OD RAM offset) is this axis' command that makes the unit factors take
@@ -696,9 +715,12 @@ impl DriveAxis {
                 mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
             }
             let direction = match set_point.control {
-                modes::Loop::Position => {
-                    set_point.position.saturating_sub(feedback.position) as f32
-                }
+                // Only the sign counts.
+                modes::Loop::Position => match set_point.position.cmp(&feedback.position) {
+                    core::cmp::Ordering::Greater => 1.0,
+                    core::cmp::Ordering::Less => -1.0,
+                    core::cmp::Ordering::Equal => 0.0,
+                },
                 modes::Loop::Velocity => set_point.velocity,
                 modes::Loop::Torque => set_point.torque,
             };

@@ -55,6 +55,7 @@ struct RunningAdjustment {
 pub struct NoSuchAxis(pub usize);
 
 /// The drive application: its axes and the profile's adjusting services.
+#[derive(Clone)]
 pub struct Drive {
     /// The profile's axes (`None` past its count).
     axes: [Option<DriveAxis>; MAX_AXES],
@@ -251,8 +252,7 @@ impl Drive {
 
 /// The slave stack's view of the drive.
 impl Application for Drive {
-    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvents {
-        let mut events = AppEvents::new();
+    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32, events: &mut AppEvents) {
         for i in 0..MAX_AXES {
             let Some(axis) = self.axis_mut(i) else {
                 continue;
@@ -296,7 +296,6 @@ impl Application for Drive {
             // event per axis.
             let _ = events.push(event);
         }
-        events
     }
 
     fn outputs_safe(&mut self, ram: &mut [u8], cycle_ns: u32) -> bool {

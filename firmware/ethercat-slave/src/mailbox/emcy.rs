@@ -215,7 +215,7 @@ pub enum Raised {
 }
 
 /// The errors active now; the source of 1001h.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct ActiveErrors {
     errors: Vec<ActiveError, MAX_ACTIVE_ERRORS>,
     overflow: bool,

@@ -189,13 +189,31 @@ impl PdoPlan {
     }
 }
 
+/// Copies `from` into `to` (equal lengths). The common object sizes are copied as a whole (one
+/// load and store), not through the library `memcpy` call a slice copy of unknown length
+/// becomes: its call and size dispatch cost more than the copy of a few bytes.
+fn copy_bytes(from: &[u8], to: &mut [u8]) {
+    fn fixed<const N: usize>(from: &[u8], to: &mut [u8]) {
+        if let (Ok(from), Ok(to)) = (<&[u8; N]>::try_from(from), <&mut [u8; N]>::try_from(to)) {
+            *to = *from;
+        }
+    }
+    match from.len() {
+        1 => fixed::<1>(from, to),
+        2 => fixed::<2>(from, to),
+        4 => fixed::<4>(from, to),
+        8 => fixed::<8>(from, to),
+        _ => to.copy_from_slice(from),
+    }
+}
+
 /// Copies `bits` bits, LSB first (EtherCAT bit order), from `src` at bit `src_bit` to `dst` at
 /// bit `dst_bit`. Out-of-range parts are skipped, never panicked on.
 fn copy_bits(src: &[u8], src_bit: usize, dst: &mut [u8], dst_bit: usize, bits: usize) {
     if src_bit % 8 == 0 && dst_bit % 8 == 0 && bits % 8 == 0 {
         let (s, d, n) = (src_bit / 8, dst_bit / 8, bits / 8);
         if let (Some(from), Some(to)) = (src.get(s..s + n), dst.get_mut(d..d + n)) {
-            to.copy_from_slice(from);
+            copy_bytes(from, to);
         }
         return;
     }

@@ -37,9 +37,10 @@ pub type AppEvents = heapless::Vec<AppEvent, MAX_APP_EVENTS>;
 pub trait Application {
     /// One process-data cycle (SAFEOP and OP; also once on entering SAFEOP so that the first
     /// inputs are valid). `cycle_ns` is the SYNC0 cycle (1C32h:02), 0 when not synchronised.
-    /// Returns what happened to its errors (an application with several channels, such as a
-    /// two-axis drive, may raise and clear errors on each).
-    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32) -> AppEvents;
+    /// Puts what happened to its errors into `events`, which comes empty (an application with
+    /// several channels, such as a two-axis drive, may raise and clear errors on each; an
+    /// out-parameter, so that the cycle does not copy the whole list back).
+    fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32, events: &mut AppEvents);
 
     /// The EtherCAT state leaves OP: put everything the master's outputs drive into its safe
     /// state at once (no further cycle runs that would do it). Returns whether the application
@@ -85,9 +86,7 @@ pub trait Application {
 pub struct NoApplication;
 
 impl Application for NoApplication {
-    fn cycle(&mut self, _: &mut [u8], _: u32) -> AppEvents {
-        AppEvents::new()
-    }
+    fn cycle(&mut self, _: &mut [u8], _: u32, _: &mut AppEvents) {}
 
     fn outputs_safe(&mut self, _: &mut [u8], _: u32) -> bool {
         false

@@ -14,7 +14,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let Some(cycle_ns) = self.cycle_begin(pdi, now_ns)? else {
             return Ok(());
         };
-        let events = self.app.cycle(&mut self.ram, cycle_ns);
+        let mut events = AppEvents::new();
+        self.app.cycle(&mut self.ram, cycle_ns, &mut events);
         self.cycle_end(pdi, &events, now_ns)
     }
 
@@ -109,7 +110,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// Runs the application's cycle outside the process-data cycle (entering SAFEOP, so that the
     /// first inputs are valid) and reports its errors.
     pub(super) fn run_application(&mut self, now_ns: u64) {
-        let events = self.app.cycle(&mut self.ram, self.sync.cycle_ns);
+        let mut events = AppEvents::new();
+        self.app.cycle(&mut self.ram, self.sync.cycle_ns, &mut events);
         for event in events {
             self.report_app_event(event, now_ns);
         }

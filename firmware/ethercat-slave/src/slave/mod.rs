@@ -69,6 +69,7 @@ const SUB_SYNC_ERROR_LIMIT: u8 = 0x02;
 /// SDO services work on their own copy, [`MailboxSide`]). `RAM` is the OD RAM size (the
 /// generated `<profile>::RAM_SIZE`, or the largest of several profiles to choose one at run
 /// time).
+#[derive(Clone)]
 pub struct SlaveCore<const RAM: usize, A: Application = NoApplication> {
     profile: &'static Profile,
     ram: [u8; RAM],
