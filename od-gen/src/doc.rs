@@ -1151,6 +1151,14 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             "- Touch probe status 60B9h bit 6 (14) shows the trigger source (1 = index).\n",
         );
     }
+    if r.touch_probe_function_bits != u16::MAX {
+        let _ = writeln!(
+            out,
+            "- Touch probe function 60B8h: only bits {} are defined (the others are reserved \
+             and ignored).",
+            bit_list(r.touch_probe_function_bits)
+        );
+    }
     if r.touch_probe1_off_while_homing {
         out.push_str("- Touch probe 1 is switched off while homing runs.\n");
     }
@@ -1432,6 +1440,15 @@ pub fn index(profiles: &[Profile]) -> String {
         regenerate_one("<name>")
     );
     out
+}
+
+/// The set bits of `bits` as a list ("0, 1, 2, 4, 8").
+fn bit_list(bits: u16) -> String {
+    (0..16)
+        .filter(|b| bits & (1 << b) != 0)
+        .map(|b: u16| b.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[cfg(test)]

@@ -851,6 +851,7 @@ impl Default for Cia402File {
             homing_method_aliases: Vec::new(),
             touch_probe_bit7: None,
             touch_probe_bit6_source: false,
+            touch_probe_function_bits: None,
             touch_probe1_off_while_homing: false,
             touch_probe2_off_while_homing: false,
             following_error_fault: true,
@@ -1092,6 +1093,10 @@ pub struct Cia402File {
     /// 60B9h bit 6 (14) shows the trigger source (1 = index).
     #[serde(default)]
     pub touch_probe_bit6_source: bool,
+    /// The 60B8h bits the profile defines (the rest are reserved and ignored); default every
+    /// bit (CiA402).
+    #[serde(default)]
+    pub touch_probe_function_bits: Option<u16>,
     /// Touch probe 1 is switched off while homing runs.
     #[serde(default)]
     pub touch_probe1_off_while_homing: bool,

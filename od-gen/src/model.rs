@@ -2090,6 +2090,8 @@ pub struct Cia402Rules {
     pub touch_probe_bit7: TouchProbeBit7,
     /// 60B9h bit 6 (14) shows the trigger source.
     pub touch_probe_bit6_source: bool,
+    /// The 60B8h bits the profile defines (the others are ignored).
+    pub touch_probe_function_bits: u16,
     /// Touch probe 1 is off while homing runs.
     pub touch_probe1_off_while_homing: bool,
     /// Touch probe 2 is off while homing runs.
@@ -2161,6 +2163,7 @@ impl Default for Cia402Rules {
             homing_method_aliases: Vec::new(),
             touch_probe_bit7: TouchProbeBit7::None,
             touch_probe_bit6_source: false,
+            touch_probe_function_bits: u16::MAX,
             touch_probe1_off_while_homing: false,
             touch_probe2_off_while_homing: false,
             following_error_fault: true,

@@ -550,6 +550,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             })?,
         },
         touch_probe_bit6_source: f.cia402.touch_probe_bit6_source,
+        touch_probe_function_bits: f.cia402.touch_probe_function_bits.unwrap_or(u16::MAX),
         touch_probe1_off_while_homing: f.cia402.touch_probe1_off_while_homing,
         touch_probe2_off_while_homing: f.cia402.touch_probe2_off_while_homing,
         following_error_fault: f.cia402.following_error_fault,

@@ -1399,8 +1399,12 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false }"
     ));
+    // 60B8h bits a profile defines: every bit unless the profile lists them (the Σ-V-SD's).
+    let sigma = od_gen::builtin("sigma-v-sd").unwrap();
+    assert_eq!(sigma.cia402.touch_probe_function_bits, 0x1317);
+    assert!(od_gen::rust::generate(&[sigma]).contains("function_bits: 0x1317"));
     // Profile position: CiA402's bit 6 and bit 9 unless the profile says otherwise.
     let p = od_gen::parse(
         &appended("[cia402]\npp_bit6_absolute = true\npp_change_on_set_point = false"),
@@ -1425,7 +1429,7 @@ fn cia402_rules_are_resolved_and_checked() {
     )
     .unwrap();
     let rust = od_gen::rust::generate(&[p]);
-    assert!(rust.contains("bit7: cia402::touch_probe::Bit7::InputLevel, bit6_shows_source: false, off_while_homing: [false, true]"));
+    assert!(rust.contains("bit7: cia402::touch_probe::Bit7::InputLevel, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, true]"));
     let (key, _) = invalid(&appended("[cia402]\ntouch_probe_bit7 = \"blink\""));
     assert_eq!(key, "cia402.touch_probe_bit7");
     for bad in [

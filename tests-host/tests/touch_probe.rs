@@ -126,3 +126,90 @@ fn touch_probes_latch_the_edge_positions_of_inputs_and_index() {
         assert_eq!(sd.sdo_read::<i32>(0x60BB, 0).await.expect("60BBh"), falling);
     });
 }
+
+/// RSE 7.9 (60B8h): bit 2 "probe 1 trigger signal selection: 0 IN input signal, 1
+/// meaningless": the drive has no index latch, so a master that sets bit 2 still latches the
+/// probe input (CiA402 would latch the encoder index instead, as the test above shows). The
+/// motor turns at 100 rpm in profile velocity past the probe 1 sensor (0.3 rev) and the encoder
+/// index (1.0 rev); 60BAh must hold the sensor's edge.
+#[test]
+fn rse_touch_probe_source_bit_is_meaningless_the_input_latches() {
+    use tests_host::master_for;
+    use tests_host::vendor::{self, Sdo};
+    // The RSE's free-run cycle (1C32h:02 default).
+    const RSE_CYCLE_NS: u64 = 4_000_000;
+    // RSE 1600h: 6040h at byte 0, 607Ah at 2, 60B8h at 6.
+    const CONTROLWORD_AT: usize = 0;
+    const TOUCH_PROBE_FUNCTION_AT: usize = 6;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("rse", 1).expect("rse"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_switches(SwitchParams {
+                probes: [Some((PROBE1.0 * TAU, PROBE1.1 * TAU)), None],
+                ..SwitchParams::default()
+            });
+        // Command units are increments (6091h 1:1 by default): 100 rpm, 10 rev/s² ramps, and
+        // 607Fh (default 10000 units/s, 0.6 rpm) raised to 3000 rpm.
+        let group = vendor::into_op(
+            &m,
+            md,
+            &[
+                Sdo::I8(0x6060, 0, PV),
+                Sdo::I32(0x60FF, 0, counts(100.0 / 60.0)),
+                Sdo::U32(0x6083, 0, (10.0 * CPR) as u32),
+                Sdo::U32(0x6084, 0, (10.0 * CPR) as u32),
+                Sdo::U32(0x607F, 0, (50.0 * CPR) as u32),
+            ],
+        )
+        .await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        let function = (ENABLE | SOURCE_INDEX | RISING).to_le_bytes();
+        let mut inputs = Vec::new();
+        for cw in vendor::enable_sequence(5) {
+            inputs = vendor::exchange(
+                &m,
+                md,
+                &group,
+                &[
+                    (CONTROLWORD_AT, &cw.to_le_bytes()),
+                    (TOUCH_PROBE_FUNCTION_AT, &function),
+                ],
+                RSE_CYCLE_NS,
+            )
+            .await;
+        }
+        assert!(!inputs.is_empty());
+        let status: u16 = sd.sdo_read(0x6041, 0).await.expect("6041h");
+        assert_eq!(status & STATE_MASK, OPERATION_ENABLED);
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(status & 0x0007, 0x0001, "probe 1 enabled, nothing stored");
+        // Past the sensor (0.3 rev) and the index (1.0 rev).
+        let mut cycles = 0;
+        while vendor::motor(&m).1 < 1.3 {
+            cycles += 1;
+            assert!(cycles < 2_000, "the motor did not turn");
+            vendor::exchange(
+                &m,
+                md,
+                &group,
+                &[
+                    (CONTROLWORD_AT, &vendor::ENABLE_OPERATION.to_le_bytes()),
+                    (TOUCH_PROBE_FUNCTION_AT, &function),
+                ],
+                RSE_CYCLE_NS,
+            )
+            .await;
+        }
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(status & 0x0007, 0x0003, "probe 1: the rising edge stored");
+        let latched: i32 = sd.sdo_read(0x60BA, 0).await.expect("60BAh");
+        assert_at(
+            latched,
+            PROBE1.0,
+            "60BAh (the input, not the index at 1.0 rev)",
+        );
+    });
+}

@@ -60,14 +60,36 @@ pub enum Bit7 {
 }
 
 /// A profile's deviations.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Rules {
     /// 60B9h bit 7 (15).
     pub bit7: Bit7,
     /// 60B9h bit 6 (14) shows the trigger source (1 = index; SDV3-E).
     pub bit6_shows_source: bool,
+    /// The 60B8h bits the profile defines; the others are reserved and ignored (a master's
+    /// write of them has no effect): e.g. the Σ-V-SD's bits 5/13 (one sampling enable per
+    /// probe) and 10, the RSE's source bits (no index latch). [`Rules::ALL_FUNCTION_BITS`]
+    /// for CiA402.
+    pub function_bits: u16,
     /// Probe 1 / 2 is switched off while homing runs (Σ-V-SD §6.9: probe 1, GHA-E §6.8: both).
     pub off_while_homing: [bool; 2],
+}
+
+impl Rules {
+    /// Every 60B8h bit defined (CiA402).
+    pub const ALL_FUNCTION_BITS: u16 = u16::MAX;
+}
+
+/// CiA402: no deviation.
+impl Default for Rules {
+    fn default() -> Self {
+        Self {
+            bit7: Bit7::None,
+            bit6_shows_source: false,
+            function_bits: Self::ALL_FUNCTION_BITS,
+            off_while_homing: [false; 2],
+        }
+    }
 }
 
 /// The inputs of one cycle.
@@ -237,7 +259,7 @@ impl TouchProbes {
 
     /// One cycle.
     pub fn step(&mut self, i: &Inputs, rules: &Rules) -> Output {
-        let [low, high] = i.function.to_le_bytes();
+        let [low, high] = (i.function & rules.function_bits).to_le_bytes();
         let [off1, off2] = rules.off_while_homing.map(|off| off && i.homing);
         let gate = |f: u8, off: bool| if off { f & !function::ENABLE } else { f };
         let [p1, p2] = &mut self.probes;
@@ -265,6 +287,7 @@ mod tests {
     const CIA402: Rules = Rules {
         bit7: Bit7::None,
         bit6_shows_source: false,
+        function_bits: Rules::ALL_FUNCTION_BITS,
         off_while_homing: [false; 2],
     };
 
@@ -369,7 +392,7 @@ mod tests {
         let sdv3 = Rules {
             bit7: Bit7::ToggleOnStore,
             bit6_shows_source: true,
-            off_while_homing: [false; 2],
+            ..CIA402
         };
         let mut b = Bench::default();
         let f = (ENABLE | CONTINUOUS | SOURCE_INDEX | RISING) as u16;
@@ -395,5 +418,47 @@ mod tests {
         b.inputs.homing = true;
         let f = (ENABLE | RISING) as u16 | (u16::from(ENABLE | RISING) << 8);
         assert_eq!(b.step(f, &sigma).status, 0x0100, "probe 1 off while homing");
+    }
+
+    #[test]
+    fn reserved_function_bits_are_ignored() {
+        // Σ-V-SD §6.10: per probe only enable, single/continuous, source (probe 1) and one
+        // sampling enable (bit 4 / 12); bit 5 (13) is reserved: no falling-edge sampling.
+        let sigma = Rules {
+            function_bits: 0x1317,
+            ..CIA402
+        };
+        let mut b = Bench::default();
+        let falling_only = (ENABLE | FALLING) as u16;
+        assert_eq!(b.step(falling_only, &sigma).status, 0x0001);
+        b.edge(0, true, 10);
+        b.edge(0, false, 20);
+        let out = b.step(falling_only, &sigma);
+        assert_eq!((out.status, out.values[1]), (0x0001, 0), "bit 5 reserved");
+        // The same write under CiA402 latches the falling edge.
+        let mut b = Bench::default();
+        b.step(falling_only, &CIA402);
+        b.edge(0, true, 10);
+        b.edge(0, false, 20);
+        let out = b.step(falling_only, &CIA402);
+        assert_eq!((out.status, out.values[1]), (0x0005, 20));
+
+        // RSE: source bit 2 "meaningless" (no index latch): the probe input stays the source.
+        let rse = Rules {
+            function_bits: 0x3333,
+            ..CIA402
+        };
+        let mut b = Bench::default();
+        let index_rising = (ENABLE | SOURCE_INDEX | RISING) as u16;
+        b.step(index_rising, &rse);
+        b.index(500);
+        assert_eq!(b.step(index_rising, &rse).status, 0x0001, "no index latch");
+        b.edge(0, true, 700);
+        let out = b.step(index_rising, &rse);
+        assert_eq!(
+            (out.status, out.values[0]),
+            (0x0003, 700),
+            "the input latched"
+        );
     }
 }
