@@ -88,7 +88,8 @@ impl Trajectory {
     pub fn move_to(&mut self, target: i64, end_speed: f32, limits: Limits, dt_s: f32) -> bool {
         let limits = limits.sane();
         let end_speed = math::clamp(end_speed, 0.0, limits.velocity);
-        let remaining = math::i64_to_f32(target.wrapping_sub(self.position)) - self.fraction;
+        // Beyond 2^31 increments the distance only has to be long enough to need no braking.
+        let remaining = math::saturating_f32(target.wrapping_sub(self.position)) - self.fraction;
         let direction = math::sign(remaining);
         let distance = remaining.abs();
         // Speed toward the target (negative while moving away from it).
@@ -165,7 +166,7 @@ impl Trajectory {
         let total = self.fraction + distance;
         let whole = floor(total);
         self.position = self.position.saturating_add(whole);
-        self.fraction = math::clamp(total - math::i64_to_f32(whole), 0.0, 0.999_999_94);
+        self.fraction = math::clamp(total - math::saturating_f32(whole), 0.0, 0.999_999_94);
     }
 }
 
@@ -183,14 +184,15 @@ pub fn slew(value: f32, target: f32, step: f32) -> f32 {
     value + math::clamp_symmetric(target - value, step)
 }
 
-/// ⌊x⌋ as an integer, saturating (`core` has no `f32::floor`).
+/// ⌊x⌋ as an integer, saturating at the i32 range (`core` has no `f32::floor`; one cycle's
+/// travel is far inside it, and 32-bit conversions are single FPU instructions).
 fn floor(x: f32) -> i64 {
-    let t = math::f32_to_i64(x);
-    if math::i64_to_f32(t) > x {
+    let t = x as i32;
+    i64::from(if (t as f32) > x {
         t.saturating_sub(1)
     } else {
         t
-    }
+    })
 }
 
 #[cfg(test)]
@@ -427,6 +429,11 @@ mod tests {
         assert_eq!(floor(-0.5), -1);
         assert_eq!(floor(2.0), 2);
         assert_eq!(floor(-2.0), -2);
-        assert_eq!(floor(1e30), i64::MAX);
+        assert_eq!(
+            floor(1e30),
+            i64::from(i32::MAX),
+            "saturates at the i32 range"
+        );
+        assert_eq!(floor(-1e30), i64::from(i32::MIN));
     }
 }

@@ -40,7 +40,9 @@ use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, Control
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::math;
 use crate::motor::trajectory::Limits;
-use crate::profile::{self, AppVars, Cia402Rules, DriveProfile, UnitFactorValues, UnitRatios, MOTOR_FAULT_COUNT};
+use crate::profile::{
+    self, AppVars, Cia402Rules, DriveProfile, UnitFactorValues, UnitRatios, MOTOR_FAULT_COUNT,
+};
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
 /// rotation detection level (Pn502, /TGON) default. Neither the adjusting service's "while the
@@ -63,8 +65,9 @@ pub(super) struct AxisPort {
     pub(super) counts_per_rev: u32,
     /// The axis' trip counter at the last fault raised here.
     trips_seen: u32,
-    /// The motor model last handed to the axis.
-    model_sent: Option<MotorModel>,
+    /// The motor data objects (R, Ld, Lq, J as the objects hold them) last handed to the axis
+    /// as a model.
+    model_sent: Option<[u32; 4]>,
     /// The results of the finished identification are in the OD.
     results_written: bool,
 }
@@ -386,17 +389,18 @@ impl DriveAxis {
         };
         let mut refused_during_homing = false;
         let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
-            // A mode 6502h does not list is not taken: the drive keeps the mode it runs (and
-            // 6061h shows it).
-            let supported = read_u32(ram, vars.supported_drive_modes)
-                .is_none_or(|s| modes::is_supported(requested as i8, s));
-            // Profile rule: no mode change while homing runs (the SDV3-E's oPE).
-            let locked = self.rules.mode_change_while_homing_error.is_some()
-                && self.profile_modes.homing_running()
-                && requested != self.running_mode;
-            refused_during_homing = locked;
-            if supported && !locked {
-                self.running_mode = requested;
+            if requested != self.running_mode {
+                // A mode 6502h does not list is not taken: the drive keeps the mode it runs
+                // (and 6061h shows it).
+                let supported = read_u32(ram, vars.supported_drive_modes)
+                    .is_none_or(|s| modes::is_supported(requested as i8, s));
+                // Profile rule: no mode change while homing runs (the SDV3-E's oPE).
+                let locked = self.rules.mode_change_while_homing_error.is_some()
+                    && self.profile_modes.homing_running();
+                refused_during_homing = locked;
+                if supported && !locked {
+                    self.running_mode = requested;
+                }
             }
             [self.running_mode]
         });
@@ -536,7 +540,11 @@ impl DriveAxis {
             }
         }
         let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
-        sync_motor_model(&mut port, vars, ram);
+        if motion == Motion::Off || feedback.state == AxisState::Identified {
+            // The axis takes a new model only in these states (not while it runs): checked
+            // only then.
+            sync_motor_model(&mut port, vars, ram);
+        }
         let identifying = mode == Mode::Identification;
         match (feedback.state, feedback.identified) {
             (AxisState::Identified, Some(result)) if identifying => {
@@ -622,25 +630,24 @@ impl DriveAxis {
             .then(|| software_limits(ram, vars, position_ratio, pol))
             .flatten();
         if motion::is_profile_mode(mode) {
-            let inputs =
-                profile_inputs(ram, vars, cw, motion, &targets, &feedback, &units, rated_nm);
-            let inputs = motion::Inputs {
-                position_range: limits,
-                target_position: pol.position(inputs.target_position),
-                ..inputs
-            };
-            let inputs = if mode == Mode::Homing {
+            let mut inputs = profile_inputs(
+                ram,
+                vars,
+                (cw, mode, motion),
+                &targets,
+                &feedback,
+                &units,
+                rated_nm,
+            );
+            inputs.position_range = limits;
+            inputs.target_position = pol.position(inputs.target_position);
+            if mode == Mode::Homing {
                 // Read only where needed: a seqlock read of the captures.
                 let captures = shifted_captures(link.captures(), self.position_shift);
-                motion::Inputs {
-                    homing_method: read_bytes::<1>(ram, vars.homing_method)
-                        .and_then(|[m]| self.rules.homing_reference(m as i8)),
-                    homing_signals: homing_signals(&captures),
-                    ..inputs
-                }
-            } else {
-                inputs
-            };
+                inputs.homing_method = read_bytes::<1>(ram, vars.homing_method)
+                    .and_then(|[m]| self.rules.homing_reference(m as i8));
+                inputs.homing_signals = homing_signals(&captures);
+            }
             let out = self.profile_modes.step(
                 mode,
                 &inputs,
@@ -1096,20 +1103,19 @@ impl DriveAxis {
     }
 }
 
-/// The objects of the profile modes this cycle, in axis units (ramps in the velocity unit per
-/// second; 6081h and 60FFh limited by 607Fh when the profile has it).
-#[allow(clippy::too_many_arguments)]
+/// What the profile modes read this cycle (user units converted with `units`): for mode
+/// `mode` only what it uses (the objects of the other modes are not read: each read costs
+/// instructions in the SYNC0 handler), the rest neutral.
 fn profile_inputs(
     ram: &[u8],
     vars: &AppVars,
-    cw: u16,
-    motion: Motion,
+    (cw, mode, motion): (u16, Mode, Motion),
     targets: &Targets,
     feedback: &AxisFeedback,
     units: &UnitRatios,
     rated_nm: f32,
 ) -> motion::Inputs {
-    let (position_ratio, velocity_ratio) = (units.position, units.velocity);
+    let velocity_ratio = units.velocity;
     let velocity = |at, default: f32| {
         read_u32(ram, at).map_or(default, |v| velocity_ratio.velocity_to_internal(v as f32))
     };
@@ -1120,65 +1126,95 @@ fn profile_inputs(
     let window_ratio = units.velocity_window;
     let window =
         |at| read_u16(ram, at).map_or(0.0, |v| window_ratio.velocity_to_internal(f32::from(v)));
-    // 607Fh, and the maximum motor speed 6080h above it.
-    let max_velocity = math::min(
-        velocity(vars.max_profile_velocity, f32::INFINITY),
-        velocity(vars.max_motor_speed, f32::INFINITY),
-    );
-    let acceleration = accel(vars.profile_acceleration, 0.0);
-    let deceleration = accel(vars.profile_deceleration, acceleration);
-    let move_velocity = velocity(vars.profile_velocity, 0.0);
-    let slope_permille = read_u32(ram, vars.torque_slope).unwrap_or(0);
-    motion::Inputs {
+    let time = |at| read_u16(ram, at).unwrap_or(0);
+    let mut inputs = motion::Inputs {
         controlword: cw,
         running: motion == Motion::Run,
         halted: cw & controlword::HALT != 0 && matches!(motion, Motion::Stop(_)),
-        target_position: read_i32(ram, vars.target_position).unwrap_or(0),
+        target_position: 0,
         target_velocity: targets.velocity,
         target_torque: targets.torque,
-        move_limits: Limits {
-            velocity: if move_velocity < max_velocity {
-                move_velocity
-            } else {
-                max_velocity
-            },
-            acceleration,
-            deceleration,
-        },
-        velocity_limits: Limits {
-            velocity: max_velocity,
-            acceleration,
-            deceleration,
-        },
-        torque_slope: units::torque_from_permille_f32(slope_permille as f32, rated_nm),
-        position_ratio,
-        position_window: (
-            read_u32(ram, vars.position_window).unwrap_or(0),
-            read_u16(ram, vars.position_window_time).unwrap_or(0),
-        ),
-        velocity_window: (
-            window(vars.velocity_window),
-            read_u16(ram, vars.velocity_window_time).unwrap_or(0),
-        ),
-        velocity_threshold: (
-            window(vars.velocity_threshold),
-            read_u16(ram, vars.velocity_threshold_time).unwrap_or(0),
-        ),
+        move_limits: Limits::default(),
+        velocity_limits: Limits::default(),
+        torque_slope: 0.0,
+        position_ratio: units.position,
+        position_window: (0, 0),
+        velocity_window: (0.0, 0),
+        velocity_threshold: (0.0, 0),
         actual_position: feedback.position,
         actual_velocity: feedback.velocity,
         // The drive sets the method in the cycle (it needs the profile's rules).
         homing_method: None,
-        homing_speeds: (
-            velocity(vars.homing_speed_switch, 0.0),
-            velocity(vars.homing_speed_zero, 0.0),
-            // A profile without 609Ah (the SDV3-E) homes on its profile acceleration 6083h.
-            accel(vars.homing_acceleration, acceleration),
-        ),
+        homing_speeds: (0.0, 0.0, 0.0),
         homing_signals: homing::Signals::default(),
-        homing_timeout_ms: read_u16(ram, vars.homing_timeout).map(u32::from),
+        homing_timeout_ms: None,
         // The drive sets the software limits (it reads them once per cycle).
         position_range: None,
+    };
+    // 607Fh, and the maximum motor speed 6080h above it.
+    let max_velocity = || {
+        math::min(
+            velocity(vars.max_profile_velocity, f32::INFINITY),
+            velocity(vars.max_motor_speed, f32::INFINITY),
+        )
+    };
+    let acceleration = || accel(vars.profile_acceleration, 0.0);
+    match mode {
+        Mode::ProfilePosition => {
+            inputs.target_position = read_i32(ram, vars.target_position).unwrap_or(0);
+            let max = max_velocity();
+            let acceleration = acceleration();
+            let move_velocity = velocity(vars.profile_velocity, 0.0);
+            inputs.move_limits = Limits {
+                velocity: if move_velocity < max {
+                    move_velocity
+                } else {
+                    max
+                },
+                acceleration,
+                deceleration: accel(vars.profile_deceleration, acceleration),
+            };
+            inputs.position_window = (
+                read_u32(ram, vars.position_window).unwrap_or(0),
+                time(vars.position_window_time),
+            );
+        }
+        Mode::ProfileVelocity => {
+            let acceleration = acceleration();
+            inputs.velocity_limits = Limits {
+                velocity: max_velocity(),
+                acceleration,
+                deceleration: accel(vars.profile_deceleration, acceleration),
+            };
+            inputs.velocity_window = (
+                window(vars.velocity_window),
+                time(vars.velocity_window_time),
+            );
+            inputs.velocity_threshold = (
+                window(vars.velocity_threshold),
+                time(vars.velocity_threshold_time),
+            );
+        }
+        Mode::ProfileTorque => {
+            let slope_permille = read_u32(ram, vars.torque_slope).unwrap_or(0);
+            inputs.torque_slope = units::torque_from_permille_f32(slope_permille as f32, rated_nm);
+        }
+        Mode::Homing => {
+            inputs.position_window = (
+                read_u32(ram, vars.position_window).unwrap_or(0),
+                time(vars.position_window_time),
+            );
+            inputs.homing_speeds = (
+                velocity(vars.homing_speed_switch, 0.0),
+                velocity(vars.homing_speed_zero, 0.0),
+                // A profile without 609Ah (the SDV3-E) homes on its profile acceleration 6083h.
+                accel(vars.homing_acceleration, acceleration()),
+            );
+            inputs.homing_timeout_ms = read_u16(ram, vars.homing_timeout).map(u32::from);
+        }
+        _ => {}
     }
+    inputs
 }
 
 /// The torque limits (positive, negative magnitudes; N·m) of 6072h and 60E0h/60E1h, the lower
@@ -1191,7 +1227,8 @@ fn torque_limits(ram: &[u8], vars: &AppVars, rated_nm: f32) -> Option<(f32, f32)
     if max.is_none() && positive.is_none() && negative.is_none() {
         return None;
     }
-    let lower = |a: Option<u16>, b: Option<u16>| a.into_iter().chain(b).min().unwrap_or(u16::MAX);
+    // The lower of the two that exist (u16::MAX: no limit).
+    let lower = |a: Option<u16>, b: Option<u16>| a.unwrap_or(u16::MAX).min(b.unwrap_or(u16::MAX));
     let nm = |p: u16| units::torque_from_permille_f32(f32::from(p), rated_nm);
     Some((nm(lower(max, positive)), nm(lower(max, negative))))
 }
@@ -1273,17 +1310,25 @@ fn shifted_captures(mut c: Captures, shift: i64) -> Captures {
 /// to the axis when they changed since the last call; the axis applies them when it is not
 /// running.
 fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
-    let object = |at: Option<u16>, unit: f32| read_u32(ram, at).unwrap_or(0) as f32 * unit;
-    let model = MotorModel {
-        resistance_ohm: object(vars.motor_resistance, units::MICRO),
-        ld_h: object(vars.motor_ld, units::NANO),
-        lq_h: object(vars.motor_lq, units::NANO),
-        inertia_kgm2: object(vars.motor_inertia, units::NANO),
-    };
-    if port.model_sent != Some(model) {
-        port.link.set_motor_model(model);
-        port.model_sent = Some(model);
+    // Compared as the objects hold them: converted only when they changed.
+    let object = |at| read_u32(ram, at).unwrap_or(0);
+    let objects = [
+        object(vars.motor_resistance),
+        object(vars.motor_ld),
+        object(vars.motor_lq),
+        object(vars.motor_inertia),
+    ];
+    if matches!(port.model_sent, Some(sent) if profile::words_equal(&sent, &objects)) {
+        return;
     }
+    let [resistance, ld, lq, inertia] = objects;
+    port.link.set_motor_model(MotorModel {
+        resistance_ohm: resistance as f32 * units::MICRO,
+        ld_h: ld as f32 * units::NANO,
+        lq_h: lq as f32 * units::NANO,
+        inertia_kgm2: inertia as f32 * units::NANO,
+    });
+    port.model_sent = Some(objects);
 }
 
 /// [`STANDSTILL_RPM`] in increments/s for an encoder of `counts_per_rev`.

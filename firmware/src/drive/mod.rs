@@ -273,9 +273,10 @@ impl Application for Drive {
             let Some(axis) = self.axis_mut(i) else {
                 continue;
             };
-            let (emcy_code, data) = axis.fault_emcy();
             let event = match (before, axis.fault_code()) {
+                (None, None) => continue,
                 (Some(_), None) => {
+                    let (emcy_code, _) = axis.fault_emcy();
                     self.show_active_alarms(ram);
                     // The unit's error stays while another axis still holds it.
                     if self.emcy_code_held(emcy_code, i) {
@@ -284,6 +285,7 @@ impl Application for Drive {
                     AppEvent::ErrorCleared(emcy_code)
                 }
                 (None, Some(_)) => {
+                    let (emcy_code, data) = axis.fault_emcy();
                     self.alarm_raised(i, ram);
                     AppEvent::ErrorRaised {
                         code: emcy_code,

@@ -10,6 +10,7 @@ mod motor;
 mod process_data;
 mod sdo;
 mod sync0_handler;
+mod sync0_with_axis;
 
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 
@@ -21,7 +22,13 @@ const MODE_CYCLIC_SYNC_POSITION: i8 = 8;
 const TARGET_POSITION: i32 = 0x0012_3456;
 
 /// Every benchmark, in report order.
-pub const ALL: &[fn(&mut Harness)] = &[process_data::run, sync0_handler::run, sdo::run, motor::run];
+pub const ALL: &[fn(&mut Harness)] = &[
+    process_data::run,
+    sync0_handler::run,
+    sync0_with_axis::run,
+    sdo::run,
+    motor::run,
+];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.
 fn read<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
@@ -53,18 +60,19 @@ fn axis_vars() -> Option<&'static firmware::profile::AppVars> {
 /// `controlword`, the target position and CSP. Packing it with an Rx copy plan gives the SM2
 /// image, so no image layout is assumed. `None` if the profile lacks one of the variables.
 fn master_outputs(controlword: u16) -> Option<[u8; RAM_SIZE]> {
+    master_outputs_for(controlword, TARGET_POSITION, MODE_CYCLIC_SYNC_POSITION)
+}
+
+/// [`master_outputs`] with any target position 607Ah and mode 6060h.
+fn master_outputs_for(controlword: u16, target_position: i32, mode: i8) -> Option<[u8; RAM_SIZE]> {
     let vars = axis_vars()?;
     let mut master = [0; RAM_SIZE];
     let ok = write(&mut master, vars.controlword, &controlword.to_le_bytes())
         && write(
             &mut master,
             vars.target_position,
-            &TARGET_POSITION.to_le_bytes(),
+            &target_position.to_le_bytes(),
         )
-        && write(
-            &mut master,
-            vars.modes_of_operation,
-            &MODE_CYCLIC_SYNC_POSITION.to_le_bytes(),
-        );
+        && write(&mut master, vars.modes_of_operation, &mode.to_le_bytes());
     ok.then_some(master)
 }

@@ -40,13 +40,13 @@ const BUS_VOLTAGE: f32 = 48.0;
 /// Power-stage temperature of the measurement, °C.
 const TEMPERATURE: f32 = 25.0;
 /// The (constant) encoder position of the measurement, increments: any value away from zero.
-const POSITION: i64 = 0x0012_3456;
+pub(super) const POSITION: i64 = 0x0012_3456;
 /// Margin of the duty checks (the duties of a steady state are 0.5 up to rounding).
 const DUTY_TOLERANCE: f32 = 1e-3;
 
 /// The default tuning with the position and speed loops every `loop_divider`-th PWM period and
 /// set-points every `bus_cycle_s`.
-fn tuning(loop_divider: u32, bus_cycle_s: f32) -> Tuning {
+pub(super) fn tuning(loop_divider: u32, bus_cycle_s: f32) -> Tuning {
     Tuning {
         loop_divider,
         bus_cycle_s,
@@ -203,7 +203,7 @@ const COMMAND: AxisCommand = AxisCommand {
 };
 
 /// The sample of the measurement: no current, 48 V, 25 °C, the encoder at rest.
-const SAMPLE: Sample = Sample {
+pub(super) const SAMPLE: Sample = Sample {
     currents: PhaseCurrents {
         a: 0.0,
         b: 0.0,

@@ -44,7 +44,7 @@ const PARAMETER: u16 = 0x2F00;
 
 /// A PDI access outside the image.
 #[derive(Debug)]
-struct OutOfImage;
+pub(super) struct OutOfImage;
 
 impl PdiError for OutOfImage {
     fn kind(&self) -> PdiErrorKind {
@@ -54,7 +54,7 @@ impl PdiError for OutOfImage {
 
 /// The ESC as a RAM image: reads and writes are copies; every access returns the AL event
 /// register, as the ET1100's SPI PDI does.
-struct RamEsc {
+pub(super) struct RamEsc {
     mem: [u8; ESC_IMAGE],
 }
 
@@ -89,23 +89,46 @@ impl EscPdi for RamEsc {
     fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<AlEvent, OutOfImage> {
         let at = usize::from(addr);
         let src = self.mem.get(at..at + buf.len()).ok_or(OutOfImage)?;
-        buf.copy_from_slice(src);
+        transfer(src, buf);
         Ok(self.events())
     }
 
     fn write(&mut self, addr: u16, data: &[u8]) -> Result<AlEvent, OutOfImage> {
         let at = usize::from(addr);
         let dst = self.mem.get_mut(at..at + data.len()).ok_or(OutOfImage)?;
-        dst.copy_from_slice(data);
+        transfer(data, dst);
         Ok(self.events())
     }
 }
 
+/// The data of a PDI access: what the board's SPI transfer (DMA) does, which the budget
+/// excludes. Transfers of up to 8 bytes (the default process-data images, registers) are
+/// fixed-size copies instead of the library `memcpy` call, so that the stand-in costs next to
+/// nothing.
+fn transfer(from: &[u8], to: &mut [u8]) {
+    fn fixed<const N: usize>(from: &[u8], to: &mut [u8]) {
+        if let (Ok(from), Ok(to)) = (<&[u8; N]>::try_from(from), <&mut [u8; N]>::try_from(to)) {
+            *to = *from;
+        }
+    }
+    match from.len() {
+        1 => fixed::<1>(from, to),
+        2 => fixed::<2>(from, to),
+        3 => fixed::<3>(from, to),
+        4 => fixed::<4>(from, to),
+        5 => fixed::<5>(from, to),
+        6 => fixed::<6>(from, to),
+        7 => fixed::<7>(from, to),
+        8 => fixed::<8>(from, to),
+        _ => to.copy_from_slice(from),
+    }
+}
+
 /// The drive's core, its mailbox side and the ESC image.
-struct Setup {
-    core: DriveCore<RAM_SIZE>,
+pub(super) struct Setup {
+    pub(super) core: DriveCore<RAM_SIZE>,
     mailbox: MailboxSide<RAM_SIZE>,
-    esc: RamEsc,
+    pub(super) esc: RamEsc,
     rx: PdoPlan,
 }
 
@@ -127,7 +150,7 @@ impl Setup {
     }
 
     /// INIT → PREOP → SAFEOP → OP in free run with the profile's mailbox and default mapping.
-    fn new() -> Option<Self> {
+    pub(super) fn new() -> Option<Self> {
         let mut ram = [0; RAM_SIZE];
         let mut od = Dictionary::new(&PROFILE.od, &mut ram);
         od.load_defaults();
@@ -158,12 +181,17 @@ impl Setup {
 
     /// Puts the master's outputs into SM2 ([`master_outputs`] packed by the Rx plan).
     fn set_outputs(&mut self, cw: u16) -> Option<()> {
-        let master = master_outputs(cw)?;
+        self.set_master(&master_outputs(cw)?);
+        Some(())
+    }
+
+    /// Puts the master's side of the RxPDO objects (an OD RAM image) into SM2, packed by the Rx
+    /// plan.
+    pub(super) fn set_master(&mut self, master: &[u8; RAM_SIZE]) {
         let mut image = [0; MAX_IMAGE];
-        self.rx.pack(&master, &mut image);
+        self.rx.pack(master, &mut image);
         self.esc
             .set(PROFILE.od.device.outputs.start, &image[..OUTPUTS_SIZE]);
-        Some(())
     }
 
     /// A segmented SDO download left half done: the init announces 4 bytes and carries none, so

@@ -74,6 +74,15 @@ struct CopyStep {
     bits: u16,
 }
 
+impl CopyStep {
+    /// The image byte offset and byte length of an entry on byte boundaries in the image (the
+    /// OD RAM always holds a value from a byte boundary), `None` for a bit-packed one.
+    fn bytes(&self) -> Option<(usize, usize)> {
+        (self.image_bit % 8 == 0 && self.bits % 8 == 0)
+            .then(|| (usize::from(self.image_bit / 8), usize::from(self.bits / 8)))
+    }
+}
+
 /// The copy plan of one direction.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct PdoPlan {
@@ -166,6 +175,15 @@ impl PdoPlan {
     pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
         for step in &self.steps {
             if let Slot::Ram(offset) = step.slot {
+                if let Some((at, len)) = step.bytes() {
+                    let offset = usize::from(offset);
+                    if let (Some(from), Some(to)) =
+                        (image.get(at..at + len), ram.get_mut(offset..offset + len))
+                    {
+                        copy_bytes(from, to);
+                    }
+                    continue;
+                }
                 copy_bits(
                     image,
                     step.image_bit as usize,
@@ -181,10 +199,25 @@ impl PdoPlan {
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
         for step in &self.steps {
             let (src, at) = match step.slot {
-                Slot::Ram(offset) => (ram, offset as usize * 8),
+                Slot::Ram(offset) => (ram, usize::from(offset)),
                 Slot::Const(bytes) => (bytes, 0),
             };
-            copy_bits(src, at, image, step.image_bit as usize, step.bits as usize);
+            if let Some((image_at, len)) = step.bytes() {
+                if let (Some(from), Some(to)) = (
+                    src.get(at..at + len),
+                    image.get_mut(image_at..image_at + len),
+                ) {
+                    copy_bytes(from, to);
+                }
+                continue;
+            }
+            copy_bits(
+                src,
+                at * 8,
+                image,
+                usize::from(step.image_bit),
+                usize::from(step.bits),
+            );
         }
     }
 }
@@ -192,6 +225,7 @@ impl PdoPlan {
 /// Copies `from` into `to` (equal lengths). The common object sizes are copied as a whole (one
 /// load and store), not through the library `memcpy` call a slice copy of unknown length
 /// becomes: its call and size dispatch cost more than the copy of a few bytes.
+#[inline(always)]
 fn copy_bytes(from: &[u8], to: &mut [u8]) {
     fn fixed<const N: usize>(from: &[u8], to: &mut [u8]) {
         if let (Ok(from), Ok(to)) = (<&[u8; N]>::try_from(from), <&mut [u8; N]>::try_from(to)) {

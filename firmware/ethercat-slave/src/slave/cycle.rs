@@ -111,7 +111,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// first inputs are valid) and reports its errors.
     pub(super) fn run_application(&mut self, now_ns: u64) {
         let mut events = AppEvents::new();
-        self.app.cycle(&mut self.ram, self.sync.cycle_ns, &mut events);
+        self.app
+            .cycle(&mut self.ram, self.sync.cycle_ns, &mut events);
         for event in events {
             self.report_app_event(event, now_ns);
         }
