@@ -548,6 +548,9 @@ pub struct Cia402Rules {
     /// The home offset 607Ch is added to every position object, not only set at the home
     /// (the GHA-E: 6064h = 6063h / ratio + 607Ch).
     pub home_offset_added: bool,
+    /// The 1010h subindexes after whose store the drive enters Operation Enabled only after a
+    /// power-on (the Σ-V-SD's 1 and 4, §4.7).
+    pub store_requires_power_cycle: &'static [u8],
 }
 
 impl Cia402Rules {

@@ -1177,6 +1177,19 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }
+    if !r.store_requires_power_cycle.is_empty() {
+        let subs: Vec<String> = r
+            .store_requires_power_cycle
+            .iter()
+            .map(|s| format!("1010h:{s:02X}"))
+            .collect();
+        let _ = writeln!(
+            out,
+            "- After a store with {}, Operation Enabled needs a power-on first (enable operation \
+             stops in Switched On).",
+            subs.join(" or ")
+        );
+    }
     out.push('\n');
 }
 

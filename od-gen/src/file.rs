@@ -858,6 +858,7 @@ impl Default for Cia402File {
             digital_inputs_limits_swapped: false,
             following_error_zero_window_off: false,
             home_offset_added: false,
+            store_requires_power_cycle: Vec::new(),
         }
     }
 }
@@ -1117,6 +1118,9 @@ pub struct Cia402File {
     /// instead of only setting the home's position.
     #[serde(default)]
     pub home_offset_added: bool,
+    /// 1010h subindexes after whose store Operation Enabled needs a power-on first.
+    #[serde(default)]
+    pub store_requires_power_cycle: Vec<u8>,
 }
 
 fn yes() -> bool {

@@ -2104,6 +2104,8 @@ pub struct Cia402Rules {
     pub following_error_zero_window_off: bool,
     /// 607Ch is added to every position object.
     pub home_offset_added: bool,
+    /// 1010h subindexes after whose store Operation Enabled needs a power-on first.
+    pub store_requires_power_cycle: Vec<u8>,
 }
 
 /// What a profile shows in 60B9h bit 7 (15) (`firmware: cia402::touch_probe::Bit7`).
@@ -2170,6 +2172,7 @@ impl Default for Cia402Rules {
             digital_inputs_limits_swapped: false,
             following_error_zero_window_off: false,
             home_offset_added: false,
+            store_requires_power_cycle: Vec::new(),
         }
     }
 }

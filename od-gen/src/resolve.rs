@@ -557,6 +557,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         digital_inputs_limits_swapped: f.cia402.digital_inputs_limits_swapped,
         following_error_zero_window_off: f.cia402.following_error_zero_window_off,
         home_offset_added: f.cia402.home_offset_added,
+        store_requires_power_cycle: store_requires_power_cycle(&f.cia402)?,
     };
     let mut profile = Profile {
         name: f.name.clone(),
@@ -2077,6 +2078,26 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         });
     }
     Ok(v)
+}
+
+/// `[cia402] store_requires_power_cycle`: 1010h subindexes (CiA 301: 1 all, 2 communication,
+/// 3 application, 4-127 manufacturer), each once, ascending.
+fn store_requires_power_cycle(c: &crate::file::Cia402File) -> Result<Vec<u8>, Fault> {
+    let key = "cia402.store_requires_power_cycle";
+    let list = &c.store_requires_power_cycle;
+    if let Some(bad) = list.iter().find(|s| !(1..=0x7F).contains(*s)) {
+        return Err(fault(
+            key,
+            Invalid::Value(format!("{bad} is not a 1010h store subindex (1-127)")),
+        ));
+    }
+    if list.windows(2).any(|w| w[0] >= w[1]) {
+        return Err(fault(
+            key,
+            Invalid::Value("list each subindex once, ascending".into()),
+        ));
+    }
+    Ok(list.clone())
 }
 
 /// `[cia402] homing_methods` and `homing_method_aliases`: every method listed is a CiA402

@@ -549,7 +549,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?} }},",
             p.cia402
                 .enable_without_mode_error
                 .as_ref()
@@ -578,7 +578,8 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.following_error_fault,
             p.cia402.digital_inputs_limits_swapped,
             p.cia402.following_error_zero_window_off,
-            p.cia402.home_offset_added
+            p.cia402.home_offset_added,
+            p.cia402.store_requires_power_cycle
         );
     }
     let _ = writeln!(out, "    }};\n");

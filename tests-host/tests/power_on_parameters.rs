@@ -4,6 +4,8 @@
 //! - SDV3-E §3.7: P4.02 = 1 makes the drive write P4.01 into the configured station alias
 //!   0x0012 at start-up; with P4.02 = 0 the alias comes from SII word 4.
 //! - SDV3-E §3.5.1: P4.09 sets the input shift time 1C33h:03 = P4.09 × 62500 ns at power-on.
+//! - Σ-V-SD §4.7: after a store with 1010h:01/:04 the drive enters Operation Enabled only after
+//!   a power cycle.
 
 use board_sim::Segment;
 use tests_host::session::{power_cycle, session, Step};
@@ -140,4 +142,71 @@ fn the_input_shift_is_stored_on_the_sigma_v_sd_but_not_on_the_sdv3e() {
             "{profile}: 1C33h:03 after a power cycle"
         );
     }
+}
+
+/// Takes drive 0 of `segment` to OP (free run, 1 ms: the Σ-V-SD's 1C32h:02 default) with a fresh
+/// master, sends the enable sequence (shutdown, switch on, enable operation) and returns the
+/// segment with the statusword the drive ended in.
+fn enable_in_op(segment: Segment) -> (Segment, u16) {
+    use tests_host::session::take_segment;
+    use tests_host::vendor;
+    const CYCLE_NS: u64 = 1_000_000;
+    tests_host::block_on(async {
+        let (m, transport) = tests_host::master_for(segment);
+        tokio::task::spawn_local(transport);
+        let md = &*m.maindevice;
+        let group = vendor::into_op(&m, md, &[]).await;
+        // Σ-V-SD 1600h: 6040h at byte 0; 1A00h: 6041h at byte 0.
+        let mut inputs = Vec::new();
+        for cw in vendor::enable_sequence(20) {
+            inputs = vendor::exchange(&m, md, &group, &[(0, &cw.to_le_bytes())], CYCLE_NS).await;
+        }
+        let statusword = vendor::u16_at(&inputs, 0);
+        (take_segment(&m), statusword)
+    })
+}
+
+/// Σ-V-SD §4.7 (and §4.2 (5)): "after storing with 1010h sub 1 or sub 4, a power-on reset is
+/// required before the drive can enter Operation Enabled". Enable operation then stops in
+/// Switched On; after a power cycle the drive enables again. A store of another subindex
+/// (sub 2, the communication objects) does not lock it.
+#[test]
+fn sigma_v_sd_a_parameter_store_needs_a_power_cycle_before_operation_enabled() {
+    const STATE_MASK: u16 = 0x6F;
+    const SWITCHED_ON: u16 = 0x23;
+    const OPERATION_ENABLED: u16 = 0x27;
+    let segment = Segment::new("sigma-v-sd", 1).expect("profile");
+    // Sub 2 (1xxxh objects): no power cycle needed.
+    let (segment, out) = session(segment, &[Step::Write(STORE, 2, SIGNATURE_SAVE)]);
+    assert!(out[0].is_ok(), "{out:?}");
+    let (_, sw) = enable_in_op(segment);
+    assert_eq!(
+        sw & STATE_MASK,
+        OPERATION_ENABLED,
+        "after 1010h:02: {sw:#06x}"
+    );
+    for sub in [1, 4] {
+        let (mut segment, sw) = enable_in_op(segment_fresh_after(sub));
+        assert_eq!(
+            sw & STATE_MASK,
+            SWITCHED_ON,
+            "after 1010h:{sub:02}: enable operation stops in Switched On ({sw:#06x})"
+        );
+        power_cycle(&mut segment);
+        let (_, sw) = enable_in_op(segment);
+        assert_eq!(
+            sw & STATE_MASK,
+            OPERATION_ENABLED,
+            "after the power cycle: {sw:#06x}"
+        );
+    }
+}
+
+/// A fresh Σ-V-SD whose parameters were just stored with 1010h:`sub` (in PREOP, Switch On
+/// Disabled: the state the profile allows it in).
+fn segment_fresh_after(sub: u8) -> Segment {
+    let segment = Segment::new("sigma-v-sd", 1).expect("profile");
+    let (segment, out) = session(segment, &[Step::Write(STORE, sub, SIGNATURE_SAVE)]);
+    assert!(out[0].is_ok(), "1010h:{sub:02}: {out:?}");
+    segment
 }

@@ -49,6 +49,8 @@ pub struct Device {
     rules: DeviceRules,
     /// The main circuit is powered (the drive application tells, [`Self::set_main_power`]).
     main_power: bool,
+    /// Operation Enabled is refused until the next power-on ([`Self::require_power_cycle`]).
+    power_cycle_required: bool,
 }
 
 /// CiA402 behaviour a profile adds to the standard.
@@ -107,7 +109,16 @@ impl Device {
             },
             rules,
             main_power: false,
+            power_cycle_required: false,
         }
+    }
+
+    /// From now until the next power-on (a new `Device`), Operation Enabled is not entered:
+    /// a request for it leaves the drive in Switched On (the Σ-V-SD after storing parameters
+    /// with 1010h:01/:04, §4.7: "a power-on reset is required before the drive can enter
+    /// Operation Enabled").
+    pub fn require_power_cycle(&mut self) {
+        self.power_cycle_required = true;
     }
 
     /// Whether the main circuit is powered (the bus voltage is up): statusword bit 4 "voltage
@@ -173,6 +184,19 @@ impl Device {
                     _,
                 ) => PdsState::SwitchOnDisabled,
                 (_, to) => to,
+            };
+        }
+        if self.power_cycle_required
+            && requested == PdsState::OperationEnabled
+            && !matches!(
+                self.state,
+                PdsState::OperationEnabled | PdsState::QuickStopActive
+            )
+        {
+            // Transitions 3 and 4 in one command stop after 3.
+            requested = match self.state {
+                PdsState::ReadyToSwitchOn | PdsState::SwitchedOn => PdsState::SwitchedOn,
+                other => other,
             };
         }
         self.previous_controlword = cw;
@@ -578,6 +602,42 @@ mod tests {
             d.step(c, RAMPS, true);
             assert_eq!(d.state(), PdsState::SwitchOnDisabled, "cw {c:#x}");
         }
+    }
+
+    #[test]
+    fn a_required_power_cycle_keeps_the_drive_out_of_operation_enabled() {
+        let mut d = Device::new();
+        d.set_main_power(true);
+        d.initialised();
+        d.require_power_cycle();
+        let options = OptionCodes {
+            quick_stop: None,
+            shutdown: None,
+            disable_operation: None,
+            halt: None,
+            fault_reaction: None,
+        };
+        for (cw, state) in [
+            (0x06, PdsState::ReadyToSwitchOn),
+            (0x07, PdsState::SwitchedOn),
+            (0x0F, PdsState::SwitchedOn),
+            (0x0F, PdsState::SwitchedOn),
+            (0x00, PdsState::SwitchOnDisabled),
+            (0x06, PdsState::ReadyToSwitchOn),
+            // Enable operation straight from Ready to Switch On (3 + 4): only 3.
+            (0x0F, PdsState::SwitchedOn),
+        ] {
+            d.step(cw, options, true);
+            assert_eq!(d.state(), state, "cw {cw:#06x}");
+        }
+        // A new power-on (a new device) enables again.
+        let mut d = Device::new();
+        d.set_main_power(true);
+        d.initialised();
+        for cw in [0x06, 0x07, 0x0F] {
+            d.step(cw, options, true);
+        }
+        assert_eq!(d.state(), PdsState::OperationEnabled);
     }
 
     #[test]

@@ -257,6 +257,14 @@ impl DriveAxis {
         ratios
     }
 
+    /// The parameters were stored with 1010h:`subindex`: where the profile says so, the drive
+    /// enters Operation Enabled only after the next power-on.
+    pub(super) fn parameters_stored(&mut self, subindex: u8) {
+        if self.rules.store_requires_power_cycle.contains(&subindex) {
+            self.device.require_power_cycle();
+        }
+    }
+
     /// Whether `at` (an OD RAM offset) is this axis' command that makes the unit factors take
     /// effect.
     pub(super) fn is_units_apply(&self, at: u16) -> bool {

@@ -24,6 +24,7 @@ pub use axis::DriveAxis;
 
 use cia402::faults::FaultReport;
 use cia402::pds::PdsState;
+use ethercat_slave::od::index::STORE_PARAMETERS;
 use ethercat_slave::od::ErrorReport;
 use ethercat_slave::slave::{AppEvent, AppEvents, Application};
 
@@ -338,6 +339,13 @@ impl Application for Drive {
 
     fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
         self.now_ns = now_ns;
+        if index == STORE_PARAMETERS {
+            // A store that succeeded (a refused one is not committed).
+            for axis in self.axes.iter_mut().flatten() {
+                axis.parameters_stored(subindex);
+            }
+            return;
+        }
         if self
             .alarm_log
             .downloaded(self.alarm_table, ram, index, subindex)
