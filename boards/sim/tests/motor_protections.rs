@@ -79,21 +79,43 @@ fn hold(servo: &SimServo, mode: ControlMode) -> AxisCommand {
     }
 }
 
-/// Publishes `command` once per bus cycle and runs period by period until the axis faults or
-/// `max_periods` passed; returns the number of periods run until (and including) the one whose
-/// control step tripped, or `None`. Checks that the gates are off from that period on.
+/// Publishes `command` once per bus cycle and runs period by period until the axis reports a
+/// fault or `max_periods` passed; returns the number of periods run until (and including) the
+/// one whose control step tripped, or `None`. Checks that a fault that cuts the gates did so in
+/// that period, and that one that allows a controlled stop (the thermal faults, a following
+/// error: `MotorFault::allows_controlled_stop`) left a running axis running with its gates on,
+/// for the drive's fault reaction ([`end_fault_reaction`]).
 fn run_until_fault(servo: &mut SimServo, command: AxisCommand, max_periods: u64) -> Option<u64> {
     for k in 0..max_periods {
         if k % PERIODS_PER_CYCLE == 0 {
             servo.publish(command);
         }
+        let was_running = servo.axis.state() == AxisState::Running;
         servo.period();
-        if servo.axis.state() == AxisState::Faulted {
-            assert!(!servo.latched().gates, "gates on in the tripping period");
+        if let Some(fault) = servo.axis.fault() {
+            if fault.allows_controlled_stop() && was_running {
+                assert_eq!(servo.axis.state(), AxisState::Running, "under control");
+                assert!(servo.latched().gates, "gates on for the fault reaction");
+            } else {
+                assert_eq!(servo.axis.state(), AxisState::Faulted);
+                assert!(!servo.latched().gates, "gates on in the tripping period");
+            }
             return Some(k + 1);
         }
     }
     None
+}
+
+/// The drive's fault reaction ends (its ramp done, or none): `command` without the enable for
+/// one bus cycle. The axis holding a fault is `Faulted` with its gates off.
+fn end_fault_reaction(servo: &mut SimServo, command: AxisCommand) {
+    servo.publish(AxisCommand {
+        enable: false,
+        ..command
+    });
+    servo.run_periods(PERIODS_PER_CYCLE);
+    assert_eq!(servo.axis.state(), AxisState::Faulted);
+    assert!(!servo.latched().gates, "gates off");
 }
 
 /// Runs on with `command` for `periods`, asserting that the axis stays faulted with `fault` and
@@ -353,7 +375,10 @@ fn motor_i2t_trips_at_the_analytic_time() {
     let t = locked_rotor_trip(&mut servo, amps, MotorFault::MotorOverload, 1.5 * t_motor);
     println!("motor I²t: {t:.4} s, analytic {t_motor:.4} s");
     assert!((t / t_motor - 1.0).abs() < 0.02, "{t} s vs {t_motor} s");
+    // A thermal fault: the axis runs on for the drive's fault reaction, then stays faulted
+    // (enabled again, it does not run).
     let command = hold(&servo, ControlMode::Torque);
+    end_fault_reaction(&mut servo, command);
     stays_faulted(&mut servo, command, MotorFault::MotorOverload, 400);
 }
 
@@ -374,6 +399,9 @@ fn drive_i2t_trips_at_the_analytic_time() {
     let t = locked_rotor_trip(&mut servo, amps, MotorFault::DriveOverload, 1.5 * t_drive);
     println!("drive I²t: {t:.4} s, analytic {t_drive:.4} s");
     assert!((t / t_drive - 1.0).abs() < 0.02, "{t} s vs {t_drive} s");
+    let command = hold(&servo, ControlMode::Torque);
+    end_fault_reaction(&mut servo, command);
+    stays_faulted(&mut servo, command, MotorFault::DriveOverload, 400);
 }
 
 /// I²t foldback (the board's default: from 80 % of the trip level): a locked rotor asked for
@@ -560,6 +588,63 @@ fn encoder_signal_loss_trips_at_the_next_loop_sample() {
         .set_encoder_fault(Some(EncoderFaultInjection::SignalLoss));
     let tripped = run_until_fault(&mut servo, command, 10 * d);
     assert_trip(&servo, tripped, MotorFault::EncoderSignalLoss, 1, d);
+    stays_faulted(&mut servo, command, MotorFault::EncoderSignalLoss, 200);
+}
+
+/// A fault that cuts the gates ends a controlled stop at once: the motor's thermal switch trips
+/// (the axis runs on for the drive's fault reaction), then the encoder signal is lost during
+/// that reaction: `EncoderSignalLoss` replaces the thermal fault as a new trip (the drive sees
+/// it) and the gates go off at the next loop sample, whatever the command.
+#[test]
+fn a_fault_that_cuts_the_gates_ends_a_controlled_stop() {
+    let mut plant = PlantConfig::servo_400w();
+    plant.encoder = EncoderParams::Incremental {
+        counts_per_rev: 1 << 20,
+        index_at_rad: 0.0,
+    };
+    let mut servo = servo_with(plant, |_| {});
+    start(&mut servo, ControlMode::Torque);
+    let p = prot(&servo);
+    let n = u64::from(confirmation_samples(
+        p.motor_over_temperature_confirm_s,
+        loop_dt(&servo) as f32,
+    ));
+    let d = divider(&servo);
+    let command = hold(&servo, ControlMode::Torque);
+    servo.plant.set_motor_overtemp_input(true);
+    let tripped = run_until_fault(&mut servo, command, 2 * n * d);
+    assert_trip(
+        &servo,
+        tripped,
+        MotorFault::MotorOverTemperature,
+        (n - 1) * d + 1,
+        n * d,
+    );
+    let trips = servo.feedback().trips;
+    // The fault reaction runs (the axis stays enabled); the encoder goes.
+    servo
+        .plant
+        .set_encoder_fault(Some(EncoderFaultInjection::SignalLoss));
+    let mut cut_after = None;
+    for k in 0..10 * d {
+        if k % PERIODS_PER_CYCLE == 0 {
+            servo.publish(command);
+        }
+        servo.period();
+        if servo.axis.state() == AxisState::Faulted {
+            assert!(!servo.latched().gates, "gates off");
+            cut_after = Some(k + 1);
+            break;
+        }
+    }
+    let k = cut_after.expect("the encoder loss did not cut the gates");
+    assert!(
+        k <= d,
+        "gates cut {k} periods after the loss, one loop sample is {d}"
+    );
+    assert_eq!(servo.axis.fault(), Some(MotorFault::EncoderSignalLoss));
+    servo.run_periods(d);
+    assert_eq!(servo.feedback().trips, trips.wrapping_add(1), "a new trip");
     stays_faulted(&mut servo, command, MotorFault::EncoderSignalLoss, 200);
 }
 
@@ -768,7 +853,9 @@ fn a_fault_latches_until_a_reset_with_the_cause_gone() {
         (n - 1) * d + 1,
         n * d,
     );
-    // Enabled and commanding torque: stays faulted, gates off.
+    // The drive's fault reaction ends; then, enabled and commanding torque: stays faulted,
+    // gates off.
+    end_fault_reaction(&mut servo, command);
     let torque = AxisCommand {
         torque: 1.0,
         ..command
@@ -794,6 +881,9 @@ fn a_fault_latches_until_a_reset_with_the_cause_gone() {
     let tripped = run_until_fault(&mut servo, reset, 2 * n * d);
     assert!(tripped.is_some(), "no trip with the cause present");
     assert_eq!(servo.axis.fault(), Some(MotorFault::MotorOverTemperature));
+    if servo.axis.state() == AxisState::Running {
+        end_fault_reaction(&mut servo, reset);
+    }
     // Holding fault_reset high is no new edge: the cause gone, it stays latched.
     servo.plant.set_motor_overtemp_input(false);
     stays_faulted(&mut servo, reset, MotorFault::MotorOverTemperature, 4_000);

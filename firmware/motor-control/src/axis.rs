@@ -871,10 +871,14 @@ impl Axis {
         output
     }
 
-    /// Records `fault` (the first one stays until a reset) without stopping: a fault that
-    /// allows a controlled stop.
+    /// Records `fault` without stopping (a fault that allows a controlled stop; the first one
+    /// stays until a reset, unless a fault that cuts the gates replaces it).
     fn record(&mut self, fault: MotorFault) {
-        if self.fault.is_none() {
+        // A fault that cuts the gates replaces one that allowed a controlled stop (a new trip
+        // for the drive, which then ends its fault reaction at once).
+        let escalates = self.fault.is_some_and(MotorFault::allows_controlled_stop)
+            && !fault.allows_controlled_stop();
+        if self.fault.is_none() || escalates {
             self.fault = Some(fault);
             self.trips = self.trips.wrapping_add(1);
         }

@@ -153,10 +153,20 @@ impl MotorFault {
 
     /// Whether the motor is still under control after the fault, so that the drive's fault
     /// reaction (CiA402 605Eh) can decelerate it before the power stage goes off: a following
-    /// error (the loops, sensors and power stage are sound). Every other fault cuts the gates
-    /// at once.
+    /// error, and the thermal faults (I²t overloads, over-temperatures: the loops, sensors and
+    /// power stage are sound, and heat builds over seconds, far longer than a stop ramp; drives
+    /// stop on them under control, e.g. Yaskawa's group-2 alarms). Every other fault cuts the
+    /// gates at once, and cuts them during such a controlled stop too
+    /// ([`protection::Protections::check`] reports it over the first).
     pub const fn allows_controlled_stop(self) -> bool {
-        matches!(self, MotorFault::FollowingError)
+        matches!(
+            self,
+            MotorFault::FollowingError
+                | MotorFault::MotorOverload
+                | MotorFault::DriveOverload
+                | MotorFault::DriveOverTemperature
+                | MotorFault::MotorOverTemperature
+        )
     }
 
     /// The name used in profile files (`[motor_faults]`).

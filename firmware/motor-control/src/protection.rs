@@ -46,7 +46,10 @@
 //!
 //! # Latching and reset
 //! The first fault [`Protections::check`] reports is latched and returned by every later call
-//! until [`Protections::reset`]. The reset clears the latch, the confirmation counters, the CRC
+//! until [`Protections::reset`], with one exception: a fault that allows a controlled stop
+//! (7–11 above: [`MotorFault::allows_controlled_stop`]; the motor runs on for the drive's
+//! fault reaction) is replaced by a later one that does not (1–6: the encoder lost during the
+//! reaction's ramp must cut the gates). The reset clears the latch, the confirmation counters, the CRC
 //! counter, the following-error timer and the encoder-jump reference, but **not** the I²t
 //! integrals: they model heat, which a fault reset does not remove (a reset right after an
 //! overload trip leaves little margin, and [`Protections::current_limit`] shows it).
@@ -631,8 +634,11 @@ impl Protections {
             .following_error
             .update(inputs.following_error, inputs.enabled);
 
-        if self.latched.is_none() {
-            self.latched = if over_voltage {
+        // The first fault latches; a fault that cuts the gates replaces one that allowed a
+        // controlled stop (an encoder lost during the fault reaction's ramp must stop it).
+        let escalating = self.latched.is_some_and(MotorFault::allows_controlled_stop);
+        if self.latched.is_none() || escalating {
+            let fault = if over_voltage {
                 Some(MotorFault::BusOverVoltage)
             } else if under_voltage {
                 Some(MotorFault::BusUnderVoltage)
@@ -653,6 +659,11 @@ impl Protections {
             } else {
                 None
             };
+            if !escalating {
+                self.latched = fault;
+            } else if let Some(hard) = fault.filter(|f| !f.allows_controlled_stop()) {
+                self.latched = Some(hard);
+            }
         }
         self.latched
     }
@@ -1442,12 +1453,29 @@ mod tests {
         for _ in 0..1_000 {
             assert_eq!(p.check(&healthy(0)), Some(MotorFault::MotorOverTemperature));
         }
-        // A later, different fault does not replace the first.
+        // The motor is still under control (a thermal fault): a later fault that also allows a
+        // controlled stop does not replace it, one that cuts the gates does (an encoder lost
+        // during the fault reaction's ramp), and nothing replaces that one.
+        let lagging = ProtectionInputs {
+            following_error: i64::MAX,
+            ..healthy(0)
+        };
+        for _ in 0..1_000 {
+            assert_eq!(p.check(&lagging), Some(MotorFault::MotorOverTemperature));
+        }
         let lost = ProtectionInputs {
             encoder: Err(EncoderFault::SignalLoss),
             ..healthy(0)
         };
-        assert_eq!(p.check(&lost), Some(MotorFault::MotorOverTemperature));
+        assert_eq!(p.check(&lost), Some(MotorFault::EncoderSignalLoss));
+        assert_eq!(p.check(&hot), Some(MotorFault::EncoderSignalLoss));
+        let over_voltage = ProtectionInputs {
+            bus_voltage: 1.0e6,
+            ..healthy(0)
+        };
+        for _ in 0..1_000 {
+            assert_eq!(p.check(&over_voltage), Some(MotorFault::EncoderSignalLoss));
+        }
         p.reset();
         assert_eq!(p.latched(), None);
         assert_eq!(p.check(&healthy(0)), None);

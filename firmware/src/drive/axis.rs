@@ -542,8 +542,9 @@ impl DriveAxis {
                 self.report_fault(report, ram);
             }
             if feedback.state == AxisState::Faulted {
-                // The axis tripped with its gates off: no fault reaction ramp can run (a
-                // following error leaves the motor under control: the reaction decelerates it).
+                // The axis tripped with its gates off (or a fault that cuts them ended a
+                // controlled stop): no fault reaction ramp can run. A following error or a
+                // thermal fault leaves the motor under control: the reaction decelerates it.
                 self.device.power_stage_lost();
             }
         }
