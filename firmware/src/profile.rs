@@ -551,6 +551,22 @@ pub struct Cia402Rules {
     /// The 1010h subindexes after whose store the drive enters Operation Enabled only after a
     /// power-on (the Σ-V-SD's 1 and 4, §4.7).
     pub store_requires_power_cycle: &'static [u8],
+    /// The probe inputs must be assigned to a physical input first (the SDV3-E's EXT1/EXT2).
+    pub touch_probe_inputs: Option<ProbeInputAssignment>,
+}
+
+/// A profile whose touch-probe inputs are functions a physical input must be assigned first
+/// (the SDV3-E: EXT1/EXT2 are EI functions 40/41, on EI3–EI5 only, §7.12): a 60B8h write that
+/// enables a probe on its input (source 0, an edge enabled) while no assignment parameter holds
+/// the probe's function raises `unassigned_error` (the SDV3-E's Act).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProbeInputAssignment {
+    /// The parameters that hold an input's function (OD RAM entries).
+    pub entries: &'static [Operand],
+    /// The function of probe 1's and probe 2's input.
+    pub functions: [u32; 2],
+    /// The error raised.
+    pub unassigned_error: FaultReport,
 }
 
 impl Cia402Rules {

@@ -1177,6 +1177,23 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }
+    if let Some(t) = &r.touch_probe_inputs {
+        let entries: Vec<String> = t
+            .entries
+            .iter()
+            .map(|(i, s)| format!("{i:04X}h:{s:02X}"))
+            .collect();
+        let _ = writeln!(
+            out,
+            "- A touch probe enabled on its input (60B8h source 0 with an edge) needs the input \
+             assigned: one of {} holding {} (probe 1) or {} (probe 2); else the write raises \
+             603Fh {:04X}h.",
+            entries.join(", "),
+            t.functions[0],
+            t.functions[1],
+            t.unassigned_error.error_code
+        );
+    }
     if !r.store_requires_power_cycle.is_empty() {
         let subs: Vec<String> = r
             .store_requires_power_cycle

@@ -859,6 +859,7 @@ impl Default for Cia402File {
             following_error_zero_window_off: false,
             home_offset_added: false,
             store_requires_power_cycle: Vec::new(),
+            touch_probe_inputs: None,
         }
     }
 }
@@ -1121,6 +1122,22 @@ pub struct Cia402File {
     /// 1010h subindexes after whose store Operation Enabled needs a power-on first.
     #[serde(default)]
     pub store_requires_power_cycle: Vec<u8>,
+    /// The probe inputs must be assigned to a physical input first.
+    #[serde(default)]
+    pub touch_probe_inputs: Option<TouchProbeInputsFile>,
+}
+
+/// `[cia402.touch_probe_inputs]`: the parameters that assign input functions, the function of
+/// each probe's input, the error when a probe is enabled on an unassigned input.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TouchProbeInputsFile {
+    /// `"0xIIII:S"` entries, each an input's function.
+    pub entries: Vec<String>,
+    /// The function value of probe 1's and probe 2's input.
+    pub functions: [u32; 2],
+    /// The error: an `[[alarm]]` display or a 603Fh code.
+    pub unassigned_error: MotorFaultFile,
 }
 
 fn yes() -> bool {

@@ -2106,6 +2106,19 @@ pub struct Cia402Rules {
     pub home_offset_added: bool,
     /// 1010h subindexes after whose store Operation Enabled needs a power-on first.
     pub store_requires_power_cycle: Vec<u8>,
+    /// The probe inputs must be assigned to a physical input first.
+    pub touch_probe_inputs: Option<TouchProbeInputs>,
+}
+
+/// `[cia402.touch_probe_inputs]` (`firmware: profile::ProbeInputAssignment`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TouchProbeInputs {
+    /// The parameters that hold an input's function.
+    pub entries: Vec<(u16, u8)>,
+    /// The function value of probe 1's and probe 2's input.
+    pub functions: [u32; 2],
+    /// Raised when a probe is enabled on its input while no entry holds its function.
+    pub unassigned_error: MotorFaultCode,
 }
 
 /// What a profile shows in 60B9h bit 7 (15) (`firmware: cia402::touch_probe::Bit7`).
@@ -2173,6 +2186,7 @@ impl Default for Cia402Rules {
             following_error_zero_window_off: false,
             home_offset_added: false,
             store_requires_power_cycle: Vec::new(),
+            touch_probe_inputs: None,
         }
     }
 }

@@ -558,6 +558,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         following_error_zero_window_off: f.cia402.following_error_zero_window_off,
         home_offset_added: f.cia402.home_offset_added,
         store_requires_power_cycle: store_requires_power_cycle(&f.cia402)?,
+        touch_probe_inputs: f
+            .cia402
+            .touch_probe_inputs
+            .as_ref()
+            .map(|t| touch_probe_inputs(t, &alarms))
+            .transpose()?,
     };
     let mut profile = Profile {
         name: f.name.clone(),
@@ -2078,6 +2084,34 @@ fn derived_objects(p: &Profile) -> Result<Vec<Object>, Fault> {
         });
     }
     Ok(v)
+}
+
+/// `[cia402.touch_probe_inputs]`: the entries parse (at least one), the error resolves.
+fn touch_probe_inputs(
+    t: &crate::file::TouchProbeInputsFile,
+    alarms: &[Alarm],
+) -> Result<crate::model::TouchProbeInputs, Fault> {
+    let key = "cia402.touch_probe_inputs.entries";
+    if t.entries.is_empty() {
+        return Err(fault(
+            key,
+            Invalid::Value("needs at least one entry".into()),
+        ));
+    }
+    let entries = t
+        .entries
+        .iter()
+        .map(|s| entry_ref(Some(s), key).map(|e| e.unwrap_or_default()))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(crate::model::TouchProbeInputs {
+        entries,
+        functions: t.functions,
+        unassigned_error: fault_report(
+            &t.unassigned_error,
+            alarms,
+            "cia402.touch_probe_inputs.unassigned_error",
+        )?,
+    })
 }
 
 /// `[cia402] store_requires_power_cycle`: 1010h subindexes (CiA 301: 1 all, 2 communication,

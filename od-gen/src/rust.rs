@@ -549,7 +549,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {} }},",
             p.cia402
                 .enable_without_mode_error
                 .as_ref()
@@ -579,7 +579,24 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.digital_inputs_limits_swapped,
             p.cia402.following_error_zero_window_off,
             p.cia402.home_offset_added,
-            p.cia402.store_requires_power_cycle
+            p.cia402.store_requires_power_cycle,
+            p.cia402.touch_probe_inputs.as_ref().map_or("None".into(), |t| format!(
+                "Some({drive}::profile::ProbeInputAssignment {{ entries: &[{}], functions: {:?}, unassigned_error: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }} }})",
+                // Validated: writable integer parameters in RAM.
+                t.entries
+                    .iter()
+                    .map(|&(index, sub)| {
+                        let at = layout.offsets.get(&(index, sub)).copied().unwrap_or(0);
+                        let len = p.entry(index, sub).map_or(0, |e| e.byte_len());
+                        format!("{drive}::profile::Operand::Ram {{ at: {at}, len: {len} }}")
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                t.functions,
+                t.unassigned_error.error_code,
+                t.unassigned_error.emcy.code,
+                t.unassigned_error.emcy.data
+            ))
         );
     }
     let _ = writeln!(out, "    }};\n");

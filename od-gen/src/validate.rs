@@ -897,6 +897,11 @@ fn esm(p: &Profile) -> Result<(), Fault> {
             Invalid::Value("0 is \"no error\" (603Fh)".into()),
         ));
     }
+    if let Some(t) = &p.cia402.touch_probe_inputs {
+        for &entry in &t.entries {
+            integer_parameter(p, entry, "cia402.touch_probe_inputs.entries")?;
+        }
+    }
     if let Some(l) = &p.esm.lost_outputs {
         integer_parameter(p, l.limit_parameter, "esm.lost_outputs.limit_parameter")?;
         let (index, subindex) = l.while_entry;

@@ -1399,7 +1399,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[] }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None }"
     ));
     // 1010h subindexes whose store needs a power cycle before Operation Enabled (Σ-V-SD 1, 4).
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();
@@ -1410,6 +1410,33 @@ fn cia402_rules_are_resolved_and_checked() {
             "[cia402]\nstore_requires_power_cycle = {bad}"
         )));
         assert_eq!(key, "cia402.store_requires_power_cycle", "{bad}");
+    }
+    // Probe inputs to assign first (the SDV3-E's EXT1/EXT2 = EI functions 40/41 on P3.03-P3.05).
+    let sdv3 = od_gen::builtin("sdv3-e").unwrap();
+    let t = sdv3.cia402.touch_probe_inputs.clone().expect("SDV3-E rule");
+    assert_eq!(t.entries, [(0x3002, 3), (0x3002, 4), (0x3002, 5)]);
+    assert_eq!(
+        (t.functions, t.unassigned_error.error_code),
+        ([40, 41], 0x8802)
+    );
+    let rust = od_gen::rust::generate(&[sdv3]);
+    assert!(rust.contains("touch_probe_inputs: Some(crate::profile::ProbeInputAssignment { entries: &[crate::profile::Operand::Ram {"));
+    for (table, key) in [
+        (
+            "entries = []\nfunctions = [40, 41]\nunassigned_error = 0x8802",
+            "cia402.touch_probe_inputs.entries",
+        ),
+        (
+            "entries = [\"0x6041:0\"]\nfunctions = [40, 41]\nunassigned_error = 0x8802",
+            "cia402.touch_probe_inputs.entries",
+        ),
+        (
+            "entries = [\"0x6040:0\"]\nfunctions = [40, 41]\nunassigned_error = \"NoSuchAlarm\"",
+            "cia402.touch_probe_inputs.unassigned_error",
+        ),
+    ] {
+        let (k, _) = invalid(&appended(&format!("[cia402.touch_probe_inputs]\n{table}")));
+        assert_eq!(k, key, "{table}");
     }
     // 60B8h bits a profile defines: every bit unless the profile lists them (the Σ-V-SD's).
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();

@@ -213,3 +213,83 @@ fn rse_touch_probe_source_bit_is_meaningless_the_input_latches() {
         );
     });
 }
+
+/// SDV3-E §7.12 / §5.2 11: EXT1 and EXT2 are the EI functions 40 and 41, which only EI3–EI5
+/// (P3.03–P3.05 = 3002h:03–05) can take. A 60B8h write that enables a probe latch on EXT while
+/// its function is assigned to none of them raises Act (603Fh 8802h, Fault); with the function
+/// assigned the same write latches as usual; the encoder Z source needs no assignment.
+#[test]
+fn sdv3_e_a_probe_on_an_unassigned_ext_input_is_act() {
+    use tests_host::master_for;
+    use tests_host::vendor;
+    const CYCLE_NS: u64 = 1_000_000;
+    const ACT: u16 = 0x8802;
+    const FAULT_BIT: u16 = 0x08;
+    const FAULT_RESET: u16 = 0x80;
+    const EI3_FUNCTION: (u16, u8) = (0x3002, 3);
+    const EI5_FUNCTION: (u16, u8) = (0x3002, 5);
+    const EXT1: i32 = 40;
+    const EXT2: i32 = 41;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("sdv3-e", 1).expect("sdv3-e"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = vendor::into_op(&m, md, &[]).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        // SDV3-E 1600h: 6040h at byte 0; 1A00h: 6041h at byte 0.
+        let run = |cw: u16| {
+            let (m, group) = (&m, &group);
+            async move {
+                let mut inputs = Vec::new();
+                for _ in 0..5 {
+                    inputs =
+                        vendor::exchange(m, md, group, &[(0, &cw.to_le_bytes())], CYCLE_NS).await;
+                }
+                vendor::u16_at(&inputs, 0)
+            }
+        };
+        let sd = &sd;
+        let error_code = || async move { sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh") };
+        let probe = |function: u16| async move {
+            sd.sdo_write(0x60B8, 0, function).await.expect("60B8h");
+        };
+        assert_eq!(run(0).await & FAULT_BIT, 0);
+        // EXT1 rising edge, nothing assigned: Act.
+        probe(ENABLE | RISING).await;
+        let sw = run(0).await;
+        assert_ne!(sw & FAULT_BIT, 0, "Fault: {sw:#06x}");
+        assert_eq!(error_code().await, ACT);
+        // Reset; the Z source needs no input.
+        probe(0).await;
+        run(FAULT_RESET).await;
+        assert_eq!(run(0).await & FAULT_BIT, 0, "reset");
+        probe(ENABLE | SOURCE_INDEX | RISING).await;
+        assert_eq!(run(0).await & FAULT_BIT, 0, "Z phase: no Act");
+        assert_eq!(error_code().await, 0);
+        // EXT1 assigned to EI3: no error; EXT2 (probe 2) still unassigned: Act.
+        probe(0).await;
+        sd.sdo_write(EI3_FUNCTION.0, EI3_FUNCTION.1, EXT1)
+            .await
+            .expect("P3.03");
+        probe(ENABLE | RISING).await;
+        assert_eq!(run(0).await & FAULT_BIT, 0, "EXT1 assigned");
+        assert_eq!(error_code().await, 0);
+        probe((ENABLE | RISING) | (ENABLE | RISING) << 8).await;
+        assert_ne!(run(0).await & FAULT_BIT, 0, "EXT2 unassigned");
+        assert_eq!(error_code().await, ACT);
+        // EXT2 on EI5: both probes run.
+        probe(0).await;
+        run(FAULT_RESET).await;
+        sd.sdo_write(EI5_FUNCTION.0, EI5_FUNCTION.1, EXT2)
+            .await
+            .expect("P3.05");
+        probe((ENABLE | RISING) | (ENABLE | RISING) << 8).await;
+        assert_eq!(run(0).await & FAULT_BIT, 0, "both assigned");
+        let status: u16 = sd.sdo_read(0x60B9, 0).await.expect("60B9h");
+        assert_eq!(
+            status & 0x0101,
+            0x0101,
+            "both probes enabled: {status:#06x}"
+        );
+    });
+}

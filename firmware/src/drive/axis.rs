@@ -41,7 +41,8 @@ use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::math;
 use crate::motor::trajectory::Limits;
 use crate::profile::{
-    self, AppVars, Cia402Rules, DriveProfile, UnitFactorValues, UnitRatios, MOTOR_FAULT_COUNT,
+    self, AppVars, Cia402Rules, DriveProfile, ProbeInputAssignment, UnitFactorValues, UnitRatios,
+    MOTOR_FAULT_COUNT,
 };
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
@@ -113,6 +114,9 @@ pub struct DriveAxis {
     /// Where the slave shows its synchronisation (1C32h:01 sync type), to tell a SYNC0 cycle
     /// from a free-run one.
     sync_type_at: Option<u16>,
+    /// 60B8h as last seen (a write that enables a probe on an unassigned input is an error,
+    /// `Cia402Rules::touch_probe_inputs`).
+    probe_function_seen: u16,
     /// Interpolated position: how long the axis has been inside the position window of the
     /// unchanged set-point (statusword bit 10).
     ip_target_timer: WindowTimer,
@@ -191,6 +195,7 @@ impl DriveAxis {
             position_shift: 0,
             home_offset_shift: 0,
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
+            probe_function_seen: 0,
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
             polarity: Polarity::NONE,
@@ -1004,6 +1009,15 @@ impl DriveAxis {
         let Some(function) = read_u16(ram, vars.touch_probe_function) else {
             return;
         };
+        if function != self.probe_function_seen {
+            self.probe_function_seen = function;
+            if let Some(rule) = self.rules.touch_probe_inputs {
+                let defined = function & self.rules.touch_probe.function_bits;
+                if unassigned_probe_input(defined, &rule, ram) {
+                    self.report_fault(rule.unassigned_error, ram);
+                }
+            }
+        }
         let rules = &self.rules.touch_probe;
         if function == 0 && !self.touch_probes.enabled() && rules.bit7 != Bit7::InputLevel {
             return;
@@ -1262,6 +1276,22 @@ fn software_limits(
         ratio.position_to_internal(i64::from(min)),
         ratio.position_to_internal(i64::from(max)),
     )
+}
+
+/// Whether 60B8h `function` enables a probe on its input (source 0 with an edge) while no
+/// assignment parameter of `rule` holds that probe's input function.
+fn unassigned_probe_input(function: u16, rule: &ProbeInputAssignment, ram: &[u8]) -> bool {
+    use touch_probe::function::{ENABLE, FALLING, RISING, SOURCE_MASK};
+    let assigned = |f: u32| rule.entries.iter().any(|e| e.value(ram, 0) == f);
+    function
+        .to_le_bytes()
+        .into_iter()
+        .zip(rule.functions)
+        .any(|(probe, input_function)| {
+            let on_input =
+                probe & ENABLE != 0 && probe & (RISING | FALLING) != 0 && probe & SOURCE_MASK == 0;
+            on_input && !assigned(input_function)
+        })
 }
 
 /// The axis' switch and index captures as homing sees them.
