@@ -553,6 +553,10 @@ pub struct Cia402Rules {
     pub store_requires_power_cycle: &'static [u8],
     /// The probe inputs must be assigned to a physical input first (the SDV3-E's EXT1/EXT2).
     pub touch_probe_inputs: Option<ProbeInputAssignment>,
+    /// In CSP and IP, a target that would move the demand this many increments per ms or
+    /// faster is ignored (the demand stays) and statusword bit 11 set (the Σ-V-SD's
+    /// over-interpolation-speed guard, 4194304 inc/ms).
+    pub max_interpolation_speed: Option<u32>,
 }
 
 /// A profile whose touch-probe inputs are functions a physical input must be assigned first

@@ -1177,6 +1177,14 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }
+    if let Some(v) = r.max_interpolation_speed {
+        let _ = writeln!(
+            out,
+            "- Cyclic synchronous position and interpolated position: a target that would move \
+             the position demand {v} increments per ms or faster is ignored (the demand stays) \
+             and statusword bit 11 is set."
+        );
+    }
     if let Some(t) = &r.touch_probe_inputs {
         let entries: Vec<String> = t
             .entries

@@ -860,6 +860,7 @@ impl Default for Cia402File {
             home_offset_added: false,
             store_requires_power_cycle: Vec::new(),
             touch_probe_inputs: None,
+            max_interpolation_speed: None,
         }
     }
 }
@@ -1125,6 +1126,9 @@ pub struct Cia402File {
     /// The probe inputs must be assigned to a physical input first.
     #[serde(default)]
     pub touch_probe_inputs: Option<TouchProbeInputsFile>,
+    /// CSP/IP targets at or above this speed (increments per ms) are ignored.
+    #[serde(default)]
+    pub max_interpolation_speed: Option<u32>,
 }
 
 /// `[cia402.touch_probe_inputs]`: the parameters that assign input functions, the function of

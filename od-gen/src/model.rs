@@ -2108,6 +2108,8 @@ pub struct Cia402Rules {
     pub store_requires_power_cycle: Vec<u8>,
     /// The probe inputs must be assigned to a physical input first.
     pub touch_probe_inputs: Option<TouchProbeInputs>,
+    /// CSP/IP targets at or above this speed (increments per ms) are ignored.
+    pub max_interpolation_speed: Option<u32>,
 }
 
 /// `[cia402.touch_probe_inputs]` (`firmware: profile::ProbeInputAssignment`).
@@ -2187,6 +2189,7 @@ impl Default for Cia402Rules {
             home_offset_added: false,
             store_requires_power_cycle: Vec::new(),
             touch_probe_inputs: None,
+            max_interpolation_speed: None,
         }
     }
 }

@@ -564,6 +564,15 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .as_ref()
             .map(|t| touch_probe_inputs(t, &alarms))
             .transpose()?,
+        max_interpolation_speed: match f.cia402.max_interpolation_speed {
+            Some(0) => {
+                return Err(fault(
+                    "cia402.max_interpolation_speed",
+                    Invalid::Value("0 would ignore every target".into()),
+                ))
+            }
+            v => v,
+        },
     };
     let mut profile = Profile {
         name: f.name.clone(),

@@ -5,6 +5,7 @@
 //!   of CiA402), the position factor 6093h (16 increments per unit by default), the profile
 //!   velocity 6081h in 0.1 rpm and the ramps 6083h/6084h as the time in ms from 0 to 2000 rpm;
 //! - RSE 7.11: homing method 19 on a home switch, 6064h = 607Ch at the home.
+//! - Σ-V-SD §4.7 bit 11: a CSP target beyond the over-interpolation speed is ignored.
 
 use ethercrab::MainDevice;
 use tests_host::vendor::{self, Sdo};
@@ -580,5 +581,67 @@ fn sdv3_e_a_mode_change_while_homing_is_ope() {
         );
         let sd = group.subdevice(md, 0).expect("drive");
         assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), OPE);
+    });
+}
+
+/// Σ-V-SD §4.7 statusword bit 11: in CSP (and IP) the target must move the position demand by
+/// less than 4194304 inc/ms (2301h 1:1 by default: user units are increments), else "the
+/// target position is ignored". Over its default PDOs (1600h: 6040h, 607Ah, ...; 1A00h: 6041h,
+/// 6064h, ...) a step of 5 revolutions in one 1 ms cycle is ignored (the demand 6062h and the
+/// motor stay, bit 11 set); a step of 1000 increments is taken and bit 11 clears.
+#[test]
+fn sigma_v_sd_csp_target_beyond_the_interpolation_speed_is_ignored() {
+    const CSP: i8 = 8;
+    const INTERNAL_LIMIT: u16 = 1 << 11;
+    // The Σ-V-SD's free-run cycle (1C32h:02 default).
+    const SIGMA_CYCLE_NS: u64 = 1_000_000;
+    block_on(async {
+        let (m, transport) =
+            master_for(board_sim::Segment::new("sigma-v-sd", 1).expect("sigma-v-sd"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = vendor::into_op(&m, md, &[Sdo::I8(0x6060, 0, CSP)]).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        let cycle = |cw: u16, target: i32| {
+            let (m, group) = (&m, &group);
+            async move {
+                let inputs = vendor::exchange(
+                    m,
+                    md,
+                    group,
+                    &[(0, &cw.to_le_bytes()), (2, &target.to_le_bytes())],
+                    SIGMA_CYCLE_NS,
+                )
+                .await;
+                (vendor::u16_at(&inputs, 0), vendor::i32_at(&inputs, 2))
+            }
+        };
+        // Enable on the actual position.
+        let (_, start) = cycle(0, 0).await;
+        let mut s = (0, start);
+        for cw in vendor::enable_sequence(20) {
+            s = cycle(cw, start).await;
+        }
+        assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED, "{:#06x}", s.0);
+        assert_eq!(s.0 & INTERNAL_LIMIT, 0);
+        // 5 revolutions (5 × 2^20 increments) in 1 ms: ignored.
+        let jump = start.wrapping_add(5 << 20);
+        for _ in 0..10 {
+            s = cycle(ENABLE_OPERATION, jump).await;
+        }
+        assert_ne!(s.0 & INTERNAL_LIMIT, 0, "bit 11: {:#06x}", s.0);
+        assert_eq!(s.0 & STATE_MASK, OPERATION_ENABLED, "no fault");
+        let demand: i32 = sd.sdo_read(0x6062, 0).await.expect("6062h");
+        assert_eq!(demand, start, "the demand stays");
+        assert!((s.1 - start).abs() < 100, "the motor stays: 6064h {}", s.1);
+        // A plausible step is taken.
+        let near = start.wrapping_add(1000);
+        for _ in 0..50 {
+            s = cycle(ENABLE_OPERATION, near).await;
+        }
+        assert_eq!(s.0 & INTERNAL_LIMIT, 0, "bit 11 clear: {:#06x}", s.0);
+        let demand: i32 = sd.sdo_read(0x6062, 0).await.expect("6062h");
+        assert_eq!(demand, near);
+        assert!((s.1 - near).abs() < 100, "6064h {} follows", s.1);
     });
 }

@@ -114,6 +114,10 @@ pub struct DriveAxis {
     /// Where the slave shows its synchronisation (1C32h:01 sync type), to tell a SYNC0 cycle
     /// from a free-run one.
     sync_type_at: Option<u16>,
+    /// The position set-point handed to the axis in the last cycle (increments, drive frame;
+    /// the actual position while the axis does not run the mode's set-point): the reference of
+    /// the interpolation speed guard (`Cia402Rules::max_interpolation_speed`).
+    position_demand: i64,
     /// 60B8h as last seen (a write that enables a probe on an unassigned input is an error,
     /// `Cia402Rules::touch_probe_inputs`).
     probe_function_seen: u16,
@@ -194,6 +198,7 @@ impl DriveAxis {
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
             home_offset_shift: 0,
+            position_demand: 0,
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             probe_function_seen: 0,
             ip_target_timer: WindowTimer::new(),
@@ -605,6 +610,7 @@ impl DriveAxis {
             if delta != 0 {
                 self.home_offset_shift = wanted;
                 self.position_shift = self.position_shift.saturating_add(delta);
+                self.position_demand = self.position_demand.saturating_add(delta);
                 self.profile_modes.rebase(delta);
                 feedback.position = feedback.position.saturating_add(delta);
             }
@@ -638,6 +644,23 @@ impl DriveAxis {
         };
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;
+        if let Some(limit) = self.rules.max_interpolation_speed {
+            let interpolated = matches!(mode, Mode::CyclicPosition | Mode::InterpolatedPosition);
+            if interpolated && motion == Motion::Run {
+                let period_ns = if mode == Mode::InterpolatedPosition {
+                    self.interpolation_period_ns(ram, cycle_ns)
+                } else {
+                    cycle_ns
+                };
+                // Profile rule (the Σ-V-SD §4.7 bit 11): a target further from the last demand
+                // than the limit allows in one period is ignored (the demand stays), bit 11.
+                let step = set_point.position.abs_diff(self.position_demand);
+                if interpolation_too_fast(step, limit, period_ns) {
+                    set_point.position = self.position_demand;
+                    mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+                }
+            }
+        }
         // Software position limits (607Dh), in drive increments; not while homing looks for
         // its references.
         let limits = (mode != Mode::Homing)
@@ -678,6 +701,7 @@ impl DriveAxis {
                     .position_to_internal(i64::from(offset))
                     .saturating_sub(home);
                 self.position_shift = self.position_shift.saturating_add(delta);
+                self.position_demand = self.position_demand.saturating_add(delta);
                 self.profile_modes.rebase(delta);
                 set_point.position = set_point.position.saturating_add(delta);
                 // This cycle's actual values already read in the new positions.
@@ -899,6 +923,11 @@ impl DriveAxis {
             vars.torque_actual_value,
             torque_out(feedback.torque).to_le_bytes(),
         );
+        self.position_demand = if motion == Motion::Run {
+            set_point.position
+        } else {
+            feedback.position
+        };
         self.remember(
             &feedback,
             &set_point,
@@ -949,13 +978,25 @@ impl DriveAxis {
     /// 60C2h holds no valid period).
     fn interpolation_period(&self, ram: &mut [u8], cycle_ns: u32) -> u32 {
         let vars = self.vars;
-        let dc = read_bytes::<1>(ram, self.sync_type_at)
-            .is_some_and(|[t]| t == SyncMode::DcSync0 as u8 || t == SyncMode::DcSync1 as u8);
-        if dc {
+        if self.synchronised(ram) {
             if let Some((value, index)) = interpolated_position::period_object(cycle_ns) {
                 write_bytes(ram, vars.interpolation_time_period, [value]);
                 write_bytes(ram, vars.interpolation_time_index, index.to_le_bytes());
             }
+        }
+        self.interpolation_period_ns(ram, cycle_ns)
+    }
+
+    /// Whether the slave runs in a DC mode (1C32h:01).
+    fn synchronised(&self, ram: &[u8]) -> bool {
+        read_bytes::<1>(ram, self.sync_type_at)
+            .is_some_and(|[t]| t == SyncMode::DcSync0 as u8 || t == SyncMode::DcSync1 as u8)
+    }
+
+    /// The interpolation period of [`Self::interpolation_period`], without showing it in 60C2h.
+    fn interpolation_period_ns(&self, ram: &[u8], cycle_ns: u32) -> u32 {
+        let vars = self.vars;
+        if self.synchronised(ram) {
             return cycle_ns;
         }
         let value = read_bytes::<1>(ram, vars.interpolation_time_period);
@@ -1278,6 +1319,15 @@ fn software_limits(
     )
 }
 
+/// Whether a set-point step of `step` increments in one interpolation period of `period_ns` is
+/// at or above `limit_per_ms` increments per ms (step × 10⁶ ≥ limit × period, saturating: a huge
+/// step is too fast); a period of 0 (not known) checks nothing.
+fn interpolation_too_fast(step: u64, limit_per_ms: u32, period_ns: u32) -> bool {
+    const NS_PER_MS: u64 = 1_000_000;
+    period_ns != 0
+        && step.saturating_mul(NS_PER_MS) >= u64::from(limit_per_ms) * u64::from(period_ns)
+}
+
 /// Whether 60B8h `function` enables a probe on its input (source 0 with an edge) while no
 /// assignment parameter of `rule` holds that probe's input function.
 fn unassigned_probe_input(function: u16, rule: &ProbeInputAssignment, ram: &[u8]) -> bool {
@@ -1373,4 +1423,23 @@ fn sync_motor_model(port: &mut AxisPort, vars: &AppVars, ram: &[u8]) {
 /// [`STANDSTILL_RPM`] in increments/s for an encoder of `counts_per_rev`.
 fn standstill_counts_per_s(counts_per_rev: u32) -> f32 {
     STANDSTILL_RPM / SECONDS_PER_MINUTE * counts_per_rev as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::interpolation_too_fast;
+
+    #[test]
+    fn the_interpolation_speed_guard_is_at_or_above_the_limit() {
+        // Σ-V-SD §4.7: allowed below 4194304 inc/ms; a 1 ms period allows 4194303 increments.
+        const LIMIT: u32 = 4_194_304;
+        assert!(!interpolation_too_fast(4_194_303, LIMIT, 1_000_000));
+        assert!(interpolation_too_fast(4_194_304, LIMIT, 1_000_000));
+        // 125 µs: an eighth of that.
+        assert!(!interpolation_too_fast(524_287, LIMIT, 125_000));
+        assert!(interpolation_too_fast(524_288, LIMIT, 125_000));
+        // Huge steps saturate to "too fast"; an unknown period checks nothing.
+        assert!(interpolation_too_fast(u64::MAX, LIMIT, 1));
+        assert!(!interpolation_too_fast(u64::MAX, LIMIT, 0));
+    }
 }
