@@ -492,3 +492,72 @@ fn rse_a_limit_switch_is_a_warning_not_a_fault() {
         assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED);
     });
 }
+
+/// SDV3-E §6.3.3 alarm record fields 05–07 (feedback speed, the speed 5 ms before, command
+/// speed, rpm): the motor runs at 300 rpm in CSV (60FFh in 0.1 rpm over the default PDOs) when
+/// the power stage overheats (AH); the newest record holds 300 rpm in all three.
+#[test]
+fn sdv3_e_an_alarm_record_holds_the_speed_at_the_alarm() {
+    use tests_host::vendor;
+    const CSV: u8 = 9;
+    const RPM: f64 = 300.0;
+    // SDV3-E 1600h: 6040h at byte 0, 60FFh (0.1 rpm) at 6, 6060h at 12; 1A00h: 6041h first.
+    let out = |cw: u16, rpm: f64| {
+        [
+            (0usize, cw.to_le_bytes().to_vec()),
+            (6, ((rpm * 10.0) as i32).to_le_bytes().to_vec()),
+            (12, vec![CSV]),
+        ]
+    };
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = vendor::into_op(&m, md, &[]).await;
+        let cycle = |cw: u16, rpm: f64| {
+            let (m, group) = (&m, &group);
+            let o = out(cw, rpm);
+            async move {
+                let refs: Vec<(usize, &[u8])> = o.iter().map(|(at, b)| (*at, &b[..])).collect();
+                let inputs = vendor::exchange(m, md, group, &refs, CYCLE_NS).await;
+                vendor::u16_at(&inputs, 0)
+            }
+        };
+        let mut sw = 0;
+        for cw in vendor::enable_sequence(20) {
+            sw = cycle(cw, 0.0).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        // A 300 ms ramp to 300 rpm, then 200 ms there.
+        for k in 0..500 {
+            cycle(ENABLE_OPERATION, RPM * f64::from(k.min(300)) / 300.0).await;
+        }
+        let (rpm, _) = vendor::motor(&m);
+        assert!((rpm - RPM).abs() < 5.0, "{rpm:.1} rpm");
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_drive_temperature(120.0);
+        let mut faulted = false;
+        for _ in 0..300 {
+            if cycle(ENABLE_OPERATION, RPM).await & FAULT_BIT != 0 {
+                faulted = true;
+                break;
+            }
+        }
+        assert!(faulted, "AH");
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
+        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+        for (sub, what) in [
+            (5, "feedback speed"),
+            (6, "feedback speed 5 ms before"),
+            (7, "command speed"),
+        ] {
+            let rpm = sd.sdo_read::<i32>(0x3201, sub).await.expect("3201h");
+            assert!(
+                (f64::from(rpm) - RPM).abs() <= 5.0,
+                "3201h:{sub:02} {what}: {rpm} rpm"
+            );
+        }
+    });
+}

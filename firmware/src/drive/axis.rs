@@ -142,6 +142,8 @@ pub struct DriveAxis {
     /// The unit conversions of the last cycle and what they were made of (they are rebuilt
     /// only when a factor's object changes).
     units_cache: Option<(UnitFactorValues, UnitRatios)>,
+    /// Whether a unit factor is read from an object (`AppVars::unit_factors_vary`).
+    units_vary: bool,
     /// The profile's warnings.
     warnings: &'static [Warning],
     /// The warning that holds.
@@ -152,13 +154,17 @@ pub struct DriveAxis {
 /// the time the power stage has been on.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Recent {
-    rpm: f32,
-    demand_rpm: f32,
-    demand_torque_percent: f32,
-    torque_percent: f32,
+    /// Increments/s (converted to rpm only for a record: the cycle just stores).
+    velocity: f32,
+    demand_velocity: f32,
+    /// N·m, and the rated torque they are a share of.
+    demand_torque: f32,
+    torque: f32,
+    rated_nm: f32,
     bus_voltage: f32,
     demand_position: i32,
-    /// Speeds sampled every [`SPEED_SAMPLE_NS`], the newest at `speeds[newest]`.
+    /// Velocities (increments/s) sampled every [`SPEED_SAMPLE_NS`], the newest at
+    /// `speeds[newest]`.
     speeds: [f32; SPEED_SAMPLES],
     newest: usize,
     since_sample_ns: u32,
@@ -210,12 +216,14 @@ impl DriveAxis {
             warning: None,
             latched_units: None,
             units_cache: None,
+            units_vary: vars.unit_factors_vary(),
             fault_number: None,
             recent: Recent {
-                rpm: 0.0,
-                demand_rpm: 0.0,
-                demand_torque_percent: 0.0,
-                torque_percent: 0.0,
+                velocity: 0.0,
+                demand_velocity: 0.0,
+                demand_torque: 0.0,
+                torque: 0.0,
+                rated_nm: 1.0,
                 bus_voltage: 0.0,
                 demand_position: 0,
                 speeds: [0.0; SPEED_SAMPLES],
@@ -254,10 +262,9 @@ impl DriveAxis {
         if let Some(latched) = self.latched_units {
             return latched;
         }
-        let varies = self.vars.unit_factors_vary();
         if let Some((cached, ratios)) = &self.units_cache {
             // Fixed factors are made once per motor (attaching one drops the cache).
-            if !varies || *cached == self.vars.unit_factor_values(ram, counts_per_rev) {
+            if !self.units_vary || *cached == self.vars.unit_factor_values(ram, counts_per_rev) {
                 return *ratios;
             }
         }
@@ -324,14 +331,19 @@ impl DriveAxis {
         let r = &self.recent;
         // The sample 5 ms back: the oldest of the ring.
         let oldest = (r.newest + 1) % SPEED_SAMPLES;
+        let rpm_per_count_s = self
+            .port
+            .as_ref()
+            .map_or(0.0, |p| SECONDS_PER_MINUTE / p.counts_per_rev.max(1) as f32);
+        let percent_per_nm = PERCENT / r.rated_nm;
         Conditions {
             power_on_hours,
             running_s: u32::try_from(r.running_ns / NS_PER_S).unwrap_or(u32::MAX),
-            speed_rpm: r.rpm,
-            speed_rpm_5ms_before: r.speeds.get(oldest).copied().unwrap_or(0.0),
-            demand_speed_rpm: r.demand_rpm,
-            demand_torque_percent: r.demand_torque_percent,
-            torque_percent: r.torque_percent,
+            speed_rpm: r.velocity * rpm_per_count_s,
+            speed_rpm_5ms_before: r.speeds.get(oldest).copied().unwrap_or(0.0) * rpm_per_count_s,
+            demand_speed_rpm: r.demand_velocity * rpm_per_count_s,
+            demand_torque_percent: r.demand_torque * percent_per_nm,
+            torque_percent: r.torque * percent_per_nm,
             bus_voltage: r.bus_voltage,
             demand_position: r.demand_position,
             mode: self.running_mode as i8,
@@ -947,16 +959,13 @@ impl DriveAxis {
         demand_position: i32,
         (running, cycle_ns): (bool, u32),
     ) {
-        let rpm_per_count_s = self
-            .port
-            .as_ref()
-            .map_or(0.0, |p| SECONDS_PER_MINUTE / p.counts_per_rev.max(1) as f32);
-        let percent_per_nm = PERCENT / rated_nm;
+        // Stored as they are: converted only when a record is made (`alarm_conditions`).
         let r = &mut self.recent;
-        r.rpm = feedback.velocity * rpm_per_count_s;
-        r.demand_rpm = set_point.velocity * rpm_per_count_s;
-        r.demand_torque_percent = torque_demand * percent_per_nm;
-        r.torque_percent = feedback.torque * percent_per_nm;
+        r.velocity = feedback.velocity;
+        r.demand_velocity = set_point.velocity;
+        r.demand_torque = torque_demand;
+        r.torque = feedback.torque;
+        r.rated_nm = rated_nm;
         r.bus_voltage = feedback.bus_voltage;
         r.demand_position = demand_position;
         if running {
@@ -967,7 +976,7 @@ impl DriveAxis {
             r.since_sample_ns = 0;
             r.newest = (r.newest + 1) % SPEED_SAMPLES;
             if let Some(s) = r.speeds.get_mut(r.newest) {
-                *s = r.rpm;
+                *s = r.velocity;
             }
         }
     }
