@@ -557,6 +557,9 @@ pub struct Cia402Rules {
     /// faster is ignored (the demand stays) and statusword bit 11 set (the Σ-V-SD's
     /// over-interpolation-speed guard, 4194304 inc/ms).
     pub max_interpolation_speed: Option<u32>,
+    /// A homing run that ends in a homing error also raises this alarm (the GHA-E's GOH, "no
+    /// home signal found in the valid travel").
+    pub homing_error_alarm: Option<FaultReport>,
 }
 
 /// A profile whose touch-probe inputs are functions a physical input must be assigned first

@@ -1177,6 +1177,14 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }
+    if let Some(c) = &r.homing_error_alarm {
+        let _ = writeln!(
+            out,
+            "- A homing run that ends in a homing error (statusword bit 13) also raises 603Fh \
+             {:04X}h (Fault).",
+            c.error_code
+        );
+    }
     if let Some(v) = r.max_interpolation_speed {
         let _ = writeln!(
             out,

@@ -861,6 +861,7 @@ impl Default for Cia402File {
             store_requires_power_cycle: Vec::new(),
             touch_probe_inputs: None,
             max_interpolation_speed: None,
+            homing_error_alarm: None,
         }
     }
 }
@@ -1129,6 +1130,9 @@ pub struct Cia402File {
     /// CSP/IP targets at or above this speed (increments per ms) are ignored.
     #[serde(default)]
     pub max_interpolation_speed: Option<u32>,
+    /// A failed homing run also raises this alarm (display) or 603Fh code.
+    #[serde(default)]
+    pub homing_error_alarm: Option<MotorFaultFile>,
 }
 
 /// `[cia402.touch_probe_inputs]`: the parameters that assign input functions, the function of

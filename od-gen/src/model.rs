@@ -2110,6 +2110,8 @@ pub struct Cia402Rules {
     pub touch_probe_inputs: Option<TouchProbeInputs>,
     /// CSP/IP targets at or above this speed (increments per ms) are ignored.
     pub max_interpolation_speed: Option<u32>,
+    /// A failed homing run also raises this fault.
+    pub homing_error_alarm: Option<MotorFaultCode>,
 }
 
 /// `[cia402.touch_probe_inputs]` (`firmware: profile::ProbeInputAssignment`).
@@ -2190,6 +2192,7 @@ impl Default for Cia402Rules {
             store_requires_power_cycle: Vec::new(),
             touch_probe_inputs: None,
             max_interpolation_speed: None,
+            homing_error_alarm: None,
         }
     }
 }

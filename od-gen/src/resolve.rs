@@ -573,6 +573,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             }
             v => v,
         },
+        homing_error_alarm: f
+            .cia402
+            .homing_error_alarm
+            .as_ref()
+            .map(|r| fault_report(r, &alarms, "cia402.homing_error_alarm"))
+            .transpose()?,
     };
     let mut profile = Profile {
         name: f.name.clone(),

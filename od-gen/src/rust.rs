@@ -549,7 +549,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {} }},",
             p.cia402
                 .enable_without_mode_error
                 .as_ref()
@@ -597,7 +597,14 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                 t.unassigned_error.emcy.code,
                 t.unassigned_error.emcy.data
             )),
-            p.cia402.max_interpolation_speed
+            p.cia402.max_interpolation_speed,
+            p.cia402
+                .homing_error_alarm
+                .as_ref()
+                .map_or("None".into(), |c| format!(
+                    "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
+                    c.error_code, c.emcy.code, c.emcy.data
+                ))
         );
     }
     let _ = writeln!(out, "    }};\n");

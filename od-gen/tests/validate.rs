@@ -1399,7 +1399,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None }"
     ));
     // 1010h subindexes whose store needs a power cycle before Operation Enabled (Σ-V-SD 1, 4).
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();
@@ -1411,6 +1411,14 @@ fn cia402_rules_are_resolved_and_checked() {
         )));
         assert_eq!(key, "cia402.store_requires_power_cycle", "{bad}");
     }
+    // The GHA-E's GOH on a failed homing run; an unknown alarm is refused.
+    let gha = od_gen::builtin("gha-e").unwrap();
+    assert_eq!(
+        gha.cia402.homing_error_alarm.map(|c| c.error_code),
+        Some(0x8613)
+    );
+    let (key, _) = invalid(&appended("[cia402]\nhoming_error_alarm = \"NoSuchAlarm\""));
+    assert_eq!(key, "cia402.homing_error_alarm");
     // The Σ-V-SD's over-interpolation-speed guard; 0 would ignore every target.
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();
     assert_eq!(sigma.cia402.max_interpolation_speed, Some(4_194_304));

@@ -3,12 +3,21 @@
 //! phase-locked to the drive's free-run timer (every output is seen) over byte offsets of the
 //! process images, which each scenario takes from its manual's default mapping.
 
+use std::time::Duration;
+
 use board_sim::inproc::InProcess;
-use ethercrab::subdevice_group::{Op, PreOp};
-use ethercrab::{DefaultLock, MainDevice, SubDeviceGroup};
+use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op, PreOp};
+use ethercrab::{DcSync, DefaultLock, MainDevice, SubDeviceGroup};
 
 /// A group of one drive in OP.
 pub type Group = SubDeviceGroup<4, 64, DefaultLock, Op>;
+
+/// A group of one drive in OP, synchronised to SYNC0 (a profile without free run).
+pub type DcGroup = SubDeviceGroup<4, 64, DefaultLock, Op, HasDc>;
+
+/// The SYNC0 start delay of [`into_op_dc`]: the drive's SYNC0 values appear in the inputs from
+/// then on.
+pub const SYNC0_START_DELAY: Duration = Duration::from_millis(10);
 
 /// CiA402 controlwords of the enable sequence (Table 5): shutdown, switch on, enable operation.
 pub const SHUTDOWN: u16 = 0x06;
@@ -72,6 +81,71 @@ pub async fn into_op(m: &InProcess, md: &MainDevice<'_>, setup: &[Sdo]) -> Group
         .request_into_op(md)
         .await
         .expect("OP")
+}
+
+/// INIT → OP in DC mode (SYNC0 every `cycle_ns`, the system time synchronised first) with
+/// `setup` written in PREOP.
+pub async fn into_op_dc(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    setup: &[Sdo],
+    cycle_ns: u64,
+) -> DcGroup {
+    let mut group = md
+        .init_single_group::<4, 64>(m.shared.clock().now_fn())
+        .await
+        .expect("init");
+    for &sdo in setup {
+        write(&group, md, sdo).await;
+    }
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP");
+    for _ in 0..100 {
+        group.tx_rx_sync_system_time(md).await.expect("time");
+        m.shared.advance(cycle_ns);
+    }
+    group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: SYNC0_START_DELAY,
+                sync0_period: Duration::from_nanos(cycle_ns),
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .expect("DC")
+        .into_safe_op(md)
+        .await
+        .expect("SAFE-OP")
+        .request_into_op(md)
+        .await
+        .expect("OP")
+}
+
+/// One DC cycle of `cycle_ns`: `outputs` (byte offset, little-endian bytes) written into the
+/// output image, the frame exchanged, the clock advanced; the input image the drive sent back
+/// (the values of the previous SYNC0).
+pub async fn exchange_dc(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &DcGroup,
+    outputs: &[(usize, &[u8])],
+    cycle_ns: u64,
+) -> Vec<u8> {
+    let sd = group.subdevice(md, 0).expect("drive");
+    {
+        let mut image = sd.outputs_raw_mut();
+        for (at, bytes) in outputs {
+            image[*at..*at + bytes.len()].copy_from_slice(bytes);
+        }
+    }
+    group.tx_rx_dc(md).await.expect("tx/rx");
+    m.shared.advance(cycle_ns);
+    let inputs = sd.inputs_raw().to_vec();
+    inputs
 }
 
 /// One cycle of `cycle_ns` phase-locked to the drive's free-run timer: `outputs` (byte offset,

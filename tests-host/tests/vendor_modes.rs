@@ -6,6 +6,7 @@
 //!   velocity 6081h in 0.1 rpm and the ramps 6083h/6084h as the time in ms from 0 to 2000 rpm;
 //! - RSE 7.11: homing method 19 on a home switch, 6064h = 607Ch at the home.
 //! - Σ-V-SD §4.7 bit 11: a CSP target beyond the over-interpolation speed is ignored.
+//! - GHA-E §5.4.3: a homing run that finds no home signal is alarm GOH.
 
 use ethercrab::MainDevice;
 use tests_host::vendor::{self, Sdo};
@@ -643,5 +644,90 @@ fn sigma_v_sd_csp_target_beyond_the_interpolation_speed_is_ignored() {
         let demand: i32 = sd.sdo_read(0x6062, 0).await.expect("6062h");
         assert_eq!(demand, near);
         assert!((s.1 - near).abs() < 100, "6064h {} follows", s.1);
+    });
+}
+
+/// GHA-E §5.4.3: a homing run that does not find its home signal ends with statusword bit 13
+/// (homing error) and alarm GOH "Back to zero failure" (603Fh 8613h, Fault). Method 7 (home
+/// switch, positive first) on a machine with limit switches at ±0.5 rev and no home switch:
+/// the search reverses at the positive limit and fails at the negative one.
+#[test]
+fn gha_e_homing_that_finds_no_home_signal_is_goh() {
+    use board_sim::plant::SwitchParams;
+    use std::f64::consts::TAU;
+    const HM: i8 = 6;
+    const HOMING_ERROR: u16 = 1 << 13;
+    const FAULT_BIT: u16 = 0x08;
+    const GOH: u16 = 0x8613;
+    // 6091h default 131072:10000: 80000 units per revolution; the GHA-E runs in DC only (1 ms).
+    const UNITS_PER_REV: f64 = 80_000.0;
+    const GHA_CYCLE_NS: u64 = 1_000_000;
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("gha-e", 1).expect("gha-e"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_switches(SwitchParams {
+                limit_pos_rad: Some(0.5 * TAU),
+                limit_neg_rad: Some(-0.5 * TAU),
+                ..SwitchParams::default()
+            });
+        let group = vendor::into_op_dc(
+            &m,
+            md,
+            &[
+                Sdo::I8(0x6098, 0, 7),
+                // 60 rpm searching, 6 rpm creeping, 10 rev/s² (user units).
+                Sdo::U32(0x6099, 1, UNITS_PER_REV as u32),
+                Sdo::U32(0x6099, 2, (UNITS_PER_REV / 10.0) as u32),
+                Sdo::U32(0x609A, 0, (10.0 * UNITS_PER_REV) as u32),
+            ],
+            GHA_CYCLE_NS,
+        )
+        .await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        // GHA-E 1600h: 6040h at byte 0, 607Ah at 2, 6060h at 6; 1A00h: 6041h first.
+        let cycle = |cw: u16| {
+            let (m, group) = (&m, &group);
+            async move {
+                let inputs = vendor::exchange_dc(
+                    m,
+                    md,
+                    group,
+                    &[(0, &cw.to_le_bytes()), (6, &[HM as u8])],
+                    GHA_CYCLE_NS,
+                )
+                .await;
+                vendor::u16_at(&inputs, 0)
+            }
+        };
+        // Past the SYNC0 start delay, then the enable sequence.
+        for _ in 0..20 {
+            cycle(0).await;
+        }
+        let mut sw = 0;
+        for cw in vendor::enable_sequence(20) {
+            sw = cycle(cw).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED, "{sw:#06x}");
+        // Start homing (bit 4) and run until the drive faults.
+        let mut k = 0;
+        while sw & FAULT_BIT == 0 {
+            k += 1;
+            assert!(k < 10_000, "no end of the search: {sw:#06x}");
+            sw = cycle(ENABLE_OPERATION | NEW_SET_POINT).await;
+            // GOH comes in the cycle the error does.
+            assert!(
+                sw & HOMING_ERROR == 0 || sw & FAULT_BIT != 0,
+                "homing error without GOH: {sw:#06x}"
+            );
+        }
+        let error: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
+        assert_eq!(error, GOH);
+        let (_, rev) = vendor::motor(&m);
+        assert!(rev < -0.3, "failed at the negative limit: {rev:.2} rev");
+        sw = cycle(ENABLE_OPERATION | NEW_SET_POINT).await;
+        assert_ne!(sw & HOMING_ERROR, 0, "bit 13 in Fault: {sw:#06x}");
     });
 }

@@ -118,6 +118,8 @@ pub struct DriveAxis {
     /// the actual position while the axis does not run the mode's set-point): the reference of
     /// the interpolation speed guard (`Cia402Rules::max_interpolation_speed`).
     position_demand: i64,
+    /// The failed homing run has raised the profile's alarm (`Cia402Rules::homing_error_alarm`).
+    homing_failure_raised: bool,
     /// 60B8h as last seen (a write that enables a probe on an unassigned input is an error,
     /// `Cia402Rules::touch_probe_inputs`).
     probe_function_seen: u16,
@@ -207,6 +209,7 @@ impl DriveAxis {
             position_demand: 0,
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             probe_function_seen: 0,
+            homing_failure_raised: false,
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
             polarity: Polarity::NONE,
@@ -878,6 +881,15 @@ impl DriveAxis {
             if let Some(sw) = read_u16(ram, vars.statusword) {
                 write_u16(ram, vars.statusword, sw | mode_statusword);
             }
+        }
+        if let Some(report) = self.rules.homing_error_alarm {
+            // Profile rule: a homing run that fails raises the profile's alarm (the GHA-E's
+            // GOH), once per failure.
+            let failed = self.profile_modes.homing_failed();
+            if failed && !self.homing_failure_raised {
+                self.report_fault(report, ram);
+            }
+            self.homing_failure_raised = failed;
         }
         self.touch_probe(ram, link, position_ratio);
         let switches = feedback.switches;
