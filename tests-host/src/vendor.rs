@@ -51,6 +51,24 @@ pub enum Sdo {
     U32(u16, u8, u32),
 }
 
+/// The SDO downloads that map `entries` (index, subindex, bit length) into PDO `pdo` and assign
+/// it alone in `assign` (1C12h/1C13h): the assignment and the mapping cleared, the entries
+/// written and counted, the PDO assigned (ETG.1020 §6.2.2: the order a master must follow).
+pub fn remap(pdo: u16, assign: u16, entries: &[(u16, u8, u8)]) -> Vec<Sdo> {
+    let mut sdos = vec![Sdo::U8(assign, 0, 0), Sdo::U8(pdo, 0, 0)];
+    for (n, &(index, subindex, bits)) in (1u8..).zip(entries) {
+        let mapping = u32::from(index) << 16 | u32::from(subindex) << 8 | u32::from(bits);
+        sdos.push(Sdo::U32(pdo, n, mapping));
+    }
+    let count = u8::try_from(entries.len()).expect("at most 255 entries");
+    sdos.extend([
+        Sdo::U8(pdo, 0, count),
+        Sdo::U16(assign, 1, pdo),
+        Sdo::U8(assign, 0, 1),
+    ]);
+    sdos
+}
+
 /// Writes `sdo` to the first drive of `group` in PREOP.
 async fn write(group: &SubDeviceGroup<4, 64, DefaultLock, PreOp>, md: &MainDevice<'_>, sdo: Sdo) {
     let sd = group.subdevice(md, 0).expect("drive");

@@ -12,14 +12,13 @@
 //! The mode changes while the drive stays in Operation Enabled; 6061h shows each mode. Homing is
 //! covered per profile by `homing.rs`, `vendor_modes.rs`, `two_axes.rs` and `motion_soem.rs`.
 
-use std::time::Duration;
-
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
-use ethercrab::subdevice_group::{DcConfiguration, HasDc, Op};
-use ethercrab::{DcSync, DefaultLock, MainDevice, SubDeviceGroup};
+use ethercrab::MainDevice;
 use od_gen::model::{Acceleration, Factor, Operand, Profile};
-use tests_host::vendor::{enable_sequence, i32_at, motor, u16_at, ENABLE_OPERATION};
+use tests_host::vendor::{
+    self, enable_sequence, i32_at, motor, u16_at, DcGroup as Group, Sdo, ENABLE_OPERATION,
+};
 use tests_host::{block_on, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -67,8 +66,6 @@ const TX_SW: usize = 0;
 const TX_MODE: usize = 2;
 const TX_POSITION: usize = 3;
 
-type Group = SubDeviceGroup<4, 64, DefaultLock, Op, HasDc>;
-
 /// A factor's value with its objects' defaults.
 fn factor(p: &Profile, f: &Factor) -> f64 {
     let value = |o: Operand| match o {
@@ -115,81 +112,38 @@ fn units(p: &Profile) -> Units {
     }
 }
 
-fn mapping((index, bits): (u16, u8)) -> u32 {
-    u32::from(index) << 16 | u32::from(bits)
-}
-
 /// INIT → OP with DC SYNC0 at 1 ms, the layout mapped and the profile-mode objects set.
 async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, u: &Units) -> Group {
-    let mut group = md
-        .init_single_group::<4, 64>(m.shared.clock().now_fn())
-        .await
-        .expect("init");
-    {
-        let sd = group.subdevice(md, 0).expect("drive");
-        for (pdo, assign, entries) in [(0x1600u16, 0x1C12u16, RX), (0x1A00, 0x1C13, TX)] {
-            sd.sdo_write(assign, 0, 0u8).await.expect("assign :00 = 0");
-            sd.sdo_write(pdo, 0, 0u8).await.expect("map :00 = 0");
-            for (i, e) in entries.into_iter().enumerate() {
-                sd.sdo_write(pdo, (i + 1) as u8, mapping(e))
-                    .await
-                    .unwrap_or_else(|err| panic!("{}: {pdo:#06x}:{}: {err:?}", p.name, i + 1));
-            }
-            sd.sdo_write(pdo, 0, entries.len() as u8)
-                .await
-                .expect("map :00");
-            sd.sdo_write(assign, 1, pdo).await.expect("assign :01");
-            sd.sdo_write(assign, 0, 1u8).await.expect("assign :00 = 1");
-        }
-        let speed = (PROFILE_SPEED * CPR / u.velocity) as u32;
-        let accel = (u.acceleration)(ACCELERATION);
-        for (index, value) in [
-            (0x607F, 2 * speed),
-            (0x6081, speed),
-            (0x6083, accel),
-            (0x6084, accel),
-            (0x6087, 10_000),
-        ] {
-            // Only the objects the profile has (the SDV3-E has no 6087h).
-            if p.entry(index, 0).is_some() {
-                sd.sdo_write(index, 0, value)
-                    .await
-                    .unwrap_or_else(|err| panic!("{}: {index:#06x}: {err:?}", p.name));
-            }
-        }
-        // A position window of 0 (the GHA-E's default) asks for the exact increment: 1/1000
-        // revolution instead.
-        let window = p.entry(0x6067, 0).map(|e| e.initial_bytes());
-        if window.is_some_and(|b| b.iter().all(|x| *x == 0)) {
-            let units = (CPR / 1000.0 / u.position).ceil() as u32;
-            sd.sdo_write(0x6067, 0, units).await.expect("6067h");
+    let entries = |layout: &[(u16, u8)]| -> Vec<(u16, u8, u8)> {
+        layout
+            .iter()
+            .map(|&(index, bits)| (index, 0, bits))
+            .collect()
+    };
+    let mut setup = vendor::remap(0x1600, 0x1C12, &entries(&RX));
+    setup.extend(vendor::remap(0x1A00, 0x1C13, &entries(&TX)));
+    let speed = (PROFILE_SPEED * CPR / u.velocity) as u32;
+    let accel = (u.acceleration)(ACCELERATION);
+    for (index, value) in [
+        (0x607F, 2 * speed),
+        (0x6081, speed),
+        (0x6083, accel),
+        (0x6084, accel),
+        (0x6087, 10_000),
+    ] {
+        // Only the objects the profile has (the SDV3-E has no 6087h).
+        if p.entry(index, 0).is_some() {
+            setup.push(Sdo::U32(index, 0, value));
         }
     }
-    for mut sd in group.iter_mut(md) {
-        sd.set_dc_sync(DcSync::Sync0);
+    // A position window of 0 (the GHA-E's default) asks for the exact increment: 1/1000
+    // revolution instead.
+    let window = p.entry(0x6067, 0).map(|e| e.initial_bytes());
+    if window.is_some_and(|b| b.iter().all(|x| *x == 0)) {
+        let units = (CPR / 1000.0 / u.position).ceil() as u32;
+        setup.push(Sdo::U32(0x6067, 0, units));
     }
-    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP");
-    for _ in 0..100 {
-        group.tx_rx_sync_system_time(md).await.expect("time");
-        m.shared.advance(CYCLE_NS);
-    }
-    group
-        .configure_dc_sync(
-            md,
-            DcConfiguration {
-                start_delay: Duration::from_millis(10),
-                sync0_period: Duration::from_nanos(CYCLE_NS),
-                sync0_shift: Duration::ZERO,
-            },
-        )
-        .await
-        .expect("DC")
-        .into_safe_op(md)
-        .await
-        .expect("SAFE-OP")
-        .request_into_op(md)
-        .await
-        .expect("OP")
+    vendor::into_op_dc(m, md, &setup, CYCLE_NS).await
 }
 
 /// What one cycle brought back: statusword, 6061h, 6064h, and the motor's speed (rpm) and

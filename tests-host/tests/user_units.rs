@@ -5,11 +5,9 @@
 //! PDOs with DC SYNC0 (the GHA-E runs in DC mode only), the simulated motor turns by the
 //! converted amount and 6064h reads back in user units.
 
-use std::time::Duration;
-
 use board_sim::Segment;
-use ethercrab::subdevice_group::DcConfiguration;
-use ethercrab::{DcSync, MainDevice};
+use ethercrab::MainDevice;
+use tests_host::vendor::{self, Sdo};
 use tests_host::{block_on, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -25,10 +23,6 @@ const OPERATION_ENABLED: u16 = 0x27;
 /// 6060h modes: cyclic synchronous position / velocity.
 const CSP: u8 = 8;
 const CSV: u8 = 9;
-
-fn mapping(index: u16, sub: u8, bits: u8) -> u32 {
-    u32::from(index) << 16 | u32::from(sub) << 8 | u32::from(bits)
-}
 
 #[test]
 fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
@@ -65,74 +59,24 @@ fn gha_e_csp_and_csv(polarity: u8, home_offset: i32) {
         let (m, transport) = master_for(Segment::new("gha-e", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            sd.sdo_write(0x6091, 1, CPR).await.expect("6091h:01");
-            sd.sdo_write(0x6091, 2, UNITS_PER_REV)
-                .await
-                .expect("6091h:02");
-            sd.sdo_write(0x607E, 0, polarity).await.expect("607Eh");
-            sd.sdo_write(0x607C, 0, home_offset / 2)
-                .await
-                .expect("607Ch");
-            // RxPDO: controlword, target position, mode; TxPDO: statusword, position actual.
-            for (pdo, assign, entries) in [
-                (
-                    0x1600u16,
-                    0x1C12u16,
-                    vec![
-                        mapping(0x6040, 0, 16),
-                        mapping(0x607A, 0, 32),
-                        mapping(0x6060, 0, 8),
-                    ],
-                ),
-                (
-                    0x1A00,
-                    0x1C13,
-                    vec![mapping(0x6041, 0, 16), mapping(0x6064, 0, 32)],
-                ),
-            ] {
-                sd.sdo_write(assign, 0, 0u8).await.expect("assign :00 = 0");
-                sd.sdo_write(pdo, 0, 0u8).await.expect("map :00 = 0");
-                for (i, e) in entries.iter().enumerate() {
-                    sd.sdo_write(pdo, (i + 1) as u8, *e).await.expect("entry");
-                }
-                sd.sdo_write(pdo, 0, entries.len() as u8)
-                    .await
-                    .expect("map :00 = n");
-                sd.sdo_write(assign, 1, pdo).await.expect("assign :01");
-                sd.sdo_write(assign, 0, 1u8).await.expect("assign :00 = 1");
-            }
-        }
-        for mut sd in group.iter_mut(md) {
-            sd.set_dc_sync(DcSync::Sync0);
-        }
-        let group = group.into_pre_op_pdi(md).await.expect("PRE-OP");
-        for _ in 0..100 {
-            group.tx_rx_sync_system_time(md).await.expect("time");
-            m.shared.advance(CYCLE_NS);
-        }
-        let group = group
-            .configure_dc_sync(
-                md,
-                DcConfiguration {
-                    start_delay: Duration::from_millis(10),
-                    sync0_period: Duration::from_nanos(CYCLE_NS),
-                    sync0_shift: Duration::ZERO,
-                },
-            )
-            .await
-            .expect("DC")
-            .into_safe_op(md)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("request OP");
+        // RxPDO: controlword, target position, mode; TxPDO: statusword, position actual.
+        let mut setup = vec![
+            Sdo::U32(0x6091, 1, CPR),
+            Sdo::U32(0x6091, 2, UNITS_PER_REV),
+            Sdo::U8(0x607E, 0, polarity),
+            Sdo::I32(0x607C, 0, home_offset / 2),
+        ];
+        setup.extend(vendor::remap(
+            0x1600,
+            0x1C12,
+            &[(0x6040, 0, 16), (0x607A, 0, 32), (0x6060, 0, 8)],
+        ));
+        setup.extend(vendor::remap(
+            0x1A00,
+            0x1C13,
+            &[(0x6041, 0, 16), (0x6064, 0, 32)],
+        ));
+        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
         let sd = group.subdevice(md, 0).expect("drive");
         let cycle = |cw: u16, target: i32, mode: u8| {
             {
