@@ -83,8 +83,12 @@ async fn write(group: &SubDeviceGroup<4, 64, DefaultLock, PreOp>, md: &MainDevic
     r.unwrap_or_else(|e| panic!("SDO {sdo:?}: {e:?}"));
 }
 
-/// INIT → OP in free run with `setup` written in PREOP.
-pub async fn into_op(m: &InProcess, md: &MainDevice<'_>, setup: &[Sdo]) -> Group {
+/// INIT → PREOP with `setup` written.
+async fn preop(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    setup: &[Sdo],
+) -> SubDeviceGroup<4, 64, DefaultLock, PreOp> {
     let group = md
         .init_single_group::<4, 64>(m.shared.clock().now_fn())
         .await
@@ -93,6 +97,12 @@ pub async fn into_op(m: &InProcess, md: &MainDevice<'_>, setup: &[Sdo]) -> Group
         write(&group, md, sdo).await;
     }
     group
+}
+
+/// INIT → OP in free run with `setup` written in PREOP.
+pub async fn into_op(m: &InProcess, md: &MainDevice<'_>, setup: &[Sdo]) -> Group {
+    preop(m, md, setup)
+        .await
         .into_safe_op(md)
         .await
         .expect("SAFE-OP")
@@ -109,13 +119,7 @@ pub async fn into_op_dc(
     setup: &[Sdo],
     cycle_ns: u64,
 ) -> DcGroup {
-    let mut group = md
-        .init_single_group::<4, 64>(m.shared.clock().now_fn())
-        .await
-        .expect("init");
-    for &sdo in setup {
-        write(&group, md, sdo).await;
-    }
+    let mut group = preop(m, md, setup).await;
     for mut sd in group.iter_mut(md) {
         sd.set_dc_sync(DcSync::Sync0);
     }
@@ -154,12 +158,7 @@ pub async fn exchange_dc(
     cycle_ns: u64,
 ) -> Vec<u8> {
     let sd = group.subdevice(md, 0).expect("drive");
-    {
-        let mut image = sd.outputs_raw_mut();
-        for (at, bytes) in outputs {
-            image[*at..*at + bytes.len()].copy_from_slice(bytes);
-        }
-    }
+    put(&mut sd.outputs_raw_mut(), outputs);
     group.tx_rx_dc(md).await.expect("tx/rx");
     m.shared.advance(cycle_ns);
     let inputs = sd.inputs_raw().to_vec();
@@ -177,17 +176,19 @@ pub async fn exchange(
     cycle_ns: u64,
 ) -> Vec<u8> {
     let sd = group.subdevice(md, 0).expect("drive");
-    {
-        let mut image = sd.outputs_raw_mut();
-        for (at, bytes) in outputs {
-            image[*at..*at + bytes.len()].copy_from_slice(bytes);
-        }
-    }
+    put(&mut sd.outputs_raw_mut(), outputs);
     let since = m.shared.clock().now();
     group.tx_rx(md).await.expect("tx/rx");
     m.shared.finish_cycle(since, cycle_ns);
     let inputs = sd.inputs_raw().to_vec();
     inputs
+}
+
+/// Writes `outputs` (byte offset, little-endian bytes) into an output image.
+fn put(image: &mut [u8], outputs: &[(usize, &[u8])]) {
+    for (at, bytes) in outputs {
+        image[*at..*at + bytes.len()].copy_from_slice(bytes);
+    }
 }
 
 /// The little-endian u16 at byte `at` of an image.

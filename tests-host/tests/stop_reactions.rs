@@ -533,111 +533,33 @@ fn sigma_v_sd_switched_on_needs_the_main_power() {
     });
 }
 
-/// CiA402 fault reaction (605Eh = 2, quick-stop ramp) on a following error: the motor is still
-/// under control, so the drive stays in Fault Reaction Active while it decelerates along 6085h,
-/// then Fault (603Fh = 8611h) with the power stage off. (A fault of the power stage or the
-/// sensors cuts the gates at once instead.)
-#[test]
-fn a_following_error_fault_decelerates_on_the_fault_reaction_ramp() {
-    const FAULT_REACTION_OPTION: u16 = 0x605E;
-    const RAMP: u32 = 104_857_600; // 6000 rpm/s
-    const FAULT_REACTION_ACTIVE: u16 = 0x0F;
-    const FAULT: u16 = 0x08;
-    block_on(async {
-        let (m, transport) = master();
-        tokio::task::spawn_local(transport);
-        let md: &MainDevice<'_> = &m.maindevice;
-        let (group, target) = moving!(
-            m,
-            md,
-            &[(QUICK_STOP_DECELERATION, RAMP), (FAULT_REACTION_OPTION, 2)]
-        );
-        // A following-error window of one increment with no timeout: the next lag trips it.
-        let sd = group.subdevice(md, 0).expect("drive");
-        sd.sdo_write(0x6066, 0, 0u16).await.expect("6066h");
-        sd.sdo_write(0x6065, 0, 1u32).await.expect("6065h");
-        let step = speed_counts_per_s(SPEED_RPM) * CYCLE_S;
-        let mut target = target;
-        let mut speeds = Vec::new();
-        let mut sw = 0;
-        let mut entered = false;
-        for _ in 0..1_000 {
-            target += step;
-            let rpm;
-            (sw, _, rpm) = cycle!(m, md, group, ENABLE_OPERATION, target as i32);
-            let reacting = sw & SWITCH_ON_DISABLED_MASK == FAULT_REACTION_ACTIVE;
-            if entered && !reacting {
-                break;
-            }
-            entered |= reacting;
-            if entered {
-                speeds.push(rpm);
-            }
-        }
-        assert!(entered, "Fault Reaction Active: {sw:#06x}");
-        assert_eq!(sw & SWITCH_ON_DISABLED_MASK, FAULT, "then Fault: {sw:#06x}");
-        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(RAMP));
-        let took_s = speeds.len() as f64 * CYCLE_S;
-        assert!(
-            (took_s - expected_s).abs() < 0.03,
-            "Fault Reaction Active for {took_s:.3} s, the ramp takes {expected_s:.3} s"
-        );
-        let mid = speeds[speeds.len() / 2];
-        assert!(
-            (mid - SPEED_RPM / 2.0).abs() < 100.0,
-            "{mid:.0} rpm half-way: {speeds:?}"
-        );
-        let sd = group.subdevice(md, 0).expect("drive");
-        assert_eq!(sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"), 0x8611);
-        let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
-        assert!(!gates, "power stage off");
-    });
-}
+/// The fault reaction option code object and the ramp the fault-reaction scenarios run on.
+const FAULT_REACTION_OPTION: u16 = 0x605E;
+const FAULT_REACTION_RAMP: u32 = 104_857_600; // 6000 rpm/s
 
-/// CiA402 fault reaction (605Eh = 2, quick-stop ramp) on a thermal fault: the power stage
-/// over its temperature (`drive_over_temperature`, 603Fh = 4210h) leaves the motor under
-/// control (heat builds over seconds), so the drive decelerates it along 6085h in Fault
-/// Reaction Active and then goes to Fault with the power stage off, as on a following error.
-#[test]
-fn a_drive_over_temperature_fault_decelerates_on_the_fault_reaction_ramp() {
-    const FAULT_REACTION_OPTION: u16 = 0x605E;
-    const RAMP: u32 = 104_857_600; // 6000 rpm/s
-    const FAULT_REACTION_ACTIVE: u16 = 0x0F;
-    const FAULT: u16 = 0x08;
-    /// The standard profile's `drive_over_temperature` code: "excess temperature device".
-    const DRIVE_OVER_TEMPERATURE: u16 = 0x4210;
-    block_on(async {
-        let (m, transport) = master();
-        tokio::task::spawn_local(transport);
-        let md: &MainDevice<'_> = &m.maindevice;
-        let (group, target) = moving!(
-            m,
-            md,
-            &[(QUICK_STOP_DECELERATION, RAMP), (FAULT_REACTION_OPTION, 2)]
-        );
-        let level = m.shared.segment().drives()[0].servos[0]
-            .axis
-            .config()
-            .protection
-            .drive_over_temperature_c;
-        m.shared.segment().drives_mut()[0].servos[0]
-            .plant
-            .set_drive_temperature(f64::from(level) + 10.0);
+/// Runs the moving drive on (the CSP target advancing at [`SPEED_RPM`]) through a fault until
+/// its fault reaction ends; asserts Fault Reaction Active (the power stage on for the ramp) and
+/// then Fault, the reaction as long as the ramp from [`SPEED_RPM`] on 6085h takes and half the
+/// speed half-way, and the power stage off at the end; evaluates to 603Fh.
+macro_rules! fault_reaction_ramp {
+    ($m:expr, $md:expr, $group:expr, $target:expr) => {{
+        const FAULT_REACTION_ACTIVE: u16 = 0x0F;
+        const FAULT: u16 = 0x08;
         let step = speed_counts_per_s(SPEED_RPM) * CYCLE_S;
-        let mut target = target;
+        let mut target = $target;
         let mut speeds = Vec::new();
         let mut sw = 0;
         let mut entered = false;
         for _ in 0..1_000 {
             target += step;
             let rpm;
-            (sw, _, rpm) = cycle!(m, md, group, ENABLE_OPERATION, target as i32);
+            (sw, _, rpm) = cycle!($m, $md, $group, ENABLE_OPERATION, target as i32);
             let reacting = sw & SWITCH_ON_DISABLED_MASK == FAULT_REACTION_ACTIVE;
             if entered && !reacting {
                 break;
             }
             if reacting && !entered {
-                let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
+                let gates = $m.shared.segment().drives()[0].servos[0].latched().gates;
                 assert!(gates, "the power stage runs the ramp");
             }
             entered |= reacting;
@@ -647,7 +569,7 @@ fn a_drive_over_temperature_fault_decelerates_on_the_fault_reaction_ramp() {
         }
         assert!(entered, "Fault Reaction Active: {sw:#06x}");
         assert_eq!(sw & SWITCH_ON_DISABLED_MASK, FAULT, "then Fault: {sw:#06x}");
-        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(RAMP));
+        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(FAULT_REACTION_RAMP));
         let took_s = speeds.len() as f64 * CYCLE_S;
         assert!(
             (took_s - expected_s).abs() < 0.03,
@@ -658,12 +580,70 @@ fn a_drive_over_temperature_fault_decelerates_on_the_fault_reaction_ramp() {
             (mid - SPEED_RPM / 2.0).abs() < 100.0,
             "{mid:.0} rpm half-way: {speeds:?}"
         );
+        let gates = $m.shared.segment().drives()[0].servos[0].latched().gates;
+        assert!(!gates, "power stage off");
+        let sd = $group.subdevice($md, 0).expect("drive");
+        sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh")
+    }};
+}
+
+/// CiA402 fault reaction (605Eh = 2, quick-stop ramp) on a following error: the motor is still
+/// under control, so the drive stays in Fault Reaction Active while it decelerates along 6085h,
+/// then Fault (603Fh = 8611h) with the power stage off. (A fault of the power stage or the
+/// sensors cuts the gates at once instead.)
+#[test]
+fn a_following_error_fault_decelerates_on_the_fault_reaction_ramp() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(
+            m,
+            md,
+            &[
+                (QUICK_STOP_DECELERATION, FAULT_REACTION_RAMP),
+                (FAULT_REACTION_OPTION, 2)
+            ]
+        );
+        // A following-error window of one increment with no timeout: the next lag trips it.
         let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x6066, 0, 0u16).await.expect("6066h");
+        sd.sdo_write(0x6065, 0, 1u32).await.expect("6065h");
+        assert_eq!(fault_reaction_ramp!(m, md, group, target), 0x8611);
+    });
+}
+
+/// CiA402 fault reaction (605Eh = 2, quick-stop ramp) on a thermal fault: the power stage
+/// over its temperature (`drive_over_temperature`, 603Fh = 4210h) leaves the motor under
+/// control (heat builds over seconds), so the drive decelerates it along 6085h in Fault
+/// Reaction Active and then goes to Fault with the power stage off, as on a following error.
+#[test]
+fn a_drive_over_temperature_fault_decelerates_on_the_fault_reaction_ramp() {
+    /// The standard profile's `drive_over_temperature` code: "excess temperature device".
+    const DRIVE_OVER_TEMPERATURE: u16 = 0x4210;
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let (group, target) = moving!(
+            m,
+            md,
+            &[
+                (QUICK_STOP_DECELERATION, FAULT_REACTION_RAMP),
+                (FAULT_REACTION_OPTION, 2)
+            ]
+        );
+        let level = m.shared.segment().drives()[0].servos[0]
+            .axis
+            .config()
+            .protection
+            .drive_over_temperature_c;
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_drive_temperature(f64::from(level) + 10.0);
         assert_eq!(
-            sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"),
+            fault_reaction_ramp!(m, md, group, target),
             DRIVE_OVER_TEMPERATURE
         );
-        let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
-        assert!(!gates, "power stage off");
     });
 }

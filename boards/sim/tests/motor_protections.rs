@@ -145,6 +145,28 @@ fn assert_trip(servo: &SimServo, tripped: Option<u64>, fault: MotorFault, lo: u6
     );
 }
 
+/// Sets the motor's thermal switch of the running `servo` and runs `command` until
+/// `MotorOverTemperature` trips, asserting it does after the confirmation time; returns the
+/// confirmation in loop samples and the PWM periods per loop sample.
+fn thermal_switch_trip(servo: &mut SimServo, command: AxisCommand) -> (u64, u64) {
+    let p = prot(servo);
+    let n = u64::from(confirmation_samples(
+        p.motor_over_temperature_confirm_s,
+        loop_dt(servo) as f32,
+    ));
+    let d = divider(servo);
+    servo.plant.set_motor_overtemp_input(true);
+    let tripped = run_until_fault(servo, command, 2 * n * d);
+    assert_trip(
+        servo,
+        tripped,
+        MotorFault::MotorOverTemperature,
+        (n - 1) * d + 1,
+        n * d,
+    );
+    (n, d)
+}
+
 /// Largest magnitude of the three measured phase currents of the last sample, with the sensors'
 /// true offsets removed (the firmware's calibrated offsets agree within a few mA).
 fn measured_peak(servo: &SimServo) -> f64 {
@@ -604,22 +626,8 @@ fn a_fault_that_cuts_the_gates_ends_a_controlled_stop() {
     };
     let mut servo = servo_with(plant, |_| {});
     start(&mut servo, ControlMode::Torque);
-    let p = prot(&servo);
-    let n = u64::from(confirmation_samples(
-        p.motor_over_temperature_confirm_s,
-        loop_dt(&servo) as f32,
-    ));
-    let d = divider(&servo);
     let command = hold(&servo, ControlMode::Torque);
-    servo.plant.set_motor_overtemp_input(true);
-    let tripped = run_until_fault(&mut servo, command, 2 * n * d);
-    assert_trip(
-        &servo,
-        tripped,
-        MotorFault::MotorOverTemperature,
-        (n - 1) * d + 1,
-        n * d,
-    );
+    let (_, d) = thermal_switch_trip(&mut servo, command);
     let trips = servo.feedback().trips;
     // The fault reaction runs (the axis stays enabled); the encoder goes.
     servo
@@ -837,22 +845,8 @@ fn following_error_trips_at_a_hard_end_stop() {
 #[test]
 fn a_fault_latches_until_a_reset_with_the_cause_gone() {
     let mut servo = running(ControlMode::Torque);
-    let p = prot(&servo);
-    let n = u64::from(confirmation_samples(
-        p.motor_over_temperature_confirm_s,
-        loop_dt(&servo) as f32,
-    ));
-    let d = divider(&servo);
     let command = hold(&servo, ControlMode::Torque);
-    servo.plant.set_motor_overtemp_input(true);
-    let tripped = run_until_fault(&mut servo, command, 2 * n * d);
-    assert_trip(
-        &servo,
-        tripped,
-        MotorFault::MotorOverTemperature,
-        (n - 1) * d + 1,
-        n * d,
-    );
+    let (n, d) = thermal_switch_trip(&mut servo, command);
     // The drive's fault reaction ends; then, enabled and commanding torque: stays faulted,
     // gates off.
     end_fault_reaction(&mut servo, command);
