@@ -350,6 +350,21 @@ pub enum Operand {
 }
 
 impl Operand {
+    /// Writes `value` to an OD RAM entry, saturated to its length (nothing for a constant or
+    /// an entry outside the RAM).
+    pub fn write(self, ram: &mut [u8], value: u32) {
+        if let Self::Ram { at, len } = self {
+            let len = len.min(4);
+            let max = u32::MAX.checked_shr(8 * (4 - u32::from(len))).unwrap_or(0);
+            let start = usize::from(at);
+            if let Some(dst) = ram.get_mut(start..start + usize::from(len)) {
+                for (d, s) in dst.iter_mut().zip(value.min(max).to_le_bytes()) {
+                    *d = s;
+                }
+            }
+        }
+    }
+
     /// The value; an entry outside the RAM reads 0, an unknown encoder resolution too (which
     /// [`Ratio::new`] turns into 1:1).
     pub fn value(self, ram: &[u8], counts_per_rev: u32) -> u32 {
@@ -505,6 +520,9 @@ pub struct DriveProfile {
     /// The profile's adjusting-service objects (`[[adjusting]]`; at most
     /// [`crate::drive::MAX_ADJUSTING_SERVICES`]).
     pub adjusting: &'static [ServiceSpec],
+    /// Settings held both by a whole object and by two parameters that split it
+    /// (`[[split_value]]`).
+    pub split_values: &'static [SplitValue],
     /// CiA402 behaviour the manual adds (`[cia402]`).
     pub cia402: Cia402Rules,
 }
@@ -560,6 +578,41 @@ pub struct Cia402Rules {
     /// A homing run that ends in a homing error also raises this alarm (the GHA-E's GOH, "no
     /// home signal found in the valid travel").
     pub homing_error_alarm: Option<FaultReport>,
+}
+
+/// One setting that a whole object and two parameters hold: `whole` = `high` × `radix` + `low`
+/// (the GHA-E's gear ratio: 6091h:01 = Pn-006 × 10000 + Pn-007, 6091h:02 = Pn-008 × 10000 +
+/// Pn-009). The drive keeps them equal: the side a write changed sets the other; at power-on
+/// the parts (saved at once) set the whole ([`SplitValue::reconcile`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SplitValue {
+    /// The whole value (an OD RAM entry).
+    pub whole: Operand,
+    /// The high part.
+    pub high: Operand,
+    /// The low part (below `radix`).
+    pub low: Operand,
+    /// The factor of the high part (> 1).
+    pub radix: u32,
+}
+
+impl SplitValue {
+    /// The values `[whole, high, low]` after one check of `now` against what was `seen` last
+    /// (`None` at power-on: the parts set the whole). The side that changed sets the other
+    /// (the whole first, if both did); the whole saturates.
+    pub fn reconcile(&self, now: [u32; 3], seen: Option<[u32; 3]>) -> [u32; 3] {
+        let [whole, high, low] = now;
+        let radix = self.radix.max(2);
+        let from_parts = [high.saturating_mul(radix).saturating_add(low), high, low];
+        match seen {
+            None => from_parts,
+            Some([seen_whole, _, _]) if whole != seen_whole => {
+                [whole, whole / radix, whole % radix]
+            }
+            Some([_, seen_high, seen_low]) if high != seen_high || low != seen_low => from_parts,
+            Some(_) => now,
+        }
+    }
 }
 
 /// A profile whose touch-probe inputs are functions a physical input must be assigned first
@@ -908,5 +961,55 @@ mod axis_vars {
             };
             assert_eq!(p.axes.len(), expected, "{}", p.od.device.profile);
         }
+    }
+}
+
+#[cfg(test)]
+mod split_values {
+    use super::{Operand, SplitValue};
+
+    /// The GHA-E's 6091h:01 = Pn-006 × 10000 + Pn-007 (UDINT at 0, UINTs at 4 and 6).
+    const GEAR: SplitValue = SplitValue {
+        whole: Operand::Ram { at: 0, len: 4 },
+        high: Operand::Ram { at: 4, len: 2 },
+        low: Operand::Ram { at: 6, len: 2 },
+        radix: 10_000,
+    };
+
+    #[test]
+    fn the_side_that_changed_sets_the_other() {
+        let seen = [131_072, 13, 1_072];
+        // The whole written: the parts follow.
+        assert_eq!(
+            GEAR.reconcile([262_144, 13, 1_072], Some(seen)),
+            [262_144, 26, 2_144]
+        );
+        // A part written: the whole follows.
+        assert_eq!(
+            GEAR.reconcile([131_072, 20, 1_072], Some(seen)),
+            [201_072, 20, 1_072]
+        );
+        // Both: the whole wins.
+        assert_eq!(GEAR.reconcile([50_000, 20, 0], Some(seen)), [50_000, 5, 0]);
+        // Nothing: as it is.
+        assert_eq!(GEAR.reconcile(seen, Some(seen)), seen);
+        // Power-on: the parts set the whole; a huge product saturates.
+        assert_eq!(GEAR.reconcile([1, 1, 0], None), [10_000, 1, 0]);
+        assert_eq!(
+            GEAR.reconcile([0, u32::MAX, 0], None),
+            [u32::MAX, u32::MAX, 0]
+        );
+    }
+
+    #[test]
+    fn a_write_saturates_to_the_entry_and_stays_inside_the_ram() {
+        let mut ram = [0u8; 8];
+        GEAR.high.write(&mut ram, 70_000);
+        assert_eq!(GEAR.high.value(&ram, 0), 65_535, "a UINT saturates");
+        GEAR.whole.write(&mut ram, 0x0102_0304);
+        assert_eq!(&ram[..4], &[4, 3, 2, 1]);
+        Operand::Ram { at: 7, len: 4 }.write(&mut ram, 9);
+        assert_eq!(ram[7], 0, "outside the RAM: nothing written");
+        Operand::Const(5).write(&mut ram, 9);
     }
 }

@@ -1177,6 +1177,18 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }
+    for v in &p.split_values {
+        let e = |(i, s): (u16, u8)| format!("{i:04X}h:{s:02X}");
+        let _ = writeln!(
+            out,
+            "- {} = {} × {} + {}: the drive keeps both forms equal (a write to either updates \
+             the other; at power-on the parts, which are saved at once, set the whole).",
+            e(v.whole),
+            e(v.high),
+            v.radix,
+            e(v.low)
+        );
+    }
     if let Some(c) = &r.homing_error_alarm {
         let _ = writeln!(
             out,

@@ -87,6 +87,24 @@ pub struct ProfileFile {
     /// channel, the Σ-V-SD's 2310h).
     #[serde(default)]
     pub adjusting: Vec<AdjustingFile>,
+    /// `[[split_value]]`: settings held both by a whole object and by two parameters that split
+    /// it (the GHA-E's 6091h and Pn-006..009).
+    #[serde(default, rename = "split_value")]
+    pub split_values: Vec<SplitValueFile>,
+}
+
+/// `[[split_value]]`: `whole` = `high` × `radix` + `low`, kept equal by the drive.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SplitValueFile {
+    /// The whole value's entry, `"0xIIII:S"`.
+    pub whole: String,
+    /// The parameter with the high part.
+    pub high: String,
+    /// The parameter with the low part (below `radix`).
+    pub low: String,
+    /// The factor of the high part (> 1).
+    pub radix: u32,
 }
 
 /// `[[adjusting]]`: one adjusting-service object.

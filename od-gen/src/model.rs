@@ -1521,6 +1521,8 @@ pub struct Profile {
     pub storage: StorageRules,
     /// `[[adjusting]]`: adjusting-service objects.
     pub adjusting: Vec<Adjusting>,
+    /// `[[split_value]]`: settings held by a whole object and two parameters that split it.
+    pub split_values: Vec<SplitValue>,
     /// `[cia402]`: CiA402 behaviour rules.
     pub cia402: Cia402Rules,
     /// RxPDOs, sorted by index.
@@ -2112,6 +2114,19 @@ pub struct Cia402Rules {
     pub max_interpolation_speed: Option<u32>,
     /// A failed homing run also raises this fault.
     pub homing_error_alarm: Option<MotorFaultCode>,
+}
+
+/// `[[split_value]]` (`firmware: profile::SplitValue`): `whole` = `high` × `radix` + `low`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SplitValue {
+    /// The whole value's entry.
+    pub whole: (u16, u8),
+    /// The parameter with the high part.
+    pub high: (u16, u8),
+    /// The parameter with the low part.
+    pub low: (u16, u8),
+    /// The factor of the high part.
+    pub radix: u32,
 }
 
 /// `[cia402.touch_probe_inputs]` (`firmware: profile::ProbeInputAssignment`).

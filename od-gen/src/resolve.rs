@@ -632,6 +632,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         objects: Vec::new(),
         storage: StorageRules::default(),
         adjusting: Vec::new(),
+        split_values: Vec::new(),
         cia402,
     };
     for o in derived_objects(&profile)? {
@@ -647,7 +648,49 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     crate::validate::check(&profile)?;
     profile.storage = crate::storage::resolve(&f.storage, &profile)?;
     profile.adjusting = crate::adjusting::resolve(&f.adjusting, &profile)?;
+    profile.split_values = split_values(&f.split_values, &profile)?;
     Ok(profile)
+}
+
+/// `[[split_value]]`: three writable integer parameters in RAM of at most 32 bits, a radix > 1.
+fn split_values(
+    files: &[crate::file::SplitValueFile],
+    p: &Profile,
+) -> Result<Vec<SplitValue>, Fault> {
+    if files.len() > crate::validate::MAX_SPLIT_VALUES {
+        return Err(fault(
+            "split_value",
+            Invalid::Value(format!(
+                "{} settings, at most {}",
+                files.len(),
+                crate::validate::MAX_SPLIT_VALUES
+            )),
+        ));
+    }
+    files
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let entry = |s: &str, name: &str| -> Result<(u16, u8), Fault> {
+                let key = format!("split_value[{i}].{name}");
+                let e = entry_ref(Some(s), &key)?.unwrap_or_default();
+                crate::validate::integer_parameter(p, e, &key)?;
+                Ok(e)
+            };
+            if f.radix < 2 {
+                return Err(fault(
+                    &format!("split_value[{i}].radix"),
+                    Invalid::Value(format!("{} is not a radix (at least 2)", f.radix)),
+                ));
+            }
+            Ok(SplitValue {
+                whole: entry(&f.whole, "whole")?,
+                high: entry(&f.high, "high")?,
+                low: entry(&f.low, "low")?,
+                radix: f.radix,
+            })
+        })
+        .collect()
 }
 
 /// `[units]` → [`Units`]: each side an integer ≥ 1 or an unsigned entry of at most 32 bits

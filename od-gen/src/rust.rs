@@ -509,6 +509,26 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             })
             .collect();
         let _ = writeln!(out, "        warnings: &[{}],", warnings.join(", "));
+        // Validated: writable integer parameters in RAM.
+        let ram = |(index, sub): (u16, u8)| {
+            let at = layout.offsets.get(&(index, sub)).copied().unwrap_or(0);
+            let len = p.entry(index, sub).map_or(0, |e| e.byte_len());
+            format!("{drive}::profile::Operand::Ram {{ at: {at}, len: {len} }}")
+        };
+        let splits: Vec<String> = p
+            .split_values
+            .iter()
+            .map(|v| {
+                format!(
+                    "{drive}::profile::SplitValue {{ whole: {}, high: {}, low: {}, radix: {} }}",
+                    ram(v.whole),
+                    ram(v.high),
+                    ram(v.low),
+                    v.radix
+                )
+            })
+            .collect();
+        let _ = writeln!(out, "        split_values: &[{}],", splits.join(", "));
         let _ = writeln!(
             out,
             "        emcy_axis_number_byte: {:?},",
@@ -613,6 +633,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             out,
             "    const _: () = assert!({drive}::profile::MAX_AXES == {}, \"od-gen's axis limit differs from the firmware's\");",
             crate::validate::MAX_AXES
+        );
+        let _ = writeln!(
+            out,
+            "    const _: () = assert!({drive}::drive::MAX_SPLIT_VALUES == {}, \"od-gen's split-value limit differs from the firmware's\");",
+            crate::validate::MAX_SPLIT_VALUES
         );
         let _ = writeln!(
             out,

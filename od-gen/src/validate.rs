@@ -372,6 +372,10 @@ fn sync(p: &Profile) -> Result<(), Fault> {
 /// `profile::MAX_AXES`, which the generated code asserts to agree.
 pub const MAX_AXES: u8 = 2;
 
+/// The most `[[split_value]]` settings: the firmware's `drive::MAX_SPLIT_VALUES`, which the
+/// generated code asserts to agree.
+pub const MAX_SPLIT_VALUES: usize = 4;
+
 fn roles(p: &Profile) -> Result<(), Fault> {
     axes(p)?;
     let mut seen = BTreeSet::new();
@@ -689,7 +693,11 @@ fn eeprom(p: &Profile) -> Result<(), Fault> {
 
 /// A parameter the firmware reads at power-on: an integer entry of at most 32 bits in RAM,
 /// writable (so a master can set it and 1010h can store it).
-fn integer_parameter(p: &Profile, (index, subindex): (u16, u8), key: &str) -> Result<(), Fault> {
+pub(crate) fn integer_parameter(
+    p: &Profile,
+    (index, subindex): (u16, u8),
+    key: &str,
+) -> Result<(), Fault> {
     let e = p
         .entry(index, subindex)
         .ok_or_else(|| fault(key, Invalid::PdoEntryMissing { index, subindex }))?;

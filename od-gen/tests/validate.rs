@@ -1411,6 +1411,30 @@ fn cia402_rules_are_resolved_and_checked() {
         )));
         assert_eq!(key, "cia402.store_requires_power_cycle", "{bad}");
     }
+    // The GHA-E's gear ratio in two forms; a radix below 2 or a read-only part is refused.
+    let gha = od_gen::builtin("gha-e").unwrap();
+    assert_eq!(gha.split_values.len(), 2);
+    assert_eq!(
+        (
+            gha.split_values[0].whole,
+            gha.split_values[0].high,
+            gha.split_values[0].radix
+        ),
+        ((0x6091, 1), (0x2000, 7), 10_000)
+    );
+    for (table, key) in [
+        (
+            "whole = \"0x6040:0\"\nhigh = \"0x6040:0\"\nlow = \"0x6040:0\"\nradix = 1",
+            "split_value[0].radix",
+        ),
+        (
+            "whole = \"0x6041:0\"\nhigh = \"0x6040:0\"\nlow = \"0x6040:0\"\nradix = 10",
+            "split_value[0].whole",
+        ),
+    ] {
+        let (k, _) = invalid(&appended(&format!("[[split_value]]\n{table}")));
+        assert_eq!(k, key, "{table}");
+    }
     // The GHA-E's GOH on a failed homing run; an unknown alarm is refused.
     let gha = od_gen::builtin("gha-e").unwrap();
     assert_eq!(

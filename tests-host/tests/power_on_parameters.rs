@@ -210,3 +210,59 @@ fn segment_fresh_after(sub: u8) -> Segment {
     assert!(out[0].is_ok(), "1010h:{sub:02}: {out:?}");
     segment
 }
+
+/// GHA-E §2.2.2 / §5.7.3: 6091h:01 = Pn-006 × 10000 + Pn-007 and 6091h:02 = Pn-008 × 10000 +
+/// Pn-009 are one setting in two forms: a write to either updates the other. The Pn parameters
+/// are saved at once (§4.2, Pn-046 = 0), 6091h only by 1010h: after a power cycle the Pn form
+/// holds the last write to it and sets 6091h; a 6091h write that was not stored is gone.
+#[test]
+fn gha_e_gear_ratio_6091h_and_pn_006_to_009_are_one_setting() {
+    const GEAR: u16 = 0x6091;
+    const PN: u16 = 0x2000;
+    const PN_006: u8 = 0x07;
+    const PN_007: u8 = 0x08;
+    const PN_008: u8 = 0x09;
+    const PN_009: u8 = 0x0A;
+    let segment = Segment::new("gha-e", 1).expect("profile");
+    let (mut segment, out) = session(
+        segment,
+        &[
+            // The defaults agree: 131072 = 13 × 10000 + 1072, 10000 = 1 × 10000 + 0.
+            Step::Read(GEAR, 1),
+            Step::ReadU16(PN, PN_006),
+            Step::ReadU16(PN, PN_007),
+            // 6091h:01 written: Pn-006/007 follow.
+            Step::Write(GEAR, 1, 262_144),
+            Step::ReadU16(PN, PN_006),
+            Step::ReadU16(PN, PN_007),
+            // Pn-008 written: 6091h:02 follows.
+            Step::WriteU16(PN, PN_008, 2),
+            Step::Read(GEAR, 2),
+            Step::ReadU16(PN, PN_009),
+        ],
+    );
+    let values: Vec<u32> = out.iter().map(value).collect();
+    assert_eq!(&values[..3], &[131_072, 13, 1_072], "defaults");
+    assert_eq!(
+        &values[4..6],
+        &[26, 2_144],
+        "Pn-006/007 from 6091h:01 = 262144"
+    );
+    assert_eq!(&values[7..9], &[20_000, 0], "6091h:02 from Pn-008 = 2");
+    power_cycle(&mut segment);
+    let (_, out) = session(
+        segment,
+        &[
+            Step::Read(GEAR, 1),
+            Step::ReadU16(PN, PN_006),
+            Step::Read(GEAR, 2),
+            Step::ReadU16(PN, PN_008),
+        ],
+    );
+    let values: Vec<u32> = out.iter().map(value).collect();
+    assert_eq!(
+        values,
+        [131_072, 13, 20_000, 2],
+        "6091h:01 not stored (the default again), Pn-008 saved at once sets 6091h:02"
+    );
+}

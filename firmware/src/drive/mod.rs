@@ -32,7 +32,7 @@ use crate::adjust::service::{Progress, Refusal};
 use crate::adjust::{Action, AdjustingService};
 use crate::alarm_log::{AlarmLog, AlarmTable};
 use crate::motor::axis::{AxisFeedback, AxisLink, AxisState};
-use crate::profile::{DriveProfile, MAX_AXES};
+use crate::profile::{DriveProfile, SplitValue, MAX_AXES};
 
 /// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
 pub const MAX_ADJUSTING_SERVICES: usize = 2;
@@ -72,7 +72,13 @@ pub struct Drive {
     now_ns: u64,
     /// The object dictionary (to find the variable an SDO download wrote).
     od: &'static ethercat_slave::od::Profile,
+    /// The profile's split settings and their values `[whole, high, low]` as last seen.
+    split_values: &'static [SplitValue],
+    split_seen: [[u32; 3]; MAX_SPLIT_VALUES],
 }
+
+/// The most `[[split_value]]` settings a profile has (od-gen checks it).
+pub const MAX_SPLIT_VALUES: usize = 4;
 
 impl Drive {
     /// The application of `profile` at power-on, without motors.
@@ -99,6 +105,8 @@ impl Drive {
             alarm_log: AlarmLog::new(),
             now_ns: 0,
             od: &profile.od,
+            split_values: profile.split_values,
+            split_seen: [[0; 3]; MAX_SPLIT_VALUES],
         }
     }
 
@@ -251,9 +259,35 @@ impl Drive {
     }
 }
 
+impl Drive {
+    /// Keeps each split setting's forms equal (`SplitValue::reconcile`): after an SDO download
+    /// and every cycle; at power-on (`power_on`) the parts set the whole.
+    fn sync_split_values(&mut self, ram: &mut [u8], power_on: bool) {
+        for (value, seen) in self.split_values.iter().zip(self.split_seen.iter_mut()) {
+            let now = [value.whole, value.high, value.low].map(|o| o.value(ram, 0));
+            let next = value.reconcile(now, (!power_on).then_some(*seen));
+            for ((object, old), new) in [value.whole, value.high, value.low]
+                .into_iter()
+                .zip(now)
+                .zip(next)
+            {
+                if new != old {
+                    object.write(ram, new);
+                }
+            }
+            // As the objects hold them now (a write may have saturated).
+            *seen = [value.whole, value.high, value.low].map(|o| o.value(ram, 0));
+        }
+    }
+}
+
 /// The slave stack's view of the drive.
 impl Application for Drive {
     fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32, events: &mut AppEvents) {
+        // A split setting the master wrote by PDO (both forms may be mapped).
+        if !self.split_values.is_empty() {
+            self.sync_split_values(ram, false);
+        }
         for i in 0..MAX_AXES {
             let Some(axis) = self.axis_mut(i) else {
                 continue;
@@ -310,6 +344,7 @@ impl Application for Drive {
     }
 
     fn power_on(&mut self, ram: &mut [u8]) {
+        self.sync_split_values(ram, true);
         // CiA402 transition 1: initialisation is done at power-on, in any EtherCAT state, so a
         // master reads Switch On Disabled in PREOP already (and profile rules that test it,
         // e.g. the Σ-V-SD's 1010h write condition, see the real state).
@@ -339,6 +374,7 @@ impl Application for Drive {
 
     fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
         self.now_ns = now_ns;
+        self.sync_split_values(ram, false);
         if index == STORE_PARAMETERS {
             // A store that succeeded (a refused one is not committed).
             for axis in self.axes.iter_mut().flatten() {
@@ -456,6 +492,35 @@ mod tests {
         app.step(&mut ram, 0);
         assert_eq!(u16::from_le_bytes([ram[2], ram[3]]) & 0x6F, 0x27);
         assert_eq!(i32::from_le_bytes(ram[10..14].try_into().unwrap()), 1234);
+    }
+
+    /// The GHA-E's gear ratio in two forms (6091h:01 = Pn-006 × 10000 + Pn-007): a part the
+    /// master wrote by PDO (straight into the OD RAM) sets the whole in the next cycle; at
+    /// power-on the parts set the whole.
+    #[test]
+    fn a_split_setting_follows_a_pdo_write_and_the_parts_at_power_on() {
+        use crate::profiles::gha_e;
+        let mut ram = gha_e::DEFAULTS.to_vec();
+        let [gear, _] = gha_e::PROFILE.split_values else {
+            panic!("the GHA-E's two gear-ratio settings")
+        };
+        // Parts that disagree with the whole at power-on: the parts win.
+        gear.high.write(&mut ram, 2);
+        gear.low.write(&mut ram, 5);
+        let mut app = Drive::new(&gha_e::PROFILE);
+        app.power_on(&mut ram);
+        assert_eq!(gear.whole.value(&ram, 0), 20_005);
+        // A PDO write of the low part: the whole follows in the cycle.
+        gear.low.write(&mut ram, 7);
+        app.cycle(&mut ram, 1_000_000, &mut AppEvents::new());
+        assert_eq!(gear.whole.value(&ram, 0), 20_007);
+        // A PDO write of the whole: the parts follow.
+        gear.whole.write(&mut ram, 131_072);
+        app.cycle(&mut ram, 1_000_000, &mut AppEvents::new());
+        assert_eq!(
+            (gear.high.value(&ram, 0), gear.low.value(&ram, 0)),
+            (13, 1_072)
+        );
     }
 
     #[test]
