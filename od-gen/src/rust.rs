@@ -570,20 +570,8 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(
             out,
             "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {} }},",
-            p.cia402
-                .enable_without_mode_error
-                .as_ref()
-                .map_or("None".into(), |c| format!(
-                    "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
-                    c.error_code, c.emcy.code, c.emcy.data
-                )),
-            p.cia402
-                .mode_change_while_homing_error
-                .as_ref()
-                .map_or("None".into(), |c| format!(
-                    "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
-                    c.error_code, c.emcy.code, c.emcy.data
-                )),
+            optional_fault_report(p.cia402.enable_without_mode_error.as_ref()),
+            optional_fault_report(p.cia402.mode_change_while_homing_error.as_ref()),
             p.cia402.stops_end_switched_off,
             p.cia402.switch_on_requires_main_power,
             p.cia402.pp_bit6_absolute,
@@ -601,7 +589,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.home_offset_added,
             p.cia402.store_requires_power_cycle,
             p.cia402.touch_probe_inputs.as_ref().map_or("None".into(), |t| format!(
-                "Some({drive}::profile::ProbeInputAssignment {{ entries: &[{}], functions: {:?}, unassigned_error: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }} }})",
+                "Some({drive}::profile::ProbeInputAssignment {{ entries: &[{}], functions: {:?}, unassigned_error: {} }})",
                 // Validated: writable integer parameters in RAM.
                 t.entries
                     .iter()
@@ -613,18 +601,10 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                     .collect::<Vec<_>>()
                     .join(", "),
                 t.functions,
-                t.unassigned_error.error_code,
-                t.unassigned_error.emcy.code,
-                t.unassigned_error.emcy.data
+                fault_report(&t.unassigned_error)
             )),
             p.cia402.max_interpolation_speed,
-            p.cia402
-                .homing_error_alarm
-                .as_ref()
-                .map_or("None".into(), |c| format!(
-                    "Some(FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }})",
-                    c.error_code, c.emcy.code, c.emcy.data
-                ))
+            optional_fault_report(p.cia402.homing_error_alarm.as_ref())
         );
     }
     let _ = writeln!(out, "    }};\n");
@@ -769,6 +749,19 @@ fn alarm_table(out: &mut String, p: &Profile, layout: &RamLayout, drive: &str) {
 /// A `[units]` factor of axis `axis` (0 = the first; its copies of the factor's objects) as the
 /// firmware's `Factor`: entries in the OD RAM by offset and length, constant entries by their
 /// value.
+/// A `FaultReport` literal of `c` (603Fh code, EMCY code and manufacturer field).
+fn fault_report(c: &MotorFaultCode) -> String {
+    format!(
+        "FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }}",
+        c.error_code, c.emcy.code, c.emcy.data
+    )
+}
+
+/// `Some(FaultReport { .. })` of `c`, or `None`.
+fn optional_fault_report(c: Option<&MotorFaultCode>) -> String {
+    c.map_or("None".into(), |c| format!("Some({})", fault_report(c)))
+}
+
 fn factor(p: &Profile, layout: &RamLayout, f: &crate::model::Factor, axis: u8) -> String {
     use crate::model::Operand as O;
     let side = |o: &O| -> String {
