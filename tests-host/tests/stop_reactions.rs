@@ -165,6 +165,23 @@ fn deceleration_rpm_per_s(counts_per_s2: f64) -> f64 {
     counts_per_s2 / CPR * 60.0
 }
 
+/// Asserts that `speeds` (rpm, one per cycle while the drive was in `state`) came down from
+/// [`SPEED_RPM`] along `ramp` (6084h/6085h, increments/s²): as many cycles as the ramp takes,
+/// and half the speed half-way in time.
+fn assert_on_ramp(speeds: &[f64], ramp: u32, state: &str) {
+    let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(ramp));
+    let took_s = speeds.len() as f64 * CYCLE_S;
+    assert!(
+        (took_s - expected_s).abs() < 0.03,
+        "{state} for {took_s:.3} s, the ramp takes {expected_s:.3} s"
+    );
+    let mid = speeds[speeds.len() / 2];
+    assert!(
+        (mid - SPEED_RPM / 2.0).abs() < 100.0,
+        "{mid:.0} rpm half-way: {speeds:?}"
+    );
+}
+
 #[test]
 fn quick_stop_decelerates_on_6085h_in_quick_stop_active_then_disables() {
     // 605Ah = 2 (the standard profile's default): quick-stop ramp, then Switch On Disabled.
@@ -184,18 +201,7 @@ fn quick_stop_decelerates_on_6085h_in_quick_stop_active_then_disables() {
             QUICK_STOP_ACTIVE,
             1_000
         );
-        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(RAMP));
-        let took_s = speeds.len() as f64 * CYCLE_S;
-        assert!(
-            (took_s - expected_s).abs() < 0.03,
-            "Quick Stop Active for {took_s:.3} s, the ramp takes {expected_s:.3} s"
-        );
-        // Along the ramp: half-way in time, half the speed.
-        let mid = speeds[speeds.len() / 2];
-        assert!(
-            (mid - SPEED_RPM / 2.0).abs() < 100.0,
-            "{mid:.0} rpm half-way: {speeds:?}"
-        );
+        assert_on_ramp(&speeds, RAMP, "Quick Stop Active");
         assert_eq!(
             sw & SWITCH_ON_DISABLED_MASK,
             SWITCH_ON_DISABLED,
@@ -569,17 +575,7 @@ macro_rules! fault_reaction_ramp {
         }
         assert!(entered, "Fault Reaction Active: {sw:#06x}");
         assert_eq!(sw & SWITCH_ON_DISABLED_MASK, FAULT, "then Fault: {sw:#06x}");
-        let expected_s = SPEED_RPM / deceleration_rpm_per_s(f64::from(FAULT_REACTION_RAMP));
-        let took_s = speeds.len() as f64 * CYCLE_S;
-        assert!(
-            (took_s - expected_s).abs() < 0.03,
-            "Fault Reaction Active for {took_s:.3} s, the ramp takes {expected_s:.3} s"
-        );
-        let mid = speeds[speeds.len() / 2];
-        assert!(
-            (mid - SPEED_RPM / 2.0).abs() < 100.0,
-            "{mid:.0} rpm half-way: {speeds:?}"
-        );
+        assert_on_ramp(&speeds, FAULT_REACTION_RAMP, "Fault Reaction Active");
         let gates = $m.shared.segment().drives()[0].servos[0].latched().gates;
         assert!(!gates, "power stage off");
         let sd = $group.subdevice($md, 0).expect("drive");

@@ -63,7 +63,7 @@ pub fn to_object_units(value: f32, unit: f32) -> u32 {
 /// The factor between a profile's user unit and the drive's internal unit (DESIGN.md §4:
 /// increments, increments/s): internal = value × numerator / denominator, e.g. the gear ratio
 /// 6091h or the position factor 6093h. Positions convert exactly (integer arithmetic);
-/// velocities in floating point, best through the ratio's [`Scale`] (made once: a 64-bit
+/// velocities in floating point through the ratio's [`Scale`] (made once: a 64-bit
 /// integer to float conversion is a library call on the Cortex-M4, too slow to repeat per
 /// value).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,16 +153,6 @@ impl Ratio {
             return increments;
         }
         scale(increments, self.denominator, self.numerator)
-    }
-
-    /// A velocity in user units/s as increments/s.
-    pub fn velocity_to_internal(self, user: f32) -> f32 {
-        self.scale().velocity_to_internal(user)
-    }
-
-    /// Increments/s as a velocity in user units/s.
-    pub fn velocity_from_internal(self, increments_per_s: f32) -> f32 {
-        self.scale().velocity_from_internal(increments_per_s)
     }
 }
 
@@ -264,15 +254,15 @@ mod tests {
         assert_eq!(r.position_to_internal(3), 30_000);
         assert_eq!(r.position_from_internal(30_009), 3);
         assert_eq!(r.position_from_internal(-30_009), -3, "toward zero");
-        assert_eq!(r.velocity_to_internal(2.5), 25_000.0);
-        assert_eq!(r.velocity_from_internal(25_000.0), 2.5);
+        assert_eq!(r.scale().velocity_to_internal(2.5), 25_000.0);
+        assert_eq!(r.scale().velocity_from_internal(25_000.0), 2.5);
         // 1 user unit = 1/4 increment (numerator < denominator).
         let q = Ratio::new(1, 4);
         assert_eq!(q.position_to_internal(400), 100);
         assert_eq!(q.position_from_internal(100), 400);
         // 0.1 rpm per velocity unit at 2^17 increments/rev: × 131072 / 600.
         let rpm = Ratio::new(1 << 17, 1).times(Ratio::new(1, 600));
-        assert_eq!(rpm.velocity_to_internal(600.0), 131_072.0);
+        assert_eq!(rpm.scale().velocity_to_internal(600.0), 131_072.0);
     }
 
     #[test]
