@@ -22,7 +22,7 @@ use cia402::units::Ratio;
 use cia402::window::{self, WindowTimer};
 
 use crate::motor::math;
-use crate::motor::trajectory::{self, Limits, Trajectory};
+use crate::motor::trajectory::{self, Limits, SaneLimits, Trajectory};
 
 /// Statusword bit 10 "target reached".
 pub const TARGET_REACHED: u16 = 1 << 10;
@@ -51,9 +51,9 @@ pub struct Inputs {
     pub target_torque: f32,
     /// 6081h profile velocity, 6083h profile acceleration, 6084h profile deceleration (6081h
     /// limited by 607Fh).
-    pub move_limits: Limits,
+    pub move_limits: SaneLimits,
     /// 607Fh max profile velocity with 6083h/6084h: the ramp of profile velocity.
-    pub velocity_limits: Limits,
+    pub velocity_limits: SaneLimits,
     /// 6087h torque slope, N·m/s (0 = no ramp).
     pub torque_slope: f32,
     /// The position factor (user units ↔ increments).
@@ -68,16 +68,24 @@ pub struct Inputs {
     pub actual_position: i64,
     /// Increments/s.
     pub actual_velocity: f32,
-    /// Homing: what 6098h looks for (`None`: a method the profile does not run).
-    pub homing_method: Option<homing::Reference>,
-    /// Homing: 6099h:01 (search for switch), 6099h:02 (search for zero), 609Ah.
-    pub homing_speeds: (f32, f32, f32),
-    /// Homing: the switches and index pulses (drive positions).
-    pub homing_signals: homing::Signals,
-    /// Homing: the profile's time limit of a run, ms (`None` or 0: none).
-    pub homing_timeout_ms: Option<u32>,
+    /// What homing takes (`None` in the other modes: the switches' latches are a large
+    /// record, made only where it is used).
+    pub homing: Option<HomingInputs>,
     /// The software position limits: profile-position targets are limited to them.
     pub position_range: Option<SoftwareLimits>,
+}
+
+/// What the homing mode takes in a cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct HomingInputs {
+    /// What 6098h looks for (`None`: a method the profile does not run).
+    pub method: Option<homing::Reference>,
+    /// 6099h:01 (search for switch), 6099h:02 (search for zero), 609Ah.
+    pub speeds: (f32, f32, f32),
+    /// The switches and index pulses (drive positions).
+    pub signals: homing::Signals,
+    /// The profile's time limit of a run, ms (`None` or 0: none).
+    pub timeout_ms: Option<u32>,
 }
 
 /// The set-point of a profile mode and the statusword bits it sets.
@@ -94,7 +102,7 @@ pub struct Output {
 /// The generator state of the profile modes.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct ProfileModes {
-    set_points: ProfilePosition<Limits>,
+    set_points: ProfilePosition<SaneLimits>,
     trajectory: Trajectory,
     torque: f32,
     /// The mode the generator ran in the last cycle (`None`: it followed the actual values).
@@ -174,25 +182,26 @@ impl ProfileModes {
             // Take over from the actual values (a mode change, the end of a stop).
             self.trajectory = Trajectory::at(inputs.actual_position, inputs.actual_velocity);
             self.torque = actual_torque;
-            if mode != Mode::ProfilePosition || !(inputs.running || inputs.halted) {
+            if !matches!(mode, Mode::ProfilePosition) || !(inputs.running || inputs.halted) {
                 self.set_points.clear(held_user);
             }
-            if mode != Mode::Homing {
+            if !matches!(mode, Mode::Homing) {
                 self.homing.leave();
             }
         }
         self.active = inputs.running.then_some(mode);
-        let acknowledge = if mode == Mode::ProfilePosition && (inputs.running || inputs.halted) {
-            self.set_points.step(
-                inputs.controlword,
-                rules,
-                inputs.target_position,
-                held_user,
-                inputs.move_limits,
-            )
-        } else {
-            0
-        };
+        let acknowledge =
+            if matches!(mode, Mode::ProfilePosition) && (inputs.running || inputs.halted) {
+                self.set_points.step(
+                    inputs.controlword,
+                    rules,
+                    inputs.target_position,
+                    held_user,
+                    inputs.move_limits,
+                )
+            } else {
+                0
+            };
         let mut home_found = None;
         let (set_point, statusword) = match mode {
             Mode::ProfileVelocity => self.velocity(inputs, dt_s),
@@ -225,22 +234,27 @@ impl ProfileModes {
             .position_from_internal(self.trajectory.position())
             .saturating_sub(ratio.position_from_internal(inputs.actual_position));
         let settled = window::inside(lag, inputs.position_window.0);
+        // Without its inputs homing runs no method (and says so).
+        let h = inputs.homing.unwrap_or_default();
         let out = self.homing.step(&homing::Inputs {
             controlword: inputs.controlword,
             running: inputs.running,
-            method: inputs.homing_method,
-            signals: inputs.homing_signals,
+            method: h.method,
+            signals: h.signals,
             demand_position: self.trajectory.position(),
             demand_at_rest: self.trajectory.velocity() == 0.0,
             at_target: self.trajectory.velocity() == 0.0 && settled,
-            timeout_ms: inputs.homing_timeout_ms,
+            timeout_ms: h.timeout_ms,
             cycle_ns: seconds_to_ns(dt_s),
         });
-        let (switch_speed, zero_speed, acceleration) = inputs.homing_speeds;
-        let ramp = |velocity| Limits {
-            velocity,
-            acceleration,
-            deceleration: acceleration,
+        let (switch_speed, zero_speed, acceleration) = h.speeds;
+        let ramp = |velocity| {
+            Limits {
+                velocity,
+                acceleration,
+                deceleration: acceleration,
+            }
+            .sane()
         };
         if inputs.running {
             let t = &mut self.trajectory;
@@ -322,7 +336,7 @@ impl ProfileModes {
     /// The speed at which the current move passes its target into the buffered one: with
     /// change on set-point, the lower of the two profile velocities when the next move goes on
     /// in the same direction; else 0 (stop on the target).
-    fn end_speed(&self, current: profile_position::SetPoint<Limits>, ratio: Ratio) -> f32 {
+    fn end_speed(&self, current: profile_position::SetPoint<SaneLimits>, ratio: Ratio) -> f32 {
         let Some(next) = self.set_points.buffered().filter(|_| current.pass_through) else {
             return 0.0;
         };
@@ -331,7 +345,7 @@ impl ProfileModes {
         let beyond = ratio.position_to_internal(next.target);
         let same_direction = (to.saturating_sub(here) > 0) == (beyond.saturating_sub(to) > 0);
         if same_direction && beyond != to {
-            math::min(current.profile.velocity, next.profile.velocity)
+            math::min(current.profile.get().velocity, next.profile.get().velocity)
         } else {
             0.0
         }
@@ -418,8 +432,8 @@ mod tests {
             target_position: target,
             target_velocity: 0.0,
             target_torque: 0.0,
-            move_limits: MOVE,
-            velocity_limits: MOVE,
+            move_limits: MOVE.sane(),
+            velocity_limits: MOVE.sane(),
             torque_slope: 0.0,
             position_ratio: Ratio::ONE,
             position_window: (10, 2),
@@ -427,10 +441,7 @@ mod tests {
             velocity_threshold: (50.0, 0),
             actual_position: 0,
             actual_velocity: 0.0,
-            homing_method: None,
-            homing_speeds: (0.0, 0.0, 0.0),
-            homing_signals: homing::Signals::default(),
-            homing_timeout_ms: None,
+            homing: None,
             position_range: None,
         }
     }

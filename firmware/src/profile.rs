@@ -241,18 +241,6 @@ pub struct UnitRatios {
     pub velocity_window: Scale,
 }
 
-/// The values the unit factors are made of at a moment (their objects read, the encoder's
-/// resolution): [`UnitRatios`] change only when these do, so a cycle compares them instead of
-/// building the ratios afresh. (Every operand is at most 32 bits wide.)
-#[derive(Clone, Copy, Debug)]
-pub struct UnitFactorValues([u32; 9]);
-
-impl PartialEq for UnitFactorValues {
-    fn eq(&self, other: &Self) -> bool {
-        words_equal(&self.0, &other.0)
-    }
-}
-
 /// Whether two arrays of words are equal, compared word by word: a derived `==` of an array
 /// becomes the byte-wise library comparison (some 50 instructions for 36 bytes on the
 /// Cortex-M4), too slow for a check that runs every cycle.
@@ -263,57 +251,36 @@ pub(crate) fn words_equal<const N: usize>(a: &[u32; N], b: &[u32; N]) -> bool {
         == 0
 }
 
-impl Eq for UnitFactorValues {}
-
-impl Factor {
-    /// The current values of the numerator and denominator.
-    fn values(&self, ram: &[u8], counts_per_rev: u32) -> [u32; 2] {
-        [
-            self.numerator.value(ram, counts_per_rev),
-            self.denominator.value(ram, counts_per_rev),
-        ]
-    }
-}
-
 impl Operand {
-    /// Whether the value can change (an object entry; the encoder's resolution is fixed once
-    /// the motor is attached).
-    const fn varies(&self) -> bool {
-        matches!(self, Self::Ram { .. })
+    /// The OD RAM entry (offset, length) the value is read from; `None` for a constant or the
+    /// encoder's resolution.
+    pub const fn object(&self) -> Option<(u16, u8)> {
+        match self {
+            Self::Ram { at, len } => Some((*at, *len)),
+            Self::Const(_) | Self::CountsPerRev => None,
+        }
     }
 }
 
 impl Factor {
-    /// Whether an operand can change.
-    const fn varies(&self) -> bool {
-        self.numerator.varies() || self.denominator.varies()
+    /// The OD RAM entries of the numerator and denominator.
+    const fn objects(&self) -> [Option<(u16, u8)>; 2] {
+        [self.numerator.object(), self.denominator.object()]
     }
 }
 
 impl AppVars {
-    /// Whether the unit factors are read from objects (else they are fixed for a motor, and
-    /// [`Self::unit_ratios`] need to be made only once).
-    pub const fn unit_factors_vary(&self) -> bool {
-        let acceleration = match &self.acceleration_unit {
-            AccelerationUnit::Factor(f) => f.varies(),
-            AccelerationUnit::VelocityPerSecond | AccelerationUnit::MsToRpm(_) => false,
-        };
-        self.position_factor.varies()
-            || self.velocity_factor.varies()
-            || acceleration
-            || self.velocity_window_factor.varies()
-    }
-
-    /// What [`Self::unit_ratios`] would be made of now.
-    pub fn unit_factor_values(&self, ram: &[u8], counts_per_rev: u32) -> UnitFactorValues {
-        let [p0, p1] = self.position_factor.values(ram, counts_per_rev);
-        let [v0, v1] = self.velocity_factor.values(ram, counts_per_rev);
+    /// The OD RAM entries (offset, length) the unit factors read (e.g. 6091h:01/02): the
+    /// conversions change only when one of them does.
+    pub const fn unit_factor_objects(&self) -> [Option<(u16, u8)>; 8] {
+        let [p0, p1] = self.position_factor.objects();
+        let [v0, v1] = self.velocity_factor.objects();
         let [a0, a1] = match &self.acceleration_unit {
-            AccelerationUnit::Factor(f) => f.values(ram, counts_per_rev),
-            AccelerationUnit::VelocityPerSecond | AccelerationUnit::MsToRpm(_) => [0, 0],
+            AccelerationUnit::Factor(f) => f.objects(),
+            AccelerationUnit::VelocityPerSecond | AccelerationUnit::MsToRpm(_) => [None, None],
         };
-        let [w0, w1] = self.velocity_window_factor.values(ram, counts_per_rev);
-        UnitFactorValues([p0, p1, v0, v1, a0, a1, w0, w1, counts_per_rev])
+        let [w0, w1] = self.velocity_window_factor.objects();
+        [p0, p1, v0, v1, a0, a1, w0, w1]
     }
 
     /// The axis' unit conversions from the factors' objects in `ram` now, with the encoder's

@@ -136,6 +136,75 @@ pub struct SetPoint {
     pub torque: f32,
 }
 
+/// Which of the master's [`Targets`] a mode takes (the set-point of [`set_point`], or the
+/// target of a profile mode's generator): the drive reads only those objects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TargetsUsed {
+    /// 607Ah.
+    pub position: bool,
+    /// 60FFh.
+    pub velocity: bool,
+    /// 6071h.
+    pub torque: bool,
+    /// 60B0h.
+    pub position_offset: bool,
+    /// 60B1h.
+    pub velocity_offset: bool,
+    /// 60B2h.
+    pub torque_offset: bool,
+    /// 60C1h:01.
+    pub interpolation: bool,
+}
+
+impl Mode {
+    /// The targets the mode takes (profile position reads 607Ah itself, as written: it is
+    /// not a set-point but the end of a move).
+    pub const fn targets_used(self) -> TargetsUsed {
+        let none = TargetsUsed {
+            position: false,
+            velocity: false,
+            torque: false,
+            position_offset: false,
+            velocity_offset: false,
+            torque_offset: false,
+            interpolation: false,
+        };
+        match self {
+            Self::CyclicPosition => TargetsUsed {
+                position: true,
+                position_offset: true,
+                velocity_offset: true,
+                torque_offset: true,
+                ..none
+            },
+            Self::CyclicVelocity => TargetsUsed {
+                velocity: true,
+                velocity_offset: true,
+                torque_offset: true,
+                ..none
+            },
+            Self::CyclicTorque => TargetsUsed {
+                torque: true,
+                torque_offset: true,
+                ..none
+            },
+            Self::InterpolatedPosition => TargetsUsed {
+                interpolation: true,
+                ..none
+            },
+            Self::ProfileVelocity => TargetsUsed {
+                velocity: true,
+                ..none
+            },
+            Self::ProfileTorque => TargetsUsed {
+                torque: true,
+                ..none
+            },
+            Self::ProfilePosition | Self::Homing | Self::Identification | Self::Other(_) => none,
+        }
+    }
+}
+
 /// The set-point of `mode` from the master's `targets`, the axis being at `actual_position`.
 pub fn set_point(mode: Mode, targets: Targets, actual_position: i64) -> SetPoint {
     let t = targets;
@@ -290,6 +359,74 @@ mod tests {
         assert_eq!((cst.velocity, cst.torque), (0.0, 0.75));
         let hold = set_point(Mode::Other(0), t, 7);
         assert_eq!((hold.position, hold.velocity, hold.torque), (7, 0.0, 0.0));
+    }
+
+    #[test]
+    fn a_mode_set_point_depends_only_on_the_targets_it_uses() {
+        let all = Targets {
+            position: Some(5_000),
+            velocity: 1_000.0,
+            torque: 0.5,
+            position_offset: 10,
+            velocity_offset: 20.0,
+            torque_offset: 0.25,
+            interpolation: Some(-7_000),
+        };
+        let modes = [
+            Mode::ProfilePosition,
+            Mode::ProfileVelocity,
+            Mode::ProfileTorque,
+            Mode::Homing,
+            Mode::InterpolatedPosition,
+            Mode::CyclicPosition,
+            Mode::CyclicVelocity,
+            Mode::CyclicTorque,
+            Mode::Identification,
+            Mode::Other(0),
+        ];
+        for mode in modes {
+            let used = mode.targets_used();
+            // The targets the mode does not use as the drive passes them: not read.
+            let only_used = Targets {
+                position: all.position.filter(|_| used.position),
+                velocity: if used.velocity { all.velocity } else { 0.0 },
+                torque: if used.torque { all.torque } else { 0.0 },
+                position_offset: if used.position_offset {
+                    all.position_offset
+                } else {
+                    0
+                },
+                velocity_offset: if used.velocity_offset {
+                    all.velocity_offset
+                } else {
+                    0.0
+                },
+                torque_offset: if used.torque_offset {
+                    all.torque_offset
+                } else {
+                    0.0
+                },
+                interpolation: all.interpolation.filter(|_| used.interpolation),
+            };
+            assert_eq!(
+                set_point(mode, only_used, 3),
+                set_point(mode, all, 3),
+                "{mode:?}"
+            );
+        }
+        // The profile modes' generators take theirs: PV the target velocity, PT the torque.
+        assert!(Mode::ProfileVelocity.targets_used().velocity);
+        assert!(Mode::ProfileTorque.targets_used().torque);
+        // CSP feeds the offsets forward (60B0h-60B2h), CSV 60B1h/60B2h, CST 60B2h.
+        assert_eq!(
+            set_point(Mode::CyclicPosition, all, 3),
+            SetPoint {
+                control: Loop::Position,
+                position: 5_010,
+                velocity: 20.0,
+                torque: 0.25
+            }
+        );
     }
 
     #[test]

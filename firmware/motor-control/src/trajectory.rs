@@ -29,9 +29,34 @@ pub struct Limits {
     pub deceleration: f32,
 }
 
+/// [`Limits`] made fit for the generators ([`Limits::sane`]): what they take, so that the
+/// check runs once when a setting changes rather than in every cycle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SaneLimits(Limits);
+
+impl SaneLimits {
+    /// At rest: no speed, the gentlest rates.
+    pub const REST: Self = Self(Limits {
+        velocity: 0.0,
+        acceleration: MIN_RATE,
+        deceleration: MIN_RATE,
+    });
+
+    /// The limits.
+    pub fn get(self) -> Limits {
+        self.0
+    }
+}
+
+impl Default for SaneLimits {
+    fn default() -> Self {
+        Self::REST
+    }
+}
+
 impl Limits {
     /// The limits with every rate at least [`MIN_RATE`] and a finite, non-negative speed.
-    fn sane(self) -> Self {
+    pub fn sane(self) -> SaneLimits {
         let rate = |r: f32| {
             if r.is_finite() {
                 math::max(r.abs(), MIN_RATE)
@@ -39,7 +64,7 @@ impl Limits {
                 MIN_RATE
             }
         };
-        Self {
+        SaneLimits(Self {
             velocity: if self.velocity.is_finite() {
                 self.velocity.abs()
             } else {
@@ -47,7 +72,7 @@ impl Limits {
             },
             acceleration: rate(self.acceleration),
             deceleration: rate(self.deceleration),
-        }
+        })
     }
 }
 
@@ -85,8 +110,8 @@ impl Trajectory {
     /// direction of travel; 0 = stop on it). Returns `true` in the cycle the demand reaches
     /// the target: it is then exactly on it at rest or, with an end speed, past it by the rest of
     /// the cycle's travel, moving on at the speed reached.
-    pub fn move_to(&mut self, target: i64, end_speed: f32, limits: Limits, dt_s: f32) -> bool {
-        let limits = limits.sane();
+    pub fn move_to(&mut self, target: i64, end_speed: f32, limits: SaneLimits, dt_s: f32) -> bool {
+        let limits = limits.0;
         let end_speed = math::clamp(end_speed, 0.0, limits.velocity);
         // Beyond 2^31 increments the distance only has to be long enough to need no braking.
         let remaining = math::saturating_f32(target.wrapping_sub(self.position)) - self.fraction;
@@ -135,8 +160,8 @@ impl Trajectory {
 
     /// One cycle of `dt_s` of a velocity ramp toward `velocity` (limited to the speed limit):
     /// speeding up at the acceleration, slowing down (and through zero) at the deceleration.
-    pub fn run_at(&mut self, velocity: f32, limits: Limits, dt_s: f32) {
-        let limits = limits.sane();
+    pub fn run_at(&mut self, velocity: f32, limits: SaneLimits, dt_s: f32) {
+        let limits = limits.0;
         let target = math::clamp_symmetric(velocity, limits.velocity);
         let v = self.velocity;
         let slowing = v != 0.0 && (target * v < 0.0 || target.abs() < v.abs());
@@ -214,7 +239,7 @@ mod tests {
         let mut t = from;
         let mut path = Vec::new();
         for _ in 0..1_000_000 {
-            let arrived = t.move_to(target, 0.0, limits, DT);
+            let arrived = t.move_to(target, 0.0, limits.sane(), DT);
             path.push((t.position(), t.velocity()));
             if arrived {
                 return path;
@@ -320,7 +345,7 @@ mod tests {
         let mut t = Trajectory::at(0, 0.0);
         let mut arrived = false;
         for _ in 0..10_000 {
-            if t.move_to(20_000, 60_000.0, limits, DT) {
+            if t.move_to(20_000, 60_000.0, limits.sane(), DT) {
                 arrived = true;
                 break;
             }
@@ -349,13 +374,13 @@ mod tests {
         let mut t = Trajectory::at(0, 0.0);
         let mut cycles = 0;
         while t.velocity() < 10_000.0 {
-            t.run_at(50_000.0, limits, DT); // limited to 10 000
+            t.run_at(50_000.0, limits.sane(), DT); // limited to 10 000
             cycles += 1;
         }
         assert_eq!(cycles, 100, "0.1 s at 100 000 inc/s²");
         let mut down = 0;
         while t.velocity() > 0.0 {
-            t.run_at(-10_000.0, limits, DT);
+            t.run_at(-10_000.0, limits.sane(), DT);
             down += 1;
         }
         assert_eq!(
@@ -363,7 +388,7 @@ mod tests {
             (25, 0.0),
             "rest first, at the deceleration"
         );
-        t.run_at(-10_000.0, limits, DT);
+        t.run_at(-10_000.0, limits.sane(), DT);
         assert!((t.velocity() + 100.0).abs() < 1e-3, "then the acceleration");
         // The position integrates the velocity: 0.1 s ramp (500) + 25 ms down (125) - 0.1.
         assert!((t.position() - 625).abs() <= 1, "{}", t.position());
@@ -375,7 +400,7 @@ mod tests {
         let mut t = Trajectory::at(5, f32::NAN);
         assert_eq!(t.velocity(), 0.0);
         assert!(
-            !t.move_to(100, 0.0, zero, DT),
+            !t.move_to(100, 0.0, zero.sane(), DT),
             "no speed allowed: no motion"
         );
         assert_eq!(t.position(), 5);
@@ -384,13 +409,13 @@ mod tests {
             acceleration: f32::INFINITY,
             deceleration: -3.0,
         };
-        t.move_to(i64::MAX, f32::NAN, nan, DT);
-        t.run_at(f32::INFINITY, nan, DT);
+        t.move_to(i64::MAX, f32::NAN, nan.sane(), DT);
+        t.run_at(f32::INFINITY, nan.sane(), DT);
         let mut far = Trajectory::at(i64::MAX - 2, 1e30);
-        far.run_at(1e30, FAST, DT);
+        far.run_at(1e30, FAST.sane(), DT);
         assert_eq!(far.position(), i64::MAX, "saturates");
         assert!(
-            Trajectory::at(3, 0.0).move_to(3, 0.0, FAST, DT),
+            Trajectory::at(3, 0.0).move_to(3, 0.0, FAST.sane(), DT),
             "already there"
         );
     }

@@ -17,11 +17,11 @@ use cia402::device::{Device, DeviceRules, Motion};
 use cia402::faults::FaultReport;
 use cia402::homing;
 use cia402::interpolated_position;
-use cia402::limits::{self, Blocked, SoftwareLimits};
+use cia402::limits::{self, Blocked};
 use cia402::modes::{self, Mode, Targets};
 use cia402::outputs;
 use cia402::pds::{controlword, statusword, PdsState};
-use cia402::stop::{Deceleration, OptionCodes};
+use cia402::stop::Deceleration;
 use cia402::touch_probe::{self, Bit7, TouchProbes};
 use cia402::units::{self, Polarity};
 use cia402::window::{self, WindowTimer};
@@ -29,21 +29,21 @@ use cia402::window::{self, WindowTimer};
 use ethercat_slave::od::index::{sm_parameter::SUB_SYNC_TYPE, SM_OUTPUT_PARAMETER};
 use ethercat_slave::slave::SyncMode;
 
-use super::ram::{
-    ram_offset, read_bytes, read_i16, read_i32, read_u16, read_u32, write_bytes, write_u16,
-};
+use super::ram::{ram_offset, read_bytes, read_i32, read_u16, read_u32, write_bytes, write_u16};
+use super::settings::{live_groups, Groups, Settings, FOLLOWING_ERROR_OFF};
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
 use crate::alarm_log::{self, AlarmTable, Conditions, Warning, WarningInputs};
-use crate::motion::{self, ProfileModes};
+use crate::motion::{self, HomingInputs, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::math;
-use crate::motor::trajectory::Limits;
+use crate::motor::trajectory::SaneLimits;
 use crate::profile::{
-    self, AppVars, Cia402Rules, DriveProfile, ProbeInputAssignment, UnitFactorValues, UnitRatios,
-    MOTOR_FAULT_COUNT,
+    self, AppVars, Cia402Rules, DriveProfile, ProbeInputAssignment, UnitRatios, MOTOR_FAULT_COUNT,
 };
+use ethercat_slave::od::Profile;
+use ethercat_slave::pdo::PdoPlan;
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
 /// rotation detection level (Pn502, /TGON) default. Neither the adjusting service's "while the
@@ -51,8 +51,6 @@ use crate::profile::{
 const STANDSTILL_RPM: f32 = 20.0;
 const SECONDS_PER_MINUTE: f32 = 60.0;
 const NS_TO_S: f32 = 1e-9;
-/// 6065h value that switches the following-error check off (CiA402).
-const FOLLOWING_ERROR_OFF: u32 = u32::MAX;
 /// Statusword bit 13 in the position modes: following error.
 const FOLLOWING_ERROR: u16 = 1 << 13;
 /// The EMCY byte of the first byte of the manufacturer-specific field (CiA 301: bytes 3–7).
@@ -101,6 +99,8 @@ pub struct DriveAxis {
     touch_probes: TouchProbes,
     /// The mode of operation the axis runs (6061h): the last supported 6060h value.
     running_mode: u8,
+    /// `running_mode` as the drive runs it (decoded once per change, not every cycle).
+    mode: Mode,
     /// How long the following error has been outside 6065h (statusword bit 13).
     following_error_timer: WindowTimer,
     /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
@@ -141,11 +141,15 @@ pub struct DriveAxis {
     /// The unit factors in force where the profile makes them take effect on a command (the
     /// Σ-V-SD's 2300h, `AppVars::units_apply`): read at power-on and on the command.
     latched_units: Option<UnitRatios>,
-    /// The unit conversions of the last cycle and what they were made of (they are rebuilt
-    /// only when a factor's object changes).
-    units_cache: Option<(UnitFactorValues, UnitRatios)>,
-    /// Whether a unit factor is read from an object (`AppVars::unit_factors_vary`).
-    units_vary: bool,
+    /// The unit conversions in force (rebuilt only when [`Groups::UNITS`] is due: a factor's
+    /// object may have changed).
+    units_cache: Option<UnitRatios>,
+    /// The settings (option codes, limits, ramps, windows...) in drive units.
+    settings: Settings,
+    /// The setting groups to read again in the next cycle (their objects were written).
+    settings_due: Groups,
+    /// The setting groups the RxPDO mapping writes: read in every cycle.
+    settings_live: Groups,
     /// The profile's warnings.
     warnings: &'static [Warning],
     /// The warning that holds.
@@ -203,6 +207,7 @@ impl DriveAxis {
             profile_modes: ProfileModes::new(),
             touch_probes: TouchProbes::new(),
             running_mode: 0,
+            mode: Mode::from_object(0),
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
             home_offset_shift: 0,
@@ -219,7 +224,9 @@ impl DriveAxis {
             warning: None,
             latched_units: None,
             units_cache: None,
-            units_vary: vars.unit_factors_vary(),
+            settings: Settings::UNREAD,
+            settings_due: Groups::ALL,
+            settings_live: Groups::NONE,
             fault_number: None,
             recent: Recent {
                 velocity: 0.0,
@@ -251,7 +258,9 @@ impl DriveAxis {
             results_written: false,
         };
         sync_motor_model(&mut port, self.vars, ram);
+        // The conversions depend on the motor's encoder: everything is read again.
         self.units_cache = None;
+        self.settings_due = Groups::ALL;
         if self.vars.units_apply.is_some() {
             // The factors stored at power-on take effect now (the parameters were loaded).
             self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
@@ -260,21 +269,36 @@ impl DriveAxis {
     }
 
     /// The unit conversions this cycle: the factors in force (latched where the profile makes
-    /// them take effect on a command), or the factors' objects read now.
-    fn unit_ratios(&mut self, ram: &[u8], counts_per_rev: u32) -> UnitRatios {
-        if let Some(latched) = self.latched_units {
-            return latched;
+    /// them take effect on a command), or the factors' objects read now when `due` has
+    /// [`Groups::UNITS`]; a change makes the groups converted with them `due`.
+    fn unit_ratios(&mut self, ram: &[u8], counts_per_rev: u32, due: &mut Groups) -> UnitRatios {
+        if let (Some(ratios), false) = (self.units_cache, due.has(Groups::UNITS)) {
+            return ratios;
         }
-        if let Some((cached, ratios)) = &self.units_cache {
-            // Fixed factors are made once per motor (attaching one drops the cache).
-            if !self.units_vary || *cached == self.vars.unit_factor_values(ram, counts_per_rev) {
-                return *ratios;
-            }
+        let ratios = self
+            .latched_units
+            .unwrap_or_else(|| self.vars.unit_ratios(ram, counts_per_rev));
+        if self.units_cache != Some(ratios) {
+            self.units_cache = Some(ratios);
+            *due |= Groups::UNIT_DEPENDENT;
         }
-        let values = self.vars.unit_factor_values(ram, counts_per_rev);
-        let ratios = self.vars.unit_ratios(ram, counts_per_rev);
-        self.units_cache = Some((values, ratios));
         ratios
+    }
+
+    /// An SDO download to object `index` of `od` was committed: the settings it belongs to
+    /// are read again in the next cycle.
+    pub(super) fn downloaded(&mut self, od: &Profile, index: u16) {
+        self.settings_due |= Groups::of_object(self.vars, od, index);
+    }
+
+    /// The drive wrote the OD RAM entry at `at` (e.g. a split value's other form).
+    pub(super) fn written(&mut self, at: u16) {
+        self.settings_due |= Groups::of_offset(self.vars, at);
+    }
+
+    /// The RxPDO mapping is now `outputs`: the settings it maps are read in every cycle.
+    pub(super) fn outputs_mapped(&mut self, outputs: &PdoPlan) {
+        self.settings_live = live_groups(self.vars, outputs);
     }
 
     /// The parameters were stored with 1010h:`subindex`: where the profile says so, the drive
@@ -299,6 +323,7 @@ impl DriveAxis {
         let ready = self.device.state() == PdsState::SwitchOnDisabled;
         if let (Some(1), true, Some(port)) = (command, ready, self.port.as_ref()) {
             self.latched_units = Some(self.vars.unit_ratios(ram, port.counts_per_rev));
+            self.settings_due |= Groups::UNITS;
         }
         write_bytes(ram, self.vars.units_apply, 0u32.to_le_bytes());
     }
@@ -369,6 +394,8 @@ impl DriveAxis {
 
     /// CiA402 transition 1 at power-on: Switch On Disabled.
     pub(super) fn power_on(&mut self, ram: &mut [u8]) {
+        // The parameters were loaded.
+        self.settings_due = Groups::ALL;
         let statusword = self.device.initialised();
         write_u16(ram, self.vars.statusword, statusword);
     }
@@ -413,13 +440,13 @@ impl DriveAxis {
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
         // The axis feedback of this cycle, read once (a seqlock read).
         let feedback = self.port.as_ref().map(|port| port.link.feedback());
-        let options = OptionCodes {
-            quick_stop: read_i16(ram, vars.quick_stop_option_code),
-            shutdown: read_i16(ram, vars.shutdown_option_code),
-            disable_operation: read_i16(ram, vars.disable_operation_option_code),
-            halt: read_i16(ram, vars.halt_option_code),
-            fault_reaction: read_i16(ram, vars.fault_reaction_option_code),
-        };
+        // The settings whose objects were written since the last cycle, or are mapped.
+        let due = self.settings_due | self.settings_live;
+        self.settings_due = Groups::NONE;
+        if due.has(Groups::OPTIONS) {
+            self.settings.refresh_options(ram, vars);
+        }
+        let options = self.settings.options;
         let mut refused_during_homing = false;
         let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
             if requested != self.running_mode {
@@ -433,6 +460,7 @@ impl DriveAxis {
                 refused_during_homing = locked;
                 if supported && !locked {
                     self.running_mode = requested;
+                    self.mode = Mode::from_object(requested as i8);
                 }
             }
             [self.running_mode]
@@ -470,12 +498,17 @@ impl DriveAxis {
         self.output_levels = outputs::levels(
             read_u32(ram, vars.digital_outputs).unwrap_or(0),
             read_u32(ram, vars.digital_outputs_mask).unwrap_or(0),
-            step.motion != Motion::Off,
+            !matches!(step.motion, Motion::Off),
         );
         if let Some(feedback) = feedback {
-            let mode = Mode::from_object(mode.map_or(0, |[m]| m as i8));
-            self.exchange_with_axis(ram, cw, mode, step.motion, feedback, cycle_ns);
-        } else if step.motion == Motion::Run {
+            // A profile without 6060h runs no mode.
+            let mode = if mode.is_some() {
+                self.mode
+            } else {
+                Mode::Other(0)
+            };
+            self.exchange_with_axis(ram, (cw, mode, step.motion), feedback, cycle_ns, due);
+        } else if matches!(step.motion, Motion::Run) {
             if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
                 write_bytes(ram, vars.position_actual_value, target);
             }
@@ -534,14 +567,14 @@ impl DriveAxis {
 
     /// With the axis' `feedback` of this cycle: raises a new motor fault, hands the set-points
     /// of this cycle (or the stop `motion` asks for) to the axis, and writes its actual values.
+    /// The settings of the groups `due` are read first.
     fn exchange_with_axis(
         &mut self,
         ram: &mut [u8],
-        cw: u16,
-        mode: Mode,
-        motion: Motion,
+        (cw, mode, motion): (u16, Mode, Motion),
         feedback: AxisFeedback,
         cycle_ns: u32,
+        mut due: Groups,
     ) {
         // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
         let Some(mut port) = self.port.take() else {
@@ -573,13 +606,12 @@ impl DriveAxis {
                 self.device.power_stage_lost();
             }
         }
-        let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
-        if motion == Motion::Off || feedback.state == AxisState::Identified {
+        if matches!(motion, Motion::Off) || feedback.state == AxisState::Identified {
             // The axis takes a new model only in these states (not while it runs): checked
             // only then.
             sync_motor_model(&mut port, vars, ram);
         }
-        let identifying = mode == Mode::Identification;
+        let identifying = matches!(mode, Mode::Identification);
         match (feedback.state, feedback.identified) {
             (AxisState::Identified, Some(result)) if identifying => {
                 if !port.results_written {
@@ -605,16 +637,26 @@ impl DriveAxis {
             (AxisState::Identified, _) => {}
             _ => port.results_written = false,
         }
-        // The profile's user units (e.g. 6091h gear ratio): read each cycle, so a master's
-        // change applies at once.
-        let units = self.unit_ratios(ram, port.counts_per_rev);
+        // The profile's user units (e.g. 6091h gear ratio): a master's change applies in the
+        // next cycle.
+        let units = self.unit_ratios(ram, port.counts_per_rev, &mut due);
         let (position_ratio, velocity_ratio) = (units.position, units.velocity);
-        if motion == Motion::Off {
+        if matches!(motion, Motion::Off) {
             // 607Eh: a new polarity is taken while nothing moves.
-            self.polarity = read_bytes::<1>(ram, vars.polarity)
+            let polarity = read_bytes::<1>(ram, vars.polarity)
                 .map_or(Polarity::NONE, |[p]| Polarity::from_object(p));
+            if polarity != self.polarity {
+                self.polarity = polarity;
+                due |= Groups::POSITION_LIMITS;
+            }
         }
         let pol = self.polarity;
+        if !due.is_empty() {
+            let zero_window_off = self.rules.following_error_zero_window_off;
+            self.settings
+                .refresh(ram, vars, (&units, pol), zero_window_off, due);
+        }
+        let rated_nm = self.settings.rated_nm;
         if self.rules.home_offset_added {
             // The GHA-E's 6064h = position from the home + 607Ch, before homing too and at once
             // when 607Ch changes: the offset is part of the drive positions' shift, so every
@@ -641,17 +683,41 @@ impl DriveAxis {
             let permille = read_bytes::<2>(ram, at).map_or(0, i16::from_le_bytes);
             units::torque_from_permille(pol.torque(permille), rated_nm)
         };
+        // Only the targets the mode takes are read (each read and conversion costs).
+        let used = mode.targets_used();
         let targets = Targets {
-            position: position_in(vars.target_position)
+            position: used
+                .position
+                .then(|| position_in(vars.target_position))
+                .flatten()
                 .map(|t| units::target_position(t, feedback.position, position_ratio)),
-            velocity: velocity_in(vars.target_velocity),
-            torque: torque_in(vars.target_torque),
-            position_offset: position_in(vars.position_offset)
+            velocity: if used.velocity {
+                velocity_in(vars.target_velocity)
+            } else {
+                0.0
+            },
+            torque: if used.torque {
+                torque_in(vars.target_torque)
+            } else {
+                0.0
+            },
+            position_offset: used
+                .position_offset
+                .then(|| position_in(vars.position_offset))
+                .flatten()
                 .map_or(0, |o| position_ratio.position_to_internal(i64::from(o))),
-            velocity_offset: velocity_in(vars.velocity_offset),
+            velocity_offset: if used.velocity_offset {
+                velocity_in(vars.velocity_offset)
+            } else {
+                0.0
+            },
             // An INT, or the low half of a DINT (the GHA-E's 60B2h).
-            torque_offset: torque_in(vars.torque_offset),
-            interpolation: (mode == Mode::InterpolatedPosition
+            torque_offset: if used.torque_offset {
+                torque_in(vars.torque_offset)
+            } else {
+                0.0
+            },
+            interpolation: (used.interpolation
                 && cw & interpolated_position::ENABLE_INTERPOLATION != 0)
                 .then(|| position_in(vars.interpolation_data))
                 .flatten()
@@ -661,8 +727,8 @@ impl DriveAxis {
         let mut mode_statusword = 0;
         if let Some(limit) = self.rules.max_interpolation_speed {
             let interpolated = matches!(mode, Mode::CyclicPosition | Mode::InterpolatedPosition);
-            if interpolated && motion == Motion::Run {
-                let period_ns = if mode == Mode::InterpolatedPosition {
+            if interpolated && matches!(motion, Motion::Run) {
+                let period_ns = if matches!(mode, Mode::InterpolatedPosition) {
                     self.interpolation_period_ns(ram, cycle_ns)
                 } else {
                     cycle_ns
@@ -678,9 +744,10 @@ impl DriveAxis {
         }
         // Software position limits (607Dh), in drive increments; not while homing looks for
         // its references.
-        let limits = (mode != Mode::Homing)
-            .then(|| software_limits(ram, vars, position_ratio, pol))
-            .flatten();
+        let limits = self
+            .settings
+            .software_limits
+            .filter(|_| !matches!(mode, Mode::Homing));
         if motion::is_profile_mode(mode) {
             let mut inputs = profile_inputs(
                 ram,
@@ -688,17 +755,19 @@ impl DriveAxis {
                 (cw, mode, motion),
                 &targets,
                 &feedback,
-                &units,
-                rated_nm,
+                &self.settings,
+                units.position,
             );
             inputs.position_range = limits;
             inputs.target_position = pol.position(inputs.target_position);
-            if mode == Mode::Homing {
+            if matches!(mode, Mode::Homing) {
                 // Read only where needed: a seqlock read of the captures.
                 let captures = shifted_captures(link.captures(), self.position_shift);
-                inputs.homing_method = read_bytes::<1>(ram, vars.homing_method)
-                    .and_then(|[m]| self.rules.homing_reference(m as i8));
-                inputs.homing_signals = homing_signals(&captures);
+                if let Some(homing) = inputs.homing.as_mut() {
+                    homing.method = read_bytes::<1>(ram, vars.homing_method)
+                        .and_then(|[m]| self.rules.homing_reference(m as i8));
+                    homing.signals = homing_signals(&captures);
+                }
             }
             let out = self.profile_modes.step(
                 mode,
@@ -724,9 +793,10 @@ impl DriveAxis {
             }
         }
         // The maximum motor speed 6080h limits a velocity set-point (bit 11 while it does).
-        if let Some(max) = read_u32(ram, vars.max_motor_speed)
+        if let Some(max) = self
+            .settings
+            .max_motor_speed
             .filter(|_| set_point.control == modes::Loop::Velocity)
-            .map(|v| velocity_ratio.velocity_to_internal(v as f32))
         {
             let limited = math::clamp(set_point.velocity, -max, max);
             if limited != set_point.velocity {
@@ -738,7 +808,7 @@ impl DriveAxis {
         // torque set-point limited here.
         // 60E0h limits the positive torque the objects name: with the torque polarity, the
         // drive's negative one.
-        let torque_limits = torque_limits(ram, vars, rated_nm).map(|(positive, negative)| {
+        let torque_limits = self.settings.torque_limits.map(|(positive, negative)| {
             if pol.torque {
                 (negative, positive)
             } else {
@@ -755,7 +825,7 @@ impl DriveAxis {
             }
         }
         let mut motion = motion;
-        if mode != Mode::Homing {
+        if !matches!(mode, Mode::Homing) {
             if let Some(l) = limits.filter(|_| set_point.control == modes::Loop::Position) {
                 // A position target beyond a software limit is limited to it (bit 11).
                 let (position, limited) = l.clamp(set_point.position);
@@ -784,7 +854,7 @@ impl DriveAxis {
                 modes::Loop::Velocity => set_point.velocity,
                 modes::Loop::Torque => set_point.torque,
             };
-            if motion == Motion::Run && blocked.stops(direction) {
+            if matches!(motion, Motion::Run) && blocked.stops(direction) {
                 // Into a limit switch or beyond a software limit: stopped on the quick-stop
                 // ramp and held; the profile generators follow the motor.
                 motion = Motion::Stop(Deceleration::QuickStopRamp);
@@ -794,16 +864,8 @@ impl DriveAxis {
         }
         // Following error (6065h/6066h): statusword bit 13 in the position modes; the axis
         // trips its fault on the same limits where the profile makes it one.
-        let zero_is_off = self.rules.following_error_zero_window_off;
-        let window = read_u32(ram, vars.following_error_window).map(|w| {
-            if w == FOLLOWING_ERROR_OFF || (w == 0 && zero_is_off) {
-                FOLLOWING_ERROR_OFF
-            } else {
-                let increments = position_ratio.position_to_internal(i64::from(w));
-                u32::try_from(increments).unwrap_or(FOLLOWING_ERROR_OFF - 1)
-            }
-        });
-        let timeout_ms = read_u16(ram, vars.following_error_timeout).unwrap_or(0);
+        let window = self.settings.following_error_window;
+        let timeout_ms = self.settings.following_error_timeout_ms;
         let outside = window.is_some_and(|w| {
             w != FOLLOWING_ERROR_OFF && feedback.following_error.unsigned_abs() > u64::from(w)
         });
@@ -812,7 +874,7 @@ impl DriveAxis {
             Mode::ProfilePosition | Mode::CyclicPosition | Mode::InterpolatedPosition
         );
         let lagging = self.following_error_timer.step(
-            outside && motion == Motion::Run && position_mode,
+            outside && matches!(motion, Motion::Run) && position_mode,
             timeout_ms,
             cycle_ns,
         );
@@ -835,11 +897,9 @@ impl DriveAxis {
         let (enable, control_mode, deceleration) = match motion {
             Motion::Run => (true, loop_mode, 0.0),
             Motion::Stop(d) => {
-                let ramp =
-                    |at| read_u32(ram, at).map_or(0.0, |a| units.acceleration.to_internal(a));
                 let deceleration = match d {
-                    Deceleration::ProfileRamp => ramp(vars.profile_deceleration),
-                    Deceleration::QuickStopRamp => ramp(vars.quick_stop_deceleration),
+                    Deceleration::ProfileRamp => self.settings.profile_deceleration,
+                    Deceleration::QuickStopRamp => self.settings.quick_stop_deceleration,
                     // At once: the speed loop brakes at the current limit. The DC link is not
                     // regulated by its own (no braking chopper model), so the voltage-limit stop
                     // is the current-limit stop, guarded by the bus over-voltage protection.
@@ -854,14 +914,14 @@ impl DriveAxis {
         link.publish(AxisCommand {
             enable,
             fault_reset: cw & controlword::FAULT_RESET != 0,
-            identify: identifying && motion == Motion::Run,
+            identify: identifying && matches!(motion, Motion::Run),
             calibrate_offsets: self.calibrating_offsets,
             mode: control_mode,
             position: set_point.position.saturating_sub(self.position_shift),
             velocity: set_point.velocity,
             torque: set_point.torque,
             deceleration,
-            bus_cycle_ns: if mode == Mode::InterpolatedPosition {
+            bus_cycle_ns: if matches!(mode, Mode::InterpolatedPosition) {
                 self.interpolation_period(ram, cycle_ns)
             } else {
                 cycle_ns
@@ -869,9 +929,9 @@ impl DriveAxis {
             following_error_limits,
             torque_limits,
         });
-        if mode == Mode::InterpolatedPosition {
+        if matches!(mode, Mode::InterpolatedPosition) {
             mode_statusword |=
-                self.ip_status(ram, &targets, &feedback, motion, (position_ratio, cycle_ns));
+                self.ip_status(&targets, &feedback, motion, (position_ratio, cycle_ns));
         }
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
@@ -947,7 +1007,7 @@ impl DriveAxis {
             vars.torque_actual_value,
             torque_out(feedback.torque).to_le_bytes(),
         );
-        self.position_demand = if motion == Motion::Run {
+        self.position_demand = if matches!(motion, Motion::Run) {
             set_point.position
         } else {
             feedback.position
@@ -1034,20 +1094,18 @@ impl DriveAxis {
     /// mode.
     fn ip_status(
         &mut self,
-        ram: &[u8],
         targets: &Targets,
         feedback: &AxisFeedback,
         motion: Motion,
         (ratio, cycle_ns): (units::Ratio, u32),
     ) -> u16 {
-        let running = motion == Motion::Run;
+        let running = matches!(motion, Motion::Run);
         let Some(set_point) = targets.interpolation.filter(|_| running) else {
             self.ip_last_set_point = None;
             self.ip_target_timer.step(false, 0, cycle_ns);
             return 0;
         };
-        let window = read_u32(ram, self.vars.position_window).unwrap_or(0);
-        let time_ms = read_u16(ram, self.vars.position_window_time).unwrap_or(0);
+        let (window, time_ms) = self.settings.position_window;
         // In position units, as profile position compares.
         let deviation = i64::from(units::actual_position(set_point, ratio))
             - i64::from(units::actual_position(feedback.position, ratio));
@@ -1188,156 +1246,63 @@ impl DriveAxis {
     }
 }
 
-/// What the profile modes read this cycle (user units converted with `units`): for mode
-/// `mode` only what it uses (the objects of the other modes are not read: each read costs
-/// instructions in the SYNC0 handler), the rest neutral.
+/// What the profile modes take this cycle: for mode `mode` only what it uses (the objects of
+/// the other modes are not read: each read costs instructions in the SYNC0 handler), the rest
+/// neutral; the limits, ramps and windows from the `settings`.
 fn profile_inputs(
     ram: &[u8],
     vars: &AppVars,
     (cw, mode, motion): (u16, Mode, Motion),
     targets: &Targets,
     feedback: &AxisFeedback,
-    units: &UnitRatios,
-    rated_nm: f32,
+    settings: &Settings,
+    position_ratio: units::Ratio,
 ) -> motion::Inputs {
-    let velocity_ratio = units.velocity;
-    let velocity = |at, default: f32| {
-        read_u32(ram, at).map_or(default, |v| velocity_ratio.velocity_to_internal(v as f32))
-    };
-    // Accelerations in the profile's acceleration unit.
-    let accel =
-        |at, default: f32| read_u32(ram, at).map_or(default, |v| units.acceleration.to_internal(v));
-    // 606Dh/606Fh in their own unit where the profile counts them apart (e.g. whole rpm).
-    let window_ratio = units.velocity_window;
-    let window =
-        |at| read_u16(ram, at).map_or(0.0, |v| window_ratio.velocity_to_internal(f32::from(v)));
-    let time = |at| read_u16(ram, at).unwrap_or(0);
     let mut inputs = motion::Inputs {
         controlword: cw,
-        running: motion == Motion::Run,
+        running: matches!(motion, Motion::Run),
         halted: cw & controlword::HALT != 0 && matches!(motion, Motion::Stop(_)),
         target_position: 0,
         target_velocity: targets.velocity,
         target_torque: targets.torque,
-        move_limits: Limits::default(),
-        velocity_limits: Limits::default(),
+        move_limits: SaneLimits::REST,
+        velocity_limits: SaneLimits::REST,
         torque_slope: 0.0,
-        position_ratio: units.position,
+        position_ratio,
         position_window: (0, 0),
         velocity_window: (0.0, 0),
         velocity_threshold: (0.0, 0),
         actual_position: feedback.position,
         actual_velocity: feedback.velocity,
-        // The drive sets the method in the cycle (it needs the profile's rules).
-        homing_method: None,
-        homing_speeds: (0.0, 0.0, 0.0),
-        homing_signals: homing::Signals::default(),
-        homing_timeout_ms: None,
-        // The drive sets the software limits (it reads them once per cycle).
+        homing: None,
+        // The drive sets the software limits.
         position_range: None,
     };
-    // 607Fh, and the maximum motor speed 6080h above it.
-    let max_velocity = || {
-        math::min(
-            velocity(vars.max_profile_velocity, f32::INFINITY),
-            velocity(vars.max_motor_speed, f32::INFINITY),
-        )
-    };
-    let acceleration = || accel(vars.profile_acceleration, 0.0);
     match mode {
         Mode::ProfilePosition => {
             inputs.target_position = read_i32(ram, vars.target_position).unwrap_or(0);
-            let max = max_velocity();
-            let acceleration = acceleration();
-            let move_velocity = velocity(vars.profile_velocity, 0.0);
-            inputs.move_limits = Limits {
-                velocity: if move_velocity < max {
-                    move_velocity
-                } else {
-                    max
-                },
-                acceleration,
-                deceleration: accel(vars.profile_deceleration, acceleration),
-            };
-            inputs.position_window = (
-                read_u32(ram, vars.position_window).unwrap_or(0),
-                time(vars.position_window_time),
-            );
+            inputs.move_limits = settings.move_limits;
+            inputs.position_window = settings.position_window;
         }
         Mode::ProfileVelocity => {
-            let acceleration = acceleration();
-            inputs.velocity_limits = Limits {
-                velocity: max_velocity(),
-                acceleration,
-                deceleration: accel(vars.profile_deceleration, acceleration),
-            };
-            inputs.velocity_window = (
-                window(vars.velocity_window),
-                time(vars.velocity_window_time),
-            );
-            inputs.velocity_threshold = (
-                window(vars.velocity_threshold),
-                time(vars.velocity_threshold_time),
-            );
+            inputs.velocity_limits = settings.velocity_limits;
+            inputs.velocity_window = settings.velocity_window;
+            inputs.velocity_threshold = settings.velocity_threshold;
         }
-        Mode::ProfileTorque => {
-            let slope_permille = read_u32(ram, vars.torque_slope).unwrap_or(0);
-            inputs.torque_slope = units::torque_from_permille_f32(slope_permille as f32, rated_nm);
-        }
+        Mode::ProfileTorque => inputs.torque_slope = settings.torque_slope,
         Mode::Homing => {
-            inputs.position_window = (
-                read_u32(ram, vars.position_window).unwrap_or(0),
-                time(vars.position_window_time),
-            );
-            inputs.homing_speeds = (
-                velocity(vars.homing_speed_switch, 0.0),
-                velocity(vars.homing_speed_zero, 0.0),
-                // A profile without 609Ah (the SDV3-E) homes on its profile acceleration 6083h.
-                accel(vars.homing_acceleration, acceleration()),
-            );
-            inputs.homing_timeout_ms = read_u16(ram, vars.homing_timeout).map(u32::from);
+            inputs.position_window = settings.position_window;
+            // The drive sets the method and the signals in the cycle (it needs the profile's
+            // rules and the axis' captures).
+            inputs.homing = Some(HomingInputs {
+                speeds: settings.homing_speeds,
+                timeout_ms: settings.homing_timeout_ms,
+                ..HomingInputs::default()
+            });
         }
         _ => {}
     }
     inputs
-}
-
-/// The torque limits (positive, negative magnitudes; N·m) of 6072h and 60E0h/60E1h, the lower
-/// of the general and the direction's limit; `None` when the profile has none of them.
-fn torque_limits(ram: &[u8], vars: &AppVars, rated_nm: f32) -> Option<(f32, f32)> {
-    let permille = |at| read_u16(ram, at);
-    let max = permille(vars.max_torque);
-    let positive = permille(vars.positive_torque_limit);
-    let negative = permille(vars.negative_torque_limit);
-    if max.is_none() && positive.is_none() && negative.is_none() {
-        return None;
-    }
-    // The lower of the two that exist (u16::MAX: no limit).
-    let lower = |a: Option<u16>, b: Option<u16>| a.unwrap_or(u16::MAX).min(b.unwrap_or(u16::MAX));
-    let nm = |p: u16| units::torque_from_permille_f32(f32::from(p), rated_nm);
-    Some((nm(lower(max, positive)), nm(lower(max, negative))))
-}
-
-/// The software position limits 607Dh in drive increments, `None` when disabled (min ≥ max)
-/// or absent.
-fn software_limits(
-    ram: &[u8],
-    vars: &AppVars,
-    ratio: units::Ratio,
-    polarity: Polarity,
-) -> Option<SoftwareLimits> {
-    let min = read_i32(ram, vars.software_position_limit_min)?;
-    let max = read_i32(ram, vars.software_position_limit_max)?;
-    // With the position polarity the user's minimum is the drive's maximum.
-    let (min, max) = if polarity.position {
-        (polarity.position(max), polarity.position(min))
-    } else {
-        (min, max)
-    };
-    SoftwareLimits::new(
-        ratio.position_to_internal(i64::from(min)),
-        ratio.position_to_internal(i64::from(max)),
-    )
 }
 
 /// Whether a set-point step of `step` increments in one interpolation period of `period_ns` is

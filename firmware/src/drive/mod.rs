@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`axis`] | [`DriveAxis`]: one axis' CiA402 device on its objects, and the exchange with its motor's control interrupt |
 //! | `ram` | the reads and writes of the variables in the OD RAM |
+//! | `settings` | the parameters the cycle uses (limits, ramps, windows...) in drive units, read again only when their objects may have changed |
 //!
 //! A profile has one axis or, like the Σ-V-SD for two axes, several in one slave
 //! ([`DriveProfile::axes`]): each runs its own state machine, mode, homing, touch probes and
@@ -19,6 +20,7 @@
 
 pub mod axis;
 mod ram;
+mod settings;
 
 pub use axis::DriveAxis;
 
@@ -26,6 +28,7 @@ use cia402::faults::FaultReport;
 use cia402::pds::PdsState;
 use ethercat_slave::od::index::STORE_PARAMETERS;
 use ethercat_slave::od::ErrorReport;
+use ethercat_slave::pdo::PdoPlan;
 use ethercat_slave::slave::{AppEvent, AppEvents, Application};
 
 use crate::adjust::service::{Progress, Refusal};
@@ -273,6 +276,12 @@ impl Drive {
             {
                 if new != old {
                     object.write(ram, new);
+                    if let Some((at, _)) = object.object() {
+                        // A setting the axes keep (e.g. the gear ratio 6091h of the units).
+                        for axis in self.axes.iter_mut().flatten() {
+                            axis.written(at);
+                        }
+                    }
                 }
             }
             // As the objects hold them now (a write may have saturated).
@@ -374,6 +383,9 @@ impl Application for Drive {
 
     fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
         self.now_ns = now_ns;
+        for axis in self.axes.iter_mut().flatten() {
+            axis.downloaded(self.od, index);
+        }
         self.sync_split_values(ram, false);
         if index == STORE_PARAMETERS {
             // A store that succeeded (a refused one is not committed).
@@ -429,6 +441,12 @@ impl Application for Drive {
             if let (Some(action), Some(feedback)) = (start, allowed) {
                 self.start_adjustment(i, axis, action, feedback);
             }
+        }
+    }
+
+    fn outputs_mapped(&mut self, outputs: &PdoPlan) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.outputs_mapped(outputs);
         }
     }
 

@@ -166,6 +166,18 @@ impl PdoPlan {
         Ok(())
     }
 
+    /// Whether the plan copies into (or out of) any of the `len` OD RAM bytes from offset `at`.
+    pub fn writes_ram(&self, at: u16, len: u16) -> bool {
+        let end = u32::from(at) + u32::from(len);
+        self.steps.iter().any(|step| match step.slot {
+            Slot::Ram(offset) => {
+                let step_end = u32::from(offset) + u32::from(step.bits).div_ceil(8);
+                u32::from(offset) < end && u32::from(at) < step_end
+            }
+            Slot::Const(_) => false,
+        })
+    }
+
     /// Size of the process-data image in bytes (the SM length the master must configure).
     pub fn byte_len(&self) -> usize {
         (self.bits as usize).div_ceil(8)
@@ -367,6 +379,21 @@ mod tests {
         plan.unpack(&[0x0F, 0x00, 0x78, 0x56, 0x34, 0x12], &mut ram);
         assert_eq!(&ram[0..2], &[0x0F, 0x00]);
         assert_eq!(&ram[2..6], &[0x78, 0x56, 0x34, 0x12]);
+    }
+
+    #[test]
+    fn writes_ram_names_exactly_the_mapped_entries_bytes() {
+        let mut ram = [0u8; 31];
+        // 6040h at RAM 0..2, 607Ah at 2..6; the flag 2000h (RAM 6) is not mapped.
+        od_with(&mut ram, &[0x6040_0010, 0x607A_0020]);
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        assert!(plan.writes_ram(0, 2) && plan.writes_ram(1, 1) && plan.writes_ram(5, 4));
+        assert!(!plan.writes_ram(6, 1), "the unmapped flag");
+        assert!(!plan.writes_ram(6, 0) && !plan.writes_ram(2, 0), "no bytes");
+        assert!(
+            !PdoPlan::default().writes_ram(0, 2),
+            "the empty plan writes nothing"
+        );
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! drive, an I/O module or anything else. The stack knows nothing about it beyond this trait.
 
 use crate::od::ErrorReport;
+use crate::pdo::PdoPlan;
 
 /// What happened to the application's error state during a cycle: the slave turns it into the
 /// EMCY, 1001h and 10F3h bookkeeping of CiA 301 / ETG.1020.
@@ -69,6 +70,14 @@ pub trait Application {
     /// nothing.
     fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
         let _ = (ram, index, subindex, now_ns);
+    }
+
+    /// The RxPDO mapping changed: `outputs` is the plan the cycles unpack from now on (built at
+    /// PREOP → SAFEOP; the empty plan when the state falls below SAFEOP). An application that
+    /// keeps settings read from the OD RAM learns here which of them the master's outputs may
+    /// change in every cycle ([`PdoPlan::writes_ram`]). Default: nothing.
+    fn outputs_mapped(&mut self, outputs: &PdoPlan) {
+        let _ = outputs;
     }
 
     /// Called at the start of every ESC-event round, in every EtherCAT state (on a board at

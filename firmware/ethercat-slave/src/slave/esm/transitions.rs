@@ -139,6 +139,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if result.is_ok() {
             self.rx_plan = rx;
             self.tx_plan = tx;
+            self.app.outputs_mapped(&self.rx_plan);
         }
         Ok(result)
     }
@@ -207,6 +208,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if rank_to < 2 && rank_from >= 2 {
             self.rx_plan = PdoPlan::default();
             self.tx_plan = PdoPlan::default();
+            self.app.outputs_mapped(&self.rx_plan);
             self.sync = SyncConfig {
                 mode: Mode::FreeRun,
                 cycle_ns: 0,
