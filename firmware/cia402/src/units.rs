@@ -36,7 +36,10 @@ pub fn torque_from_permille_f32(permille: f32, rated_nm: f32) -> f32 {
 
 /// A torque in N·m as ‰ of the rated torque (`as` saturates; NaN → 0).
 pub fn torque_to_permille(torque_nm: f32, rated_nm: f32) -> i16 {
-    (torque_nm / rated_nm * PER_MILLE_INV) as i16
+    // Through i32 (one VCVT, which saturates and maps NaN to 0 like `as`), then limited to the
+    // i16 range (SSAT): a direct `as i16` becomes a chain of range checks.
+    let permille = (torque_nm / rated_nm * PER_MILLE_INV) as i32;
+    permille.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16
 }
 
 /// A 32-bit position object (607Ah) as a 64-bit position: taken relative to the 32-bit image
@@ -342,6 +345,9 @@ mod tests {
         assert_eq!(rated_torque_nm(None), 1.0);
         assert_eq!(torque_to_permille(f32::NAN, rated), 0);
         assert_eq!(torque_to_permille(1e9, rated), i16::MAX);
+        assert_eq!(torque_to_permille(-1e9, rated), i16::MIN);
+        assert_eq!(torque_to_permille(f32::INFINITY, rated), i16::MAX);
+        assert_eq!(torque_to_permille(f32::NEG_INFINITY, rated), i16::MIN);
     }
 
     #[test]

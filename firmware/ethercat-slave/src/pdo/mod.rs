@@ -83,10 +83,26 @@ impl CopyStep {
     }
 }
 
-/// The copy plan of one direction.
+/// Mapped entries that are whole bytes on both sides, contiguous in the image and in the OD RAM
+/// (one entry, or adjacent entries merged when the plan is built): one copy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct ByteRun {
+    /// OD RAM byte offset.
+    ram: u16,
+    /// Image byte offset.
+    image: u16,
+    /// Bytes.
+    len: u16,
+}
+
+/// The copy plan of one direction: the byte runs, then the entries that need a bit copy or
+/// come from a constant.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct PdoPlan {
+    runs: Vec<ByteRun, MAX_MAPPED_ENTRIES>,
     steps: Vec<CopyStep, MAX_MAPPED_ENTRIES>,
+    /// Mapped entries (padding excluded).
+    entries: usize,
     bits: u16,
 }
 
@@ -151,13 +167,23 @@ impl PdoPlan {
                 (Value::Const(bytes), Direction::Tx) => Slot::Const(bytes),
                 (Value::Const(_), Direction::Rx) | (Value::Domain(_), _) => return Err(bad),
             };
-            self.steps
-                .push(CopyStep {
-                    slot,
-                    image_bit: self.bits,
-                    bits,
-                })
-                .map_err(|_| bad)?;
+            if self.entries >= MAX_MAPPED_ENTRIES {
+                return Err(bad);
+            }
+            self.entries += 1;
+            let step = CopyStep {
+                slot,
+                image_bit: self.bits,
+                bits,
+            };
+            match (slot, step.bytes()) {
+                (Slot::Ram(ram), Some((image, len))) => {
+                    let image = u16::try_from(image).map_err(|_| bad)?;
+                    let len = u16::try_from(len).map_err(|_| bad)?;
+                    self.add_run(ram, image, len).map_err(|_| bad)?;
+                }
+                _ => self.steps.push(step).map_err(|_| bad)?,
+            }
             self.bits = self.bits.checked_add(bits).ok_or(bad)?;
         }
         if self.byte_len() > MAX_IMAGE {
@@ -166,16 +192,47 @@ impl PdoPlan {
         Ok(())
     }
 
+    /// Adds a byte-aligned entry of `len` bytes from OD RAM offset `ram` at image byte `image`:
+    /// to the last run if it continues it on both sides, else as a new run (`Err` when the
+    /// runs are full, which the entry count prevents).
+    fn add_run(&mut self, ram: u16, image: u16, len: u16) -> Result<(), ByteRun> {
+        if let Some(last) = self.runs.last_mut() {
+            let continues = u32::from(last.ram) + u32::from(last.len) == u32::from(ram)
+                && u32::from(last.image) + u32::from(last.len) == u32::from(image);
+            if let (true, Some(merged)) = (continues, last.len.checked_add(len)) {
+                last.len = merged;
+                return Ok(());
+            }
+        }
+        self.runs.push(ByteRun { ram, image, len })
+    }
+
     /// Whether the plan copies into (or out of) any of the `len` OD RAM bytes from offset `at`.
     pub fn writes_ram(&self, at: u16, len: u16) -> bool {
-        let end = u32::from(at) + u32::from(len);
-        self.steps.iter().any(|step| match step.slot {
-            Slot::Ram(offset) => {
-                let step_end = u32::from(offset) + u32::from(step.bits).div_ceil(8);
-                u32::from(offset) < end && u32::from(at) < step_end
-            }
-            Slot::Const(_) => false,
-        })
+        if len == 0 {
+            return false;
+        }
+        let (at, end) = (u32::from(at), u32::from(at) + u32::from(len));
+        let overlaps =
+            |from: u16, bytes: u32| u32::from(from) < end && at < u32::from(from) + bytes;
+        self.runs
+            .iter()
+            .any(|run| overlaps(run.ram, u32::from(run.len)))
+            || self.steps.iter().any(|step| match step.slot {
+                Slot::Ram(offset) => overlaps(offset, u32::from(step.bits).div_ceil(8)),
+                Slot::Const(_) => false,
+            })
+    }
+
+    /// Mapped entries (padding excluded).
+    pub fn entries(&self) -> usize {
+        self.entries
+    }
+
+    /// Copies the plan makes per cycle: the byte runs (adjacent entries merged) and the other
+    /// entries.
+    pub fn copies(&self) -> usize {
+        self.runs.len() + self.steps.len()
     }
 
     /// Size of the process-data image in bytes (the SM length the master must configure).
@@ -185,17 +242,14 @@ impl PdoPlan {
 
     /// Copies an RxPDO image (SM2 content) into the OD RAM.
     pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
+        for run in &self.runs {
+            let (i, r, n) = run.span();
+            if let (Some(from), Some(to)) = (image.get(i..i + n), ram.get_mut(r..r + n)) {
+                copy_bytes(from, to);
+            }
+        }
         for step in &self.steps {
             if let Slot::Ram(offset) = step.slot {
-                if let Some((at, len)) = step.bytes() {
-                    let offset = usize::from(offset);
-                    if let (Some(from), Some(to)) =
-                        (image.get(at..at + len), ram.get_mut(offset..offset + len))
-                    {
-                        copy_bytes(from, to);
-                    }
-                    continue;
-                }
                 copy_bits(
                     image,
                     step.image_bit as usize,
@@ -209,20 +263,17 @@ impl PdoPlan {
 
     /// Copies the mapped TxPDO values from the OD RAM into an image (SM3 content).
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
+        for run in &self.runs {
+            let (i, r, n) = run.span();
+            if let (Some(from), Some(to)) = (ram.get(r..r + n), image.get_mut(i..i + n)) {
+                copy_bytes(from, to);
+            }
+        }
         for step in &self.steps {
             let (src, at) = match step.slot {
                 Slot::Ram(offset) => (ram, usize::from(offset)),
                 Slot::Const(bytes) => (bytes, 0),
             };
-            if let Some((image_at, len)) = step.bytes() {
-                if let (Some(from), Some(to)) = (
-                    src.get(at..at + len),
-                    image.get_mut(image_at..image_at + len),
-                ) {
-                    copy_bytes(from, to);
-                }
-                continue;
-            }
             copy_bits(
                 src,
                 at * 8,
@@ -234,22 +285,50 @@ impl PdoPlan {
     }
 }
 
-/// Copies `from` into `to` (equal lengths). The common object sizes are copied as a whole (one
-/// load and store), not through the library `memcpy` call a slice copy of unknown length
-/// becomes: its call and size dispatch cost more than the copy of a few bytes.
+impl ByteRun {
+    /// Image offset, RAM offset, length.
+    #[inline(always)]
+    fn span(&self) -> (usize, usize, usize) {
+        (
+            usize::from(self.image),
+            usize::from(self.ram),
+            usize::from(self.len),
+        )
+    }
+}
+
+/// Copies `from` into `to` (equal lengths). The common object sizes are copied by whole
+/// words, not through the library `memcpy` call a slice copy of unknown length becomes (its
+/// call and size dispatch cost more than the copy of a few bytes): 4 to 8 bytes as two words
+/// that overlap where the length is below 8 (the first and the last four bytes), 2 or 3 bytes
+/// as two half-words likewise. Branches on ranges rather than on each size: fewer
+/// instructions than the jump table a `match` on the sizes becomes.
 #[inline(always)]
 fn copy_bytes(from: &[u8], to: &mut [u8]) {
-    fn fixed<const N: usize>(from: &[u8], to: &mut [u8]) {
-        if let (Ok(from), Ok(to)) = (<&[u8; N]>::try_from(from), <&mut [u8; N]>::try_from(to)) {
-            *to = *from;
+    /// Copies `N` bytes at `at` (nothing if out of range).
+    #[inline(always)]
+    fn part<const N: usize>(from: &[u8], to: &mut [u8], at: usize) {
+        let src = from
+            .get(at..at + N)
+            .and_then(|s| <&[u8; N]>::try_from(s).ok());
+        let dst = to
+            .get_mut(at..at + N)
+            .and_then(|d| <&mut [u8; N]>::try_from(d).ok());
+        if let (Some(src), Some(dst)) = (src, dst) {
+            *dst = *src;
         }
     }
-    match from.len() {
-        1 => fixed::<1>(from, to),
-        2 => fixed::<2>(from, to),
-        4 => fixed::<4>(from, to),
-        8 => fixed::<8>(from, to),
-        _ => to.copy_from_slice(from),
+    let n = from.len();
+    if n.wrapping_sub(4) <= 4 {
+        part::<4>(from, to, 0);
+        part::<4>(from, to, n - 4);
+    } else if n.wrapping_sub(2) <= 1 {
+        part::<2>(from, to, 0);
+        part::<2>(from, to, n - 2);
+    } else if n == 1 {
+        part::<1>(from, to, 0);
+    } else {
+        to.copy_from_slice(from)
     }
 }
 
@@ -382,6 +461,25 @@ mod tests {
     }
 
     #[test]
+    fn entries_adjacent_in_image_and_ram_are_one_copy() {
+        let mut ram = [0u8; 31];
+        // 6040h (RAM 0..2) then 607Ah (RAM 2..6): contiguous on both sides.
+        od_with(&mut ram, &[0x6040_0010, 0x607A_0020]);
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        assert_eq!((plan.entries(), plan.copies()), (2, 1));
+        // The other order: contiguous in the image only.
+        od_with(&mut ram, &[0x607A_0020, 0x6040_0010]);
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        assert_eq!((plan.entries(), plan.copies()), (2, 2));
+        plan.unpack(&[0x78, 0x56, 0x34, 0x12, 0x0F, 0x00], &mut ram);
+        assert_eq!(&ram[0..6], &[0x0F, 0x00, 0x78, 0x56, 0x34, 0x12]);
+        // Padding between them: two copies.
+        od_with(&mut ram, &[0x6040_0010, 0x0000_0008, 0x607A_0020]);
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        assert_eq!((plan.entries(), plan.copies()), (2, 2));
+    }
+
+    #[test]
     fn writes_ram_names_exactly_the_mapped_entries_bytes() {
         let mut ram = [0u8; 31];
         // 6040h at RAM 0..2, 607Ah at 2..6; the flag 2000h (RAM 6) is not mapped.
@@ -425,19 +523,19 @@ mod tests {
     #[test]
     fn pack_copies_constants_and_ram() {
         let plan = PdoPlan {
-            steps: Vec::from_slice(&[
-                CopyStep {
-                    slot: Slot::Const(&[0x37, 0x02]),
-                    image_bit: 0,
-                    bits: 16,
-                },
-                CopyStep {
-                    slot: Slot::Ram(2),
-                    image_bit: 16,
-                    bits: 32,
-                },
-            ])
+            runs: Vec::from_slice(&[ByteRun {
+                ram: 2,
+                image: 2,
+                len: 4,
+            }])
             .unwrap(),
+            steps: Vec::from_slice(&[CopyStep {
+                slot: Slot::Const(&[0x37, 0x02]),
+                image_bit: 0,
+                bits: 16,
+            }])
+            .unwrap(),
+            entries: 2,
             bits: 48,
         };
         let mut ram = [0u8; 31];
@@ -445,6 +543,20 @@ mod tests {
         let mut image = [0u8; 6];
         plan.pack(&ram, &mut image);
         assert_eq!(image, [0x37, 0x02, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn copy_bytes_copies_every_length_exactly() {
+        for n in 0..=12 {
+            let from: [u8; 12] = core::array::from_fn(|i| 0xA0 + i as u8);
+            let mut to = [0u8; 14];
+            copy_bytes(&from[..n], &mut to[1..1 + n]);
+            assert_eq!(&to[1..1 + n], &from[..n], "{n} bytes");
+            assert!(
+                to[0] == 0 && to[1 + n..].iter().all(|&b| b == 0),
+                "{n}: nothing else"
+            );
+        }
     }
 
     #[test]
