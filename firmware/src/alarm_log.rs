@@ -155,9 +155,9 @@ pub struct Warning {
     pub report: FaultReport,
 }
 
-/// The first of `warnings` (the profile's order) whose condition holds.
-pub fn active_warning(warnings: &[Warning], inputs: &WarningInputs) -> Option<Warning> {
-    warnings.iter().find(|w| w.condition.holds(inputs)).copied()
+/// The position in `warnings` of the first (the profile's order) whose condition holds.
+pub fn active_warning(warnings: &[Warning], inputs: &WarningInputs) -> Option<usize> {
+    warnings.iter().position(|w| w.condition.holds(inputs))
 }
 
 /// Alarm records shown one at a time.
@@ -565,7 +565,7 @@ mod tests {
             ..none
         };
         assert_eq!(
-            active_warning(&warnings, &hot).map(|w| w.report.error_code),
+            active_warning(&warnings, &hot).map(|i| warnings[i].report.error_code),
             Some(0x2351)
         );
         let below = WarningInputs {
@@ -573,7 +573,7 @@ mod tests {
             ..hot
         };
         assert_eq!(
-            active_warning(&warnings, &below).map(|w| w.report.error_code),
+            active_warning(&warnings, &below).map(|i| warnings[i].report.error_code),
             Some(0xFF48)
         );
         assert!(!WarningCondition::DriveOverload { percent: 50 }.holds(&below));

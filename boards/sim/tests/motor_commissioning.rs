@@ -111,7 +111,10 @@ fn identifies_r_l_and_inertia_of_the_plant() {
     );
     let fb = servo.feedback();
     assert_eq!(fb.fault, None);
-    let id = fb.identified.expect("identification results");
+    let id = servo
+        .link()
+        .identification()
+        .expect("identification results");
     check(&id, &plant);
 
     let bw = Bandwidths {
@@ -152,7 +155,13 @@ fn identifies_with_an_incremental_encoder_after_alignment() {
     assert_eq!(states.last(), Some(&AxisState::Identified), "{states:?}");
     let fb = servo.feedback();
     assert_eq!(fb.fault, None);
-    check(&fb.identified.expect("identification results"), &plant);
+    check(
+        &servo
+            .link()
+            .identification()
+            .expect("identification results"),
+        &plant,
+    );
 }
 
 /// An open winding (resistance × 1000, 120 Ω: the 2 A test current cannot flow within the
@@ -189,7 +198,7 @@ fn an_open_winding_fails_the_identification() {
     }
     let fb = servo.feedback();
     assert_eq!(fb.fault, Some(MotorFault::Identification));
-    assert_eq!(fb.identified, None);
+    assert_eq!(servo.link().identification(), None);
 }
 
 #[test]

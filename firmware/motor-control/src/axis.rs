@@ -219,8 +219,6 @@ pub struct AxisFeedback {
     pub torque: f32,
     /// Position following error, increments.
     pub following_error: i64,
-    /// Identification results, when the last identification finished.
-    pub identified: Option<Identification>,
     /// Faults latched so far (wrapping): a change tells the SYNC0 side that a new fault
     /// occurred, even when a reset and a new trip of the same fault fall between two reads.
     pub trips: u32,
@@ -361,6 +359,9 @@ pub struct AxisLink {
     model: SetpointHandoff<MotorModel>,
     /// Switch edges and index pulses, written when one happened.
     captures: FeedbackHandoff<Captures>,
+    /// Identification results, written when they change (kept apart from the feedback that
+    /// every cycle copies).
+    identification: FeedbackHandoff<Option<Identification>>,
 }
 
 impl AxisLink {
@@ -400,7 +401,6 @@ impl AxisLink {
                     velocity: 0.0,
                     torque: 0.0,
                     following_error: 0,
-                    identified: None,
                     trips: 0,
                     offset_calibrations: 0,
                     main_power: false,
@@ -433,6 +433,8 @@ impl AxisLink {
                     home: false,
                 }))
             },
+            // SAFETY: as above (written by the control interrupt only).
+            identification: unsafe { FeedbackHandoff::new(None) },
         }
     }
 
@@ -455,6 +457,11 @@ impl AxisLink {
     /// SYNC0 side: the latest switch levels and edge/index captures.
     pub fn captures(&self) -> Captures {
         self.captures.read().0
+    }
+
+    /// SYNC0 side: the results of the last identification that finished.
+    pub fn identification(&self) -> Option<Identification> {
+        self.identification.read().0
     }
 }
 
@@ -491,6 +498,8 @@ pub struct Axis {
     captures: Captures,
     /// The captures changed since they were last published (the first sample sets the levels).
     captures_changed: bool,
+    /// `identified` changed since it was last published.
+    identification_changed: bool,
     /// A sample has set the switch levels.
     captures_started: bool,
     /// 1 / the PWM period in ns (touch-probe edge interpolation).
@@ -611,6 +620,7 @@ impl Axis {
                 home: false,
             }),
             captures_changed: false,
+            identification_changed: false,
             captures_started: false,
             inv_period_ns: cfg.pwm_hz * 1e-9,
             omega_e: 0.0,
@@ -906,7 +916,6 @@ impl Axis {
             velocity: self.last_velocity,
             torque: self.last_iq * self.nm_per_iq,
             following_error: self.position_loop.following_error(),
-            identified: self.identified,
             trips: self.trips,
             offset_calibrations: self.offset_calibrations,
             main_power: self.vbus >= self.cfg.protection.bus_under_voltage_v,
@@ -923,6 +932,10 @@ impl Axis {
                 home: self.captures.home.level,
             },
         });
+        if self.identification_changed {
+            link.identification.write(self.identified);
+            self.identification_changed = false;
+        }
         if self.captures_changed {
             // Edges are rare: the captures go out only when one happened.
             link.captures.write(self.captures);
@@ -1237,6 +1250,7 @@ impl Axis {
                 }
             }
             IdentCommand::Done(Ok(result)) => {
+                self.identification_changed = true;
                 self.identified = Some(Identification {
                     resistance_ohm: result.resistance_ohm,
                     ld_h: result.ld_h,
@@ -1330,6 +1344,7 @@ impl Axis {
                     match result {
                         Ok(j) => {
                             if let Some(id) = self.identified.as_mut() {
+                                self.identification_changed = true;
                                 id.inertia = j;
                                 id.inertia_kgm2 = j * self.cfg.motor.counts_per_rev as f32 / TAU;
                             }

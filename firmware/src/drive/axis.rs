@@ -152,8 +152,8 @@ pub struct DriveAxis {
     settings_live: Groups,
     /// The profile's warnings.
     warnings: &'static [Warning],
-    /// The warning that holds.
-    warning: Option<Warning>,
+    /// The warning that holds (its place in `warnings`).
+    warning: Option<usize>,
 }
 
 /// What an alarm record shows of the axis: the last cycle's values, the speed a few ms back,
@@ -439,7 +439,7 @@ impl DriveAxis {
         let vars = self.vars;
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
         // The axis feedback of this cycle, read once (a seqlock read).
-        let feedback = self.port.as_ref().map(|port| port.link.feedback());
+        let mut feedback = self.port.as_ref().map(|port| port.link.feedback());
         // The settings whose objects were written since the last cycle, or are mapped.
         let due = self.settings_due | self.settings_live;
         self.settings_due = Groups::NONE;
@@ -500,7 +500,7 @@ impl DriveAxis {
             read_u32(ram, vars.digital_outputs_mask).unwrap_or(0),
             !matches!(step.motion, Motion::Off),
         );
-        if let Some(feedback) = feedback {
+        if let Some(feedback) = feedback.as_mut() {
             // A profile without 6060h runs no mode.
             let mode = if mode.is_some() {
                 self.mode
@@ -534,21 +534,28 @@ impl DriveAxis {
                 },
             )
         });
-        if warning.is_some() {
+        let report = warning.and_then(|i| self.warnings.get(i)).map(|w| w.report);
+        if report.is_some() {
             if let Some(sw) = read_u16(ram, vars.statusword) {
                 write_u16(ram, vars.statusword, sw | statusword::WARNING);
             }
         }
         if self.device.fault_code().is_none() {
-            let code = warning.map_or(0, |w| w.report.error_code);
+            let code = report.map_or(0, |r| r.error_code);
             write_u16(ram, vars.error_code, code);
         }
         self.warning = warning;
     }
 
-    /// The warning that holds (its 603Fh code and EMCY), if any.
-    pub(super) fn warning(&self) -> Option<(u16, [u8; 5])> {
-        self.warning.map(|w| {
+    /// Which of the profile's warnings holds (its place in `[warnings]`), if any: compared
+    /// before and after a cycle to tell a warning beginning or ending.
+    pub(super) fn warning(&self) -> Option<usize> {
+        self.warning
+    }
+
+    /// The EMCY code and manufacturer field of warning `slot` ([`Self::warning`]).
+    pub(super) fn warning_emcy(&self, slot: usize) -> Option<(u16, [u8; 5])> {
+        self.warnings.get(slot).map(|w| {
             (
                 w.report.emcy_code,
                 self.with_axis_number(w.report.emcy_data),
@@ -572,7 +579,7 @@ impl DriveAxis {
         &mut self,
         ram: &mut [u8],
         (cw, mode, motion): (u16, Mode, Motion),
-        feedback: AxisFeedback,
+        feedback: &mut AxisFeedback,
         cycle_ns: u32,
         mut due: Groups,
     ) {
@@ -581,7 +588,8 @@ impl DriveAxis {
             return;
         };
         let shift = self.position_shift;
-        let mut feedback = shifted(feedback, shift);
+        // In drive positions from here on (the caller's later uses take no position).
+        feedback.position = feedback.position.saturating_add(shift);
         let vars = self.vars;
         let link = port.link;
         let new_fault = if feedback.trips != port.trips_seen {
@@ -612,8 +620,12 @@ impl DriveAxis {
             sync_motor_model(&mut port, vars, ram);
         }
         let identifying = matches!(mode, Mode::Identification);
-        match (feedback.state, feedback.identified) {
-            (AxisState::Identified, Some(result)) if identifying => {
+        // The results are read only where they are taken (not in every cycle).
+        let identified = (feedback.state == AxisState::Identified && identifying)
+            .then(|| link.identification())
+            .flatten();
+        match (feedback.state, identified) {
+            (AxisState::Identified, Some(result)) => {
                 if !port.results_written {
                     port.results_written = true;
                     let object = |x: f32, unit: f32| units::to_object_units(x, unit).to_le_bytes();
@@ -754,7 +766,7 @@ impl DriveAxis {
                 vars,
                 (cw, mode, motion),
                 &targets,
-                &feedback,
+                feedback,
                 &self.settings,
                 units.position,
             );
@@ -931,7 +943,7 @@ impl DriveAxis {
         });
         if matches!(mode, Mode::InterpolatedPosition) {
             mode_statusword |=
-                self.ip_status(&targets, &feedback, motion, (position_ratio, cycle_ns));
+                self.ip_status(&targets, feedback, motion, (position_ratio, cycle_ns));
         }
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
@@ -1013,7 +1025,7 @@ impl DriveAxis {
             feedback.position
         };
         self.remember(
-            &feedback,
+            feedback,
             &set_point,
             (torque_demand, rated_nm),
             position_out(set_point.position),
@@ -1355,12 +1367,6 @@ fn switch_signal(s: SwitchCapture) -> homing::SwitchSignal {
         rising: edges(s.rising),
         falling: edges(s.falling),
     }
-}
-
-/// The axis' `feedback` in drive positions (`shift` added).
-fn shifted(mut feedback: AxisFeedback, shift: i64) -> AxisFeedback {
-    feedback.position = feedback.position.saturating_add(shift);
-    feedback
 }
 
 /// The axis' `captures` in drive positions (`shift` added to every position).

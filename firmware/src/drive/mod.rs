@@ -307,10 +307,10 @@ impl Application for Drive {
             let warning_after = axis.warning();
             if warning_after != warning_before {
                 // A warning ends or begins: its EMCY (1001h holds it while it lasts).
-                if let Some((code, _)) = warning_before {
+                if let Some((code, _)) = warning_before.and_then(|w| axis.warning_emcy(w)) {
                     let _ = events.push(AppEvent::ErrorCleared(code));
                 }
-                if let Some((code, data)) = warning_after {
+                if let Some((code, data)) = warning_after.and_then(|w| axis.warning_emcy(w)) {
                     let _ = events.push(AppEvent::ErrorRaised { code, data });
                 }
             }
