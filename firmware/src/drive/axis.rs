@@ -258,14 +258,39 @@ impl DriveAxis {
             results_written: false,
         };
         sync_motor_model(&mut port, self.vars, ram);
-        // The conversions depend on the motor's encoder: everything is read again.
-        self.units_cache = None;
-        self.settings_due = Groups::ALL;
         if self.vars.units_apply.is_some() {
             // The factors stored at power-on take effect now (the parameters were loaded).
             self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
         }
         self.port = Some(port);
+        // The conversions depend on the motor's encoder: everything is read again.
+        self.units_cache = None;
+        self.settings_due = Groups::ALL;
+        self.refresh_settings(ram);
+    }
+
+    /// Reads the settings that are due (their objects were written) and converts them, here
+    /// rather than in the next cycle: after a download, at power-on, when a motor is attached
+    /// (the ESC-event context; the SYNC0 handler pays only for the settings its outputs map).
+    /// Without a motor only the option codes are read; the rest waits for one.
+    pub(super) fn refresh_settings(&mut self, ram: &[u8]) {
+        let mut due = self.settings_due;
+        if due.has(Groups::OPTIONS) {
+            self.settings.refresh_options(ram, self.vars);
+        }
+        let Some(counts_per_rev) = self.port.as_ref().map(|p| p.counts_per_rev) else {
+            return;
+        };
+        let units = self.unit_ratios(ram, counts_per_rev, &mut due);
+        let zero_window_off = self.rules.following_error_zero_window_off;
+        self.settings.refresh(
+            ram,
+            self.vars,
+            (&units, self.polarity),
+            zero_window_off,
+            due,
+        );
+        self.settings_due = Groups::NONE;
     }
 
     /// The unit conversions this cycle: the factors in force (latched where the profile makes
@@ -286,12 +311,14 @@ impl DriveAxis {
     }
 
     /// An SDO download to object `index` of `od` was committed: the settings it belongs to
-    /// are read again in the next cycle.
+    /// are due ([`Self::refresh_settings`]).
     pub(super) fn downloaded(&mut self, od: &Profile, index: u16) {
         self.settings_due |= Groups::of_object(self.vars, od, index);
     }
 
-    /// The drive wrote the OD RAM entry at `at` (e.g. a split value's other form).
+    /// The drive wrote the OD RAM entry at `at` (e.g. a split value's other form): the
+    /// settings it belongs to are due (read in the next cycle, or by
+    /// [`Self::refresh_settings`]).
     pub(super) fn written(&mut self, at: u16) {
         self.settings_due |= Groups::of_offset(self.vars, at);
     }
@@ -396,6 +423,7 @@ impl DriveAxis {
     pub(super) fn power_on(&mut self, ram: &mut [u8]) {
         // The parameters were loaded.
         self.settings_due = Groups::ALL;
+        self.refresh_settings(ram);
         let statusword = self.device.initialised();
         write_u16(ram, self.vars.statusword, statusword);
     }
@@ -440,7 +468,8 @@ impl DriveAxis {
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
         // The axis feedback of this cycle, read once (a seqlock read).
         let mut feedback = self.port.as_ref().map(|port| port.link.feedback());
-        // The settings whose objects were written since the last cycle, or are mapped.
+        // The settings the RxPDO maps, and any the drive wrote since the last refresh (a split
+        // value's other form, written in the cycle).
         let due = self.settings_due | self.settings_live;
         self.settings_due = Groups::NONE;
         if due.has(Groups::OPTIONS) {

@@ -263,6 +263,66 @@ impl Drive {
 }
 
 impl Drive {
+    /// What a download to `index:subindex` does beyond setting a value: a store, the alarm
+    /// log's commands, the unit factors taking effect, an adjusting service's request.
+    fn act_on_download(&mut self, ram: &mut [u8], index: u16, subindex: u8) {
+        if index == STORE_PARAMETERS {
+            // A store that succeeded (a refused one is not committed).
+            for axis in self.axes.iter_mut().flatten() {
+                axis.parameters_stored(subindex);
+            }
+            return;
+        }
+        if self
+            .alarm_log
+            .downloaded(self.alarm_table, ram, index, subindex)
+        {
+            return;
+        }
+        if let Some(at) = ram::ram_offset(self.od, index, subindex) {
+            if let Some(axis) = self
+                .axes
+                .iter_mut()
+                .flatten()
+                .find(|a| a.is_units_apply(at))
+            {
+                axis.apply_units(ram);
+                return;
+            }
+        }
+        let now_ms = self.now_ns / NS_PER_MS;
+        for i in 0..MAX_ADJUSTING_SERVICES {
+            let Some(mut service) = self
+                .adjusting
+                .get(i)
+                .copied()
+                .flatten()
+                .filter(|s| s.is_request(index, subindex))
+            else {
+                continue;
+            };
+            // The service names its axis from 1.
+            let axis = usize::from(service.spec().axis).wrapping_sub(1);
+            let busy = self.adjustment.is_some();
+            let target = self.axis(axis);
+            let mut allowed = None;
+            let start = service.on_request(ram, now_ms, |action| {
+                if busy {
+                    return Err(Refusal::Busy);
+                }
+                let feedback = target.ok_or(Refusal::NoAxis)?.adjustment_allowed(action)?;
+                allowed = Some(feedback);
+                Ok(())
+            });
+            if let Some(slot) = self.adjusting.get_mut(i) {
+                *slot = Some(service);
+            }
+            if let (Some(action), Some(feedback)) = (start, allowed) {
+                self.start_adjustment(i, axis, action, feedback);
+            }
+        }
+    }
+
     /// Keeps each split setting's forms equal (`SplitValue::reconcile`): after an SDO download
     /// and every cycle; at power-on (`power_on`) the parts set the whole.
     fn sync_split_values(&mut self, ram: &mut [u8], power_on: bool) {
@@ -387,60 +447,10 @@ impl Application for Drive {
             axis.downloaded(self.od, index);
         }
         self.sync_split_values(ram, false);
-        if index == STORE_PARAMETERS {
-            // A store that succeeded (a refused one is not committed).
-            for axis in self.axes.iter_mut().flatten() {
-                axis.parameters_stored(subindex);
-            }
-            return;
-        }
-        if self
-            .alarm_log
-            .downloaded(self.alarm_table, ram, index, subindex)
-        {
-            return;
-        }
-        if let Some(at) = ram::ram_offset(self.od, index, subindex) {
-            if let Some(axis) = self
-                .axes
-                .iter_mut()
-                .flatten()
-                .find(|a| a.is_units_apply(at))
-            {
-                axis.apply_units(ram);
-                return;
-            }
-        }
-        let now_ms = now_ns / NS_PER_MS;
-        for i in 0..MAX_ADJUSTING_SERVICES {
-            let Some(mut service) = self
-                .adjusting
-                .get(i)
-                .copied()
-                .flatten()
-                .filter(|s| s.is_request(index, subindex))
-            else {
-                continue;
-            };
-            // The service names its axis from 1.
-            let axis = usize::from(service.spec().axis).wrapping_sub(1);
-            let busy = self.adjustment.is_some();
-            let target = self.axis(axis);
-            let mut allowed = None;
-            let start = service.on_request(ram, now_ms, |action| {
-                if busy {
-                    return Err(Refusal::Busy);
-                }
-                let feedback = target.ok_or(Refusal::NoAxis)?.adjustment_allowed(action)?;
-                allowed = Some(feedback);
-                Ok(())
-            });
-            if let Some(slot) = self.adjusting.get_mut(i) {
-                *slot = Some(service);
-            }
-            if let (Some(action), Some(feedback)) = (start, allowed) {
-                self.start_adjustment(i, axis, action, feedback);
-            }
+        self.act_on_download(ram, index, subindex);
+        // The settings the download changed, in drive units before the next cycle uses them.
+        for axis in self.axes.iter_mut().flatten() {
+            axis.refresh_settings(ram);
         }
     }
 

@@ -6,11 +6,14 @@
 //!
 //! A setting may change when
 //! - an SDO download writes one of its objects ([`Groups::of_object`]; the application learns
-//!   of every committed download), or the drive writes one itself (a split value);
+//!   of every committed download): its groups are read again at once, in the context that
+//!   commits the download, so the next cycle has them and pays nothing for it;
+//! - the drive writes one itself (a split value's other form, also in the cycle);
 //! - the master's RxPDO maps one of its objects: such a group is [`live`](live_groups) and read
 //!   in every cycle, as long as the mapping holds;
 //! - what its conversion depends on changes: the unit factors ([`Groups::UNIT_DEPENDENT`]), the
-//!   polarity 607Eh (the software limits), the motor (attached: everything);
+//!   polarity 607Eh (the software limits; taken in the cycle while the power stage is off), the
+//!   motor (attached: everything);
 //! - the parameters are loaded at power-on (everything).
 //!
 //! The groups split the settings along the PDOs a master maps (e.g. 6081h–6084h for profile
