@@ -17,7 +17,7 @@ use core::hint::black_box;
 use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode, Output, Sample};
 use firmware::motor::capture::Switches;
 use firmware::motor::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
-use firmware::motor::math::{sin_cos, TAU};
+use firmware::motor::math::{self, sin_cos, TAU};
 use firmware::motor::servo::{self, Tuning, SERVO_400W};
 use firmware::motor::{Duties, ElectricalAngle};
 use hal::io::ProbeCapture;
@@ -77,6 +77,7 @@ fn zero_voltage(d: &Duties) -> bool {
 /// Measures the motor-control hot paths.
 pub fn run(h: &mut Harness) {
     sin_cos_bench(h);
+    sqrt_bench(h);
     foc_step(h);
     control_interrupt(h);
     control_cycle_average(h);
@@ -97,6 +98,38 @@ fn sin_cos_bench(h: &mut Harness) {
         format_args!("math::sin_cos of an electrical angle (150°)"),
         &mut || {
             black_box(sin_cos(black_box(angle)));
+        },
+    );
+}
+
+/// `math::sqrt` on the target (the hardware VSQRT there): checked against exact values and
+/// its defined results for the inputs outside its domain, then timed.
+fn sqrt_bench(h: &mut Harness) {
+    const NAME: &str = "sqrt";
+    let cases = [
+        (4.0f32, 2.0f32),
+        (2.25, 1.5),
+        (0.25, 0.5),
+        (1_048_576.0, 1_024.0),
+        (0.0, 0.0),
+        (-1.0, 0.0),
+        (f32::NAN, 0.0),
+        (f32::INFINITY, 0.0),
+    ];
+    for (x, root) in cases {
+        let got = math::sqrt(black_box(x));
+        // Correctly rounded on the target: the exact squares come out exact.
+        if got != root {
+            h.fail(NAME, format_args!("sqrt({x}) = {got}, not {root}"));
+            return;
+        }
+    }
+    h.bench(
+        NAME,
+        None,
+        format_args!("math::sqrt (VSQRT with the domain checks)"),
+        &mut || {
+            black_box(math::sqrt(black_box(2.0)));
         },
     );
 }
