@@ -53,7 +53,7 @@ pub enum Mode {
     /// Motor identification (−1).
     Identification,
     /// Any other value (no mode, or one this drive does not run): the position is held.
-    Other(i8),
+    Other,
 }
 
 impl Mode {
@@ -69,7 +69,7 @@ impl Mode {
             CSV => Self::CyclicVelocity,
             CST => Self::CyclicTorque,
             IDENTIFICATION => Self::Identification,
-            other => Self::Other(other),
+            _ => Self::Other,
         }
     }
 }
@@ -200,7 +200,7 @@ impl Mode {
                 torque: true,
                 ..none
             },
-            Self::ProfilePosition | Self::Homing | Self::Identification | Self::Other(_) => none,
+            Self::ProfilePosition | Self::Homing | Self::Identification | Self::Other => none,
         }
     }
 }
@@ -242,7 +242,7 @@ pub fn set_point(mode: Mode, targets: Targets, actual_position: i64) -> SetPoint
         | Mode::ProfileTorque
         | Mode::Homing
         | Mode::Identification
-        | Mode::Other(_) => SetPoint {
+        | Mode::Other => SetPoint {
             control: Loop::Position,
             position: actual_position,
             velocity: 0.0,
@@ -271,12 +271,12 @@ mod tests {
         assert_eq!(Mode::from_object(9), Mode::CyclicVelocity);
         assert_eq!(Mode::from_object(10), Mode::CyclicTorque);
         assert_eq!(Mode::from_object(-1), Mode::Identification);
-        assert_eq!(Mode::from_object(0), Mode::Other(0));
+        assert_eq!(Mode::from_object(0), Mode::Other);
         assert_eq!(Mode::from_object(1), Mode::ProfilePosition);
         assert_eq!(Mode::from_object(3), Mode::ProfileVelocity);
         assert_eq!(Mode::from_object(4), Mode::ProfileTorque);
         assert_eq!(Mode::from_object(6), Mode::Homing);
-        assert_eq!(Mode::from_object(2), Mode::Other(2));
+        assert_eq!(Mode::from_object(2), Mode::Other);
         assert_eq!(Mode::from_object(7), Mode::InterpolatedPosition);
     }
 
@@ -357,7 +357,7 @@ mod tests {
         assert_eq!((csv.velocity, csv.torque), (1_020.0, 0.25));
         let cst = set_point(Mode::CyclicTorque, t, 0);
         assert_eq!((cst.velocity, cst.torque), (0.0, 0.75));
-        let hold = set_point(Mode::Other(0), t, 7);
+        let hold = set_point(Mode::Other, t, 7);
         assert_eq!((hold.position, hold.velocity, hold.torque), (7, 0.0, 0.0));
     }
 
@@ -382,7 +382,7 @@ mod tests {
             Mode::CyclicVelocity,
             Mode::CyclicTorque,
             Mode::Identification,
-            Mode::Other(0),
+            Mode::Other,
         ];
         for mode in modes {
             let used = mode.targets_used();
@@ -431,7 +431,7 @@ mod tests {
 
     #[test]
     fn other_modes_hold_the_position() {
-        for mode in [Mode::Other(0), Mode::ProfilePosition, Mode::Identification] {
+        for mode in [Mode::Other, Mode::ProfilePosition, Mode::Identification] {
             let sp = set_point(mode, TARGETS, -42);
             assert_eq!((sp.control, sp.position), (Loop::Position, -42));
         }

@@ -142,17 +142,27 @@ impl Ratio {
         )
     }
 
+    /// Whether the ratio is 1 (n = d: the conversions are the identity). One comparison, not
+    /// the derived `==` with [`Self::ONE`], which the SYNC0 handler would call for every
+    /// position.
+    #[inline]
+    fn is_one(self) -> bool {
+        self.numerator == self.denominator
+    }
+
     /// A position in user units as increments, saturating at the i64 range.
+    #[inline]
     pub fn position_to_internal(self, user: i64) -> i64 {
-        if self == Self::ONE {
+        if self.is_one() {
             return user;
         }
         scale(user, self.numerator, self.denominator)
     }
 
     /// Increments as a position in user units (rounded toward zero), saturating.
+    #[inline]
     pub fn position_from_internal(self, increments: i64) -> i64 {
-        if self == Self::ONE {
+        if self.is_one() {
             return increments;
         }
         scale(increments, self.denominator, self.numerator)

@@ -534,7 +534,7 @@ impl DriveAxis {
             let mode = if mode.is_some() {
                 self.mode
             } else {
-                Mode::Other(0)
+                Mode::Other
             };
             self.exchange_with_axis(ram, (cw, mode, step.motion), feedback, cycle_ns, due);
         } else if matches!(step.motion, Motion::Run) {
@@ -1180,7 +1180,7 @@ impl DriveAxis {
             }
         }
         let rules = &self.rules.touch_probe;
-        if function == 0 && !self.touch_probes.enabled() && rules.bit7 != Bit7::InputLevel {
+        if function == 0 && rules.bit7 != Bit7::InputLevel && !self.touch_probes.enabled() {
             return;
         }
         let c = shifted_captures(link.captures(), self.position_shift);
