@@ -51,12 +51,45 @@ pub struct RamLayout {
     pub domains: BTreeMap<(u16, u8), u8>,
 }
 
-/// Packs the RAM entries in dictionary order, each aligned to its size (at most 4 bytes;
-/// strings byte-aligned).
+/// Packs the RAM entries: first those the default-assigned RxPDOs and then TxPDOs map, in
+/// mapping order and without gaps, so that the default process data are one block of the OD
+/// RAM per direction (the copy plan then copies each PDO's run of adjacent entries at once,
+/// not entry by entry); then the others in dictionary order, each aligned to its size (at most
+/// 4 bytes; strings byte-aligned). Nothing relies on the alignment (the OD RAM is read and
+/// written as bytes); it only packs the rest well.
 pub fn ram_layout(p: &Profile) -> RamLayout {
     let mut offsets = BTreeMap::new();
     let mut image: Vec<u8> = Vec::new();
     let mut domains = BTreeMap::new();
+    let entry = |index: u16, subindex: u8| {
+        p.objects
+            .iter()
+            .find(|o| o.index == index)
+            .and_then(|o| o.entries.iter().find(|e| e.subindex == subindex))
+    };
+    let mut place = |index: u16, e: &Entry, align: usize, image: &mut Vec<u8>| {
+        if offsets.contains_key(&(index, e.subindex)) {
+            return;
+        }
+        let at = image.len().div_ceil(align) * align;
+        image.resize(at, 0);
+        image.extend_from_slice(&e.initial_bytes());
+        offsets.insert((index, e.subindex), u16::try_from(at).unwrap_or(u16::MAX));
+    };
+    for pdo in p
+        .rx_pdos
+        .iter()
+        .chain(&p.tx_pdos)
+        .filter(|pdo| pdo.assigned)
+    {
+        for mapped in &pdo.entries {
+            if let Some(e) = entry(mapped.index, mapped.subindex) {
+                if e.storage == Storage::Ram {
+                    place(mapped.index, e, 1, &mut image);
+                }
+            }
+        }
+    }
     for o in &p.objects {
         for e in o.entries.iter().filter(|e| e.storage == Storage::Domain) {
             let id = u8::try_from(domains.len()).unwrap_or(u8::MAX);
@@ -68,10 +101,7 @@ pub fn ram_layout(p: &Profile) -> RamLayout {
             } else {
                 e.byte_len().next_power_of_two().min(4)
             };
-            let at = image.len().div_ceil(align) * align;
-            image.resize(at, 0);
-            image.extend_from_slice(&e.initial_bytes());
-            offsets.insert((o.index, e.subindex), u16::try_from(at).unwrap_or(u16::MAX));
+            place(o.index, e, align, &mut image);
         }
     }
     // Keep the size a multiple of 4 so that `[u8; RAM_SIZE]` arrays pack well.
