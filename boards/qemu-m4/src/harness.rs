@@ -23,7 +23,6 @@
 //! | `META` | key, value |
 //! | `CALIBRATION` | expected, measured |
 //! | `BENCH` | name, instructions, budget (`-` if none), description |
-//! | `OVER` | name, the open issue that tracks its budget overrun ([`Harness::report_tracked`]) |
 //! | `FAIL` | name, reason |
 //! | `DONE` | `ok` or `failed` |
 
@@ -155,26 +154,6 @@ impl Harness {
                     format_args!("{instructions} instructions exceed the budget of {b}"),
                 );
             }
-        }
-    }
-
-    /// [`report`](Self::report) for an operation known to exceed its budget and tracked by an
-    /// open issue (`issue`): an overrun is recorded (`OVER` record: the report marks the row) but
-    /// does not fail the run, so that the measurement stays visible in the report until the
-    /// issue brings it under; a row that comes under its budget is reported as an ordinary one.
-    pub fn report_tracked(
-        &mut self,
-        name: &str,
-        instructions: u32,
-        budget: u32,
-        issue: u32,
-        description: fmt::Arguments<'_>,
-    ) {
-        self.record(format_args!(
-            "BENCH\t{name}\t{instructions}\t{budget}\t{description}"
-        ));
-        if instructions > budget {
-            self.record(format_args!("OVER\t{name}\t{issue}"));
         }
     }
 

@@ -54,9 +54,6 @@ const MAX_ENABLE_CYCLES: u32 = 400;
 /// PWM periods of the control interrupt per bus cycle during the enable sequence (how many is
 /// not critical: the axis only has to finish its offset calibration and run).
 const PERIODS_PER_CYCLE: u32 = 40;
-/// The open issue that tracks the profile-position cycle over its budget (issue 13: every hot
-/// path under budget in every branch).
-const PP_BUDGET_ISSUE: u32 = 13;
 /// Bus cycles a move may take before giving up.
 const MAX_MOVE_CYCLES: u32 = 20_000;
 
@@ -340,11 +337,10 @@ fn profile_position_move(h: &mut Harness, bench: &mut Bench) -> Result<(), &'sta
         return Err("nothing measured");
     };
     let [a, b, c, d, e, f] = phases.costs;
-    h.report_tracked(
+    h.report(
         PP_NAME,
         worst,
-        SYNC0_HANDLER_BUDGET,
-        PP_BUDGET_ISSUE,
+        Some(SYNC0_HANDLER_BUDGET),
         format_args!(
             "on_sync0 in OP with the axis attached, profile position: the most expensive cycle of \
              an 8-revolution move ({}); by cycle: {} {}, {} {}, {} {}, {} {}, {} {}, {} {} (each \
