@@ -545,6 +545,44 @@ pub struct Cia402Rules {
     /// A homing run that ends in a homing error also raises this alarm (the GHA-E's GOH, "no
     /// home signal found in the valid travel").
     pub homing_error_alarm: Option<FaultReport>,
+    /// Where the profile shows the safe-torque-off input (the Σ-V-SD's HWBB).
+    pub safe_torque_off: Option<SafeTorqueOffDisplay>,
+}
+
+/// How a profile shows its safe-torque-off input (the Σ-V-SD's HWBB, §4.7 statusword bit 15,
+/// §6.11 60FDh bits 24/25).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SafeTorqueOffDisplay {
+    /// The statusword bit (a manufacturer-specific one: 8, 14 or 15).
+    pub statusword_bit: u8,
+    /// Its value while safe torque off holds (the Σ-V-SD's bit 15: "0: HWBB activated, 1:
+    /// HWBB not activated").
+    pub statusword_while_active: bool,
+    /// The 60FDh bits of channel 1 and 2 (1 = closed; manufacturer-specific bits 16–31).
+    pub digital_input_bits: [u8; 2],
+}
+
+impl SafeTorqueOffDisplay {
+    /// The statusword bits to set (`active`: safe torque off holds).
+    pub fn statusword(&self, active: bool) -> u16 {
+        if active == self.statusword_while_active {
+            1u16.checked_shl(u32::from(self.statusword_bit))
+                .unwrap_or(0)
+        } else {
+            0
+        }
+    }
+
+    /// The 60FDh bits of the channels (`true` = closed).
+    pub fn digital_inputs(&self, channels_closed: [bool; 2]) -> u32 {
+        self.digital_input_bits
+            .iter()
+            .zip(channels_closed)
+            .filter(|(_, closed)| *closed)
+            .fold(0, |bits, (&bit, _)| {
+                bits | 1u32.checked_shl(u32::from(bit)).unwrap_or(0)
+            })
+    }
 }
 
 /// One setting that a whole object and two parameters hold: `whole` = `high` × `radix` + `low`

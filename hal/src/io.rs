@@ -18,6 +18,13 @@ pub trait DigitalInputs {
     fn motor_over_temperature(&mut self) -> bool;
     /// Touch-probe input `probe` as captured in the last PWM period.
     fn touch_probe(&mut self, probe: TouchProbe) -> ProbeCapture;
+    /// The two channels of the safe-torque-off input (IEC 61800-5-2 STO, e.g. the Σ-V-SD's
+    /// HWBB1/HWBB2), `true` = channel closed (torque allowed). The hardware cuts the gate drive
+    /// on its own when a channel opens; the firmware reads the levels to follow it (disable,
+    /// report). Default: a board without the input, both channels closed.
+    fn safe_torque_off_channels(&mut self) -> [bool; 2] {
+        [true; 2]
+    }
 }
 
 /// The two touch-probe inputs (CiA402 60B8h probe 1 and 2).

@@ -1197,6 +1197,17 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             c.error_code
         );
     }
+    if let Some(s) = r.safe_torque_off {
+        let _ = writeln!(
+            out,
+            "- Safe torque off (an open channel of the STO input): statusword bit {} reads {} \
+             while it holds; 60FDh bits {} and {} show channel 1 and 2 (1 = closed).",
+            s.statusword_bit,
+            u8::from(s.statusword_while_active),
+            s.digital_input_bits[0],
+            s.digital_input_bits[1]
+        );
+    }
     if let Some(v) = r.max_interpolation_speed {
         let _ = writeln!(
             out,

@@ -880,6 +880,7 @@ impl Default for Cia402File {
             touch_probe_inputs: None,
             max_interpolation_speed: None,
             homing_error_alarm: None,
+            safe_torque_off: None,
         }
     }
 }
@@ -1151,6 +1152,22 @@ pub struct Cia402File {
     /// A failed homing run also raises this alarm (display) or 603Fh code.
     #[serde(default)]
     pub homing_error_alarm: Option<MotorFaultFile>,
+    /// How the safe-torque-off input shows.
+    #[serde(default)]
+    pub safe_torque_off: Option<SafeTorqueOffFile>,
+}
+
+/// `[cia402.safe_torque_off]`: the statusword bit that shows safe torque off and its value while
+/// it holds, and the 60FDh bits of its two channels (1 = closed).
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SafeTorqueOffFile {
+    /// Statusword bit (8, 14 or 15).
+    pub statusword_bit: u8,
+    /// Its value while safe torque off holds.
+    pub statusword_while_active: bool,
+    /// 60FDh bits of channel 1 and 2 (16-31).
+    pub digital_input_bits: [u8; 2],
 }
 
 /// `[cia402.touch_probe_inputs]`: the parameters that assign input functions, the function of

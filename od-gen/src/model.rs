@@ -2114,6 +2114,19 @@ pub struct Cia402Rules {
     pub max_interpolation_speed: Option<u32>,
     /// A failed homing run also raises this fault.
     pub homing_error_alarm: Option<MotorFaultCode>,
+    /// How the safe-torque-off input shows (`[cia402.safe_torque_off]`).
+    pub safe_torque_off: Option<SafeTorqueOff>,
+}
+
+/// `[cia402.safe_torque_off]` (`firmware: profile::SafeTorqueOffDisplay`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SafeTorqueOff {
+    /// Statusword bit (8, 14 or 15).
+    pub statusword_bit: u8,
+    /// Its value while safe torque off holds.
+    pub statusword_while_active: bool,
+    /// 60FDh bits of channel 1 and 2 (16-31, distinct).
+    pub digital_input_bits: [u8; 2],
 }
 
 /// `[[split_value]]` (`firmware: profile::SplitValue`): `whole` = `high` × `radix` + `low`.
@@ -2208,6 +2221,7 @@ impl Default for Cia402Rules {
             touch_probe_inputs: None,
             max_interpolation_speed: None,
             homing_error_alarm: None,
+            safe_torque_off: None,
         }
     }
 }

@@ -573,6 +573,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             }
             v => v,
         },
+        safe_torque_off: f.cia402.safe_torque_off.map(safe_torque_off).transpose()?,
         homing_error_alarm: f
             .cia402
             .homing_error_alarm
@@ -2169,6 +2170,36 @@ fn touch_probe_inputs(
             alarms,
             "cia402.touch_probe_inputs.unassigned_error",
         )?,
+    })
+}
+
+/// `[cia402.safe_torque_off]`: a manufacturer-specific statusword bit (CiA402: 8, 14, 15) and
+/// two distinct manufacturer-specific 60FDh bits (16-31).
+fn safe_torque_off(
+    s: crate::file::SafeTorqueOffFile,
+) -> Result<crate::model::SafeTorqueOff, Fault> {
+    if ![8, 14, 15].contains(&s.statusword_bit) {
+        return Err(fault(
+            "cia402.safe_torque_off.statusword_bit",
+            Invalid::Value(format!(
+                "{} is not a manufacturer-specific statusword bit (8, 14, 15)",
+                s.statusword_bit
+            )),
+        ));
+    }
+    let [a, b] = s.digital_input_bits;
+    if !(16..=31).contains(&a) || !(16..=31).contains(&b) || a == b {
+        return Err(fault(
+            "cia402.safe_torque_off.digital_input_bits",
+            Invalid::Value(format!(
+                "[{a}, {b}]: two distinct manufacturer-specific 60FDh bits (16-31)"
+            )),
+        ));
+    }
+    Ok(crate::model::SafeTorqueOff {
+        statusword_bit: s.statusword_bit,
+        statusword_while_active: s.statusword_while_active,
+        digital_input_bits: s.digital_input_bits,
     })
 }
 

@@ -1399,8 +1399,49 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None }"
     ));
+    // The Σ-V-SD's HWBB display: statusword bit 15 (0 while active), 60FDh bits 24/25.
+    let sigma = od_gen::builtin("sigma-v-sd").unwrap();
+    assert!(od_gen::rust::generate(&[sigma]).contains(
+        "safe_torque_off: Some(crate::profile::SafeTorqueOffDisplay { statusword_bit: 15, statusword_while_active: false, digital_input_bits: [24, 25] })"
+    ));
+    for (bad, key) in [
+        (
+            "statusword_bit = 12",
+            "cia402.safe_torque_off.statusword_bit",
+        ),
+        (
+            "statusword_bit = 16",
+            "cia402.safe_torque_off.statusword_bit",
+        ),
+        (
+            "digital_input_bits = [3, 25]",
+            "cia402.safe_torque_off.digital_input_bits",
+        ),
+        (
+            "digital_input_bits = [24, 24]",
+            "cia402.safe_torque_off.digital_input_bits",
+        ),
+        (
+            "digital_input_bits = [24, 32]",
+            "cia402.safe_torque_off.digital_input_bits",
+        ),
+    ] {
+        let mut table = vec![
+            "statusword_bit = 15",
+            "statusword_while_active = false",
+            "digital_input_bits = [24, 25]",
+        ];
+        let field = bad.split(' ').next().unwrap();
+        table.retain(|line| !line.starts_with(field));
+        table.push(bad);
+        let (got, _) = invalid(&appended(&format!(
+            "[cia402.safe_torque_off]\n{}",
+            table.join("\n")
+        )));
+        assert_eq!(got, key, "{bad}");
+    }
     // 1010h subindexes whose store needs a power cycle before Operation Enabled (Σ-V-SD 1, 4).
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();
     assert_eq!(sigma.cia402.store_requires_power_cycle, [1, 4]);

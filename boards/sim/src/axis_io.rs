@@ -353,6 +353,8 @@ pub struct SimInputs {
     home: bool,
     motor_over_temperature: bool,
     probes: [ProbeCapture; 2],
+    /// The safe-torque-off channels that are open (`false`, the default: closed).
+    safe_torque_off_open: [bool; 2],
 }
 
 impl SimInputs {
@@ -363,6 +365,7 @@ impl SimInputs {
         self.negative_limit = sample.limit_neg;
         self.home = sample.home;
         self.motor_over_temperature = sample.motor_overtemp_input;
+        self.safe_torque_off_open = sample.safe_torque_off_channels.map(|closed| !closed);
         self.probes = sample.probes.map(|p| ProbeCapture {
             active: p.active,
             edge_ns_before_position: p.last_edge_s.map(|t| {
@@ -404,6 +407,10 @@ impl DigitalInputs for SimInputs {
             TouchProbe::One => one,
             TouchProbe::Two => two,
         }
+    }
+
+    fn safe_torque_off_channels(&mut self) -> [bool; 2] {
+        self.safe_torque_off_open.map(|open| !open)
     }
 }
 

@@ -51,6 +51,8 @@ pub struct Device {
     main_power: bool,
     /// Operation Enabled is refused until the next power-on ([`Self::require_power_cycle`]).
     power_cycle_required: bool,
+    /// Safe torque off holds ([`Self::set_safe_torque_off`]).
+    safe_torque_off: bool,
 }
 
 /// CiA402 behaviour a profile adds to the standard.
@@ -110,7 +112,18 @@ impl Device {
             rules,
             main_power: false,
             power_cycle_required: false,
+            safe_torque_off: false,
         }
+    }
+
+    /// Whether safe torque off holds (a channel of the STO input is open: the power stage
+    /// cannot drive the motor). While it does, Switched On, Operation Enabled and Quick Stop
+    /// Active leave to Switch On Disabled at once, the motor coasting (the Σ-V-SD §3.1 *1, *2,
+    /// *4 "HWBB signal was inputted"; for the other profiles the same: a drive whose power
+    /// stage is cut is not enabled). Ready to Switch On → Switched On is not refused (*3 does
+    /// not name HWBB), but Switched On then falls back in the next cycle.
+    pub fn set_safe_torque_off(&mut self, active: bool) {
+        self.safe_torque_off = active;
     }
 
     /// From now until the next power-on (a new `Device`), Operation Enabled is not entered:
@@ -185,6 +198,14 @@ impl Device {
                 ) => PdsState::SwitchOnDisabled,
                 (_, to) => to,
             };
+        }
+        if self.safe_torque_off
+            && matches!(
+                self.state,
+                PdsState::SwitchedOn | PdsState::OperationEnabled | PdsState::QuickStopActive
+            )
+        {
+            requested = PdsState::SwitchOnDisabled;
         }
         if self.power_cycle_required
             && requested == PdsState::OperationEnabled
@@ -675,6 +696,43 @@ mod tests {
         let mut d = enabled(RAMPS);
         assert!(d.operation_enabled());
         d.step(ENABLE, RAMPS, true);
+        assert!(d.operation_enabled());
+    }
+
+    #[test]
+    fn safe_torque_off_leaves_every_enabled_state_to_switch_on_disabled() {
+        // Operation Enabled: at once, the motor coasting (the power stage is cut).
+        let mut d = enabled(RAMPS);
+        d.set_safe_torque_off(true);
+        let step = d.step(ENABLE, RAMPS, false);
+        assert_eq!(
+            (d.state(), step.motion),
+            (PdsState::SwitchOnDisabled, Motion::Off)
+        );
+        // While it holds, a new enable sequence passes Switched On only for one cycle.
+        for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP] {
+            d.step(c, RAMPS, true);
+        }
+        assert_eq!(d.state(), PdsState::ReadyToSwitchOn);
+        d.step(ENABLE, RAMPS, true);
+        assert_eq!(d.state(), PdsState::SwitchedOn);
+        assert_eq!(d.step(ENABLE, RAMPS, true).motion, Motion::Off);
+        assert_eq!(d.state(), PdsState::SwitchOnDisabled);
+        // Quick Stop Active too, without finishing its ramp.
+        let mut d = enabled(RAMPS);
+        d.step(QUICK_STOP, RAMPS, false);
+        assert_eq!(d.state(), PdsState::QuickStopActive);
+        d.set_safe_torque_off(true);
+        let step = d.step(QUICK_STOP, RAMPS, false);
+        assert_eq!(
+            (d.state(), step.motion),
+            (PdsState::SwitchOnDisabled, Motion::Off)
+        );
+        // Released: the usual sequence enables again.
+        d.set_safe_torque_off(false);
+        for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
+            d.step(c, RAMPS, true);
+        }
         assert!(d.operation_enabled());
     }
 

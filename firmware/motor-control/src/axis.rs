@@ -237,6 +237,11 @@ pub struct AxisFeedback {
     pub stopping: bool,
     /// The limit and home switches at the last sample.
     pub switches: Switches,
+    /// The safe-torque-off channels at the last sample, `true` = closed.
+    pub safe_torque_off_channels: [bool; 2],
+    /// Safe torque off holds: a channel is open, or was since the enable was last taken back
+    /// (the axis drives nothing, as if disabled, until then).
+    pub safe_torque_off: bool,
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
@@ -291,6 +296,8 @@ pub struct Sample {
     pub index: Option<i64>,
     /// Touch-probe inputs 1 and 2 with their edge times.
     pub probes: [ProbeCapture; 2],
+    /// The safe-torque-off channels, `true` = closed (torque allowed; both must be).
+    pub safe_torque_off_channels: [bool; 2],
 }
 
 /// What the board applies during the next PWM period.
@@ -328,6 +335,7 @@ impl Sample {
                 inputs.touch_probe(TouchProbe::One),
                 inputs.touch_probe(TouchProbe::Two),
             ],
+            safe_torque_off_channels: inputs.safe_torque_off_channels(),
         }
     }
 }
@@ -414,6 +422,8 @@ impl AxisLink {
                         negative_limit: false,
                         home: false,
                     },
+                    safe_torque_off_channels: [true; 2],
+                    safe_torque_off: false,
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -500,6 +510,10 @@ pub struct Axis {
     captures_changed: bool,
     /// `identified` changed since it was last published.
     identification_changed: bool,
+    /// The safe-torque-off channels at the last sample (`true` = closed).
+    safe_torque_off_channels: [bool; 2],
+    /// Safe torque off holds: a channel is open, or was since the enable was last taken back.
+    safe_torque_off: bool,
     /// A sample has set the switch levels.
     captures_started: bool,
     /// 1 / the PWM period in ns (touch-probe edge interpolation).
@@ -621,6 +635,8 @@ impl Axis {
             }),
             captures_changed: false,
             identification_changed: false,
+            safe_torque_off_channels: [true; 2],
+            safe_torque_off: false,
             captures_started: false,
             inv_period_ns: cfg.pwm_hz * 1e-9,
             omega_e: 0.0,
@@ -772,6 +788,19 @@ impl Axis {
             }
         }
         self.read_encoder(sample);
+        // Safe torque off: with a channel open the hardware has cut the gate drive; the axis
+        // runs nothing either (below, as without enable). It stays off until both channels are
+        // closed and the drive has taken its enable back: closing the channels never restarts
+        // the motor by itself (IEC 61800-5-2: no unexpected start-up), however short the
+        // opening was.
+        self.safe_torque_off_channels = sample.safe_torque_off_channels;
+        let [sto1, sto2] = sample.safe_torque_off_channels;
+        if !(sto1 && sto2) {
+            self.safe_torque_off = true;
+        } else if !self.command.enable {
+            self.safe_torque_off = false;
+        }
+        let torque_allowed = !self.safe_torque_off;
         let loop_tick = self.tick == 0;
         self.tick += 1;
         if self.tick >= self.cfg.loop_divider {
@@ -794,7 +823,8 @@ impl Axis {
         let output = match self.state {
             AxisState::Disabled => {
                 let calibrate = self.command.calibrate_offsets && !self.previous_calibrate;
-                if (self.command.enable || calibrate) && self.fault.is_none() {
+                let enabled = self.command.enable && torque_allowed;
+                if (enabled || calibrate) && self.fault.is_none() {
                     self.offset_calibration.restart();
                     self.state = AxisState::CalibratingOffsets;
                 }
@@ -821,7 +851,8 @@ impl Axis {
         // Measuring the offsets on request needs no enable.
         let calibrating_on_request =
             self.state == AxisState::CalibratingOffsets && self.command.calibrate_offsets;
-        if !self.command.enable
+        let enabled = self.command.enable && torque_allowed;
+        if !enabled
             && !calibrating_on_request
             && !matches!(self.state, AxisState::Faulted | AxisState::Disabled)
         {
@@ -931,6 +962,8 @@ impl Axis {
                 negative_limit: self.captures.negative_limit.level,
                 home: self.captures.home.level,
             },
+            safe_torque_off_channels: self.safe_torque_off_channels,
+            safe_torque_off: self.safe_torque_off,
         });
         if self.identification_changed {
             link.identification.write(self.identified);
@@ -1470,6 +1503,7 @@ mod tests {
             switches: Switches::default(),
             index: None,
             probes: [ProbeCapture::default(); 2],
+            safe_torque_off_channels: [true; 2],
         };
         for _ in 0..ticks {
             link.publish(command);
@@ -1503,6 +1537,71 @@ mod tests {
     }
 
     #[test]
+    fn safe_torque_off_cuts_the_output_at_once_and_never_restarts_by_itself() {
+        use crate::servo::{axis_config, Tuning, SERVO_400W};
+        let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
+        let mut axis = Axis::new(cfg).unwrap();
+        // SAFETY: one thread calls both sides, one after the other.
+        let link = unsafe { AxisLink::new() };
+        let closed = Sample {
+            currents: PhaseCurrents::default(),
+            bus_voltage: 48.0,
+            temperature: 25.0,
+            motor_overtemp: false,
+            position: Ok(1_000),
+            switches: Switches::default(),
+            index: None,
+            probes: [ProbeCapture::default(); 2],
+            safe_torque_off_channels: [true; 2],
+        };
+        let open = Sample {
+            safe_torque_off_channels: [true, false],
+            ..closed
+        };
+        let enable = AxisCommand {
+            enable: true,
+            mode: ControlMode::Position,
+            position: 1_000,
+            ..AxisCommand::default()
+        };
+        link.publish(enable);
+        for _ in 0..2_000 * cfg.loop_divider {
+            axis.control_step(&closed, &link);
+        }
+        assert_eq!(axis.state(), AxisState::Running);
+        // Channel 2 opens: no gates from this very period on, not a fault.
+        let out = axis.control_step(&open, &link);
+        assert!(!out.gates);
+        assert_eq!(axis.state(), AxisState::Disabled);
+        for _ in 0..100 {
+            assert!(!axis.control_step(&open, &link).gates);
+        }
+        let fb = link.feedback();
+        assert!(fb.safe_torque_off && fb.fault.is_none());
+        assert_eq!(fb.safe_torque_off_channels, [true, false]);
+        // Closed again with the enable still given: the motor stays off.
+        for _ in 0..2_000 * cfg.loop_divider {
+            assert!(!axis.control_step(&closed, &link).gates);
+        }
+        assert_eq!(axis.state(), AxisState::Disabled);
+        assert!(
+            link.feedback().safe_torque_off,
+            "held until the enable is taken back"
+        );
+        // The enable taken back, then given again: it runs.
+        link.publish(AxisCommand::default());
+        for _ in 0..10 * cfg.loop_divider {
+            axis.control_step(&closed, &link);
+        }
+        assert!(!link.feedback().safe_torque_off);
+        link.publish(enable);
+        for _ in 0..2_000 * cfg.loop_divider {
+            axis.control_step(&closed, &link);
+        }
+        assert_eq!(axis.state(), AxisState::Running);
+    }
+
+    #[test]
     fn a_sample_is_read_through_the_board_drivers() {
         let (mut c, mut b, mut e, mut i) = (
             Board::default(),
@@ -1526,6 +1625,7 @@ mod tests {
                 switches: Switches::default(),
                 index: None,
                 probes: [ProbeCapture::default(); 2],
+                safe_torque_off_channels: [true; 2],
             }
         );
     }

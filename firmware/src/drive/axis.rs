@@ -150,6 +150,8 @@ pub struct DriveAxis {
     settings_due: Groups,
     /// The setting groups the RxPDO mapping writes: read in every cycle.
     settings_live: Groups,
+    /// Safe torque off holds (the axis' last feedback).
+    safe_torque_off: bool,
     /// The profile's warnings.
     warnings: &'static [Warning],
     /// The warning that holds (its place in `warnings`).
@@ -220,6 +222,7 @@ impl DriveAxis {
             polarity: Polarity::NONE,
             output_levels: outputs::BRAKE,
             alarm_table: &profile.alarms,
+            safe_torque_off: false,
             warnings: profile.warnings,
             warning: None,
             latched_units: None,
@@ -425,7 +428,7 @@ impl DriveAxis {
         self.settings_due = Groups::ALL;
         self.refresh_settings(ram);
         let statusword = self.device.initialised();
-        write_u16(ram, self.vars.statusword, statusword);
+        self.write_statusword(ram, statusword);
     }
 
     /// The PDS state.
@@ -458,7 +461,16 @@ impl DriveAxis {
         write_u16(ram, self.vars.controlword, 0);
         let statusword = self.device.fault_with(code, resettable);
         write_u16(ram, self.vars.error_code, code);
-        write_u16(ram, self.vars.statusword, statusword);
+        self.write_statusword(ram, statusword);
+    }
+
+    /// Writes the device's `statusword` with the profile's display of safe torque off.
+    fn write_statusword(&self, ram: &mut [u8], statusword: u16) {
+        let sto = self
+            .rules
+            .safe_torque_off
+            .map_or(0, |s| s.statusword(self.safe_torque_off));
+        write_u16(ram, self.vars.statusword, statusword | sto);
     }
 
     /// One cycle: the CiA402 device on the controlword and the option codes, the mode
@@ -514,13 +526,15 @@ impl DriveAxis {
         }
         if let Some(f) = &feedback {
             self.device.set_main_power(f.main_power);
+            self.device.set_safe_torque_off(f.safe_torque_off);
+            self.safe_torque_off = f.safe_torque_off;
         }
         let at_rest = feedback.as_ref().is_none_or(|f| self.at_rest(f));
         let step = self.device.step(cw, options, at_rest);
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);
         }
-        write_u16(ram, vars.statusword, step.statusword);
+        self.write_statusword(ram, step.statusword);
         if let Some(mode) = mode {
             write_bytes(ram, vars.modes_of_operation_display, mode);
         }
@@ -997,12 +1011,15 @@ impl DriveAxis {
         write_bytes(
             ram,
             vars.digital_inputs,
-            limits::digital_inputs(
+            (limits::digital_inputs(
                 switches.negative_limit,
                 switches.positive_limit,
                 switches.home,
                 self.rules.digital_inputs_limits_swapped,
-            )
+            ) | self
+                .rules
+                .safe_torque_off
+                .map_or(0, |s| s.digital_inputs(feedback.safe_torque_off_channels)))
             .to_le_bytes(),
         );
         // Demand values: what the axis is asked for this cycle.
@@ -1226,7 +1243,7 @@ impl DriveAxis {
         write_bytes(ram, self.vars.digital_outputs, outputs::BRAKE.to_le_bytes());
         self.output_levels = outputs::BRAKE;
         let statusword = self.device.outputs_lost();
-        write_u16(ram, self.vars.statusword, statusword);
+        self.write_statusword(ram, statusword);
         if let Some(port) = &self.port {
             port.link.publish(AxisCommand {
                 enable: false,

@@ -324,6 +324,8 @@ pub struct Sample {
     pub drive_temperature_c: f32,
     /// Motor over-temperature input (thermal switch) active.
     pub motor_overtemp_input: bool,
+    /// The safe-torque-off channels (`true` = closed).
+    pub safe_torque_off_channels: [bool; 2],
     /// Encoder reading.
     pub encoder: EncoderSample,
     /// Negative limit switch actuated.
@@ -390,6 +392,7 @@ pub struct Plant {
     bus_v: f64,
     drive_temperature_c: f64,
     motor_overtemp: bool,
+    safe_torque_off_channels: [bool; 2],
     resistance_scale: f64,
     /// Touch-probe inputs as of the last substep, with their edges since the last sample.
     probes: [ProbeReading; 2],
@@ -418,6 +421,7 @@ impl Plant {
             bus_v: cfg.inverter.bus_voltage_v,
             drive_temperature_c: DEFAULT_DRIVE_TEMPERATURE_C,
             motor_overtemp: false,
+            safe_torque_off_channels: [true; 2],
             resistance_scale: 1.0,
             probes: [ProbeReading::default(); 2],
             cfg,
@@ -425,9 +429,11 @@ impl Plant {
     }
 
     /// Integrates one PWM period with the given duties (fraction of the period the high side is
-    /// commanded on; clamped to [0, 1], NaN = 0) or, with `gates_enabled == false`, with all
-    /// switches off.
+    /// commanded on; clamped to [0, 1], NaN = 0) or, with `gates_enabled == false` or safe
+    /// torque off holding ([`Self::set_safe_torque_off_channels`]), with all switches off.
     pub fn run_period(&mut self, duties: [f32; 3], gates_enabled: bool) {
+        // Safe torque off removes the gate drive in hardware, whatever the firmware commands.
+        let gates_enabled = gates_enabled && !self.safe_torque_off();
         let duties = duties.map(|d| inverter::clamp_duty(f64::from(d)));
         if gates_enabled {
             self.conduction = Conduction::Switching;
@@ -702,6 +708,7 @@ impl Plant {
             bus_voltage_counts: self.cfg.sensing.bus_counts(self.bus_v),
             drive_temperature_c: self.drive_temperature_c as f32,
             motor_overtemp_input: self.motor_overtemp,
+            safe_torque_off_channels: self.safe_torque_off_channels,
             encoder: self
                 .encoder
                 .sample(self.time_s(), self.mech.theta_rad, self.mech.omega_rad_s),
@@ -745,6 +752,18 @@ impl Plant {
     /// State of the motor's over-temperature input.
     pub fn set_motor_overtemp_input(&mut self, active: bool) {
         self.motor_overtemp = active;
+    }
+
+    /// The safe-torque-off channels 1 and 2 (`true` = closed, torque allowed). An open channel
+    /// cuts the gate drive at once, in hardware: the inverter applies no voltage whatever the
+    /// firmware commands (the bridge is off, the motor coasts).
+    pub fn set_safe_torque_off_channels(&mut self, closed: [bool; 2]) {
+        self.safe_torque_off_channels = closed;
+    }
+
+    /// Whether safe torque off cuts the gate drive (a channel is open).
+    pub fn safe_torque_off(&self) -> bool {
+        !(self.safe_torque_off_channels[0] && self.safe_torque_off_channels[1])
     }
 
     /// Injects (`Some`) or clears (`None`) an encoder fault; see [`EncoderFaultInjection`]

@@ -1,0 +1,176 @@
+//! Safe torque off (the Σ-V-SD's HWBB, manual §3.11): a channel of the STO input opens on the
+//! simulated board while the motor turns in profile velocity, commanded by ethercrab over PDOs
+//! with DC SYNC0 at 1 ms (1600h: 6040h, 6060h, 60FFh; 1A00h: 6041h, 60FDh, 606Ch).
+//!
+//! - the power stage is cut in hardware and the drive follows: Operation Enabled → Switch On
+//!   Disabled at once (§3.1 *4), no fault, the motor coasts (no braking ramp);
+//! - the Σ-V-SD shows it: statusword bit 15 "HWBB active: 0: HWBB activated, 1: HWBB not
+//!   activated" (§4.7, as written), 60FDh bits 24/25 HWBB1/HWBB2 "(0: Open, 1: Close)" (§6.11);
+//! - closing the channel does not restart the motor: the drive stays in Switch On Disabled
+//!   until the master enables it again, which then works as usual.
+//!
+//! The standard profile reacts alike (a drive whose power stage is cut is not enabled) and has
+//! no display of its own for it.
+
+use board_sim::Segment;
+use ethercrab::MainDevice;
+use tests_host::vendor::{self, enable_sequence, i32_at, motor, u16_at, ENABLE_OPERATION};
+use tests_host::{block_on, master_for};
+
+const CYCLE_NS: u64 = 1_000_000;
+const CPR: f64 = (1u32 << 20) as f64;
+const STATE_MASK: u16 = 0x6F;
+const OPERATION_ENABLED: u16 = 0x27;
+const SWITCH_ON_DISABLED: u16 = 0x40;
+const FAULT: u16 = 1 << 3;
+/// The Σ-V-SD's statusword bit 15 and 60FDh bits 24/25 (HWBB1, HWBB2).
+const HWBB_NOT_ACTIVE: u16 = 1 << 15;
+const HWBB1_CLOSED: u32 = 1 << 24;
+const HWBB2_CLOSED: u32 = 1 << 25;
+/// 6060h: profile velocity.
+const PV: i8 = 3;
+/// Image layouts (byte offsets).
+const RX_CW: usize = 0;
+const RX_MODE: usize = 2;
+const RX_VELOCITY: usize = 3;
+const TX_SW: usize = 0;
+const TX_INPUTS: usize = 2;
+/// 300 rpm in increments/s (the velocity unit of both profiles by default).
+const VELOCITY: i32 = (300.0 / 60.0 * CPR) as i32;
+
+/// What a cycle brought back: statusword, 60FDh.
+struct Inputs {
+    sw: u16,
+    digital_inputs: u32,
+}
+
+fn set_channels(m: &board_sim::inproc::InProcess, closed: [bool; 2]) {
+    m.shared.segment().drives_mut()[0].servos[0]
+        .plant
+        .set_safe_torque_off_channels(closed);
+}
+
+fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
+    block_on(async {
+        let (m, transport) = master_for(Segment::new(profile, 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let mut setup = vendor::remap(
+            0x1600,
+            0x1C12,
+            &[(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)],
+        );
+        setup.extend(vendor::remap(
+            0x1A00,
+            0x1C13,
+            &[(0x6041, 0, 16), (0x60FD, 0, 32), (0x606C, 0, 32)],
+        ));
+        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
+        let cycle = |cw: u16, velocity: i32| {
+            let (m, group) = (&m, &group);
+            async move {
+                let cw = cw.to_le_bytes();
+                let velocity = velocity.to_le_bytes();
+                let inputs = vendor::exchange_dc(
+                    m,
+                    md,
+                    group,
+                    &[
+                        (RX_CW, &cw),
+                        (RX_MODE, &[PV as u8]),
+                        (RX_VELOCITY, &velocity),
+                    ],
+                    CYCLE_NS,
+                )
+                .await;
+                Inputs {
+                    sw: u16_at(&inputs, TX_SW),
+                    digital_inputs: i32_at(&inputs, TX_INPUTS) as u32,
+                }
+            }
+        };
+        let rpm = || motor(&m).0;
+        let mut s = cycle(0, 0).await;
+        for cw in std::iter::repeat_n(0u16, 40).chain(enable_sequence(30)) {
+            s = cycle(cw, 0).await;
+        }
+        assert_eq!(s.sw & STATE_MASK, OPERATION_ENABLED, "{:#06x}", s.sw);
+        if hwbb_display {
+            assert_ne!(s.sw & HWBB_NOT_ACTIVE, 0, "bit 15: HWBB not activated");
+            assert_eq!(
+                s.digital_inputs & (HWBB1_CLOSED | HWBB2_CLOSED),
+                HWBB1_CLOSED | HWBB2_CLOSED,
+                "60FDh: both channels closed"
+            );
+        }
+        for _ in 0..600 {
+            s = cycle(ENABLE_OPERATION, VELOCITY).await;
+        }
+        let turning = rpm();
+        assert!((turning - 300.0).abs() < 10.0, "at speed: {turning:.1} rpm");
+
+        // HWBB1 opens: Switch On Disabled at once, no fault, the motor coasts.
+        set_channels(&m, [false, true]);
+        for _ in 0..3 {
+            s = cycle(ENABLE_OPERATION, VELOCITY).await;
+        }
+        assert_eq!(s.sw & STATE_MASK, SWITCH_ON_DISABLED, "{:#06x}", s.sw);
+        assert_eq!(s.sw & FAULT, 0, "not a fault");
+        if hwbb_display {
+            assert_eq!(s.sw & HWBB_NOT_ACTIVE, 0, "bit 15: HWBB activated");
+            assert_eq!(
+                s.digital_inputs & (HWBB1_CLOSED | HWBB2_CLOSED),
+                HWBB2_CLOSED,
+                "60FDh: HWBB1 open, HWBB2 closed"
+            );
+        }
+        for _ in 0..20 {
+            s = cycle(ENABLE_OPERATION, VELOCITY).await;
+        }
+        // No current flows: the bridge is off (the motor slows down by its friction alone).
+        let currents = m.shared.segment().drives()[0].servos[0]
+            .plant
+            .phase_currents();
+        assert!(
+            currents.iter().all(|i| i.abs() < 1e-3),
+            "no phase current: {currents:?} A"
+        );
+        let coasting = rpm();
+        assert!(coasting < turning, "{turning:.1} -> {coasting:.1} rpm");
+
+        // Closed again, the master still asking for enable operation: nothing restarts.
+        set_channels(&m, [true, true]);
+        for _ in 0..200 {
+            s = cycle(ENABLE_OPERATION, VELOCITY).await;
+            assert_eq!(s.sw & STATE_MASK, SWITCH_ON_DISABLED, "{:#06x}", s.sw);
+        }
+        assert!(rpm() <= coasting + 1.0, "not driven: {:.1} rpm", rpm());
+        if hwbb_display {
+            assert_ne!(s.sw & HWBB_NOT_ACTIVE, 0, "bit 15 back to 1");
+            assert_eq!(
+                s.digital_inputs & (HWBB1_CLOSED | HWBB2_CLOSED),
+                HWBB1_CLOSED | HWBB2_CLOSED
+            );
+        }
+        // A new enable sequence: back to speed.
+        for cw in enable_sequence(600) {
+            s = cycle(cw, VELOCITY).await;
+        }
+        assert_eq!(s.sw & STATE_MASK, OPERATION_ENABLED, "{:#06x}", s.sw);
+        assert!(
+            (rpm() - 300.0).abs() < 10.0,
+            "at speed again: {:.1} rpm",
+            rpm()
+        );
+    });
+}
+
+#[test]
+fn sigma_v_sd_hwbb_switches_off_and_shows_in_statusword_bit_15_and_60fdh() {
+    safe_torque_off_in_profile_velocity("sigma-v-sd", true);
+}
+
+#[test]
+fn standard_safe_torque_off_switches_off_without_restart() {
+    safe_torque_off_in_profile_velocity("standard", false);
+}
