@@ -547,6 +547,10 @@ pub struct Cia402Rules {
     pub homing_error_alarm: Option<FaultReport>,
     /// Where the profile shows the safe-torque-off input (the Σ-V-SD's HWBB).
     pub safe_torque_off: Option<SafeTorqueOffDisplay>,
+    /// The parameter that, set to 1, makes CSP go on over a cycle without new outputs with the
+    /// last target increment instead of holding the last target (the SDV3-E's P4.04 "data
+    /// loss processing"); read at power-on.
+    pub csp_extrapolation: Option<Operand>,
 }
 
 /// How a profile shows its safe-torque-off input (the Σ-V-SD's HWBB, §4.7 statusword bit 15,

@@ -1197,6 +1197,15 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             c.error_code
         );
     }
+    if let Some((index, sub)) = r.csp_extrapolation {
+        let _ = writeln!(
+            out,
+            "- Cyclic synchronous position over a cycle without new outputs (the SYNC0 came, \
+             the master's frame did not): with {index:04X}h:{sub:02X}h = 1 at power-on the \
+             position command goes on with the last target increment, else it holds the last \
+             target."
+        );
+    }
     if let Some(s) = r.safe_torque_off {
         let _ = writeln!(
             out,

@@ -881,6 +881,7 @@ impl Default for Cia402File {
             max_interpolation_speed: None,
             homing_error_alarm: None,
             safe_torque_off: None,
+            csp_extrapolation: None,
         }
     }
 }
@@ -1155,6 +1156,10 @@ pub struct Cia402File {
     /// How the safe-torque-off input shows.
     #[serde(default)]
     pub safe_torque_off: Option<SafeTorqueOffFile>,
+    /// The parameter (`"0xIIII:S"`) whose value 1, at power-on, makes CSP extrapolate over a
+    /// cycle without new outputs.
+    #[serde(default)]
+    pub csp_extrapolation: Option<String>,
 }
 
 /// `[cia402.safe_torque_off]`: the statusword bit that shows safe torque off and its value while

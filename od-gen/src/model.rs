@@ -2116,6 +2116,9 @@ pub struct Cia402Rules {
     pub homing_error_alarm: Option<MotorFaultCode>,
     /// How the safe-torque-off input shows (`[cia402.safe_torque_off]`).
     pub safe_torque_off: Option<SafeTorqueOff>,
+    /// The parameter whose value 1 (at power-on) makes CSP extrapolate over a cycle without
+    /// new outputs.
+    pub csp_extrapolation: Option<(u16, u8)>,
 }
 
 /// `[cia402.safe_torque_off]` (`firmware: profile::SafeTorqueOffDisplay`).
@@ -2222,6 +2225,7 @@ impl Default for Cia402Rules {
             max_interpolation_speed: None,
             homing_error_alarm: None,
             safe_torque_off: None,
+            csp_extrapolation: None,
         }
     }
 }

@@ -574,6 +574,10 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             v => v,
         },
         safe_torque_off: f.cia402.safe_torque_off.map(safe_torque_off).transpose()?,
+        csp_extrapolation: entry_ref(
+            f.cia402.csp_extrapolation.as_deref(),
+            "cia402.csp_extrapolation",
+        )?,
         homing_error_alarm: f
             .cia402
             .homing_error_alarm

@@ -905,6 +905,9 @@ fn esm(p: &Profile) -> Result<(), Fault> {
             Invalid::Value("0 is \"no error\" (603Fh)".into()),
         ));
     }
+    if let Some(entry) = p.cia402.csp_extrapolation {
+        integer_parameter(p, entry, "cia402.csp_extrapolation")?;
+    }
     if let Some(t) = &p.cia402.touch_probe_inputs {
         for &entry in &t.entries {
             integer_parameter(p, entry, "cia402.touch_probe_inputs.entries")?;

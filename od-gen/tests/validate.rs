@@ -1399,8 +1399,17 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, csp_extrapolation: None }"
     ));
+    // The SDV3-E's P4.04 switches CSP extrapolation; it must be a writable integer parameter.
+    let sdv3 = od_gen::builtin("sdv3-e").unwrap();
+    assert_eq!(sdv3.cia402.csp_extrapolation, Some((0x3003, 4)));
+    assert!(od_gen::rust::generate(&[sdv3])
+        .contains("csp_extrapolation: Some(crate::profile::Operand::Ram {"));
+    for bad in ["\"0x6041:0\"", "\"0x7777:1\"", "\"P4.04\""] {
+        let (key, _) = invalid(&appended(&format!("[cia402]\ncsp_extrapolation = {bad}")));
+        assert_eq!(key, "cia402.csp_extrapolation", "{bad}");
+    }
     // The Σ-V-SD's HWBB display: statusword bit 15 (0 while active), 60FDh bits 24/25.
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();
     assert!(od_gen::rust::generate(&[sigma]).contains(

@@ -152,6 +152,14 @@ pub struct DriveAxis {
     settings_live: Groups,
     /// Safe torque off holds (the axis' last feedback).
     safe_torque_off: bool,
+    /// CSP extrapolates over a cycle without new outputs (`Cia402Rules::csp_extrapolation`,
+    /// as set at power-on).
+    csp_extrapolation: bool,
+    /// The SYNC0 of this cycle brought no new outputs (`Drive::outputs_missed`).
+    outputs_missed: bool,
+    /// CSP with extrapolation: the last target taken (increments) and its step from the one
+    /// before.
+    csp_last: Option<(i64, i64)>,
     /// The profile's warnings.
     warnings: &'static [Warning],
     /// The warning that holds (its place in `warnings`).
@@ -223,6 +231,9 @@ impl DriveAxis {
             output_levels: outputs::BRAKE,
             alarm_table: &profile.alarms,
             safe_torque_off: false,
+            csp_extrapolation: false,
+            outputs_missed: false,
+            csp_last: None,
             warnings: profile.warnings,
             warning: None,
             latched_units: None,
@@ -424,6 +435,11 @@ impl DriveAxis {
 
     /// CiA402 transition 1 at power-on: Switch On Disabled.
     pub(super) fn power_on(&mut self, ram: &mut [u8]) {
+        // The SDV3-E's P4.04 takes effect at power-on.
+        self.csp_extrapolation = self
+            .rules
+            .csp_extrapolation
+            .is_some_and(|parameter| parameter.value(ram, 0) == 1);
         // The parameters were loaded.
         self.settings_due = Groups::ALL;
         self.refresh_settings(ram);
@@ -462,6 +478,36 @@ impl DriveAxis {
         let statusword = self.device.fault_with(code, resettable);
         write_u16(ram, self.vars.error_code, code);
         self.write_statusword(ram, statusword);
+    }
+
+    /// Whether CSP extrapolates over cycles without new outputs (the drive then needs to know
+    /// which they are).
+    pub(super) fn extrapolates_lost_cycles(&self) -> bool {
+        self.csp_extrapolation
+    }
+
+    /// The SYNC0 of the next cycle brought no new outputs.
+    pub(super) fn outputs_missed(&mut self) {
+        self.outputs_missed = true;
+    }
+
+    /// The CSP target of this cycle with extrapolation (`active`: CSP runs and extrapolates):
+    /// after a cycle without new outputs the last target plus the last step (the SDV3-E's
+    /// P4.04 = 1, "update the position command with the last interpolation data increment"),
+    /// else `target`.
+    fn extrapolated(&mut self, target: Option<i64>, active: bool) -> Option<i64> {
+        let missed = core::mem::take(&mut self.outputs_missed);
+        let Some(target) = target.filter(|_| active) else {
+            self.csp_last = None;
+            return target;
+        };
+        let (next, step) = match self.csp_last {
+            Some((last, step)) if missed => (last.saturating_add(step), step),
+            Some((last, _)) => (target, target.saturating_sub(last)),
+            None => (target, 0),
+        };
+        self.csp_last = Some((next, step));
+        Some(next)
     }
 
     /// Writes the device's `statusword` with the profile's display of safe torque off.
@@ -740,7 +786,7 @@ impl DriveAxis {
         };
         // Only the targets the mode takes are read (each read and conversion costs).
         let used = mode.targets_used();
-        let targets = Targets {
+        let mut targets = Targets {
             position: used
                 .position
                 .then(|| position_in(vars.target_position))
@@ -778,6 +824,10 @@ impl DriveAxis {
                 .flatten()
                 .map(|t| units::target_position(t, feedback.position, position_ratio)),
         };
+        if self.csp_extrapolation {
+            let active = matches!(mode, Mode::CyclicPosition) && matches!(motion, Motion::Run);
+            targets.position = self.extrapolated(targets.position, active);
+        }
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;
         if let Some(limit) = self.rules.max_interpolation_speed {
@@ -1465,7 +1515,29 @@ fn standstill_counts_per_s(counts_per_rev: u32) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::interpolation_too_fast;
+    use super::{interpolation_too_fast, DriveAxis};
+    use crate::profiles::standard::PROFILE;
+
+    #[test]
+    fn csp_extrapolation_goes_on_with_the_last_step_over_missed_cycles() {
+        let mut axis = DriveAxis::new(&PROFILE, 0, &PROFILE.axes[0]);
+        assert_eq!(axis.extrapolated(Some(0), true), Some(0));
+        assert_eq!(axis.extrapolated(Some(10), true), Some(10));
+        // No new outputs: the image (and so the target) repeats 10; the command goes on.
+        axis.outputs_missed();
+        assert_eq!(axis.extrapolated(Some(10), true), Some(20));
+        axis.outputs_missed();
+        assert_eq!(axis.extrapolated(Some(10), true), Some(30));
+        // New outputs again: the master's target, the step from the last command.
+        assert_eq!(axis.extrapolated(Some(45), true), Some(45));
+        axis.outputs_missed();
+        assert_eq!(axis.extrapolated(Some(45), true), Some(60));
+        // Not running CSP: the target as it is, and no history to go on from afterwards.
+        assert_eq!(axis.extrapolated(Some(7), false), Some(7));
+        axis.outputs_missed();
+        assert_eq!(axis.extrapolated(Some(7), true), Some(7));
+        assert_eq!(axis.extrapolated(None, true), None);
+    }
 
     #[test]
     fn the_interpolation_speed_guard_is_at_or_above_the_limit() {

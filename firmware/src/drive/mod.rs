@@ -454,6 +454,19 @@ impl Application for Drive {
         }
     }
 
+    fn watches_missed_outputs(&self) -> bool {
+        self.axes
+            .iter()
+            .flatten()
+            .any(DriveAxis::extrapolates_lost_cycles)
+    }
+
+    fn outputs_missed(&mut self) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.outputs_missed();
+        }
+    }
+
     fn outputs_mapped(&mut self, outputs: &PdoPlan) {
         for axis in self.axes.iter_mut().flatten() {
             axis.outputs_mapped(outputs);

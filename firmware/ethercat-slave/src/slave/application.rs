@@ -72,6 +72,18 @@ pub trait Application {
         let _ = (ram, index, subindex, now_ns);
     }
 
+    /// Whether the application needs to know which SYNC0 cycles brought no new outputs (a
+    /// position mode that extrapolates over a lost cycle): the slave then reads the SM2 event
+    /// at every SYNC0 in OP (DC) and calls [`Self::outputs_missed`]. Default: no.
+    fn watches_missed_outputs(&self) -> bool {
+        false
+    }
+
+    /// The SYNC0 of the cycle that follows came without new outputs from the master (DC, OP;
+    /// only when [`Self::watches_missed_outputs`]): the image it unpacks is the previous one.
+    /// Called before that [`Self::cycle`]. Default: nothing.
+    fn outputs_missed(&mut self) {}
+
     /// The RxPDO mapping changed: `outputs` is the plan the cycles unpack from now on (built at
     /// PREOP → SAFEOP; the empty plan when the state falls below SAFEOP). An application that
     /// keeps settings read from the OD RAM learns here which of them the master's outputs may

@@ -61,12 +61,17 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             .esm
             .lost_outputs
             .filter(|rule| op && self.lost_outputs.enabled() && self.rule_holds(rule));
-        let fresh = if op && (device.sync.sync_error_on_missed_outputs || lost_rule.is_some()) {
-            let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
-            Some(events.any(AlEvent::sm(SM_OUTPUTS)))
-        } else {
-            None
-        };
+        let watched = op && self.app.watches_missed_outputs();
+        let fresh =
+            if op && (device.sync.sync_error_on_missed_outputs || lost_rule.is_some() || watched) {
+                let events = AlEvent(pdi.read_u32(regs::AL_EVENT_REQUEST.addr)?);
+                Some(events.any(AlEvent::sm(SM_OUTPUTS)))
+            } else {
+                None
+            };
+        if watched && fresh == Some(false) {
+            self.app.outputs_missed();
+        }
         let counted = fresh.filter(|_| device.sync.sync_error_on_missed_outputs);
         self.sync_supervisor
             .on_sync0(now_ns, self.sync.cycle_ns, counted);
