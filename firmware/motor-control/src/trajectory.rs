@@ -55,7 +55,8 @@ impl Default for SaneLimits {
 }
 
 impl Limits {
-    /// The limits with every rate at least [`MIN_RATE`] and a finite, non-negative speed.
+    /// The limits with every rate at least 1 increment/s² (`MIN_RATE`: a ramp of 0 would never
+    /// move or never stop) and a finite, non-negative speed.
     pub fn sane(self) -> SaneLimits {
         let rate = |r: f32| {
             if r.is_finite() {
