@@ -147,6 +147,19 @@ pub async fn into_op_dc(
         .expect("OP")
 }
 
+/// [`into_op_dc`] with the outputs 1600h mapping `outputs` and the inputs 1A00h mapping
+/// `inputs` (index, subindex, bits each, in image order), assigned alone by 1C12h/1C13h.
+pub async fn into_op_dc_mapped(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    (outputs, inputs): (&[(u16, u8, u8)], &[(u16, u8, u8)]),
+    cycle_ns: u64,
+) -> DcGroup {
+    let mut setup = remap(0x1600, 0x1C12, outputs);
+    setup.extend(remap(0x1A00, 0x1C13, inputs));
+    into_op_dc(m, md, &setup, cycle_ns).await
+}
+
 /// One DC cycle of `cycle_ns`: `outputs` (byte offset, little-endian bytes) written into the
 /// output image, the frame exchanged, the clock advanced; the input image the drive sent back
 /// (the values of the previous SYNC0).

@@ -33,17 +33,9 @@ fn demand_of_a_lost_cycle(profile: &str) -> (i32, i32) {
         let (m, transport) = master_for(Segment::new(profile, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut setup = vendor::remap(
-            0x1600,
-            0x1C12,
-            &[(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
-        );
-        setup.extend(vendor::remap(
-            0x1A00,
-            0x1C13,
-            &[(0x6041, 0, 16), (0x6062, 0, 32)],
-        ));
-        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
+        let outputs = [(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)];
+        let inputs = [(0x6041, 0, 16), (0x6062, 0, 32)];
+        let group = vendor::into_op_dc_mapped(&m, md, (&outputs, &inputs), CYCLE_NS).await;
         let sd = group.subdevice(md, 0).expect("drive");
         let start: i32 = sd.sdo_read(0x6064, 0).await.expect("6064h");
         let cycle = |cw: u16, target: i32| {

@@ -55,17 +55,9 @@ fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
         let (m, transport) = master_for(Segment::new(profile, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut setup = vendor::remap(
-            0x1600,
-            0x1C12,
-            &[(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)],
-        );
-        setup.extend(vendor::remap(
-            0x1A00,
-            0x1C13,
-            &[(0x6041, 0, 16), (0x60FD, 0, 32), (0x606C, 0, 32)],
-        ));
-        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
+        let outputs = [(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)];
+        let inputs = [(0x6041, 0, 16), (0x60FD, 0, 32), (0x606C, 0, 32)];
+        let group = vendor::into_op_dc_mapped(&m, md, (&outputs, &inputs), CYCLE_NS).await;
         let cycle = |cw: u16, velocity: i32| {
             let (m, group) = (&m, &group);
             async move {

@@ -77,22 +77,14 @@ fn standard_a_mapped_max_profile_velocity_limits_each_cycle() {
         let (m, transport) = master_for(Segment::new("standard", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut setup = vendor::remap(
-            0x1600,
-            0x1C12,
-            &[
-                (0x6040, 0, 16),
-                (0x6060, 0, 8),
-                (0x60FF, 0, 32),
-                (0x607F, 0, 32),
-            ],
-        );
-        setup.extend(vendor::remap(
-            0x1A00,
-            0x1C13,
-            &[(0x6041, 0, 16), (0x606C, 0, 32)],
-        ));
-        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
+        let outputs = [
+            (0x6040, 0, 16),
+            (0x6060, 0, 8),
+            (0x60FF, 0, 32),
+            (0x607F, 0, 32),
+        ];
+        let inputs = [(0x6041, 0, 16), (0x606C, 0, 32)];
+        let group = vendor::into_op_dc_mapped(&m, md, (&outputs, &inputs), CYCLE_NS).await;
         let mut sw = 0;
         for cw in std::iter::repeat_n(0u16, 40).chain(enable_sequence(30)) {
             (sw, _) = cycle(&m, md, &group, cw, (0.0, 500.0)).await;
@@ -126,17 +118,9 @@ fn standard_profile_velocity_by_sdo_in_op_is_the_speed_of_the_next_set_point() {
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
         // 1600h: 6040h, 6060h, 607Ah; 1A00h: 6041h, 606Ch.
-        let mut setup = vendor::remap(
-            0x1600,
-            0x1C12,
-            &[(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
-        );
-        setup.extend(vendor::remap(
-            0x1A00,
-            0x1C13,
-            &[(0x6041, 0, 16), (0x606C, 0, 32)],
-        ));
-        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
+        let outputs = [(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)];
+        let inputs = [(0x6041, 0, 16), (0x606C, 0, 32)];
+        let group = vendor::into_op_dc_mapped(&m, md, (&outputs, &inputs), CYCLE_NS).await;
         let sd = group.subdevice(md, 0).expect("drive");
         let pp_cycle = |cw: u16, target: i32| {
             let (m, group) = (&m, &group);

@@ -91,6 +91,15 @@ pub struct OptionCodes {
 }
 
 impl OptionCodes {
+    /// As a profile without the objects 605Ah–605Eh has them.
+    pub const NONE: Self = Self {
+        quick_stop: None,
+        shutdown: None,
+        disable_operation: None,
+        halt: None,
+        fault_reaction: None,
+    };
+
     /// The code that applies to `cause`, `None` without its object.
     pub const fn of(&self, cause: Cause) -> Option<i16> {
         match cause {

@@ -229,13 +229,7 @@ pub(super) struct Settings {
 impl Settings {
     /// Before the first refresh (every group is refreshed before the first cycle uses it).
     pub const UNREAD: Self = Self {
-        options: OptionCodes {
-            quick_stop: None,
-            shutdown: None,
-            disable_operation: None,
-            halt: None,
-            fault_reaction: None,
-        },
+        options: OptionCodes::NONE,
         rated_nm: 1.0,
         torque_limits: None,
         torque_slope: 0.0,
