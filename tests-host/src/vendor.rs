@@ -51,10 +51,13 @@ pub enum Sdo {
     U32(u16, u8, u32),
 }
 
+/// A mapped object entry: index, subindex, bits.
+pub type MappedEntry = (u16, u8, u8);
+
 /// The SDO downloads that map `entries` (index, subindex, bit length) into PDO `pdo` and assign
 /// it alone in `assign` (1C12h/1C13h): the assignment and the mapping cleared, the entries
 /// written and counted, the PDO assigned (ETG.1020 §6.2.2: the order a master must follow).
-pub fn remap(pdo: u16, assign: u16, entries: &[(u16, u8, u8)]) -> Vec<Sdo> {
+pub fn remap(pdo: u16, assign: u16, entries: &[MappedEntry]) -> Vec<Sdo> {
     let mut sdos = vec![Sdo::U8(assign, 0, 0), Sdo::U8(pdo, 0, 0)];
     for (n, &(index, subindex, bits)) in (1u8..).zip(entries) {
         let mapping = u32::from(index) << 16 | u32::from(subindex) << 8 | u32::from(bits);
@@ -152,7 +155,7 @@ pub async fn into_op_dc(
 pub async fn into_op_dc_mapped(
     m: &InProcess,
     md: &MainDevice<'_>,
-    (outputs, inputs): (&[(u16, u8, u8)], &[(u16, u8, u8)]),
+    (outputs, inputs): (&[MappedEntry], &[MappedEntry]),
     cycle_ns: u64,
 ) -> DcGroup {
     let mut setup = remap(0x1600, 0x1C12, outputs);
