@@ -547,36 +547,48 @@ pub struct Cia402Rules {
     pub homing_error_alarm: Option<FaultReport>,
     /// Where the profile shows the safe-torque-off input (the Σ-V-SD's HWBB).
     pub safe_torque_off: Option<SafeTorqueOffDisplay>,
+    /// A statusword bit that shows the torque demand at its limit (the Σ-V-SD's bit 14 "torque
+    /// limit active", 0 while active), beside CiA402's bit 11.
+    pub torque_limit_statusword: Option<StatuswordFlag>,
     /// The parameter that, set to 1, makes CSP go on over a cycle without new outputs with the
     /// last target increment instead of holding the last target (the SDV3-E's P4.04 "data
     /// loss processing"); read at power-on.
     pub csp_extrapolation: Option<Operand>,
 }
 
+/// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value
+/// while the condition holds (the other value otherwise).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StatuswordFlag {
+    /// The bit.
+    pub bit: u8,
+    /// Its value while the condition holds.
+    pub while_active: bool,
+}
+
+impl StatuswordFlag {
+    /// The statusword bits to set (`active`: the condition holds).
+    pub fn bits(&self, active: bool) -> u16 {
+        if active == self.while_active {
+            1u16.checked_shl(u32::from(self.bit)).unwrap_or(0)
+        } else {
+            0
+        }
+    }
+}
+
 /// How a profile shows its safe-torque-off input (the Σ-V-SD's HWBB, §4.7 statusword bit 15,
 /// §6.11 60FDh bits 24/25).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SafeTorqueOffDisplay {
-    /// The statusword bit (a manufacturer-specific one: 8, 14 or 15).
-    pub statusword_bit: u8,
-    /// Its value while safe torque off holds (the Σ-V-SD's bit 15: "0: HWBB activated, 1:
-    /// HWBB not activated").
-    pub statusword_while_active: bool,
+    /// The statusword bit and its value while safe torque off holds (the Σ-V-SD's bit 15: "0:
+    /// HWBB activated, 1: HWBB not activated").
+    pub statusword: StatuswordFlag,
     /// The 60FDh bits of channel 1 and 2 (1 = closed; manufacturer-specific bits 16–31).
     pub digital_input_bits: [u8; 2],
 }
 
 impl SafeTorqueOffDisplay {
-    /// The statusword bits to set (`active`: safe torque off holds).
-    pub fn statusword(&self, active: bool) -> u16 {
-        if active == self.statusword_while_active {
-            1u16.checked_shl(u32::from(self.statusword_bit))
-                .unwrap_or(0)
-        } else {
-            0
-        }
-    }
-
     /// The 60FDh bits of the channels (`true` = closed).
     pub fn digital_inputs(&self, channels_closed: [bool; 2]) -> u32 {
         self.digital_input_bits

@@ -1206,13 +1206,21 @@ fn cia402_rules(out: &mut String, p: &Profile) {
              target."
         );
     }
+    if let Some(f) = r.torque_limit_statusword {
+        let _ = writeln!(
+            out,
+            "- Statusword bit {} reads {} while the torque demand is at its limit (beside bit 11).",
+            f.bit,
+            u8::from(f.while_active)
+        );
+    }
     if let Some(s) = r.safe_torque_off {
         let _ = writeln!(
             out,
             "- Safe torque off (an open channel of the STO input): statusword bit {} reads {} \
              while it holds; 60FDh bits {} and {} show channel 1 and 2 (1 = closed).",
-            s.statusword_bit,
-            u8::from(s.statusword_while_active),
+            s.statusword.bit,
+            u8::from(s.statusword.while_active),
             s.digital_input_bits[0],
             s.digital_input_bits[1]
         );

@@ -881,6 +881,7 @@ impl Default for Cia402File {
             max_interpolation_speed: None,
             homing_error_alarm: None,
             safe_torque_off: None,
+            torque_limit_statusword: None,
             csp_extrapolation: None,
         }
     }
@@ -1156,10 +1157,24 @@ pub struct Cia402File {
     /// How the safe-torque-off input shows.
     #[serde(default)]
     pub safe_torque_off: Option<SafeTorqueOffFile>,
+    /// A statusword bit showing the torque demand at its limit.
+    #[serde(default)]
+    pub torque_limit_statusword: Option<StatuswordFlagFile>,
     /// The parameter (`"0xIIII:S"`) whose value 1, at power-on, makes CSP extrapolate over a
     /// cycle without new outputs.
     #[serde(default)]
     pub csp_extrapolation: Option<String>,
+}
+
+/// `[cia402.torque_limit_statusword]`: a manufacturer-specific statusword bit and its value
+/// while the condition holds.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StatuswordFlagFile {
+    /// Statusword bit (8, 14 or 15).
+    pub statusword_bit: u8,
+    /// Its value while the condition holds.
+    pub statusword_while_active: bool,
 }
 
 /// `[cia402.safe_torque_off]`: the statusword bit that shows safe torque off and its value while

@@ -2116,18 +2116,29 @@ pub struct Cia402Rules {
     pub homing_error_alarm: Option<MotorFaultCode>,
     /// How the safe-torque-off input shows (`[cia402.safe_torque_off]`).
     pub safe_torque_off: Option<SafeTorqueOff>,
+    /// A statusword bit showing the torque demand at its limit
+    /// (`[cia402.torque_limit_statusword]`).
+    pub torque_limit_statusword: Option<StatuswordFlag>,
     /// The parameter whose value 1 (at power-on) makes CSP extrapolate over a cycle without
     /// new outputs.
     pub csp_extrapolation: Option<(u16, u8)>,
 }
 
+/// A manufacturer-specific statusword bit (8, 14 or 15) and its value while its condition
+/// holds (`firmware: profile::StatuswordFlag`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StatuswordFlag {
+    /// The bit.
+    pub bit: u8,
+    /// Its value while the condition holds.
+    pub while_active: bool,
+}
+
 /// `[cia402.safe_torque_off]` (`firmware: profile::SafeTorqueOffDisplay`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SafeTorqueOff {
-    /// Statusword bit (8, 14 or 15).
-    pub statusword_bit: u8,
-    /// Its value while safe torque off holds.
-    pub statusword_while_active: bool,
+    /// Statusword bit and its value while safe torque off holds.
+    pub statusword: StatuswordFlag,
     /// 60FDh bits of channel 1 and 2 (16-31, distinct).
     pub digital_input_bits: [u8; 2],
 }
@@ -2225,6 +2236,7 @@ impl Default for Cia402Rules {
             max_interpolation_speed: None,
             homing_error_alarm: None,
             safe_torque_off: None,
+            torque_limit_statusword: None,
             csp_extrapolation: None,
         }
     }

@@ -574,6 +574,11 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             v => v,
         },
         safe_torque_off: f.cia402.safe_torque_off.map(safe_torque_off).transpose()?,
+        torque_limit_statusword: f
+            .cia402
+            .torque_limit_statusword
+            .map(|t| statusword_flag(t, "cia402.torque_limit_statusword.statusword_bit"))
+            .transpose()?,
         csp_extrapolation: entry_ref(
             f.cia402.csp_extrapolation.as_deref(),
             "cia402.csp_extrapolation",
@@ -2182,15 +2187,13 @@ fn touch_probe_inputs(
 fn safe_torque_off(
     s: crate::file::SafeTorqueOffFile,
 ) -> Result<crate::model::SafeTorqueOff, Fault> {
-    if ![8, 14, 15].contains(&s.statusword_bit) {
-        return Err(fault(
-            "cia402.safe_torque_off.statusword_bit",
-            Invalid::Value(format!(
-                "{} is not a manufacturer-specific statusword bit (8, 14, 15)",
-                s.statusword_bit
-            )),
-        ));
-    }
+    let statusword = statusword_flag(
+        crate::file::StatuswordFlagFile {
+            statusword_bit: s.statusword_bit,
+            statusword_while_active: s.statusword_while_active,
+        },
+        "cia402.safe_torque_off.statusword_bit",
+    )?;
     let [a, b] = s.digital_input_bits;
     if !(16..=31).contains(&a) || !(16..=31).contains(&b) || a == b {
         return Err(fault(
@@ -2201,9 +2204,28 @@ fn safe_torque_off(
         ));
     }
     Ok(crate::model::SafeTorqueOff {
-        statusword_bit: s.statusword_bit,
-        statusword_while_active: s.statusword_while_active,
+        statusword,
         digital_input_bits: s.digital_input_bits,
+    })
+}
+
+/// A manufacturer-specific statusword bit (CiA402: 8, 14, 15) with its value while active.
+fn statusword_flag(
+    f: crate::file::StatuswordFlagFile,
+    key: &str,
+) -> Result<crate::model::StatuswordFlag, Fault> {
+    if ![8, 14, 15].contains(&f.statusword_bit) {
+        return Err(fault(
+            key,
+            Invalid::Value(format!(
+                "{} is not a manufacturer-specific statusword bit (8, 14, 15)",
+                f.statusword_bit
+            )),
+        ));
+    }
+    Ok(crate::model::StatuswordFlag {
+        bit: f.statusword_bit,
+        while_active: f.statusword_while_active,
     })
 }
 

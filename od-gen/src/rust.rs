@@ -113,6 +113,14 @@ pub fn ram_layout(p: &Profile) -> RamLayout {
     }
 }
 
+/// A `firmware::profile::StatuswordFlag` literal.
+fn statusword_flag(drive: &str, f: crate::model::StatuswordFlag) -> String {
+    format!(
+        "{drive}::profile::StatuswordFlag {{ bit: {}, while_active: {} }}",
+        f.bit, f.while_active
+    )
+}
+
 fn bytes(b: &[u8]) -> String {
     let items: Vec<String> = b.iter().map(|x| format!("{x:#04x}")).collect();
     format!("&[{}]", items.join(", "))
@@ -599,7 +607,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, csp_extrapolation: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {} }},",
             optional_fault_report(p.cia402.enable_without_mode_error.as_ref()),
             optional_fault_report(p.cia402.mode_change_while_homing_error.as_ref()),
             p.cia402.stops_end_switched_off,
@@ -636,8 +644,12 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.max_interpolation_speed,
             optional_fault_report(p.cia402.homing_error_alarm.as_ref()),
             p.cia402.safe_torque_off.map_or("None".into(), |s| format!(
-                "Some({drive}::profile::SafeTorqueOffDisplay {{ statusword_bit: {}, statusword_while_active: {}, digital_input_bits: {:?} }})",
-                s.statusword_bit, s.statusword_while_active, s.digital_input_bits
+                "Some({drive}::profile::SafeTorqueOffDisplay {{ statusword: {}, digital_input_bits: {:?} }})",
+                statusword_flag(drive, s.statusword), s.digital_input_bits
+            )),
+            p.cia402.torque_limit_statusword.map_or("None".into(), |f| format!(
+                "Some({})",
+                statusword_flag(drive, f)
             )),
             // Validated: a writable integer parameter in RAM.
             p.cia402.csp_extrapolation.map_or("None".into(), |(index, sub)| {

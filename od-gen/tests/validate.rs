@@ -1399,8 +1399,15 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, csp_extrapolation: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None }"
     ));
+    let (key, _) = invalid(&appended(
+        "[cia402.torque_limit_statusword]\nstatusword_bit = 11\nstatusword_while_active = true",
+    ));
+    assert_eq!(
+        key, "cia402.torque_limit_statusword.statusword_bit",
+        "bit 11 is CiA402's"
+    );
     // The SDV3-E's P4.04 switches CSP extrapolation; it must be a writable integer parameter.
     let sdv3 = od_gen::builtin("sdv3-e").unwrap();
     assert_eq!(sdv3.cia402.csp_extrapolation, Some((0x3003, 4)));
@@ -1413,7 +1420,7 @@ fn cia402_rules_are_resolved_and_checked() {
     // The Σ-V-SD's HWBB display: statusword bit 15 (0 while active), 60FDh bits 24/25.
     let sigma = od_gen::builtin("sigma-v-sd").unwrap();
     assert!(od_gen::rust::generate(&[sigma]).contains(
-        "safe_torque_off: Some(crate::profile::SafeTorqueOffDisplay { statusword_bit: 15, statusword_while_active: false, digital_input_bits: [24, 25] })"
+        "safe_torque_off: Some(crate::profile::SafeTorqueOffDisplay { statusword: crate::profile::StatuswordFlag { bit: 15, while_active: false }, digital_input_bits: [24, 25] }), torque_limit_statusword: Some(crate::profile::StatuswordFlag { bit: 14, while_active: false })"
     ));
     for (bad, key) in [
         (

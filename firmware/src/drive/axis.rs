@@ -152,6 +152,8 @@ pub struct DriveAxis {
     settings_live: Groups,
     /// Safe torque off holds (the axis' last feedback).
     safe_torque_off: bool,
+    /// The torque demand is at its limit (the axis' last feedback).
+    torque_limited: bool,
     /// CSP extrapolates over a cycle without new outputs (`Cia402Rules::csp_extrapolation`,
     /// as set at power-on).
     csp_extrapolation: bool,
@@ -231,6 +233,7 @@ impl DriveAxis {
             output_levels: outputs::BRAKE,
             alarm_table: &profile.alarms,
             safe_torque_off: false,
+            torque_limited: false,
             csp_extrapolation: false,
             outputs_missed: false,
             csp_last: None,
@@ -510,13 +513,17 @@ impl DriveAxis {
         Some(next)
     }
 
-    /// Writes the device's `statusword` with the profile's display of safe torque off.
+    /// Writes the device's `statusword` with the profile's own bits: safe torque off, torque
+    /// limit (as of the axis' last feedback).
     fn write_statusword(&self, ram: &mut [u8], statusword: u16) {
-        let sto = self
-            .rules
+        let rules = self.rules;
+        let sto = rules
             .safe_torque_off
-            .map_or(0, |s| s.statusword(self.safe_torque_off));
-        write_u16(ram, self.vars.statusword, statusword | sto);
+            .map_or(0, |s| s.statusword.bits(self.safe_torque_off));
+        let torque_limit = rules
+            .torque_limit_statusword
+            .map_or(0, |f| f.bits(self.torque_limited));
+        write_u16(ram, self.vars.statusword, statusword | sto | torque_limit);
     }
 
     /// One cycle: the CiA402 device on the controlword and the option codes, the mode
@@ -574,6 +581,7 @@ impl DriveAxis {
             self.device.set_main_power(f.main_power);
             self.device.set_safe_torque_off(f.safe_torque_off);
             self.safe_torque_off = f.safe_torque_off;
+            self.torque_limited = f.current_limited;
         }
         let at_rest = feedback.as_ref().is_none_or(|f| self.at_rest(f));
         let step = self.device.step(cw, options, at_rest);
