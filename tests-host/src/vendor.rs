@@ -181,6 +181,22 @@ pub async fn exchange_dc(
     inputs
 }
 
+/// [`exchange_dc`] for an output image that starts with the controlword 6040h, the mode of
+/// operation 6060h and one 32-bit value (e.g. 607Ah or 60FFh), in that order: `(cw, mode,
+/// value)`.
+pub async fn exchange_dc_command(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &DcGroup,
+    (cw, mode, value): (u16, i8, i32),
+    cycle_ns: u64,
+) -> Vec<u8> {
+    let [c0, c1] = cw.to_le_bytes();
+    let [v0, v1, v2, v3] = value.to_le_bytes();
+    let image = [c0, c1, mode as u8, v0, v1, v2, v3];
+    exchange_dc(m, md, group, &[(0, &image)], cycle_ns).await
+}
+
 /// One cycle of `cycle_ns` phase-locked to the drive's free-run timer: `outputs` (byte offset,
 /// little-endian bytes) written into the output image, the frame exchanged; the input image the
 /// drive sent back.

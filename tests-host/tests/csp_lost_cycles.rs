@@ -18,9 +18,6 @@ const OPERATION_ENABLED: u16 = 0x27;
 /// 6060h: cyclic synchronous position.
 const CSP: i8 = 8;
 /// Image layouts (byte offsets).
-const RX_CW: usize = 0;
-const RX_MODE: usize = 2;
-const RX_TARGET: usize = 3;
 const TX_SW: usize = 0;
 const TX_DEMAND: usize = 2;
 /// The ramp: position units per cycle.
@@ -41,16 +38,8 @@ fn demand_of_a_lost_cycle(profile: &str) -> (i32, i32) {
         let cycle = |cw: u16, target: i32| {
             let (m, group) = (&m, &group);
             async move {
-                let cw = cw.to_le_bytes();
-                let target = target.to_le_bytes();
-                let inputs = vendor::exchange_dc(
-                    m,
-                    md,
-                    group,
-                    &[(RX_CW, &cw), (RX_MODE, &[CSP as u8]), (RX_TARGET, &target)],
-                    CYCLE_NS,
-                )
-                .await;
+                let inputs =
+                    vendor::exchange_dc_command(m, md, group, (cw, CSP, target), CYCLE_NS).await;
                 (u16_at(&inputs, TX_SW), i32_at(&inputs, TX_DEMAND))
             }
         };

@@ -30,9 +30,6 @@ const HWBB2_CLOSED: u32 = 1 << 25;
 /// 6060h: profile velocity.
 const PV: i8 = 3;
 /// Image layouts (byte offsets).
-const RX_CW: usize = 0;
-const RX_MODE: usize = 2;
-const RX_VELOCITY: usize = 3;
 const TX_SW: usize = 0;
 const TX_INPUTS: usize = 2;
 /// 300 rpm in increments/s (the velocity unit of both profiles by default).
@@ -61,20 +58,8 @@ fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
         let cycle = |cw: u16, velocity: i32| {
             let (m, group) = (&m, &group);
             async move {
-                let cw = cw.to_le_bytes();
-                let velocity = velocity.to_le_bytes();
-                let inputs = vendor::exchange_dc(
-                    m,
-                    md,
-                    group,
-                    &[
-                        (RX_CW, &cw),
-                        (RX_MODE, &[PV as u8]),
-                        (RX_VELOCITY, &velocity),
-                    ],
-                    CYCLE_NS,
-                )
-                .await;
+                let inputs =
+                    vendor::exchange_dc_command(m, md, group, (cw, PV, velocity), CYCLE_NS).await;
                 Inputs {
                     sw: u16_at(&inputs, TX_SW),
                     digital_inputs: i32_at(&inputs, TX_INPUTS) as u32,

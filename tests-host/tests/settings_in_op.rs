@@ -125,16 +125,8 @@ fn standard_profile_velocity_by_sdo_in_op_is_the_speed_of_the_next_set_point() {
         let pp_cycle = |cw: u16, target: i32| {
             let (m, group) = (&m, &group);
             async move {
-                let cw = cw.to_le_bytes();
-                let target = target.to_le_bytes();
-                let inputs = vendor::exchange_dc(
-                    m,
-                    md,
-                    group,
-                    &[(RX_CW, &cw), (RX_MODE, &[PP as u8]), (3, &target)],
-                    CYCLE_NS,
-                )
-                .await;
+                let inputs =
+                    vendor::exchange_dc_command(m, md, group, (cw, PP, target), CYCLE_NS).await;
                 (u16_at(&inputs, TX_SW), i32_at(&inputs, TX_VELOCITY))
             }
         };

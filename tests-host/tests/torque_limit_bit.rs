@@ -18,9 +18,6 @@ const INTERNAL_LIMIT: u16 = 1 << 11;
 const BIT_14: u16 = 1 << 14;
 /// 6060h: profile velocity.
 const PV: i8 = 3;
-const RX_CW: usize = 0;
-const RX_MODE: usize = 2;
-const RX_VELOCITY: usize = 3;
 const TX_SW: usize = 0;
 /// 1000 rpm in increments/s (the default velocity unit of both profiles).
 const VELOCITY: i32 = (1000.0 / 60.0 * CPR) as i32;
@@ -40,20 +37,8 @@ fn statuswords(profile: &str, acceleration: Option<u32>) -> (Vec<u16>, Vec<u16>)
         let cycle = |cw: u16, velocity: i32| {
             let (m, group) = (&m, &group);
             async move {
-                let cw = cw.to_le_bytes();
-                let velocity = velocity.to_le_bytes();
-                let inputs = vendor::exchange_dc(
-                    m,
-                    md,
-                    group,
-                    &[
-                        (RX_CW, &cw),
-                        (RX_MODE, &[PV as u8]),
-                        (RX_VELOCITY, &velocity),
-                    ],
-                    CYCLE_NS,
-                )
-                .await;
+                let inputs =
+                    vendor::exchange_dc_command(m, md, group, (cw, PV, velocity), CYCLE_NS).await;
                 u16_at(&inputs, TX_SW)
             }
         };
