@@ -300,7 +300,8 @@ impl AppVars {
 }
 
 /// One side of a unit factor: a constant, or an unsigned object entry in the OD RAM (e.g.
-/// 6091h:01), read every cycle so that a master's write takes effect at once.
+/// 6091h:01), read again whenever it is written (an SDO download, or every cycle where the RxPDO
+/// maps it: `drive::settings`) so that a master's write takes effect at once.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Operand {
     /// A fixed value.
