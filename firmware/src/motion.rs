@@ -229,10 +229,14 @@ impl ProfileModes {
     fn home(&mut self, inputs: &Inputs, dt_s: f32) -> (SetPoint, u16, Option<i64>) {
         // Target reached (bit 10) needs the demand at rest and the motor inside the position
         // window 6067h around it (the Σ-V-SD's 0/1/0 "attained, target not reached" until then).
-        let ratio = inputs.position_ratio;
-        let lag = ratio
-            .position_from_internal(self.trajectory.position())
-            .saturating_sub(ratio.position_from_internal(inputs.actual_position));
+        // The deviation is converted as one difference: the difference of two converted
+        // positions would be a whole unit off whenever they straddle a unit boundary, so that a
+        // window of 0 (the GHA-E's default) would never be met from one side.
+        let lag = inputs.position_ratio.position_from_internal(
+            self.trajectory
+                .position()
+                .saturating_sub(inputs.actual_position),
+        );
         let settled = window::inside(lag, inputs.position_window.0);
         // Without its inputs homing runs no method (and says so).
         let h = inputs.homing.unwrap_or_default();
@@ -564,6 +568,45 @@ mod tests {
             out.set_point.position, held,
             "the quick stop dropped the set-point"
         );
+    }
+
+    #[test]
+    fn homing_target_reached_compares_the_deviation_in_user_units() {
+        // 13 increments per unit, window 0 (the GHA-E's default): the motor one increment short
+        // of a home on a unit boundary is less than a unit off, so the target is reached; a
+        // whole unit off, it is not.
+        let home = 13 * 1000;
+        let homing = |actual_position| Inputs {
+            controlword: ENABLED | homing::HOMING_START,
+            position_ratio: Ratio::new(13, 1),
+            position_window: (0, 0),
+            actual_position,
+            homing: Some(HomingInputs {
+                method: homing::method(37),
+                speeds: (1000.0, 100.0, 10_000.0),
+                signals: homing::Signals::default(),
+                timeout_ms: None,
+            }),
+            ..inputs(ENABLED, 0)
+        };
+        let done = homing::HOMING_ATTAINED | TARGET_REACHED;
+        for (actual, reached) in [(home - 1, true), (home + 12, true), (home - 13, false)] {
+            let mut m = ProfileModes::new();
+            // Take over at the home, then start homing on the current position.
+            m.step(Mode::Homing, &homing(home), CIA402, 0.0, DT);
+            let i = Inputs {
+                actual_position: actual,
+                ..homing(home)
+            };
+            let out = m.step(Mode::Homing, &i, CIA402, 0.0, DT);
+            assert_eq!(out.set_point.position, home);
+            let expected = if reached {
+                done
+            } else {
+                homing::HOMING_ATTAINED
+            };
+            assert_eq!(out.statusword & done, expected, "actual {actual}");
+        }
     }
 
     #[test]

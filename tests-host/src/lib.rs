@@ -7,6 +7,7 @@ pub mod io_module;
 pub mod raw_sdo;
 pub mod session;
 pub mod soem;
+pub mod units;
 pub mod vendor;
 
 use std::future::Future;

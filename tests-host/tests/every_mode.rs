@@ -10,7 +10,8 @@
 //! - cyclic synchronous torque and profile torque: a torque the motor accelerates with.
 //!
 //! The mode changes while the drive stays in Operation Enabled; 6061h shows each mode. Homing is
-//! covered per profile by `homing.rs`, `vendor_modes.rs`, `two_axes.rs` and `motion_soem.rs`.
+//! covered per profile by `homing_methods.rs` (every method), `homing.rs`, `vendor_modes.rs`,
+//! `two_axes.rs` and `motion_soem.rs`.
 
 use board_sim::inproc::InProcess;
 use board_sim::Segment;

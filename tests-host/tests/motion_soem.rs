@@ -19,15 +19,16 @@
 //! The SDV3-E and OSD-G-E have no 609Ah (homing acceleration): they home on their profile
 //! acceleration 6083h.
 //!
-//! The in-process tests (`homing.rs`, `profile_modes.rs`, `vendor_modes.rs`) cover the methods
+//! The in-process tests (`homing_methods.rs`: every method of every profile; `homing.rs`,
+//! `profile_modes.rs`, `vendor_modes.rs`) cover the methods
 //! and handshakes in detail. The scenarios run one at a time: each one is a wall-clock master
 //! next to a real-time simulator.
 
 use std::sync::{Mutex, PoisonError};
 
-use od_gen::model::Operand;
 use serde_json::Value;
 use tests_host::soem::run_script;
+use tests_host::units::increments_per_unit;
 
 const STATE_MASK: u64 = 0x6F;
 const OPERATION_ENABLED: u64 = 0x27;
@@ -44,8 +45,6 @@ const PP: i64 = 1;
 const HOME_TOLERANCE_INC: f64 = 100.0;
 /// The homing method that takes the current position as the home (no search, done at once).
 const CURRENT_POSITION: i64 = 35;
-/// Increments per revolution of the simulated servo's encoder.
-const COUNTS_PER_REV: f64 = (1u32 << 20) as f64;
 
 /// The SOEM scenarios of this file run one after the other.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -56,21 +55,6 @@ fn u(v: &Value) -> u64 {
 
 fn i(v: &Value) -> i64 {
     v.as_i64().unwrap_or_else(|| panic!("not a number: {v}"))
-}
-
-/// Increments per position unit: the profile's `[units] position` with its objects' defaults.
-fn increments_per_unit(profile: &od_gen::Profile) -> f64 {
-    let value = |operand| match operand {
-        Operand::Const(c) => f64::from(c),
-        Operand::CountsPerRev => COUNTS_PER_REV,
-        Operand::Entry(index, sub) => {
-            let entry = profile.entry(index, sub).expect("factor entry");
-            let bytes: [u8; 4] = entry.initial_bytes()[..4].try_into().expect("u32");
-            f64::from(u32::from_le_bytes(bytes))
-        }
-    };
-    let f = profile.units.position;
-    value(f.numerator) / value(f.denominator) * f64::from(f.scale.0) / f64::from(f.scale.1)
 }
 
 /// Runs the scenario on a drive of `profile` attached with the switches of `machine`, checks
