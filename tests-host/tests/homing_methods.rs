@@ -50,7 +50,8 @@ const HOMING_BITS: u16 = TARGET_REACHED | HOMING_ATTAINED | HOMING_ERROR;
 const HM: i8 = 6;
 /// The home offset every run sets: the home reads as this (in every profile's 607Ch range).
 const HOME_OFFSET: i32 = 1_000;
-/// The rotor stops on the home within this many encoder increments.
+/// The rotor stops on the home within this many encoder increments, or within the drive's
+/// position window 6067h where that is wider (target reached ends the settling).
 const HOME_TOLERANCE_INC: f64 = 40.0;
 /// 6064h at the home within this many increments of 607Ch plus the rotor's offset.
 const POSITION_TOLERANCE_INC: f64 = 60.0;
@@ -418,7 +419,7 @@ async fn home(
 fn check_homed(
     samples: &[Sample],
     figure: &Figure,
-    increments_per_unit: f64,
+    (increments_per_unit, home_tolerance_inc): (f64, f64),
 ) -> Result<(), String> {
     let last = samples.last().ok_or("no samples")?;
     let bits = last.statusword & HOMING_BITS;
@@ -431,7 +432,7 @@ fn check_homed(
         ));
     }
     let off_inc = (last.revolutions - figure.home) * units::COUNTS_PER_REV;
-    if off_inc.abs() > HOME_TOLERANCE_INC {
+    if off_inc.abs() > home_tolerance_inc {
         return Err(format!(
             "stopped at {:.4} rev, {off_inc:.0} increments from the home at {} rev",
             last.revolutions, figure.home
@@ -478,6 +479,15 @@ fn check_refused(samples: &[Sample], start: f64) -> Result<(), String> {
 fn every_method(manual: Manual) {
     let profile = od_gen::builtin(manual.profile).expect("profile");
     let per_unit = units::increments_per_unit(&profile);
+    let window = profile
+        .entry(manual.object(0x6067), 0)
+        .map(|e| e.initial_bytes())
+        .and_then(|b| {
+            b.get(..4)
+                .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+        })
+        .expect("6067h");
+    let tolerance = HOME_TOLERANCE_INC.max(f64::from(window) * per_unit);
     let method_entry = profile
         .entry(manual.object(0x6098), 0)
         .expect("6098h in the dictionary");
@@ -498,7 +508,7 @@ fn every_method(manual: Manual) {
             for &start in &figure.starts {
                 let result = home(&manual, &profile, method, figure.machine, start, MAX_CYCLES)
                     .await
-                    .and_then(|samples| check_homed(&samples, &figure, per_unit));
+                    .and_then(|samples| check_homed(&samples, &figure, (per_unit, tolerance)));
                 if let Err(e) = result {
                     failures.push(format!("method {method} from {start:.1} rev: {e}"));
                 }
