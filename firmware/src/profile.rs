@@ -555,6 +555,12 @@ pub struct Cia402Rules {
     /// last target increment instead of holding the last target (the SDV3-E's P4.04 "data
     /// loss processing"); read at power-on.
     pub csp_extrapolation: Option<Operand>,
+    /// Option codes 605Ah–605Eh the profile defines where CiA402 reserves them (the GHA-E's
+    /// code 2 of 605Bh/605Ch: stop on 6085h), taken before CiA402's meanings.
+    pub stop_codes: &'static [cia402::stop::VendorCode],
+    /// The fault stop does not follow 605Eh: the object is accepted and ignored, and a fault
+    /// disables the drive function at once (the GHA-E, §5.7.2).
+    pub fault_reaction_ignored: bool,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

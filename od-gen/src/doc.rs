@@ -1118,6 +1118,25 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.stops_end_switched_off {
         out.push_str("- Shutdown and disable operation end in Switch On Disabled after their stop (605Bh/605Ch).\n");
     }
+    for c in &r.stop_codes {
+        let _ = writeln!(
+            out,
+            "- {:04X}h = {}: {}, then {} (CiA402 reserves the code).",
+            c.object,
+            c.code,
+            c.stop.describe(),
+            if c.hold {
+                "hold the motor at rest"
+            } else {
+                "disable the drive function"
+            }
+        );
+    }
+    if r.fault_reaction_ignored {
+        out.push_str(
+            "- 605Eh is accepted but has no effect: a fault disables the drive function at once.\n",
+        );
+    }
     if r.switch_on_requires_main_power {
         out.push_str("- Switched On needs the main power; losing it in Switched On, Operation Enabled or Quick Stop Active falls to Switch On Disabled.\n");
     }

@@ -883,6 +883,8 @@ impl Default for Cia402File {
             safe_torque_off: None,
             torque_limit_statusword: None,
             csp_extrapolation: None,
+            stop_codes: Vec::new(),
+            fault_reaction_ignored: false,
         }
     }
 }
@@ -1164,6 +1166,29 @@ pub struct Cia402File {
     /// cycle without new outputs.
     #[serde(default)]
     pub csp_extrapolation: Option<String>,
+    /// `[[cia402.stop_codes]]`: option codes the profile defines where CiA402 reserves them.
+    #[serde(default)]
+    pub stop_codes: Vec<StopCodeFile>,
+    /// 605Eh is accepted but has no effect: a fault disables the drive function at once.
+    #[serde(default)]
+    pub fault_reaction_ignored: bool,
+}
+
+/// `[[cia402.stop_codes]]`: an option code of 605Ah–605Eh and the stop it selects.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StopCodeFile {
+    /// The option-code object, `"0x605B"`.
+    pub object: String,
+    /// The code.
+    pub code: i16,
+    /// How the motor is brought to rest: `coast`, `profile_ramp` (6084h), `quick_stop_ramp`
+    /// (6085h), `current_limit`, `voltage_limit`.
+    pub stop: String,
+    /// The drive holds the motor at rest afterwards (a quick stop staying in Quick Stop
+    /// Active, a halt) instead of disabling it.
+    #[serde(default)]
+    pub hold: bool,
 }
 
 /// `[cia402.torque_limit_statusword]`: a manufacturer-specific statusword bit and its value

@@ -2122,6 +2122,105 @@ pub struct Cia402Rules {
     /// The parameter whose value 1 (at power-on) makes CSP extrapolate over a cycle without
     /// new outputs.
     pub csp_extrapolation: Option<(u16, u8)>,
+    /// Option codes the profile defines where CiA402 reserves them.
+    pub stop_codes: Vec<StopCode>,
+    /// 605Eh is accepted and ignored: a fault disables the drive function at once.
+    pub fault_reaction_ignored: bool,
+}
+
+/// An option code of 605Ah–605Eh a profile defines (`firmware: cia402::stop::VendorCode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StopCode {
+    /// The option-code object (605Ah–605Eh).
+    pub object: u16,
+    /// The code.
+    pub code: i16,
+    /// How the motor is brought to rest.
+    pub stop: StopRamp,
+    /// The motor is held at rest afterwards instead of disabled.
+    pub hold: bool,
+}
+
+impl StopCode {
+    /// The option-code objects and the firmware's `cia402::stop::Cause` of each.
+    pub const OBJECTS: [(u16, &'static str); 5] = [
+        (0x605A, "QuickStop"),
+        (0x605B, "Shutdown"),
+        (0x605C, "DisableOperation"),
+        (0x605D, "Halt"),
+        (0x605E, "Fault"),
+    ];
+
+    /// The firmware's `Cause` variant of the object.
+    pub fn cause_variant(&self) -> &'static str {
+        Self::OBJECTS
+            .iter()
+            .find(|(index, _)| *index == self.object)
+            .map_or("QuickStop", |(_, cause)| cause)
+    }
+}
+
+/// How a stop brings the motor to rest (`firmware: cia402::stop::Deceleration`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopRamp {
+    /// Disable the drive function at once.
+    Coast,
+    /// The slow-down ramp 6084h.
+    ProfileRamp,
+    /// The quick-stop ramp 6085h.
+    QuickStopRamp,
+    /// The current limit.
+    CurrentLimit,
+    /// The voltage limit.
+    VoltageLimit,
+}
+
+impl StopRamp {
+    /// The profile-file spellings, in variant order.
+    pub const NAMES: [&'static str; 5] = [
+        "coast",
+        "profile_ramp",
+        "quick_stop_ramp",
+        "current_limit",
+        "voltage_limit",
+    ];
+
+    /// Parses the profile-file spelling.
+    pub fn parse(s: &str) -> Option<Self> {
+        const ALL: [StopRamp; 5] = [
+            StopRamp::Coast,
+            StopRamp::ProfileRamp,
+            StopRamp::QuickStopRamp,
+            StopRamp::CurrentLimit,
+            StopRamp::VoltageLimit,
+        ];
+        Self::NAMES
+            .iter()
+            .position(|n| *n == s)
+            .and_then(|i| ALL.get(i).copied())
+    }
+
+    /// The firmware's variant name.
+    pub fn rust_variant(self) -> &'static str {
+        match self {
+            Self::Coast => "Coast",
+            Self::ProfileRamp => "ProfileRamp",
+            Self::QuickStopRamp => "QuickStopRamp",
+            Self::CurrentLimit => "CurrentLimit",
+            Self::VoltageLimit => "VoltageLimit",
+        }
+    }
+
+    /// What the ramp is, for the documentation.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Coast => "disable the drive function at once",
+            Self::ProfileRamp => "slow down on the slow-down ramp 6084h",
+            Self::QuickStopRamp => "slow down on the quick-stop ramp 6085h",
+            Self::CurrentLimit => "slow down at the current limit",
+            Self::VoltageLimit => "slow down at the voltage limit",
+        }
+    }
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) and its value while its condition
@@ -2238,6 +2337,8 @@ impl Default for Cia402Rules {
             safe_torque_off: None,
             torque_limit_statusword: None,
             csp_extrapolation: None,
+            stop_codes: Vec::new(),
+            fault_reaction_ignored: false,
         }
     }
 }

@@ -583,6 +583,13 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             f.cia402.csp_extrapolation.as_deref(),
             "cia402.csp_extrapolation",
         )?,
+        stop_codes: f
+            .cia402
+            .stop_codes
+            .iter()
+            .map(stop_code)
+            .collect::<Result<_, _>>()?,
+        fault_reaction_ignored: f.cia402.fault_reaction_ignored,
         homing_error_alarm: f
             .cia402
             .homing_error_alarm
@@ -835,6 +842,35 @@ fn entry_ref(s: Option<&str>, key: &str) -> Result<Option<(u16, u8)>, Fault> {
             .ok_or_else(|| fault(key, Invalid::Value(format!("`{s}` is not \"0xIIII:S\""))))
     })
     .transpose()
+}
+
+/// `[[cia402.stop_codes]]`: an option-code object 605Ah–605Eh, a code and a known stop.
+fn stop_code(c: &crate::file::StopCodeFile) -> Result<crate::model::StopCode, Fault> {
+    use crate::model::{StopCode, StopRamp};
+    const KEY: &str = "cia402.stop_codes";
+    let object = parse_index(&c.object)
+        .filter(|i| StopCode::OBJECTS.iter().any(|(o, _)| o == i))
+        .ok_or_else(|| {
+            fault(
+                KEY,
+                Invalid::Value(format!(
+                    "`{}` is not an option-code object 0x605A-0x605E",
+                    c.object
+                )),
+            )
+        })?;
+    let stop = StopRamp::parse(&c.stop).ok_or_else(|| {
+        fault(
+            KEY,
+            Invalid::Value(format!("`{}` is not one of {:?}", c.stop, StopRamp::NAMES)),
+        )
+    })?;
+    Ok(StopCode {
+        object,
+        code: c.code,
+        stop,
+        hold: c.hold,
+    })
 }
 
 /// `"0x6091:1"` → (0x6091, 1); the subindex may be decimal or `0x` hex.

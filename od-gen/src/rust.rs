@@ -607,7 +607,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {}, stop_codes: &[{}], fault_reaction_ignored: {} }},",
             optional_fault_report(p.cia402.enable_without_mode_error.as_ref()),
             optional_fault_report(p.cia402.mode_change_while_homing_error.as_ref()),
             p.cia402.stops_end_switched_off,
@@ -656,7 +656,20 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                 let at = layout.offsets.get(&(index, sub)).copied().unwrap_or(0);
                 let len = p.entry(index, sub).map_or(0, |e| e.byte_len());
                 format!("Some({drive}::profile::Operand::Ram {{ at: {at}, len: {len} }})")
-            })
+            }),
+            p.cia402
+                .stop_codes
+                .iter()
+                .map(|c| format!(
+                    "cia402::stop::VendorCode {{ cause: cia402::stop::Cause::{}, code: {}, reaction: cia402::stop::Reaction {{ deceleration: cia402::stop::Deceleration::{}, after: cia402::stop::After::{} }} }}",
+                    c.cause_variant(),
+                    c.code,
+                    c.stop.rust_variant(),
+                    if c.hold { "Hold" } else { "Disable" }
+                ))
+                .collect::<Vec<_>>()
+                .join(", "),
+            p.cia402.fault_reaction_ignored
         );
     }
     let _ = writeln!(out, "    }};\n");

@@ -1399,8 +1399,29 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false }"
     ));
+    // A profile's own option codes: 605Bh = 2 stops on 6085h (the GHA-E), generated as the
+    // firmware's VendorCode; an object outside 605Ah-605Eh and an unknown stop are refused.
+    let p = od_gen::parse(
+        &appended(
+            "[cia402]\nfault_reaction_ignored = true\n[[cia402.stop_codes]]\nobject = \"0x605B\"\ncode = 2\nstop = \"quick_stop_ramp\"",
+        ),
+        "ok",
+    )
+    .unwrap();
+    assert!(p.cia402.fault_reaction_ignored);
+    let rust = od_gen::rust::generate(&[p]);
+    assert!(rust.contains(
+        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true }"
+    ));
+    for bad in [
+        "[[cia402.stop_codes]]\nobject = \"0x6060\"\ncode = 2\nstop = \"coast\"",
+        "[[cia402.stop_codes]]\nobject = \"0x605B\"\ncode = 2\nstop = \"brake\"",
+    ] {
+        let (key, _) = invalid(&appended(bad));
+        assert_eq!(key, "cia402.stop_codes", "{bad}");
+    }
     let (key, _) = invalid(&appended(
         "[cia402.torque_limit_statusword]\nstatusword_bit = 11\nstatusword_while_active = true",
     ));

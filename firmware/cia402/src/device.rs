@@ -425,6 +425,7 @@ mod tests {
         disable_operation: Some(1),
         halt: Some(1),
         fault_reaction: Some(2),
+        vendor: &[],
     };
     const NO_OBJECTS: OptionCodes = OptionCodes {
         quick_stop: None,
@@ -432,6 +433,7 @@ mod tests {
         disable_operation: None,
         halt: None,
         fault_reaction: None,
+        vendor: &[],
     };
     const ENABLE: u16 = 0x0F;
     const QUICK_STOP: u16 = 0x02;
@@ -631,6 +633,7 @@ mod tests {
             disable_operation: None,
             halt: None,
             fault_reaction: None,
+            vendor: &[],
         };
         for (cw, state) in [
             (0x06, PdsState::ReadyToSwitchOn),

@@ -12,7 +12,9 @@
 //! | 605Eh | fault reaction | 0 disable drive function; 1/2/3/4 as 605Dh, then Fault (disabled) |
 //!
 //! A code CiA402 does not define (reserved, manufacturer-specific) has no [`Reaction`]; the
-//! caller decides (the device disables the drive function: the motor coasts).
+//! caller decides (the device disables the drive function: the motor coasts). A profile gives
+//! such codes a meaning with [`VendorCode`]s (the GHA-E stops on 6085h with code 2 of 605Bh and
+//! 605Ch), and may ignore 605Eh altogether (its fault stop does not follow the object).
 
 /// How the motor is brought to rest.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,8 +76,19 @@ pub enum Cause {
     Fault,
 }
 
+/// A profile's meaning of an option code that CiA402 reserves (or defines otherwise).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VendorCode {
+    /// The stop the code is for (its object).
+    pub cause: Cause,
+    /// The code.
+    pub code: i16,
+    /// What it does.
+    pub reaction: Reaction,
+}
+
 /// The option codes 605Ah–605Eh as the master set them; `None` where the profile has no such
-/// object.
+/// object (or ignores it).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct OptionCodes {
     /// 605Ah.
@@ -88,6 +101,8 @@ pub struct OptionCodes {
     pub halt: Option<i16>,
     /// 605Eh.
     pub fault_reaction: Option<i16>,
+    /// The profile's own codes, before CiA402's.
+    pub vendor: &'static [VendorCode],
 }
 
 impl OptionCodes {
@@ -98,6 +113,7 @@ impl OptionCodes {
         disable_operation: None,
         halt: None,
         fault_reaction: None,
+        vendor: &[],
     };
 
     /// The code that applies to `cause`, `None` without its object.
@@ -118,10 +134,19 @@ impl OptionCodes {
     pub fn reaction(&self, cause: Cause) -> Option<Reaction> {
         match (cause, self.of(cause)) {
             (Cause::Halt, None) => None,
-            (Cause::Halt, Some(code)) => reaction(cause, code),
+            (Cause::Halt, Some(code)) => self.meaning(cause, code),
             (_, None) => Some(Reaction::COAST),
-            (_, Some(code)) => Some(reaction(cause, code).unwrap_or(Reaction::COAST)),
+            (_, Some(code)) => Some(self.meaning(cause, code).unwrap_or(Reaction::COAST)),
         }
+    }
+
+    /// The profile's meaning of `code` for `cause`, else CiA402's.
+    fn meaning(&self, cause: Cause, code: i16) -> Option<Reaction> {
+        self.vendor
+            .iter()
+            .find(|v| v.cause == cause && v.code == code)
+            .map(|v| v.reaction)
+            .or_else(|| reaction(cause, code))
     }
 }
 
@@ -216,6 +241,7 @@ mod tests {
             disable_operation: Some(1),
             halt: None,
             fault_reaction: Some(2),
+            vendor: &[],
         };
         assert_eq!(codes.reaction(Cause::QuickStop), Some(Reaction::COAST));
         assert_eq!(codes.reaction(Cause::Shutdown), Some(Reaction::COAST));
@@ -232,6 +258,39 @@ mod tests {
             with_halt.reaction(Cause::Halt),
             None,
             "605Dh = 0 is undefined"
+        );
+    }
+
+    #[test]
+    fn a_profile_code_comes_before_cia402_and_applies_to_its_object_only() {
+        // The GHA-E: code 2 of 605Bh stops on the quick-stop ramp, then disables.
+        const QUICK_STOP_RAMP_THEN_DISABLE: Reaction = Reaction {
+            deceleration: Deceleration::QuickStopRamp,
+            after: After::Disable,
+        };
+        let codes = OptionCodes {
+            shutdown: Some(2),
+            disable_operation: Some(2),
+            quick_stop: Some(2),
+            vendor: &[VendorCode {
+                cause: Cause::Shutdown,
+                code: 2,
+                reaction: QUICK_STOP_RAMP_THEN_DISABLE,
+            }],
+            ..OptionCodes::NONE
+        };
+        assert_eq!(
+            codes.reaction(Cause::Shutdown),
+            Some(QUICK_STOP_RAMP_THEN_DISABLE)
+        );
+        // 605Ch = 2 is not the profile's: CiA402 reserves it, the motor coasts.
+        assert_eq!(
+            codes.reaction(Cause::DisableOperation),
+            Some(Reaction::COAST)
+        );
+        assert_eq!(
+            codes.reaction(Cause::QuickStop),
+            reaction(Cause::QuickStop, 2)
         );
     }
 }

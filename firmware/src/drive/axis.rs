@@ -293,7 +293,7 @@ impl DriveAxis {
     pub(super) fn refresh_settings(&mut self, ram: &[u8]) {
         let mut due = self.settings_due;
         if due.has(Groups::OPTIONS) {
-            self.settings.refresh_options(ram, self.vars);
+            self.settings.refresh_options(ram, self.vars, self.rules);
         }
         let Some(counts_per_rev) = self.port.as_ref().map(|p| p.counts_per_rev) else {
             return;
@@ -538,7 +538,7 @@ impl DriveAxis {
         let due = self.settings_due | self.settings_live;
         self.settings_due = Groups::NONE;
         if due.has(Groups::OPTIONS) {
-            self.settings.refresh_options(ram, vars);
+            self.settings.refresh_options(ram, vars, self.rules);
         }
         let options = self.settings.options;
         let mut refused_during_homing = false;

@@ -30,7 +30,7 @@ use ethercat_slave::pdo::PdoPlan;
 use super::ram::{read_i16, read_i32, read_u16, read_u32};
 use crate::motor::math;
 use crate::motor::trajectory::{Limits, SaneLimits};
-use crate::profile::{AppVars, UnitRatios};
+use crate::profile::{AppVars, Cia402Rules, UnitRatios};
 
 /// 6065h value that switches the following-error check off (CiA402).
 pub(super) const FOLLOWING_ERROR_OFF: u32 = u32::MAX;
@@ -248,14 +248,17 @@ impl Settings {
         following_error_timeout_ms: 0,
     };
 
-    /// Reads the option codes (needed before the units are known).
-    pub fn refresh_options(&mut self, ram: &[u8], vars: &AppVars) {
+    /// Reads the option codes (needed before the units are known), with the profile's own
+    /// codes and a 605Eh the profile ignores (`rules`).
+    pub fn refresh_options(&mut self, ram: &[u8], vars: &AppVars, rules: &Cia402Rules) {
         self.options = OptionCodes {
             quick_stop: read_i16(ram, vars.quick_stop_option_code),
             shutdown: read_i16(ram, vars.shutdown_option_code),
             disable_operation: read_i16(ram, vars.disable_operation_option_code),
             halt: read_i16(ram, vars.halt_option_code),
-            fault_reaction: read_i16(ram, vars.fault_reaction_option_code),
+            fault_reaction: read_i16(ram, vars.fault_reaction_option_code)
+                .filter(|_| !rules.fault_reaction_ignored),
+            vendor: rules.stop_codes,
         };
     }
 
