@@ -16,7 +16,7 @@
 //! Disable voltage (transition 9) and a coast reaction disable the drive function at once.
 
 use crate::pds::{self, controlword, PdsState};
-use crate::stop::{After, Cause, Deceleration, OptionCodes, Reaction};
+use crate::stop::{After, Cause, Deceleration, Reaction, Reactions};
 
 /// What the axis does this cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,7 +44,7 @@ pub struct Device {
     stop: Option<Reaction>,
     leave_to: Option<PdsState>,
     /// The option codes of the last cycle (a fault raised between cycles reacts with them).
-    options: OptionCodes,
+    reactions: Reactions,
     /// The profile's rules.
     rules: DeviceRules,
     /// The main circuit is powered (the drive application tells, [`Self::set_main_power`]).
@@ -102,7 +102,7 @@ impl Device {
             fault_permanent: false,
             stop: None,
             leave_to: None,
-            options: OptionCodes::NONE,
+            reactions: Reactions::NONE,
             rules,
             main_power: false,
             power_cycle_required: false,
@@ -173,11 +173,11 @@ impl Device {
         )
     }
 
-    /// One cycle with controlword `cw` (6040h), the option codes `options` and whether the
+    /// One cycle with controlword `cw` (6040h), the reactions of the option codes and whether the
     /// motor is at rest (`at_rest`: the previous cycle's stop has ended and the velocity is
     /// below the standstill threshold).
-    pub fn step(&mut self, cw: u16, options: OptionCodes, at_rest: bool) -> Step {
-        self.options = options;
+    pub fn step(&mut self, cw: u16, reactions: Reactions, at_rest: bool) -> Step {
+        self.reactions = reactions;
         let mut requested = pds::next(self.state, cw, self.previous_controlword);
         if self.state == PdsState::Fault && self.fault_permanent {
             // Not resettable: only a power cycle leaves Fault.
@@ -226,7 +226,7 @@ impl Device {
                 } else {
                     Cause::Shutdown
                 };
-                let reaction = options.reaction(cause).unwrap_or(Reaction::COAST);
+                let reaction = reactions.of(cause).unwrap_or(Reaction::COAST);
                 self.stop = Some(reaction);
                 self.leave_to = Some(if self.rules.stops_end_switched_off {
                     PdsState::SwitchOnDisabled
@@ -245,11 +245,7 @@ impl Device {
             }
             (PdsState::OperationEnabled, PdsState::QuickStopActive) => {
                 self.leave_to = None;
-                self.stop = Some(
-                    options
-                        .reaction(Cause::QuickStop)
-                        .unwrap_or(Reaction::COAST),
-                );
+                self.stop = Some(reactions.quick_stop);
                 PdsState::QuickStopActive
             }
             // 16 only after a quick stop that holds the motor has brought it to rest.
@@ -340,7 +336,7 @@ impl Device {
             (PdsState::OperationEnabled, Some(r)) => stopping(r),
             (PdsState::OperationEnabled, None) => {
                 let halt = cw & controlword::HALT != 0;
-                match self.options.reaction(Cause::Halt) {
+                match self.reactions.halt {
                     Some(r) if halt => Motion::Stop(r.deceleration),
                     _ => Motion::Run,
                 }
@@ -368,11 +364,7 @@ impl Device {
         self.state = pds::fault(self.state);
         self.leave_to = None;
         self.stop = if self.state == PdsState::FaultReactionActive && was_powered {
-            Some(
-                self.options
-                    .reaction(Cause::Fault)
-                    .unwrap_or(Reaction::COAST),
-            )
+            Some(self.reactions.fault)
         } else {
             // Nothing is moving under power: the reaction has nothing to stop.
             Some(Reaction::COAST)
@@ -417,6 +409,7 @@ fn requested_enable(cw: u16) -> bool {
 mod tests {
     use super::*;
     use crate::pds::{controlword as cw, statusword as sw};
+    use crate::stop::OptionCodes;
 
     /// The standard profile's codes: 605Ah 2, 605Bh 1, 605Ch 1, 605Dh 1, 605Eh 2.
     const RAMPS: OptionCodes = OptionCodes {
@@ -441,7 +434,7 @@ mod tests {
     fn enabled(options: OptionCodes) -> Device {
         let mut d = Device::new();
         for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
-            d.step(c, options, true);
+            d.step(c, options.into(), true);
         }
         assert!(d.operation_enabled());
         d
@@ -455,11 +448,11 @@ mod tests {
         assert_ne!(status & sw::FAULT, 0);
         assert_eq!(d.fault_code(), Some(0x8700));
         assert_eq!(
-            d.step(ENABLE, NO_OBJECTS, true).fault_cleared,
+            d.step(ENABLE, NO_OBJECTS.into(), true).fault_cleared,
             None,
             "enable is ignored in Fault"
         );
-        let step = d.step(cw::FAULT_RESET, NO_OBJECTS, true);
+        let step = d.step(cw::FAULT_RESET, NO_OBJECTS.into(), true);
         assert_eq!(step.fault_cleared, Some(0x8700));
         assert_eq!(d.state(), PdsState::SwitchOnDisabled);
         assert_eq!(d.fault_code(), None);
@@ -473,7 +466,7 @@ mod tests {
         let mut d = enabled(NO_OBJECTS);
         d.fault_with(0x7305, false);
         for cw in [cw::FAULT_RESET, 0, cw::FAULT_RESET, 0] {
-            let step = d.step(cw, NO_OBJECTS, true);
+            let step = d.step(cw, NO_OBJECTS.into(), true);
             assert_eq!(step.fault_cleared, None);
             assert_eq!(d.state(), PdsState::Fault);
             assert_ne!(step.statusword & sw::FAULT, 0);
@@ -484,12 +477,13 @@ mod tests {
     #[test]
     fn fault_reset_held_high_through_the_fault_does_not_reset() {
         let mut d = enabled(NO_OBJECTS);
-        d.step(cw::FAULT_RESET | ENABLE, NO_OBJECTS, true);
+        d.step(cw::FAULT_RESET | ENABLE, NO_OBJECTS.into(), true);
         d.fault(0x2320);
         // Bit 7 was high before the fault; the fault counts the controlword as 0, so the next
         // cycle with bit 7 high is a rising edge.
         assert_eq!(
-            d.step(cw::FAULT_RESET, NO_OBJECTS, true).fault_cleared,
+            d.step(cw::FAULT_RESET, NO_OBJECTS.into(), true)
+                .fault_cleared,
             Some(0x2320)
         );
     }
@@ -505,7 +499,7 @@ mod tests {
     #[test]
     fn quick_stop_on_the_ramp_stays_in_quick_stop_active_until_rest_then_disables() {
         let mut d = enabled(RAMPS);
-        let step = d.step(QUICK_STOP, RAMPS, false);
+        let step = d.step(QUICK_STOP, RAMPS.into(), false);
         assert_eq!(d.state(), PdsState::QuickStopActive);
         assert_eq!(
             step.statusword & 0x6F,
@@ -516,13 +510,13 @@ mod tests {
         // Still moving: stays, whatever the controlword says but disable voltage.
         for c in [QUICK_STOP, ENABLE, 0x06] {
             assert_eq!(
-                d.step(c, RAMPS, false).motion,
+                d.step(c, RAMPS.into(), false).motion,
                 Motion::Stop(Deceleration::QuickStopRamp)
             );
             assert_eq!(d.state(), PdsState::QuickStopActive);
         }
         // At rest: transition 12 (605Ah = 2).
-        let step = d.step(QUICK_STOP, RAMPS, true);
+        let step = d.step(QUICK_STOP, RAMPS.into(), true);
         assert_eq!(
             (d.state(), step.motion),
             (PdsState::SwitchOnDisabled, Motion::Off)
@@ -536,13 +530,13 @@ mod tests {
             ..RAMPS
         };
         let mut d = enabled(hold);
-        d.step(QUICK_STOP, hold, false);
+        d.step(QUICK_STOP, hold.into(), false);
         assert_eq!(
-            d.step(ENABLE, hold, false).motion,
+            d.step(ENABLE, hold.into(), false).motion,
             Motion::Stop(Deceleration::QuickStopRamp)
         );
         assert_eq!(d.state(), PdsState::QuickStopActive, "16 only at rest");
-        let step = d.step(QUICK_STOP, hold, true);
+        let step = d.step(QUICK_STOP, hold.into(), true);
         assert_eq!(
             (d.state(), step.motion),
             (
@@ -551,14 +545,14 @@ mod tests {
             ),
             "holding"
         );
-        let step = d.step(ENABLE, hold, true);
+        let step = d.step(ENABLE, hold.into(), true);
         assert_eq!(
             (d.state(), step.motion),
             (PdsState::OperationEnabled, Motion::Run),
             "transition 16"
         );
-        d.step(QUICK_STOP, hold, true);
-        d.step(0x00, hold, true);
+        d.step(QUICK_STOP, hold.into(), true);
+        d.step(0x00, hold.into(), true);
         assert_eq!(
             d.state(),
             PdsState::SwitchOnDisabled,
@@ -573,7 +567,7 @@ mod tests {
             ..RAMPS
         };
         let mut d = enabled(coast);
-        let step = d.step(QUICK_STOP, coast, false);
+        let step = d.step(QUICK_STOP, coast.into(), false);
         assert_eq!(
             (d.state(), step.motion),
             (PdsState::SwitchOnDisabled, Motion::Off)
@@ -587,11 +581,11 @@ mod tests {
             (0x07, PdsState::SwitchedOn),
         ] {
             let mut d = enabled(RAMPS);
-            let step = d.step(c, RAMPS, false);
+            let step = d.step(c, RAMPS.into(), false);
             assert_eq!(d.state(), PdsState::OperationEnabled, "decelerating");
             assert_eq!(step.motion, Motion::Stop(Deceleration::ProfileRamp));
             assert_eq!(step.statusword & 0x6F, 0x27);
-            let step = d.step(c, RAMPS, true);
+            let step = d.step(c, RAMPS.into(), true);
             assert_eq!((d.state(), step.motion), (to, Motion::Off));
         }
         // Code 0: at once.
@@ -600,7 +594,7 @@ mod tests {
             ..RAMPS
         };
         let mut d = enabled(coast);
-        assert_eq!(d.step(0x06, coast, false).motion, Motion::Off);
+        assert_eq!(d.step(0x06, coast.into(), false).motion, Motion::Off);
         assert_eq!(d.state(), PdsState::ReadyToSwitchOn);
     }
 
@@ -612,11 +606,11 @@ mod tests {
                 switch_on_requires_main_power: false,
             });
             for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
-                d.step(c, RAMPS, true);
+                d.step(c, RAMPS.into(), true);
             }
-            d.step(c, RAMPS, false);
+            d.step(c, RAMPS.into(), false);
             assert_eq!(d.state(), PdsState::OperationEnabled, "decelerating");
-            d.step(c, RAMPS, true);
+            d.step(c, RAMPS.into(), true);
             assert_eq!(d.state(), PdsState::SwitchOnDisabled, "cw {c:#x}");
         }
     }
@@ -645,7 +639,7 @@ mod tests {
             // Enable operation straight from Ready to Switch On (3 + 4): only 3.
             (0x0F, PdsState::SwitchedOn),
         ] {
-            d.step(cw, options, true);
+            d.step(cw, options.into(), true);
             assert_eq!(d.state(), state, "cw {cw:#06x}");
         }
         // A new power-on (a new device) enables again.
@@ -653,7 +647,7 @@ mod tests {
         d.set_main_power(true);
         d.initialised();
         for cw in [0x06, 0x07, 0x0F] {
-            d.step(cw, options, true);
+            d.step(cw, options.into(), true);
         }
         assert_eq!(d.state(), PdsState::OperationEnabled);
     }
@@ -665,7 +659,7 @@ mod tests {
             switch_on_requires_main_power: true,
         });
         for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, 0x07] {
-            d.step(c, RAMPS, true);
+            d.step(c, RAMPS.into(), true);
         }
         assert_eq!(
             d.state(),
@@ -673,17 +667,17 @@ mod tests {
             "no main power: 3 waits"
         );
         d.set_main_power(true);
-        let step = d.step(0x07, RAMPS, true);
+        let step = d.step(0x07, RAMPS.into(), true);
         assert_eq!(d.state(), PdsState::SwitchedOn);
         assert_ne!(
             step.statusword & sw::VOLTAGE_ENABLED,
             0,
             "bit 4: main power"
         );
-        d.step(ENABLE, RAMPS, true);
+        d.step(ENABLE, RAMPS.into(), true);
         assert!(d.operation_enabled());
         d.set_main_power(false);
-        let step = d.step(ENABLE, RAMPS, false);
+        let step = d.step(ENABLE, RAMPS.into(), false);
         assert_eq!(
             (d.state(), step.motion),
             (PdsState::SwitchOnDisabled, Motion::Off)
@@ -692,7 +686,7 @@ mod tests {
         // CiA402 as written: no such condition.
         let mut d = enabled(RAMPS);
         assert!(d.operation_enabled());
-        d.step(ENABLE, RAMPS, true);
+        d.step(ENABLE, RAMPS.into(), true);
         assert!(d.operation_enabled());
     }
 
@@ -701,26 +695,26 @@ mod tests {
         // Operation Enabled: at once, the motor coasting (the power stage is cut).
         let mut d = enabled(RAMPS);
         d.set_safe_torque_off(true);
-        let step = d.step(ENABLE, RAMPS, false);
+        let step = d.step(ENABLE, RAMPS.into(), false);
         assert_eq!(
             (d.state(), step.motion),
             (PdsState::SwitchOnDisabled, Motion::Off)
         );
         // While it holds, a new enable sequence passes Switched On only for one cycle.
         for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP] {
-            d.step(c, RAMPS, true);
+            d.step(c, RAMPS.into(), true);
         }
         assert_eq!(d.state(), PdsState::ReadyToSwitchOn);
-        d.step(ENABLE, RAMPS, true);
+        d.step(ENABLE, RAMPS.into(), true);
         assert_eq!(d.state(), PdsState::SwitchedOn);
-        assert_eq!(d.step(ENABLE, RAMPS, true).motion, Motion::Off);
+        assert_eq!(d.step(ENABLE, RAMPS.into(), true).motion, Motion::Off);
         assert_eq!(d.state(), PdsState::SwitchOnDisabled);
         // Quick Stop Active too, without finishing its ramp.
         let mut d = enabled(RAMPS);
-        d.step(QUICK_STOP, RAMPS, false);
+        d.step(QUICK_STOP, RAMPS.into(), false);
         assert_eq!(d.state(), PdsState::QuickStopActive);
         d.set_safe_torque_off(true);
-        let step = d.step(QUICK_STOP, RAMPS, false);
+        let step = d.step(QUICK_STOP, RAMPS.into(), false);
         assert_eq!(
             (d.state(), step.motion),
             (PdsState::SwitchOnDisabled, Motion::Off)
@@ -728,7 +722,7 @@ mod tests {
         // Released: the usual sequence enables again.
         d.set_safe_torque_off(false);
         for c in [0, cw::ENABLE_VOLTAGE | cw::QUICK_STOP, 0x07, ENABLE] {
-            d.step(c, RAMPS, true);
+            d.step(c, RAMPS.into(), true);
         }
         assert!(d.operation_enabled());
     }
@@ -736,11 +730,11 @@ mod tests {
     #[test]
     fn enable_operation_cancels_a_waiting_shutdown_and_quick_stop_overrides_it() {
         let mut d = enabled(RAMPS);
-        d.step(0x06, RAMPS, false);
-        assert_eq!(d.step(ENABLE, RAMPS, false).motion, Motion::Run);
+        d.step(0x06, RAMPS.into(), false);
+        assert_eq!(d.step(ENABLE, RAMPS.into(), false).motion, Motion::Run);
         assert_eq!(d.state(), PdsState::OperationEnabled);
-        d.step(0x06, RAMPS, false);
-        let step = d.step(QUICK_STOP, RAMPS, false);
+        d.step(0x06, RAMPS.into(), false);
+        let step = d.step(QUICK_STOP, RAMPS.into(), false);
         assert_eq!(
             (d.state(), step.motion),
             (
@@ -748,8 +742,8 @@ mod tests {
                 Motion::Stop(Deceleration::QuickStopRamp)
             )
         );
-        d.step(0x06, RAMPS, false);
-        d.step(0x00, RAMPS, false);
+        d.step(0x06, RAMPS.into(), false);
+        d.step(0x00, RAMPS.into(), false);
         assert_eq!(
             d.state(),
             PdsState::SwitchOnDisabled,
@@ -760,7 +754,7 @@ mod tests {
     #[test]
     fn halt_stops_on_605dh_and_resumes_when_released() {
         let mut d = enabled(RAMPS);
-        let step = d.step(ENABLE | cw::HALT, RAMPS, false);
+        let step = d.step(ENABLE | cw::HALT, RAMPS.into(), false);
         assert_eq!(
             (d.state(), step.motion),
             (
@@ -773,20 +767,20 @@ mod tests {
             0,
             "bit 10 clear while decelerating"
         );
-        let step = d.step(ENABLE | cw::HALT, RAMPS, true);
+        let step = d.step(ENABLE | cw::HALT, RAMPS.into(), true);
         assert_eq!(
             step.motion,
             Motion::Stop(Deceleration::ProfileRamp),
             "holds at rest"
         );
         assert_ne!(step.statusword & sw::TARGET_REACHED, 0, "bit 10: halted");
-        let step = d.step(ENABLE, RAMPS, true);
+        let step = d.step(ENABLE, RAMPS.into(), true);
         assert_eq!(step.motion, Motion::Run);
         assert_eq!(step.statusword & sw::TARGET_REACHED, 0, "released");
         // Without 605Dh halt is not supported: bit 8 is ignored.
         let mut d = enabled(NO_OBJECTS);
         assert_eq!(
-            d.step(ENABLE | cw::HALT, NO_OBJECTS, false).motion,
+            d.step(ENABLE | cw::HALT, NO_OBJECTS.into(), false).motion,
             Motion::Run
         );
     }
@@ -801,14 +795,14 @@ mod tests {
             0x0F,
             "CiA402 Table 30: fault reaction active"
         );
-        let step = d.step(cw::FAULT_RESET, RAMPS, false);
+        let step = d.step(cw::FAULT_RESET, RAMPS.into(), false);
         assert_eq!(step.motion, Motion::Stop(Deceleration::QuickStopRamp));
         assert_eq!(
             (d.state(), step.fault_cleared),
             (PdsState::FaultReactionActive, None),
             "no reset before Fault"
         );
-        let step = d.step(0, RAMPS, true);
+        let step = d.step(0, RAMPS.into(), true);
         assert_eq!((d.state(), step.motion), (PdsState::Fault, Motion::Off));
         // The power stage tripped: no ramp possible.
         let mut d = enabled(RAMPS);

@@ -150,6 +150,58 @@ impl OptionCodes {
     }
 }
 
+/// The reactions of a drive's option codes, resolved when the codes (or the profile's rules)
+/// change rather than in every cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Reactions {
+    /// 605Ah.
+    pub quick_stop: Reaction,
+    /// 605Bh.
+    pub shutdown: Reaction,
+    /// 605Ch.
+    pub disable_operation: Reaction,
+    /// 605Dh (`None`: halt is not supported, bit 8 is ignored).
+    pub halt: Option<Reaction>,
+    /// 605Eh.
+    pub fault: Reaction,
+}
+
+impl Reactions {
+    /// A drive without option codes: every stop disables the drive function, no halt.
+    pub const NONE: Self = Self {
+        quick_stop: Reaction::COAST,
+        shutdown: Reaction::COAST,
+        disable_operation: Reaction::COAST,
+        halt: None,
+        fault: Reaction::COAST,
+    };
+
+    /// The reaction to `cause` (`None`: a halt the drive does not support).
+    pub const fn of(&self, cause: Cause) -> Option<Reaction> {
+        match cause {
+            Cause::QuickStop => Some(self.quick_stop),
+            Cause::Shutdown => Some(self.shutdown),
+            Cause::DisableOperation => Some(self.disable_operation),
+            Cause::Halt => self.halt,
+            Cause::Fault => Some(self.fault),
+        }
+    }
+}
+
+impl From<OptionCodes> for Reactions {
+    fn from(codes: OptionCodes) -> Self {
+        let or_coast = |cause| codes.reaction(cause).unwrap_or(Reaction::COAST);
+        Self {
+            quick_stop: or_coast(Cause::QuickStop),
+            shutdown: or_coast(Cause::Shutdown),
+            disable_operation: or_coast(Cause::DisableOperation),
+            halt: codes.reaction(Cause::Halt),
+            fault: or_coast(Cause::Fault),
+        }
+    }
+}
+
 /// The CiA402 meaning of option code `code` for `cause`, `None` for a code it does not define.
 pub const fn reaction(cause: Cause, code: i16) -> Option<Reaction> {
     use After::{Disable, Hold};

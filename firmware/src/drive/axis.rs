@@ -540,7 +540,7 @@ impl DriveAxis {
         if due.has(Groups::OPTIONS) {
             self.settings.refresh_options(ram, vars, self.rules);
         }
-        let options = self.settings.options;
+        let reactions = self.settings.reactions;
         let mut refused_during_homing = false;
         let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
             if requested != self.running_mode {
@@ -584,7 +584,7 @@ impl DriveAxis {
             self.torque_limited = f.current_limited;
         }
         let at_rest = feedback.as_ref().is_none_or(|f| self.at_rest(f));
-        let step = self.device.step(cw, options, at_rest);
+        let step = self.device.step(cw, reactions, at_rest);
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);
         }

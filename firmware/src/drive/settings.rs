@@ -21,7 +21,7 @@
 //! every cycle.
 
 use cia402::limits::SoftwareLimits;
-use cia402::stop::OptionCodes;
+use cia402::stop::{OptionCodes, Reactions};
 use cia402::units::{self, Polarity};
 
 use ethercat_slave::od::{Profile, Value};
@@ -190,8 +190,8 @@ pub(super) fn live_groups(vars: &AppVars, plan: &PdoPlan) -> Groups {
 /// each group.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Settings {
-    /// 605Ah–605Eh.
-    pub options: OptionCodes,
+    /// The reactions of 605Ah–605Eh (resolved when the codes change, not in every cycle).
+    pub reactions: Reactions,
     /// 6076h, N·m.
     pub rated_nm: f32,
     /// 6072h with 60E0h/60E1h (positive, negative magnitudes in the objects' sense, N·m):
@@ -229,7 +229,7 @@ pub(super) struct Settings {
 impl Settings {
     /// Before the first refresh (every group is refreshed before the first cycle uses it).
     pub const UNREAD: Self = Self {
-        options: OptionCodes::NONE,
+        reactions: Reactions::NONE,
         rated_nm: 1.0,
         torque_limits: None,
         torque_slope: 0.0,
@@ -251,7 +251,7 @@ impl Settings {
     /// Reads the option codes (needed before the units are known), with the profile's own
     /// codes and a 605Eh the profile ignores (`rules`).
     pub fn refresh_options(&mut self, ram: &[u8], vars: &AppVars, rules: &Cia402Rules) {
-        self.options = OptionCodes {
+        let codes = OptionCodes {
             quick_stop: read_i16(ram, vars.quick_stop_option_code),
             shutdown: read_i16(ram, vars.shutdown_option_code),
             disable_operation: read_i16(ram, vars.disable_operation_option_code),
@@ -260,6 +260,7 @@ impl Settings {
                 .filter(|_| !rules.fault_reaction_ignored),
             vendor: rules.stop_codes,
         };
+        self.reactions = Reactions::from(codes);
     }
 
     /// Reads the `groups` but the option codes from `ram`, converted with `units` and the
