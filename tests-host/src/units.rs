@@ -43,6 +43,12 @@ pub fn velocity(profile: &Profile, rev_per_s: f64) -> u32 {
     (rev_per_s * COUNTS_PER_REV / per_unit).round() as u32
 }
 
+/// A signed speed of `rev_per_s` in the profile's velocity unit (60FFh, a target), rounded.
+pub fn target_velocity(profile: &Profile, rev_per_s: f64) -> i32 {
+    let per_unit = internal_per_unit(profile, profile.units.velocity);
+    (rev_per_s * COUNTS_PER_REV / per_unit).round() as i32
+}
+
 /// An acceleration of `rev_per_s2` in the profile's acceleration unit (6083h-6085h, 609Ah),
 /// rounded; for an acceleration given as the time to a speed, that time in ms.
 pub fn acceleration(profile: &Profile, rev_per_s2: f64) -> u32 {

@@ -16,11 +16,11 @@
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
-use od_gen::model::{Acceleration, Factor, Operand, Profile};
+use od_gen::model::Profile;
 use tests_host::vendor::{
     self, enable_sequence, i32_at, motor, u16_at, DcGroup as Group, Sdo, ENABLE_OPERATION,
 };
-use tests_host::{block_on, master_for};
+use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
 /// Increments per revolution of the simulated servo's encoder.
@@ -67,54 +67,8 @@ const TX_SW: usize = 0;
 const TX_MODE: usize = 2;
 const TX_POSITION: usize = 3;
 
-/// A factor's value with its objects' defaults.
-fn factor(p: &Profile, f: &Factor) -> f64 {
-    let value = |o: Operand| match o {
-        Operand::Const(c) => f64::from(c),
-        Operand::CountsPerRev => CPR,
-        Operand::Entry(index, sub) => {
-            let bytes = p.entry(index, sub).expect("factor entry").initial_bytes();
-            let mut v = [0u8; 4];
-            for (d, s) in v.iter_mut().zip(&bytes) {
-                *d = *s;
-            }
-            f64::from(u32::from_le_bytes(v).max(1))
-        }
-    };
-    value(f.numerator) / value(f.denominator) * f64::from(f.scale.0) / f64::from(f.scale.1)
-}
-
-/// The profile's units: increments per position unit, increments/s per velocity unit, and the
-/// object value of an acceleration in rev/s².
-struct Units {
-    position: f64,
-    velocity: f64,
-    acceleration: Box<dyn Fn(f64) -> u32>,
-}
-
-fn units(p: &Profile) -> Units {
-    let position = factor(p, &p.units.position);
-    let velocity = factor(p, &p.units.velocity);
-    let acceleration: Box<dyn Fn(f64) -> u32> = match p.units.acceleration {
-        Acceleration::VelocityPerSecond => Box::new(move |a| (a * CPR / velocity) as u32),
-        Acceleration::Factor(f) => {
-            let per_unit = factor(p, &f);
-            Box::new(move |a| (a * CPR / per_unit) as u32)
-        }
-        // The time in ms from 0 to `rpm`.
-        Acceleration::MsToRpm(rpm) => {
-            Box::new(move |a| (f64::from(rpm) / 60.0 / a * 1000.0) as u32)
-        }
-    };
-    Units {
-        position,
-        velocity,
-        acceleration,
-    }
-}
-
 /// INIT → OP with DC SYNC0 at 1 ms, the layout mapped and the profile-mode objects set.
-async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, u: &Units) -> Group {
+async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile) -> Group {
     let entries = |layout: &[(u16, u8)]| -> Vec<(u16, u8, u8)> {
         layout
             .iter()
@@ -123,8 +77,8 @@ async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, u: &Units) -> 
     };
     let mut setup = vendor::remap(0x1600, 0x1C12, &entries(&RX));
     setup.extend(vendor::remap(0x1A00, 0x1C13, &entries(&TX)));
-    let speed = (PROFILE_SPEED * CPR / u.velocity) as u32;
-    let accel = (u.acceleration)(ACCELERATION);
+    let speed = units::velocity(p, PROFILE_SPEED);
+    let accel = units::acceleration(p, ACCELERATION);
     for (index, value) in [
         (0x607F, 2 * speed),
         (0x6081, speed),
@@ -141,8 +95,8 @@ async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, u: &Units) -> 
     // revolution instead.
     let window = p.entry(0x6067, 0).map(|e| e.initial_bytes());
     if window.is_some_and(|b| b.iter().all(|x| *x == 0)) {
-        let units = (CPR / 1000.0 / u.position).ceil() as u32;
-        setup.push(Sdo::U32(0x6067, 0, units));
+        let window = (CPR / 1000.0 / units::increments_per_unit(p)).ceil() as u32;
+        setup.push(Sdo::U32(0x6067, 0, window));
     }
     vendor::into_op_dc(m, md, &setup, CYCLE_NS).await
 }
@@ -202,13 +156,12 @@ async fn run(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command, n: u
 
 fn every_mode_moves_the_motor(name: &str) {
     let p = od_gen::builtin(name).expect("profile");
-    let u = units(&p);
-    let rpm_to_object = |rpm: f64| (rpm / 60.0 * CPR / u.velocity) as i32;
+    let rpm_to_object = |rpm: f64| units::target_velocity(&p, rpm / 60.0);
     block_on(async {
         let (m, transport) = master_for(Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = into_op(&m, md, &p, &u).await;
+        let group = into_op(&m, md, &p).await;
         let mut s = cycle(&m, md, &group, Command::default()).await;
         // The first SYNC0s after the request: hold the enable sequence long enough.
         for cw in std::iter::repeat_n(0u16, 40).chain(enable_sequence(30)) {
@@ -229,7 +182,7 @@ fn every_mode_moves_the_motor(name: &str) {
 
         // CSP: one revolution in 500 ms.
         let (start, rev0) = (s.position, s.rev);
-        let one_rev = (CPR / u.position) as i32;
+        let one_rev = (CPR / units::increments_per_unit(&p)) as i32;
         for k in 0..=600 {
             let c = Command {
                 cw: ENABLE_OPERATION,
