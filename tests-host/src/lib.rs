@@ -2,6 +2,7 @@
 //! ethercrab master, the expected identity from the profile, the SOEM (pysoem) harness and a raw
 //! mailbox SDO client for downloads longer than ethercrab's 4 bytes.
 
+pub mod cia402;
 pub mod csp;
 pub mod io_module;
 pub mod raw_sdo;

@@ -19,6 +19,15 @@ pub type DcGroup = SubDeviceGroup<4, 64, DefaultLock, Op, HasDc>;
 /// then on.
 pub const SYNC0_START_DELAY: Duration = Duration::from_millis(10);
 
+/// 1 ms cycles until SYNC0 runs after [`into_op_dc`] ([`SYNC0_START_DELAY`] and a margin).
+pub const SYNC0_START_CYCLES: usize = 20;
+
+/// The object of axis 1's `index` on axis `axis` (0-based): a two-axis drive's second axis has
+/// its CiA402 objects at +800h (Σ-V-SD §2.4).
+pub fn axis_object(index: u16, axis: usize) -> u16 {
+    index + 0x800 * axis as u16
+}
+
 /// CiA402 controlwords of the enable sequence (Table 5): shutdown, switch on, enable operation.
 pub const SHUTDOWN: u16 = 0x06;
 /// Switch on.

@@ -11,6 +11,9 @@ use std::f64::consts::TAU;
 
 use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
+use tests_host::cia402::{
+    self, HOMING_ATTAINED, HOMING_BITS, HOMING_ERROR, HOMING_START, TARGET_REACHED,
+};
 use tests_host::csp::{self, Sample};
 use tests_host::{block_on, master};
 
@@ -18,14 +21,9 @@ const CPR: f64 = (1u32 << 20) as f64;
 const SHUTDOWN: u16 = 0x06;
 const SWITCH_ON: u16 = 0x07;
 const ENABLE_OPERATION: u16 = 0x0F;
-const HOMING_START: u16 = 1 << 4;
 const STATE_MASK: u16 = 0x6F;
 const OPERATION_ENABLED: u16 = 0x27;
-const TARGET_REACHED: u16 = 1 << 10;
-const HOMING_ATTAINED: u16 = 1 << 12;
-const HOMING_ERROR: u16 = 1 << 13;
-const HOMING_BITS: u16 = TARGET_REACHED | HOMING_ATTAINED | HOMING_ERROR;
-const HM: i8 = 6;
+const HM: i8 = cia402::HOMING;
 /// The home offset the tests set: the home position reads as this.
 const HOME_OFFSET: i32 = 1_000;
 

@@ -33,21 +33,15 @@ use board_sim::inproc::InProcess;
 use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
 use od_gen::Profile;
+use tests_host::cia402::{
+    self, HOMING_ATTAINED, HOMING_BITS, HOMING_ERROR, HOMING_START, OPERATION_ENABLED,
+    TARGET_REACHED,
+};
 use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
-/// Cycles until SYNC0 runs ([`vendor::SYNC0_START_DELAY`] and a margin).
-const SYNC0_START_CYCLES: usize = 20;
-const STATE_MASK: u16 = 0x6F;
-const OPERATION_ENABLED: u16 = 0x27;
-const HOMING_START: u16 = 1 << 4;
-const TARGET_REACHED: u16 = 1 << 10;
-const HOMING_ATTAINED: u16 = 1 << 12;
-const HOMING_ERROR: u16 = 1 << 13;
-const HOMING_BITS: u16 = TARGET_REACHED | HOMING_ATTAINED | HOMING_ERROR;
-/// 6060h: homing.
-const HM: i8 = 6;
+const HM: i8 = cia402::HOMING;
 /// The home offset every run sets: the home reads as this (in every profile's 607Ch range).
 const HOME_OFFSET: i32 = 1_000;
 /// The rotor stops on the home within this many encoder increments, or within the drive's
@@ -259,9 +253,9 @@ impl Manual {
         cia402_figure(as_method).unwrap_or_else(|| panic!("no figure for method {as_method}"))
     }
 
-    /// The object of axis 1 `index` on the axis under test (+800h per axis, Σ-V-SD §2.4).
+    /// Axis 1's object `index` on the axis under test.
     fn object(&self, index: u16) -> u16 {
-        index + 0x800 * self.axis as u16
+        vendor::axis_object(index, self.axis)
     }
 }
 
@@ -381,13 +375,13 @@ async fn home(
     let group = vendor::into_op_dc(&m, md, &setup(manual, profile, method), CYCLE_NS).await;
     // Past the SYNC0 start delay.
     let mut s = cycle(&m, md, &group, manual.axis, 0).await;
-    for _ in 0..SYNC0_START_CYCLES {
+    for _ in 0..vendor::SYNC0_START_CYCLES {
         s = cycle(&m, md, &group, manual.axis, 0).await;
     }
     for cw in vendor::enable_sequence(20) {
         s = cycle(&m, md, &group, manual.axis, cw).await;
     }
-    if s.statusword & STATE_MASK != OPERATION_ENABLED {
+    if !cia402::is(s.statusword, OPERATION_ENABLED) {
         return Err(format!("not enabled: statusword {:#06x}", s.statusword));
     }
     if s.mode != HM {

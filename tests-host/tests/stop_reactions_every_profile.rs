@@ -26,15 +26,16 @@ use std::f64::consts::TAU;
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
 use od_gen::Profile;
+use tests_host::cia402::{
+    self, FAULT, OPERATION_ENABLED, QUICK_STOP_ACTIVE, READY_TO_SWITCH_ON, SWITCHED_ON,
+    SWITCH_ON_DISABLED,
+};
 use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
 const CYCLE_S: f64 = 1e-3;
-/// Cycles until SYNC0 runs ([`vendor::SYNC0_START_DELAY`] and a margin).
-const SYNC0_START_CYCLES: usize = 20;
-/// 6060h: cyclic synchronous velocity.
-const CSV: i8 = 9;
+const CSV: i8 = cia402::CYCLIC_SYNCHRONOUS_VELOCITY;
 /// The speed the motor runs at when the stop comes.
 const SPEED_REV_S: f64 = 10.0;
 /// The slow-down ramp 6084h and the quick-stop ramp 6085h.
@@ -53,13 +54,6 @@ const DISABLE_OPERATION: u16 = 0x07;
 const ENABLE_OPERATION: u16 = 0x0F;
 const QUICK_STOP: u16 = 0x02;
 const HALT: u16 = 0x0100;
-/// Statusword state patterns (Table 30): (mask, value).
-const OPERATION_ENABLED: (u16, u16) = (0x6F, 0x27);
-const SWITCHED_ON: (u16, u16) = (0x6F, 0x23);
-const READY_TO_SWITCH_ON: (u16, u16) = (0x6F, 0x21);
-const QUICK_STOP_ACTIVE: (u16, u16) = (0x6F, 0x07);
-const SWITCH_ON_DISABLED: (u16, u16) = (0x4F, 0x40);
-const FAULT: (u16, u16) = (0x4F, 0x08);
 
 /// What brings the motor to rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -170,9 +164,9 @@ struct Case {
 }
 
 impl Case {
-    /// Axis 1's object `index` on the axis under test (+800h per axis, Σ-V-SD §2.4).
+    /// Axis 1's object `index` on the axis under test.
     fn object(&self, index: u16) -> u16 {
-        index + 0x800 * self.axis as u16
+        vendor::axis_object(index, self.axis)
     }
 }
 
@@ -185,8 +179,8 @@ struct Sample {
 }
 
 impl Sample {
-    fn is(&self, (mask, value): (u16, u16)) -> bool {
-        self.statusword & mask == value
+    fn is(&self, state: cia402::State) -> bool {
+        cia402::is(self.statusword, state)
     }
 }
 
@@ -244,7 +238,7 @@ async fn stop(
     let md: &MainDevice<'_> = &m.maindevice;
     let axis = case.axis;
     let group = vendor::into_op_dc(&m, md, &setup(case, profile, object, code), CYCLE_NS).await;
-    for _ in 0..SYNC0_START_CYCLES {
+    for _ in 0..vendor::SYNC0_START_CYCLES {
         cycle(&m, md, &group, axis, (0, 0)).await;
     }
     let mut s = cycle(&m, md, &group, axis, (0, 0)).await;

@@ -23,15 +23,13 @@ use board_sim::inproc::InProcess;
 use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
 use od_gen::Profile;
+use tests_host::cia402::{self, OPERATION_ENABLED};
 use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
-/// Cycles until SYNC0 runs ([`vendor::SYNC0_START_DELAY`] and a margin).
-const SYNC0_START_CYCLES: usize = 20;
-const CSV: i8 = 9;
+const CSV: i8 = cia402::CYCLIC_SYNCHRONOUS_VELOCITY;
 const SPEED_REV_S: f64 = 100.0 / 60.0;
-const OPERATION_ENABLED: (u16, u16) = (0x6F, 0x27);
 /// 60B8h bits of probe 1 (probe 2: << 8).
 const ENABLE: u16 = 1 << 0;
 const CONTINUOUS: u16 = 1 << 1;
@@ -61,9 +59,9 @@ struct Probes {
 }
 
 impl Probes {
-    /// Axis 1's object `index` on the axis under test (+800h per axis, Σ-V-SD §2.4).
+    /// Axis 1's object `index` on the axis under test.
     fn object(&self, index: u16) -> u16 {
-        index + 0x800 * self.axis as u16
+        vendor::axis_object(index, self.axis)
     }
 }
 
@@ -148,14 +146,14 @@ async fn run(p: &Probes, profile: &Profile, uses: [Use; 2]) -> Result<(), String
     let function = uses[0].function | uses[1].function << 8;
     setup.push(Sdo::U16(o(0x60B8), 0, function));
     let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
-    for _ in 0..SYNC0_START_CYCLES {
+    for _ in 0..vendor::SYNC0_START_CYCLES {
         cycle(&m, md, &group, 0, 0).await;
     }
     let mut sw = 0;
     for cw in vendor::enable_sequence(20) {
         sw = cycle(&m, md, &group, cw, 0).await;
     }
-    if sw & OPERATION_ENABLED.0 != OPERATION_ENABLED.1 {
+    if !cia402::is(sw, OPERATION_ENABLED) {
         return Err(format!("not enabled: {sw:#06x}"));
     }
     let velocity = units::velocity(profile, SPEED_REV_S) as i32;
