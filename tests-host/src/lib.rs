@@ -4,6 +4,7 @@
 
 pub mod cia402;
 pub mod csp;
+pub mod emcy;
 pub mod io_module;
 pub mod raw_sdo;
 pub mod session;

@@ -9,8 +9,8 @@
 //! and its clear command (7.3.12).
 
 use board_sim::Segment;
-use ethercrab::{Command, MainDevice};
-use tests_host::{block_on, master_for, FIRST_STATION};
+use ethercrab::MainDevice;
+use tests_host::{block_on, emcy, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
 const SHUTDOWN: u16 = 0x06;
@@ -20,14 +20,6 @@ const STATE_MASK: u16 = 0x6F;
 const OPERATION_ENABLED: u16 = 0x27;
 const FAULT_BIT: u16 = 0x08;
 const CSP: u8 = 8;
-/// SM1 status register (ETG.1000.4 Table 58: SM n at 0x0800 + 8n, status at +5), bit 3
-/// "mailbox full".
-const SM1_STATUS: u16 = 0x080D;
-const MAILBOX_FULL: u8 = 0x08;
-/// Mailbox header (6 bytes) type 3 = CoE; CoE header service 1 = emergency (ETG.1000.6).
-const MAILBOX_HEADER: usize = 6;
-const TYPE_COE: u8 = 3;
-const COE_EMERGENCY: u16 = 1;
 
 /// The drive from INIT to OP (free run): an ethercrab group in OP.
 macro_rules! into_op {
@@ -141,32 +133,19 @@ macro_rules! rse_enabled {
     }};
 }
 
-/// Waits (cycling) until SM1 holds a mailbox and reads it whole, as SOEM does; evaluates to the
-/// CoE part (after the 6-byte mailbox header): CoE header, EMCY code, 1001h, manufacturer field.
+/// Waits (cycling) until SM1 holds an emergency and reads it ([`emcy::read`]).
 macro_rules! emergency {
     ($m:expr, $md:expr, $group:expr, $sm1_start:expr) => {{
-        let mut mailbox = None;
+        let mut emergency = None;
         for _ in 0..50 {
-            let status: u8 = Command::fprd(FIRST_STATION, SM1_STATUS)
-                .receive($md)
-                .await
-                .expect("SM1 status");
-            if status & MAILBOX_FULL != 0 {
-                let data: [u8; 256] = Command::fprd(FIRST_STATION, $sm1_start)
-                    .receive($md)
-                    .await
-                    .expect("SM1");
-                mailbox = Some(data);
+            emergency = emcy::read($md, $sm1_start).await.expect("a CoE emergency");
+            if emergency.is_some() {
                 break;
             }
             $group.tx_rx($md).await.expect("tx/rx");
             $m.shared.advance(CYCLE_NS);
         }
-        let mb = mailbox.expect("an emergency in SM1");
-        assert_eq!(mb[5] & 0x0F, TYPE_COE, "mailbox type");
-        let coe = mb[MAILBOX_HEADER..MAILBOX_HEADER + 10].to_vec();
-        assert_eq!(u16::from_le_bytes([coe[0], coe[1]]) >> 12, COE_EMERGENCY);
-        coe
+        emergency.expect("an emergency in SM1")
     }};
 }
 
@@ -194,15 +173,10 @@ fn a_motor_fault_sends_the_profiles_alarm_in_603fh_and_the_emcy() {
             .set_drive_temperature(120.0);
         until_fault!(m, md, group);
         let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
+        assert_eq!(coe.code, alarm.emcy.code, "EMCY code");
+        assert_eq!(coe.error_register & 0x01, 0x01, "1001h generic error");
         assert_eq!(
-            u16::from_le_bytes([coe[2], coe[3]]),
-            alarm.emcy.code,
-            "EMCY code"
-        );
-        assert_eq!(coe[4] & 0x01, 0x01, "1001h generic error");
-        assert_eq!(
-            coe[5..10],
-            alarm.emcy.data,
+            coe.data, alarm.emcy.data,
             "manufacturer field: error No., aux code"
         );
         let sd = group.subdevice(md, 0).expect("drive");
@@ -253,13 +227,9 @@ fn leaving_op_while_enabled_raises_the_profiles_alarm() {
         enable!(m, md, group);
         let group = group.into_safe_op(md).await.expect("OP -> SAFE-OP");
         let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
+        assert_eq!(coe.code, alarm.emcy.code, "EMCY code");
         assert_eq!(
-            u16::from_le_bytes([coe[2], coe[3]]),
-            alarm.emcy.code,
-            "EMCY code"
-        );
-        assert_eq!(
-            coe[5..10],
+            coe.data,
             [0x39, 0x1C, 0x80, 0, 0],
             "error No. 39h, aux 801Ch"
         );
@@ -479,11 +449,7 @@ fn rse_a_limit_switch_is_a_warning_not_a_fault() {
         assert_eq!(s.0, alarm.error_code, "603Fh = AL.480's code");
         assert_eq!(s.1 & STATE_MASK, OPERATION_ENABLED, "still enabled");
         let coe = emergency!(m, md, group, p.sm.mailbox_in.start);
-        assert_eq!(
-            u16::from_le_bytes([coe[2], coe[3]]),
-            alarm.emcy.code,
-            "EMCY"
-        );
+        assert_eq!(coe.code, alarm.emcy.code, "EMCY");
         switches(None);
         for _ in 0..5 {
             s = rse_cycle!(m, md, group, ENABLE_OPERATION);
