@@ -172,6 +172,33 @@ pub async fn into_op_dc_mapped(
     into_op_dc(m, md, &setup, cycle_ns).await
 }
 
+/// The velocity layout the per-profile scenarios share (outputs 6040h, 6060h, 60FFh; inputs
+/// 6041h, 6061h, 606Ch): every manual lets 1600h/1A00h be remapped in PREOP.
+pub const VELOCITY_MAPPING: ([MappedEntry; 3], [MappedEntry; 3]) = (
+    [(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)],
+    [(0x6041, 0, 16), (0x6061, 0, 8), (0x606C, 0, 32)],
+);
+
+/// INIT → OP in DC with [`VELOCITY_MAPPING`] and then `setup` written in PREOP, followed by
+/// [`SYNC0_START_CYCLES`] cycles with controlword 0 and 6060h = `mode`, so that SYNC0 runs.
+pub async fn into_op_dc_velocity(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    setup: &[Sdo],
+    mode: i8,
+    cycle_ns: u64,
+) -> DcGroup {
+    let (outputs, inputs) = VELOCITY_MAPPING;
+    let mut sdos = remap(0x1600, 0x1C12, &outputs);
+    sdos.extend(remap(0x1A00, 0x1C13, &inputs));
+    sdos.extend_from_slice(setup);
+    let group = into_op_dc(m, md, &sdos, cycle_ns).await;
+    for _ in 0..SYNC0_START_CYCLES {
+        exchange_dc_command(m, md, &group, (0, mode, 0), cycle_ns).await;
+    }
+    group
+}
+
 /// One DC cycle of `cycle_ns`: `outputs` (byte offset, little-endian bytes) written into the
 /// output image, the frame exchanged, the clock advanced; the input image the drive sent back
 /// (the values of the previous SYNC0).

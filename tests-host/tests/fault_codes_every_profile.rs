@@ -10,13 +10,11 @@
 use board_sim::inproc::InProcess;
 use board_sim::plant::EncoderFaultInjection;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, DcGroup, MappedEntry};
+use tests_host::vendor::{self, DcGroup};
 use tests_host::{block_on, cia402, emcy, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
 const CSV: i8 = cia402::CYCLIC_SYNCHRONOUS_VELOCITY;
-const OUTPUTS: [MappedEntry; 3] = [(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)];
-const INPUTS: [MappedEntry; 3] = [(0x6041, 0, 16), (0x6061, 0, 8), (0x606C, 0, 32)];
 /// 1001h bit 0: generic error.
 const GENERIC_ERROR: u8 = 0x01;
 /// The longest a fault takes to trip (the confirmation times are at most a few hundred ms).
@@ -91,12 +89,7 @@ async fn fault(name: &str, profile: &od_gen::Profile, injection: Injection) -> R
     let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
-    let mut setup = vendor::remap(0x1600, 0x1C12, &OUTPUTS);
-    setup.extend(vendor::remap(0x1A00, 0x1C13, &INPUTS));
-    let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
-    for _ in 0..vendor::SYNC0_START_CYCLES {
-        cycle(&m, md, &group, 0).await;
-    }
+    let group = vendor::into_op_dc_velocity(&m, md, &[], CSV, CYCLE_NS).await;
     let mut sw = 0;
     for cw in vendor::enable_sequence(20) {
         sw = cycle(&m, md, &group, cw).await;

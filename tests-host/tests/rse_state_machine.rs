@@ -12,7 +12,7 @@ use std::f64::consts::TAU;
 
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -34,9 +34,6 @@ const ENABLE_OPERATION: u16 = 0x000F;
 const DISABLE_VOLTAGE: u16 = 0x0000;
 const QUICK_STOP: u16 = 0x0002;
 const FAULT_RESET: u16 = 0x0080;
-
-const OUTPUTS: [MappedEntry; 3] = [(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)];
-const INPUTS: [MappedEntry; 3] = [(0x6041, 0, 16), (0x6061, 0, 8), (0x606C, 0, 32)];
 
 struct Drive<'a> {
     m: &'a InProcess,
@@ -82,22 +79,18 @@ async fn into_op<'a>(
     quick_stop_option: i16,
 ) -> Drive<'a> {
     let profile = od_gen::builtin("rse").expect("rse");
-    let mut setup = vendor::remap(0x1600, 0x1C12, &OUTPUTS);
-    setup.extend(vendor::remap(0x1A00, 0x1C13, &INPUTS));
-    setup.extend([
+    let setup = [
         Sdo::I16(0x605A, 0, quick_stop_option),
         Sdo::I16(0x605E, 0, 2),
         Sdo::U32(0x6085, 0, units::acceleration(&profile, 20.0)),
-    ]);
-    let group = vendor::into_op_dc(m, md, &setup, CYCLE_NS).await;
-    let drive = Drive {
+    ];
+    let group = vendor::into_op_dc_velocity(m, md, &setup, CSV, CYCLE_NS).await;
+    Drive {
         m,
         md,
         group,
         velocity: 0,
-    };
-    drive.hold(0, vendor::SYNC0_START_CYCLES).await;
-    drive
+    }
 }
 
 #[test]

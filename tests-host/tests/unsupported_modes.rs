@@ -11,7 +11,7 @@ use std::f64::consts::TAU;
 
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, DcGroup, MappedEntry};
+use tests_host::vendor::{self, DcGroup};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -19,8 +19,6 @@ const CSV: i8 = cia402::CYCLIC_SYNCHRONOUS_VELOCITY;
 const PROFILE_VELOCITY: i8 = 3;
 const FAULT_BIT: u16 = 1 << 3;
 const SPEED_REV_S: f64 = 2.0;
-const OUTPUTS: [MappedEntry; 3] = [(0x6040, 0, 16), (0x6060, 0, 8), (0x60FF, 0, 32)];
-const INPUTS: [MappedEntry; 3] = [(0x6041, 0, 16), (0x6061, 0, 8), (0x606C, 0, 32)];
 
 /// Statusword and 6061h of one cycle.
 async fn cycle(
@@ -66,12 +64,7 @@ fn unsupported_modes_are_not_taken(name: &str) {
         let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut setup = vendor::remap(0x1600, 0x1C12, &OUTPUTS);
-        setup.extend(vendor::remap(0x1A00, 0x1C13, &INPUTS));
-        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
-        for _ in 0..vendor::SYNC0_START_CYCLES {
-            vendor::exchange_dc_command(&m, md, &group, (0, CSV, 0), CYCLE_NS).await;
-        }
+        let group = vendor::into_op_dc_velocity(&m, md, &[], CSV, CYCLE_NS).await;
         for cw in vendor::enable_sequence(20) {
             vendor::exchange_dc_command(&m, md, &group, (cw, CSV, 0), CYCLE_NS).await;
         }
