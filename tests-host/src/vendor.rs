@@ -259,6 +259,15 @@ fn put(image: &mut [u8], outputs: &[(usize, &[u8])]) {
     }
 }
 
+/// Heats the power stage of the first drive's axis `axis` 10 °C over its protection's limit
+/// (the drive over-temperature fault trips after its confirmation time).
+pub fn overheat_power_stage(m: &InProcess, axis: usize) {
+    let mut segment = m.shared.segment();
+    let servo = &mut segment.drives_mut()[0].servos[axis];
+    let level = servo.axis.config().protection.drive_over_temperature_c;
+    servo.plant.set_drive_temperature(f64::from(level) + 10.0);
+}
+
 /// The little-endian u16 at byte `at` of an image.
 pub fn u16_at(image: &[u8], at: usize) -> u16 {
     u16::from_le_bytes([image[at], image[at + 1]])

@@ -153,14 +153,7 @@ fn rse_quick_stop_active_back_to_operation_enabled_and_fault_values() {
         let profile = od_gen::builtin("rse").expect("rse");
         d.velocity = units::target_velocity(&profile, 5.0);
         d.hold(ENABLE_OPERATION, 300).await;
-        let level = m.shared.segment().drives()[0].servos[0]
-            .axis
-            .config()
-            .protection
-            .drive_over_temperature_c;
-        m.shared.segment().drives_mut()[0].servos[0]
-            .plant
-            .set_drive_temperature(f64::from(level) + 10.0);
+        vendor::overheat_power_stage(&m, 0);
         let mut seen = Vec::new();
         for _ in 0..1_000 {
             let sw = d.hold(ENABLE_OPERATION, 1).await & TABLE_BITS;

@@ -629,14 +629,7 @@ fn a_drive_over_temperature_fault_decelerates_on_the_fault_reaction_ramp() {
                 (FAULT_REACTION_OPTION, 2)
             ]
         );
-        let level = m.shared.segment().drives()[0].servos[0]
-            .axis
-            .config()
-            .protection
-            .drive_over_temperature_c;
-        m.shared.segment().drives_mut()[0].servos[0]
-            .plant
-            .set_drive_temperature(f64::from(level) + 10.0);
+        tests_host::vendor::overheat_power_stage(&m, 0);
         assert_eq!(
             fault_reaction_ramp!(m, md, group, target),
             DRIVE_OVER_TEMPERATURE

@@ -258,14 +258,7 @@ async fn stop(
         return Err(format!("running at {:.2} rev/s", s.rev_s));
     }
     if cause == Cause::Fault {
-        let level = m.shared.segment().drives()[0].servos[axis]
-            .axis
-            .config()
-            .protection
-            .drive_over_temperature_c;
-        m.shared.segment().drives_mut()[0].servos[axis]
-            .plant
-            .set_drive_temperature(f64::from(level) + 10.0);
+        vendor::overheat_power_stage(&m, axis);
     }
     let command = (cause.controlword(), full as i32);
     let mut samples = Vec::with_capacity(STOP_CYCLES);
