@@ -179,18 +179,21 @@ pub const VELOCITY_MAPPING: ([MappedEntry; 3], [MappedEntry; 3]) = (
     [(0x6041, 0, 16), (0x6061, 0, 8), (0x606C, 0, 32)],
 );
 
-/// INIT → OP in DC with [`VELOCITY_MAPPING`] and then `setup` written in PREOP, followed by
+/// INIT → OP in DC with [`VELOCITY_MAPPING`] of axis `axis` (its objects, and its PDOs 1600h and
+/// 1A00h plus 10h per axis, assigned alone) and then `setup` written in PREOP, followed by
 /// [`SYNC0_START_CYCLES`] cycles with controlword 0 and 6060h = `mode`, so that SYNC0 runs.
 pub async fn into_op_dc_velocity(
     m: &InProcess,
     md: &MainDevice<'_>,
-    setup: &[Sdo],
+    (axis, setup): (usize, &[Sdo]),
     mode: i8,
     cycle_ns: u64,
 ) -> DcGroup {
+    let on_axis = |entries: [MappedEntry; 3]| entries.map(|(i, s, b)| (axis_object(i, axis), s, b));
     let (outputs, inputs) = VELOCITY_MAPPING;
-    let mut sdos = remap(0x1600, 0x1C12, &outputs);
-    sdos.extend(remap(0x1A00, 0x1C13, &inputs));
+    let pdo_offset = 0x10 * axis as u16;
+    let mut sdos = remap(0x1600 + pdo_offset, 0x1C12, &on_axis(outputs));
+    sdos.extend(remap(0x1A00 + pdo_offset, 0x1C13, &on_axis(inputs)));
     sdos.extend_from_slice(setup);
     let group = into_op_dc(m, md, &sdos, cycle_ns).await;
     for _ in 0..SYNC0_START_CYCLES {

@@ -34,7 +34,7 @@ fn enable_without_mode(name: &str, error: Option<u16>) {
         let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = vendor::into_op_dc_velocity(&m, md, &[], NO_MODE, CYCLE_NS).await;
+        let group = vendor::into_op_dc_velocity(&m, md, (0, &[]), NO_MODE, CYCLE_NS).await;
         let mut emergency = None;
         let mut sw = 0;
         for cw in vendor::enable_sequence(20) {

@@ -89,7 +89,7 @@ async fn fault(name: &str, profile: &od_gen::Profile, injection: Injection) -> R
     let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
-    let group = vendor::into_op_dc_velocity(&m, md, &[], CSV, CYCLE_NS).await;
+    let group = vendor::into_op_dc_velocity(&m, md, (0, &[]), CSV, CYCLE_NS).await;
     let mut sw = 0;
     for cw in vendor::enable_sequence(20) {
         sw = cycle(&m, md, &group, cw).await;

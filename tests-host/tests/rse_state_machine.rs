@@ -84,7 +84,7 @@ async fn into_op<'a>(
         Sdo::I16(0x605E, 0, 2),
         Sdo::U32(0x6085, 0, units::acceleration(&profile, 20.0)),
     ];
-    let group = vendor::into_op_dc_velocity(m, md, &setup, CSV, CYCLE_NS).await;
+    let group = vendor::into_op_dc_velocity(m, md, (0, &setup), CSV, CYCLE_NS).await;
     Drive {
         m,
         md,

@@ -30,7 +30,7 @@ use tests_host::cia402::{
     self, FAULT, OPERATION_ENABLED, QUICK_STOP_ACTIVE, READY_TO_SWITCH_ON, SWITCHED_ON,
     SWITCH_ON_DISABLED,
 };
-use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -201,14 +201,10 @@ async fn cycle(
     }
 }
 
-/// The PDOs (outputs 6040h, 6060h, 60FFh; inputs 6041h, 6061h, 606Ch), the ramps and the code.
+/// The ramps and the code (after the PDOs of [`vendor::into_op_dc_velocity`]).
 fn setup(case: &Case, profile: &Profile, object: u16, code: i16) -> Vec<Sdo> {
     let o = |index| case.object(index);
-    let offset = 0x10 * case.axis as u16;
-    let outputs: [MappedEntry; 3] = [(o(0x6040), 0, 16), (o(0x6060), 0, 8), (o(0x60FF), 0, 32)];
-    let inputs: [MappedEntry; 3] = [(o(0x6041), 0, 16), (o(0x6061), 0, 8), (o(0x606C), 0, 32)];
-    let mut sdos = vendor::remap(0x1600 + offset, 0x1C12, &outputs);
-    sdos.extend(vendor::remap(0x1A00 + offset, 0x1C13, &inputs));
+    let mut sdos = Vec::new();
     for (index, ramp) in [
         (0x6084, PROFILE_RAMP_REV_S2),
         (0x6085, QUICK_STOP_RAMP_REV_S2),
@@ -237,10 +233,8 @@ async fn stop(
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
     let axis = case.axis;
-    let group = vendor::into_op_dc(&m, md, &setup(case, profile, object, code), CYCLE_NS).await;
-    for _ in 0..vendor::SYNC0_START_CYCLES {
-        cycle(&m, md, &group, axis, (0, 0)).await;
-    }
+    let setup = setup(case, profile, object, code);
+    let group = vendor::into_op_dc_velocity(&m, md, (axis, &setup), CSV, CYCLE_NS).await;
     let mut s = cycle(&m, md, &group, axis, (0, 0)).await;
     for cw in vendor::enable_sequence(20) {
         s = cycle(&m, md, &group, axis, (cw, 0)).await;

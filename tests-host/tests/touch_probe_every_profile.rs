@@ -24,7 +24,7 @@ use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
 use od_gen::Profile;
 use tests_host::cia402::{self, OPERATION_ENABLED};
-use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -137,18 +137,10 @@ async fn run(p: &Probes, profile: &Profile, uses: [Use; 2]) -> Result<(), String
         });
         plant.set_rotor_position(START_REV * TAU);
     }
-    let offset = 0x10 * p.axis as u16;
-    let outputs: [MappedEntry; 3] = [(o(0x6040), 0, 16), (o(0x6060), 0, 8), (o(0x60FF), 0, 32)];
-    let inputs: [MappedEntry; 3] = [(o(0x6041), 0, 16), (o(0x6061), 0, 8), (o(0x606C), 0, 32)];
-    let mut setup = vendor::remap(0x1600 + offset, 0x1C12, &outputs);
-    setup.extend(vendor::remap(0x1A00 + offset, 0x1C13, &inputs));
-    setup.extend_from_slice(p.setup);
+    let mut setup = p.setup.to_vec();
     let function = uses[0].function | uses[1].function << 8;
     setup.push(Sdo::U16(o(0x60B8), 0, function));
-    let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
-    for _ in 0..vendor::SYNC0_START_CYCLES {
-        cycle(&m, md, &group, 0, 0).await;
-    }
+    let group = vendor::into_op_dc_velocity(&m, md, (p.axis, &setup), CSV, CYCLE_NS).await;
     let mut sw = 0;
     for cw in vendor::enable_sequence(20) {
         sw = cycle(&m, md, &group, cw, 0).await;

@@ -64,7 +64,7 @@ fn unsupported_modes_are_not_taken(name: &str) {
         let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = vendor::into_op_dc_velocity(&m, md, &[], CSV, CYCLE_NS).await;
+        let group = vendor::into_op_dc_velocity(&m, md, (0, &[]), CSV, CYCLE_NS).await;
         for cw in vendor::enable_sequence(20) {
             vendor::exchange_dc_command(&m, md, &group, (cw, CSV, 0), CYCLE_NS).await;
         }
