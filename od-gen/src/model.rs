@@ -2176,7 +2176,7 @@ pub enum StopRamp {
 }
 
 impl StopRamp {
-    /// The profile-file spellings, in variant order.
+    /// The profile-file spellings.
     pub const NAMES: [&'static str; 5] = [
         "coast",
         "profile_ramp",
@@ -2187,17 +2187,14 @@ impl StopRamp {
 
     /// Parses the profile-file spelling.
     pub fn parse(s: &str) -> Option<Self> {
-        const ALL: [StopRamp; 5] = [
-            StopRamp::Coast,
-            StopRamp::ProfileRamp,
-            StopRamp::QuickStopRamp,
-            StopRamp::CurrentLimit,
-            StopRamp::VoltageLimit,
-        ];
-        Self::NAMES
-            .iter()
-            .position(|n| *n == s)
-            .and_then(|i| ALL.get(i).copied())
+        match s {
+            "coast" => Some(Self::Coast),
+            "profile_ramp" => Some(Self::ProfileRamp),
+            "quick_stop_ramp" => Some(Self::QuickStopRamp),
+            "current_limit" => Some(Self::CurrentLimit),
+            "voltage_limit" => Some(Self::VoltageLimit),
+            _ => None,
+        }
     }
 
     /// The firmware's variant name.
