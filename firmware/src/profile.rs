@@ -561,6 +561,13 @@ pub struct Cia402Rules {
     /// The fault stop does not follow 605Eh: the object is accepted and ignored, and a fault
     /// disables the drive function at once (the GHA-E, §5.7.2).
     pub fault_reaction_ignored: bool,
+    /// Statusword bits 10–13 of the modes whose manual table differs from CiA402's (the
+    /// SDV3-E's speed zero on bit 11 and synchronisation on bit 12, the RSE's target reached
+    /// in the cyclic modes).
+    pub mode_statusword: &'static [cia402::mode_status::Override],
+    /// A statusword bit showing that a homing run has completed since power-on, in every mode
+    /// (the RSE's bit 15 "home found").
+    pub home_found_statusword: Option<StatuswordFlag>,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

@@ -1225,6 +1225,25 @@ fn cia402_rules(out: &mut String, p: &Profile) {
              target."
         );
     }
+    for m in &r.mode_statusword {
+        let _ = writeln!(
+            out,
+            "- Mode {}: statusword bit 10 {}, bit 11 {}, bit 12 {}, bit 13 {} (CiA402's table differs).",
+            m.mode,
+            crate::model::describe_mode_bit(m.bits[0]),
+            crate::model::describe_mode_bit(m.bits[1]),
+            crate::model::describe_mode_bit(m.bits[2]),
+            crate::model::describe_mode_bit(m.bits[3])
+        );
+    }
+    if let Some(f) = r.home_found_statusword {
+        let _ = writeln!(
+            out,
+            "- Statusword bit {} reads {} in every mode once a homing run has completed since power-on.",
+            f.bit,
+            u8::from(f.while_active)
+        );
+    }
     if let Some(f) = r.torque_limit_statusword {
         let _ = writeln!(
             out,

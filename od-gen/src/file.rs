@@ -885,6 +885,8 @@ impl Default for Cia402File {
             csp_extrapolation: None,
             stop_codes: Vec::new(),
             fault_reaction_ignored: false,
+            mode_statusword: Vec::new(),
+            home_found_statusword: None,
         }
     }
 }
@@ -1172,6 +1174,23 @@ pub struct Cia402File {
     /// 605Eh is accepted but has no effect: a fault disables the drive function at once.
     #[serde(default)]
     pub fault_reaction_ignored: bool,
+    /// `[[cia402.mode_statusword]]`: statusword bits 10-13 of a mode where the manual's table
+    /// differs from CiA402's.
+    #[serde(default)]
+    pub mode_statusword: Vec<ModeStatuswordFile>,
+    /// A statusword bit showing that homing has completed since power-on.
+    #[serde(default)]
+    pub home_found_statusword: Option<StatuswordFlagFile>,
+}
+
+/// `[[cia402.mode_statusword]]`: what statusword bits 10, 11, 12 and 13 show in a mode.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModeStatuswordFile {
+    /// The 6060h values the layout is for.
+    pub modes: Vec<i8>,
+    /// Bits 10, 11, 12, 13: each one of `ModeBit::NAMES`.
+    pub bits: [String; 4],
 }
 
 /// `[[cia402.stop_codes]]`: an option code of 605Ah–605Eh and the stop it selects.

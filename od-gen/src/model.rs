@@ -2126,6 +2126,84 @@ pub struct Cia402Rules {
     pub stop_codes: Vec<StopCode>,
     /// 605Eh is accepted and ignored: a fault disables the drive function at once.
     pub fault_reaction_ignored: bool,
+    /// Statusword bits 10-13 of the modes whose manual table differs from CiA402's
+    /// (`[[cia402.mode_statusword]]`), one entry per mode.
+    pub mode_statusword: Vec<ModeStatusword>,
+    /// A statusword bit showing that homing has completed since power-on
+    /// (`[cia402.home_found_statusword]`).
+    pub home_found_statusword: Option<StatuswordFlag>,
+}
+
+/// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ModeStatusword {
+    /// The 6060h value.
+    pub mode: i8,
+    /// Bits 10, 11, 12, 13.
+    pub bits: [ModeBit; 4],
+}
+
+/// A condition a mode-specific statusword bit shows: the firmware's own type, so that the
+/// generator and the firmware agree on what a profile may name.
+pub use cia402::mode_status::Shows as ModeBit;
+
+/// The profile-file spellings of [`ModeBit`]s and what each shows (for the profile document).
+pub const MODE_BITS: [(&str, ModeBit, &str); 11] = [
+    ("nothing", ModeBit::Nothing, "–"),
+    ("target_reached", ModeBit::TargetReached, "target reached"),
+    (
+        "internal_limit",
+        ModeBit::InternalLimit,
+        "internal limit active",
+    ),
+    (
+        "set_point_acknowledge",
+        ModeBit::SetPointAcknowledge,
+        "set-point acknowledge",
+    ),
+    ("speed_zero", ModeBit::SpeedZero, "speed zero (606Fh/6070h)"),
+    (
+        "following_error",
+        ModeBit::FollowingError,
+        "following error",
+    ),
+    (
+        "follows_command",
+        ModeBit::FollowsCommand,
+        "drive follows the command value",
+    ),
+    (
+        "synchronised",
+        ModeBit::Synchronised,
+        "synchronisation good",
+    ),
+    (
+        "homing_attained",
+        ModeBit::HomingAttained,
+        "homing attained",
+    ),
+    ("homing_error", ModeBit::HomingError, "homing error"),
+    (
+        "interpolation_active",
+        ModeBit::InterpolationActive,
+        "ip mode active",
+    ),
+];
+
+/// The condition a profile file names.
+pub fn parse_mode_bit(s: &str) -> Option<ModeBit> {
+    MODE_BITS
+        .iter()
+        .find(|(n, _, _)| *n == s)
+        .map(|(_, b, _)| *b)
+}
+
+/// What a bit showing `b` means, for the profile document.
+pub fn describe_mode_bit(b: ModeBit) -> &'static str {
+    MODE_BITS
+        .iter()
+        .find(|(_, m, _)| *m == b)
+        .map_or("–", |(_, _, d)| d)
 }
 
 /// An option code of 605Ah–605Eh a profile defines (`firmware: cia402::stop::VendorCode`).
@@ -2336,6 +2414,8 @@ impl Default for Cia402Rules {
             csp_extrapolation: None,
             stop_codes: Vec::new(),
             fault_reaction_ignored: false,
+            mode_statusword: Vec::new(),
+            home_found_statusword: None,
         }
     }
 }

@@ -590,6 +590,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .map(stop_code)
             .collect::<Result<_, _>>()?,
         fault_reaction_ignored: f.cia402.fault_reaction_ignored,
+        mode_statusword: mode_statusword(&f.cia402.mode_statusword)?,
+        home_found_statusword: f
+            .cia402
+            .home_found_statusword
+            .map(|t| statusword_flag(t, "cia402.home_found_statusword.statusword_bit"))
+            .transpose()?,
         homing_error_alarm: f
             .cia402
             .homing_error_alarm
@@ -597,6 +603,25 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .map(|r| fault_report(r, &alarms, "cia402.homing_error_alarm"))
             .transpose()?,
     };
+    // The manufacturer-specific statusword bits show one condition each.
+    let flags = [
+        cia402.safe_torque_off.map(|s| s.statusword.bit),
+        cia402.torque_limit_statusword.map(|f| f.bit),
+        cia402.home_found_statusword.map(|f| f.bit),
+    ];
+    let used: Vec<u8> = flags.iter().flatten().copied().collect();
+    if let Some(bit) = used.iter().enumerate().find_map(|(i, b)| {
+        used.get(i + 1..)
+            .filter(|rest| rest.contains(b))
+            .map(|_| *b)
+    }) {
+        return Err(fault(
+            "cia402.home_found_statusword.statusword_bit",
+            Invalid::Value(format!(
+                "statusword bit {bit} already shows another condition"
+            )),
+        ));
+    }
     let mut profile = Profile {
         name: f.name.clone(),
         source: source.to_string(),
@@ -871,6 +896,63 @@ fn stop_code(c: &crate::file::StopCodeFile) -> Result<crate::model::StopCode, Fa
         stop,
         hold: c.hold,
     })
+}
+
+/// `[[cia402.mode_statusword]]`: known conditions, each mode once (in one entry only), a
+/// mode of operation CiA402 defines (1-10).
+fn mode_statusword(
+    entries: &[crate::file::ModeStatuswordFile],
+) -> Result<Vec<crate::model::ModeStatusword>, Fault> {
+    use crate::model::{parse_mode_bit, ModeBit, ModeStatusword, MODE_BITS};
+    const KEY: &str = "cia402.mode_statusword";
+    let mut out: Vec<ModeStatusword> = Vec::new();
+    for e in entries {
+        let mut bits = [ModeBit::Nothing; 4];
+        for (bit, name) in bits.iter_mut().zip(&e.bits) {
+            *bit = parse_mode_bit(name).ok_or_else(|| {
+                let names: Vec<&str> = MODE_BITS.iter().map(|(n, _, _)| *n).collect();
+                fault(
+                    KEY,
+                    Invalid::Value(format!("`{name}` is not one of {names:?}")),
+                )
+            })?;
+        }
+        if e.modes.is_empty() {
+            return Err(fault(KEY, Invalid::Value("an entry names no mode".into())));
+        }
+        for &mode in &e.modes {
+            if !(1..=10).contains(&mode) {
+                return Err(fault(
+                    KEY,
+                    Invalid::Value(format!("mode {mode} has no CiA402 statusword table (1-10)")),
+                ));
+            }
+            if out.iter().any(|o| o.mode == mode) {
+                return Err(fault(
+                    KEY,
+                    Invalid::Value(format!("mode {mode} is given twice")),
+                ));
+            }
+            // The firmware works out only some conditions beyond a mode's own.
+            if let Some(b) = bits
+                .iter()
+                .find(|b| !cia402::mode_status::can_show(mode, **b))
+            {
+                return Err(fault(
+                    KEY,
+                    Invalid::Value(format!(
+                        "the drive does not work out `{}` in mode {mode}",
+                        MODE_BITS
+                            .iter()
+                            .find(|(_, m, _)| m == b)
+                            .map_or("?", |(n, _, _)| *n)
+                    )),
+                ));
+            }
+            out.push(ModeStatusword { mode, bits });
+        }
+    }
+    Ok(out)
 }
 
 /// `"0x6091:1"` → (0x6091, 1); the subindex may be decimal or `0x` hex.

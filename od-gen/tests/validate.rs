@@ -1399,7 +1399,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None }"
     ));
     // A profile's own option codes: 605Bh = 2 stops on 6085h (the GHA-E), generated as the
     // firmware's VendorCode; an object outside 605Ah-605Eh and an unknown stop are refused.
@@ -1413,7 +1413,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.fault_reaction_ignored);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true }"
+        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true, mode_statusword: &[], home_found_statusword: None }"
     ));
     for bad in [
         "[[cia402.stop_codes]]\nobject = \"0x6060\"\ncode = 2\nstop = \"coast\"",
@@ -1422,6 +1422,40 @@ fn cia402_rules_are_resolved_and_checked() {
         let (key, _) = invalid(&appended(bad));
         assert_eq!(key, "cia402.stop_codes", "{bad}");
     }
+    // A mode's statusword bits 10-13 where the manual differs from CiA402 (the SDV3-E's CSV:
+    // speed arrival, speed zero, successful synchronisation), generated as the firmware's
+    // mode_status::Override; unknown conditions, modes outside 1-10, a mode given twice and a
+    // condition the drive does not work out in the mode are refused.
+    let p = od_gen::parse(
+        &appended(
+            "[[cia402.mode_statusword]]\nmodes = [9]\nbits = [\"target_reached\", \"speed_zero\", \"synchronised\", \"nothing\"]",
+        ),
+        "ok",
+    )
+    .unwrap();
+    assert!(od_gen::rust::generate(&[p]).contains(
+        "mode_statusword: &[cia402::mode_status::Override { mode: 9, layout: cia402::mode_status::Layout { bits: [cia402::mode_status::Shows::TargetReached, cia402::mode_status::Shows::SpeedZero, cia402::mode_status::Shows::Synchronised, cia402::mode_status::Shows::Nothing] } }], home_found_statusword: None"
+    ));
+    for bad in [
+        "modes = [9]\nbits = [\"speed_arrival\", \"nothing\", \"nothing\", \"nothing\"]",
+        "modes = [11]\nbits = [\"nothing\", \"nothing\", \"nothing\", \"nothing\"]",
+        "modes = [9, 9]\nbits = [\"nothing\", \"nothing\", \"nothing\", \"nothing\"]",
+        "modes = []\nbits = [\"nothing\", \"nothing\", \"nothing\", \"nothing\"]",
+        "modes = [10]\nbits = [\"target_reached\", \"nothing\", \"nothing\", \"nothing\"]",
+        "modes = [9]\nbits = [\"nothing\", \"nothing\", \"following_error\", \"nothing\"]",
+    ] {
+        let (key, _) = invalid(&appended(&format!("[[cia402.mode_statusword]]\n{bad}")));
+        assert_eq!(key, "cia402.mode_statusword", "{bad}");
+    }
+    // The RSE's bit 15 "home found"; it may not share a bit with another flag.
+    let rse = od_gen::builtin("rse").unwrap();
+    assert!(od_gen::rust::generate(&[rse]).contains(
+        "home_found_statusword: Some(crate::profile::StatuswordFlag { bit: 15, while_active: true })"
+    ));
+    let (key, _) = invalid(&appended(
+        "[cia402.torque_limit_statusword]\nstatusword_bit = 15\nstatusword_while_active = true\n[cia402.home_found_statusword]\nstatusword_bit = 15\nstatusword_while_active = true",
+    ));
+    assert_eq!(key, "cia402.home_found_statusword.statusword_bit");
     let (key, _) = invalid(&appended(
         "[cia402.torque_limit_statusword]\nstatusword_bit = 11\nstatusword_while_active = true",
     ));

@@ -38,3 +38,21 @@ pub const HOMING_BITS: u16 = TARGET_REACHED | HOMING_ATTAINED | HOMING_ERROR;
 pub const HOMING: i8 = 6;
 /// 6060h: cyclic synchronous velocity.
 pub const CYCLIC_SYNCHRONOUS_VELOCITY: i8 = 9;
+
+/// The modes of operation `profile` supports: its 6502h (bit n−1 is mode n, CiA402: bit 0 PP …
+/// bit 9 CST).
+pub fn supported_modes(profile: &od_gen::Profile) -> u32 {
+    profile
+        .entry(0x6502, 0)
+        .map(|e| e.initial_bytes())
+        .and_then(|b| {
+            b.get(..4)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        })
+        .expect("6502h")
+}
+
+/// Whether mode `mode` (1–10) is among `supported` ([`supported_modes`]).
+pub fn supports(supported: u32, mode: i8) -> bool {
+    (1..=32).contains(&mode) && supported & (1 << (mode - 1)) != 0
+}

@@ -47,14 +47,7 @@ fn motor_rev_s(m: &InProcess) -> f64 {
 
 fn unsupported_modes_are_not_taken(name: &str) {
     let profile = od_gen::builtin(name).expect("profile");
-    let supported = profile
-        .entry(0x6502, 0)
-        .map(|e| e.initial_bytes())
-        .and_then(|b| {
-            b.get(..4)
-                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        })
-        .expect("6502h");
+    let supported = cia402::supported_modes(&profile);
     // 6502h bit n-1 is mode n (CiA402: bit 0 PP ... bit 9 CST).
     let unsupported: Vec<i8> = (1..=10i8)
         .filter(|mode| supported & (1 << (mode - 1)) == 0)

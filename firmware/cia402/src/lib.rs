@@ -11,6 +11,7 @@
 //! | [`limits`] | software position limits 607Dh, limit switches: which motions are blocked; 60FDh |
 //! | [`outputs`] | digital outputs 60FEh: the master's forced levels under the bit mask, the brake |
 //! | [`modes`] | modes of operation (6060h/6061h) and the set-point each mode hands to the axis |
+//! | [`mode_status`] | statusword bits 10–13: what each shows in each mode, CiA402's layouts and a profile's own |
 //! | [`homing`] | homing mode: the search sequences of the CiA402 homing methods on latched switch edges and index pulses, homing statusword bits |
 //! | [`interpolated_position`] | interpolated position mode: controlword bit 4, statusword bit 12, the interpolation period 60C2h |
 //! | [`profile_position`] | the set-point handshake of profile position (controlword bits 4, 5, 6, 9; statusword bit 12; the buffer) |
@@ -28,6 +29,7 @@ pub mod faults;
 pub mod homing;
 pub mod interpolated_position;
 pub mod limits;
+pub mod mode_status;
 pub mod modes;
 pub mod outputs;
 pub mod pds;

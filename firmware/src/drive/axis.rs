@@ -18,6 +18,7 @@ use cia402::faults::FaultReport;
 use cia402::homing;
 use cia402::interpolated_position;
 use cia402::limits::{self, Blocked};
+use cia402::mode_status::{self, ModeStatus, Shows};
 use cia402::modes::{self, Mode, Targets};
 use cia402::outputs;
 use cia402::pds::{controlword, statusword, PdsState};
@@ -53,6 +54,8 @@ const SECONDS_PER_MINUTE: f32 = 60.0;
 const NS_TO_S: f32 = 1e-9;
 /// Statusword bit 13 in the position modes: following error.
 const FOLLOWING_ERROR: u16 = 1 << 13;
+/// Statusword bit 12 in the cyclic synchronous modes: the drive follows the command value.
+const FOLLOWS_COMMAND: u16 = 1 << 12;
 /// The EMCY byte of the first byte of the manufacturer-specific field (CiA 301: bytes 3–7).
 const EMCY_DATA_FIRST_BYTE: usize = 3;
 
@@ -101,6 +104,18 @@ pub struct DriveAxis {
     running_mode: u8,
     /// `running_mode` as the drive runs it (decoded once per change, not every cycle).
     mode: Mode,
+    /// What statusword bits 10–13 show in `running_mode` (resolved once per change).
+    mode_status: Option<ModeStatus>,
+    /// The cyclic position or velocity target inside its window (6067h/6068h, 606Dh/606Eh),
+    /// where the profile shows it (statusword bit 10 in the RSE's and SDV3-E's CSP and CSV).
+    cyclic_target_timer: WindowTimer,
+    /// |606Ch| within 606Fh for 6070h outside profile velocity, where the profile shows it
+    /// (the SDV3-E's CSV bit 11).
+    speed_zero_timer: WindowTimer,
+    /// The slave runs the cycle in sync (OP on SYNC0 without sync errors).
+    pub(super) in_sync: bool,
+    /// A homing run has completed since power-on (`Cia402Rules::home_found_statusword`).
+    homed: bool,
     /// How long the following error has been outside 6065h (statusword bit 13).
     following_error_timer: WindowTimer,
     /// Drive position − axis position, increments: 0 at power-on, set by homing so that the
@@ -220,6 +235,11 @@ impl DriveAxis {
             touch_probes: TouchProbes::new(),
             running_mode: 0,
             mode: Mode::from_object(0),
+            mode_status: None,
+            cyclic_target_timer: WindowTimer::new(),
+            speed_zero_timer: WindowTimer::new(),
+            in_sync: false,
+            homed: false,
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
             home_offset_shift: 0,
@@ -489,6 +509,15 @@ impl DriveAxis {
         self.csp_extrapolation
     }
 
+    /// Whether the profile shows the synchronisation in a statusword bit (the SDV3-E's
+    /// "successful synchronization": the master's outputs of each cycle count).
+    pub(super) fn shows_synchronisation(&self) -> bool {
+        self.rules
+            .mode_statusword
+            .iter()
+            .any(|o| o.layout.shows(Shows::Synchronised))
+    }
+
     /// The SYNC0 of the next cycle brought no new outputs.
     pub(super) fn outputs_missed(&mut self) {
         self.outputs_missed = true;
@@ -513,6 +542,71 @@ impl DriveAxis {
         Some(next)
     }
 
+    /// The conditions the mode's statusword layout shows beyond CiA402's (`status.needs`):
+    /// synchronisation, speed zero outside profile velocity, target reached in CSP/CSV.
+    fn extra_conditions(
+        &mut self,
+        status: &ModeStatus,
+        (mode, motion): (Mode, Motion),
+        set_point: &modes::SetPoint,
+        feedback: &AxisFeedback,
+        (cycle_ns, counts_per_rev): (u32, u32),
+        position_ratio: units::Ratio,
+    ) -> mode_status::Conditions {
+        let mut extra = mode_status::Conditions::NONE;
+        extra.set(
+            Shows::Synchronised,
+            self.in_sync && status.needs(Shows::Synchronised),
+        );
+        // Like the profile modes' bits, speed zero and target reached show only while the
+        // mode runs (operation enabled).
+        let running = matches!(motion, Motion::Run);
+        if status.needs(Shows::SpeedZero) {
+            let (threshold, time_ms) = self.speed_zero_threshold(counts_per_rev);
+            let still = running && feedback.velocity.abs() <= threshold;
+            extra.set(
+                Shows::SpeedZero,
+                self.speed_zero_timer.step(still, time_ms, cycle_ns),
+            );
+        }
+        if status.needs(Shows::TargetReached) {
+            let inside = match mode {
+                Mode::CyclicPosition => {
+                    let (window, _) = self.settings.position_window;
+                    // One difference converted (see `motion`'s homing target reached).
+                    let deviation = position_ratio.position_from_internal(
+                        set_point.position.saturating_sub(feedback.position),
+                    );
+                    running && window::inside(deviation, window)
+                }
+                Mode::CyclicVelocity => {
+                    let (window, _) = self.settings.velocity_window;
+                    running && (set_point.velocity - feedback.velocity).abs() <= window
+                }
+                _ => false,
+            };
+            let time_ms = if matches!(mode, Mode::CyclicVelocity) {
+                self.settings.velocity_window.1
+            } else {
+                self.settings.position_window.1
+            };
+            extra.set(
+                Shows::TargetReached,
+                self.cyclic_target_timer.step(inside, time_ms, cycle_ns),
+            );
+        }
+        extra
+    }
+
+    /// Speed zero's level (increments/s) and time (ms): 606Fh/6070h, or without 606Fh the
+    /// drive's standstill level at once (the Σ-V-SD's PV bit 12 "speed = 0" has no threshold
+    /// object; its rotation detection level Pn502 is [`STANDSTILL_RPM`]).
+    fn speed_zero_threshold(&self, counts_per_rev: u32) -> (f32, u16) {
+        self.settings
+            .velocity_threshold
+            .unwrap_or((standstill_counts_per_s(counts_per_rev), 0))
+    }
+
     /// Writes the device's `statusword` with the profile's own bits: safe torque off, torque
     /// limit (as of the axis' last feedback).
     fn write_statusword(&self, ram: &mut [u8], statusword: u16) {
@@ -523,7 +617,14 @@ impl DriveAxis {
         let torque_limit = rules
             .torque_limit_statusword
             .map_or(0, |f| f.bits(self.torque_limited));
-        write_u16(ram, self.vars.statusword, statusword | sto | torque_limit);
+        let homed = rules
+            .home_found_statusword
+            .map_or(0, |f| f.bits(self.homed));
+        write_u16(
+            ram,
+            self.vars.statusword,
+            statusword | sto | torque_limit | homed,
+        );
     }
 
     /// One cycle: the CiA402 device on the controlword and the option codes, the mode
@@ -555,6 +656,9 @@ impl DriveAxis {
                 if supported && !locked {
                     self.running_mode = requested;
                     self.mode = Mode::from_object(requested as i8);
+                    self.mode_status = ModeStatus::of(requested as i8, self.rules.mode_statusword);
+                    self.cyclic_target_timer.reset();
+                    self.speed_zero_timer.reset();
                 }
             }
             [self.running_mode]
@@ -838,6 +942,7 @@ impl DriveAxis {
         }
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;
+        let mut target_ignored = false;
         if let Some(limit) = self.rules.max_interpolation_speed {
             let interpolated = matches!(mode, Mode::CyclicPosition | Mode::InterpolatedPosition);
             if interpolated && matches!(motion, Motion::Run) {
@@ -852,6 +957,7 @@ impl DriveAxis {
                 if interpolation_too_fast(step, limit, period_ns) {
                     set_point.position = self.position_demand;
                     mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+                    target_ignored = true;
                 }
             }
         }
@@ -872,6 +978,9 @@ impl DriveAxis {
                 units.position,
             );
             inputs.position_range = limits;
+            if matches!(mode, Mode::ProfileVelocity) {
+                inputs.velocity_threshold = self.speed_zero_threshold(port.counts_per_rev);
+            }
             inputs.target_position = pol.position(inputs.target_position);
             if matches!(mode, Mode::Homing) {
                 // Read only where needed: a seqlock read of the captures.
@@ -892,6 +1001,7 @@ impl DriveAxis {
             set_point = out.set_point;
             mode_statusword = out.statusword;
             if let Some(home) = out.home_found {
+                self.homed = true;
                 // The home position reads as the home offset from now on.
                 let offset = position_in(vars.home_offset).unwrap_or(0);
                 let delta = position_ratio
@@ -1049,6 +1159,27 @@ impl DriveAxis {
         if feedback.current_limited && enable {
             // CiA402 statusword bit 11: the torque demand is at its limit.
             mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+        }
+        let cyclic = matches!(
+            mode,
+            Mode::CyclicPosition | Mode::CyclicVelocity | Mode::CyclicTorque
+        );
+        // CiA402 bit 12 in the cyclic modes: the master's target is the loop's input (not
+        // while a stop or a limit holds the motor, nor when the target was ignored).
+        let follows = cyclic && matches!(motion, Motion::Run) && !target_ignored;
+        if follows {
+            mode_statusword |= FOLLOWS_COMMAND;
+        }
+        if let Some(status) = self.mode_status {
+            let extra = self.extra_conditions(
+                &status,
+                (mode, motion),
+                &set_point,
+                feedback,
+                (cycle_ns, port.counts_per_rev),
+                position_ratio,
+            );
+            mode_statusword = status.apply(mode_statusword, extra);
         }
         if mode_statusword != 0 {
             if let Some(sw) = read_u16(ram, vars.statusword) {
@@ -1403,7 +1534,6 @@ fn profile_inputs(
         Mode::ProfileVelocity => {
             inputs.velocity_limits = settings.velocity_limits;
             inputs.velocity_window = settings.velocity_window;
-            inputs.velocity_threshold = settings.velocity_threshold;
         }
         Mode::ProfileTorque => inputs.torque_slope = settings.torque_slope,
         Mode::Homing => {

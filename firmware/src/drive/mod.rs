@@ -458,12 +458,18 @@ impl Application for Drive {
         self.axes
             .iter()
             .flatten()
-            .any(DriveAxis::extrapolates_lost_cycles)
+            .any(|a| a.extrapolates_lost_cycles() || a.shows_synchronisation())
     }
 
     fn outputs_missed(&mut self) {
         for axis in self.axes.iter_mut().flatten() {
             axis.outputs_missed();
+        }
+    }
+
+    fn synchronisation(&mut self, in_sync: bool) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.in_sync = in_sync;
         }
     }
 

@@ -212,8 +212,9 @@ pub(super) struct Settings {
     pub position_window: (u32, u16),
     /// 606Dh (increments/s) and 606Eh (ms).
     pub velocity_window: (f32, u16),
-    /// 606Fh (increments/s) and 6070h (ms).
-    pub velocity_threshold: (f32, u16),
+    /// 606Fh (increments/s) and 6070h (ms); `None` without 606Fh (the drive's standstill
+    /// level counts).
+    pub velocity_threshold: Option<(f32, u16)>,
     /// 6099h:01, 6099h:02 (increments/s) and 609Ah (increments/s²).
     pub homing_speeds: (f32, f32, f32),
     /// The profile's homing time limit, ms.
@@ -240,7 +241,7 @@ impl Settings {
         quick_stop_deceleration: 0.0,
         position_window: (0, 0),
         velocity_window: (0.0, 0),
-        velocity_threshold: (0.0, 0),
+        velocity_threshold: None,
         homing_speeds: (0.0, 0.0, 0.0),
         homing_timeout_ms: None,
         software_limits: None,
@@ -361,10 +362,12 @@ impl Settings {
             window(vars.velocity_window),
             time(vars.velocity_window_time),
         );
-        self.velocity_threshold = (
-            window(vars.velocity_threshold),
-            time(vars.velocity_threshold_time),
-        );
+        self.velocity_threshold = vars.velocity_threshold.is_some().then(|| {
+            (
+                window(vars.velocity_threshold),
+                time(vars.velocity_threshold_time),
+            )
+        });
     }
 
     fn refresh_homing(&mut self, ram: &[u8], vars: &AppVars, units: &UnitRatios) {

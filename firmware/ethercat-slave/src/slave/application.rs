@@ -73,7 +73,8 @@ pub trait Application {
     }
 
     /// Whether the application needs to know which SYNC0 cycles brought no new outputs (a
-    /// position mode that extrapolates over a lost cycle): the slave then reads the SM2 event
+    /// position mode that extrapolates over a lost cycle, a statusword bit that shows the
+    /// synchronisation): the slave then reads the SM2 event
     /// at every SYNC0 in OP (DC) and calls [`Self::outputs_missed`]. Default: no.
     fn watches_missed_outputs(&self) -> bool {
         false
@@ -83,6 +84,15 @@ pub trait Application {
     /// only when [`Self::watches_missed_outputs`]): the image it unpacks is the previous one.
     /// Called before that [`Self::cycle`]. Default: nothing.
     fn outputs_missed(&mut self) {}
+
+    /// Whether the cycle that follows runs in sync (called before every [`Self::cycle`] of the
+    /// process-data cycle): OP on the DC SYNC0 (or SYNC1) with no sync error in the counter
+    /// (ETG.1020 §5.1, so for a few cycles after a missed event) and, where a profile rule
+    /// watches the SM2 event, new outputs from the master for this SYNC0. A drive shows it in its
+    /// statusword where the profile has a bit for it. Default: nothing.
+    fn synchronisation(&mut self, in_sync: bool) {
+        let _ = in_sync;
+    }
 
     /// The RxPDO mapping changed: `outputs` is the plan the cycles unpack from now on (built at
     /// PREOP → SAFEOP; the empty plan when the state falls below SAFEOP). An application that

@@ -31,11 +31,19 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             return Ok(None);
         }
         self.cycle_started_ns = now_ns;
-        if matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1) {
-            self.supervise_outputs(pdi, now_ns)?;
-        }
+        let dc = matches!(self.sync.mode, Mode::DcSync0 | Mode::DcSync1);
+        let fresh = if dc {
+            self.supervise_outputs(pdi, now_ns)?
+        } else {
+            None
+        };
         // The supervision may have left OP.
         let state = self.status.state;
+        // In sync: OP on SYNC0, no sync error in the counter, and this cycle's outputs new
+        // where they are watched.
+        self.app.synchronisation(
+            dc && state == AlState::Op && self.sync_supervisor.in_sync() && fresh != Some(false),
+        );
         let device = &self.profile.device;
         let rx_len = self.rx_plan.byte_len();
         if rx_len > 0 {
@@ -53,8 +61,13 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// outputs the master did not write since the previous SYNC0 (the SM2 event stays pending
     /// until the buffer is read): as a missed event (`[sync] sync_error_on_missed_outputs`), as
     /// a lost cycle in a row (`[esm] lost_outputs`, which trips here, in the cycle that
-    /// reached the limit).
-    fn supervise_outputs<P: EscPdi>(&mut self, pdi: &mut P, now_ns: u64) -> Result<(), P::Error> {
+    /// reached the limit). Returns whether the master wrote the outputs since the previous
+    /// SYNC0, where a rule watches it (`None`: not read).
+    fn supervise_outputs<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        now_ns: u64,
+    ) -> Result<Option<bool>, P::Error> {
         let device = self.profile.device;
         let op = self.status.state == AlState::Op;
         let lost_rule = device
@@ -78,13 +91,13 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let (Some(rule), Some(fresh)) = (lost_rule, fresh) else {
             // Not supervised now (another mode, not OP): the count starts afresh.
             self.lost_outputs.restart();
-            return Ok(());
+            return Ok(fresh);
         };
         self.lost_outputs.on_sync0(fresh);
         if self.lost_outputs.tripped() {
             self.trip_lost_outputs(pdi, rule)?;
         }
-        Ok(())
+        Ok(Some(fresh))
     }
 
     /// Whether the entry a [`LostOutputsRule`] watches holds one of its values.

@@ -105,6 +105,12 @@ impl SyncSupervisor {
         limit != 0 && (self.counter > limit || (at_limit && self.counter == limit))
     }
 
+    /// Whether SYNC0 events come and the counter holds no error (it is 0: every missed event
+    /// has been paid back by good ones).
+    pub fn in_sync(&self) -> bool {
+        self.running() && self.counter == 0
+    }
+
     /// Whether a SYNC0 has been seen since the last reset.
     pub fn running(&self) -> bool {
         self.next_due_ns.is_some()
@@ -209,6 +215,21 @@ mod tests {
         let mut s = SyncSupervisor::default();
         assert_eq!(s.check(50_000_000, CYCLE), 0);
         assert!(!s.running());
+    }
+
+    #[test]
+    fn in_sync_until_a_missed_event_and_again_once_it_is_paid_back() {
+        let mut s = SyncSupervisor::default();
+        assert!(!s.in_sync(), "no SYNC0 yet");
+        s.on_sync0(0, CYCLE, None);
+        assert!(s.in_sync());
+        // One SYNC0 missed: +3, then −1 per good event (ETG.1020): out of sync for three.
+        assert_eq!(s.check(1_600_000, CYCLE), 1);
+        assert!(!s.in_sync());
+        for k in 2..5u64 {
+            s.on_sync0(k * 1_000_000, CYCLE, None);
+            assert_eq!(s.in_sync(), k == 4, "SYNC0 {k}");
+        }
     }
 
     #[test]
