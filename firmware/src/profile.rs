@@ -568,6 +568,12 @@ pub struct Cia402Rules {
     /// A statusword bit showing that a homing run has completed since power-on, in every mode
     /// (the RSE's bit 15 "home found").
     pub home_found_statusword: Option<StatuswordFlag>,
+    /// The option codes the drive works with where the profile has no object for them (the
+    /// RSE's halt: controlword bit 8 "per 605Dh" without a 605Dh); `vendor` is unused.
+    pub implied_option_codes: cia402::stop::OptionCodes,
+    /// Quick stop, shutdown and disable operation disable the drive function at once in the
+    /// torque modes, whatever their option codes (the Σ-V-SD, §6.4).
+    pub torque_modes_stop_at_once: bool,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

@@ -1132,6 +1132,20 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             }
         );
     }
+    for ((index, _), code) in crate::model::StopCode::OBJECTS
+        .iter()
+        .zip(r.option_codes_without_object)
+    {
+        if let Some(code) = code {
+            let _ = writeln!(
+                out,
+                "- Without {index:04X}h the drive works as with {index:04X}h = {code}."
+            );
+        }
+    }
+    if r.torque_modes_stop_at_once {
+        out.push_str("- In profile torque and cyclic synchronous torque, quick stop, shutdown and disable operation disable the drive function at once (code 0).\n");
+    }
     if r.fault_reaction_ignored {
         out.push_str(
             "- 605Eh is accepted but has no effect: a fault disables the drive function at once.\n",

@@ -887,6 +887,8 @@ impl Default for Cia402File {
             fault_reaction_ignored: false,
             mode_statusword: Vec::new(),
             home_found_statusword: None,
+            option_codes_without_object: OptionCodesFile::default(),
+            torque_modes_stop_at_once: false,
         }
     }
 }
@@ -1181,6 +1183,29 @@ pub struct Cia402File {
     /// A statusword bit showing that homing has completed since power-on.
     #[serde(default)]
     pub home_found_statusword: Option<StatuswordFlagFile>,
+    /// `[cia402.option_codes_without_object]`: the codes the drive works with where the profile
+    /// has no 605Ah-605Eh object.
+    #[serde(default)]
+    pub option_codes_without_object: OptionCodesFile,
+    /// Quick stop, shutdown and disable operation disable the drive at once in PT and CST.
+    #[serde(default)]
+    pub torque_modes_stop_at_once: bool,
+}
+
+/// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.
+#[derive(Clone, Copy, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OptionCodesFile {
+    /// 605Ah.
+    pub quick_stop: Option<i16>,
+    /// 605Bh.
+    pub shutdown: Option<i16>,
+    /// 605Ch.
+    pub disable_operation: Option<i16>,
+    /// 605Dh.
+    pub halt: Option<i16>,
+    /// 605Eh.
+    pub fault_reaction: Option<i16>,
 }
 
 /// `[[cia402.mode_statusword]]`: what statusword bits 10, 11, 12 and 13 show in a mode.

@@ -2132,6 +2132,11 @@ pub struct Cia402Rules {
     /// A statusword bit showing that homing has completed since power-on
     /// (`[cia402.home_found_statusword]`).
     pub home_found_statusword: Option<StatuswordFlag>,
+    /// The option codes the drive works with where the profile has no object for them, in the
+    /// order of [`StopCode::OBJECTS`] (`[cia402.option_codes_without_object]`).
+    pub option_codes_without_object: [Option<i16>; 5],
+    /// Quick stop, shutdown and disable operation disable the drive at once in PT and CST.
+    pub torque_modes_stop_at_once: bool,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2416,6 +2421,8 @@ impl Default for Cia402Rules {
             fault_reaction_ignored: false,
             mode_statusword: Vec::new(),
             home_found_statusword: None,
+            option_codes_without_object: [None; 5],
+            torque_modes_stop_at_once: false,
         }
     }
 }

@@ -591,6 +591,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .collect::<Result<_, _>>()?,
         fault_reaction_ignored: f.cia402.fault_reaction_ignored,
         mode_statusword: mode_statusword(&f.cia402.mode_statusword)?,
+        option_codes_without_object: option_codes_without_object(
+            &f.cia402.option_codes_without_object,
+            &f.cia402.stop_codes,
+            &declared,
+        )?,
+        torque_modes_stop_at_once: f.cia402.torque_modes_stop_at_once,
         home_found_statusword: f
             .cia402
             .home_found_statusword
@@ -896,6 +902,59 @@ fn stop_code(c: &crate::file::StopCodeFile) -> Result<crate::model::StopCode, Fa
         stop,
         hold: c.hold,
     })
+}
+
+/// `[cia402.option_codes_without_object]`: only for an object the profile does not have, and
+/// a code with a meaning (CiA402's, or the profile's own `[[cia402.stop_codes]]`).
+fn option_codes_without_object(
+    codes: &crate::file::OptionCodesFile,
+    stop_codes: &[crate::file::StopCodeFile],
+    declared: &BTreeMap<u16, Object>,
+) -> Result<[Option<i16>; 5], Fault> {
+    use crate::model::StopCode;
+    const KEY: &str = "cia402.option_codes_without_object";
+    let given = [
+        codes.quick_stop,
+        codes.shutdown,
+        codes.disable_operation,
+        codes.halt,
+        codes.fault_reaction,
+    ];
+    for ((index, cause), code) in StopCode::OBJECTS.iter().zip(given) {
+        let Some(code) = code else { continue };
+        if declared.contains_key(index) {
+            return Err(fault(
+                KEY,
+                Invalid::Value(format!("the profile has {index:04X}h: its value applies")),
+            ));
+        }
+        let vendor = stop_codes
+            .iter()
+            .any(|c| parse_index(&c.object) == Some(*index) && c.code == code);
+        if !vendor && !cia402_defines(cause, code) {
+            return Err(fault(
+                KEY,
+                Invalid::Value(format!(
+                    "{index:04X}h = {code} has no meaning (CiA402 reserves it)"
+                )),
+            ));
+        }
+    }
+    Ok(given)
+}
+
+/// Whether CiA402 defines option code `code` for `cause` (a [`crate::model::StopCode::OBJECTS`]
+/// name), as the firmware's `cia402::stop::reaction` has it.
+fn cia402_defines(cause: &str, code: i16) -> bool {
+    use cia402::stop::Cause;
+    let cause = match cause {
+        "QuickStop" => Cause::QuickStop,
+        "Shutdown" => Cause::Shutdown,
+        "DisableOperation" => Cause::DisableOperation,
+        "Halt" => Cause::Halt,
+        _ => Cause::Fault,
+    };
+    cia402::stop::reaction(cause, code).is_some()
 }
 
 /// `[[cia402.mode_statusword]]`: known conditions, each mode once (in one entry only), a

@@ -1399,7 +1399,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false }"
     ));
     // A profile's own option codes: 605Bh = 2 stops on 6085h (the GHA-E), generated as the
     // firmware's VendorCode; an object outside 605Ah-605Eh and an unknown stop are refused.
@@ -1413,7 +1413,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.fault_reaction_ignored);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true, mode_statusword: &[], home_found_statusword: None }"
+        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false }"
     ));
     for bad in [
         "[[cia402.stop_codes]]\nobject = \"0x6060\"\ncode = 2\nstop = \"coast\"",
@@ -1447,6 +1447,30 @@ fn cia402_rules_are_resolved_and_checked() {
         let (key, _) = invalid(&appended(&format!("[[cia402.mode_statusword]]\n{bad}")));
         assert_eq!(key, "cia402.mode_statusword", "{bad}");
     }
+    // The RSE's halt without 605Dh works as 605Dh = 1; a code is refused for an object the
+    // profile has, and where CiA402 reserves it (no [[cia402.stop_codes]] meaning).
+    let rse = od_gen::builtin("rse").unwrap();
+    assert!(od_gen::rust::generate(&[rse]).contains(
+        "implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: Some(1), fault_reaction: None, vendor: &[] }"
+    ));
+    let sigma = od_gen::builtin("sigma-v-sd").unwrap();
+    assert!(od_gen::rust::generate(&[sigma]).contains("torque_modes_stop_at_once: true"));
+    let (key, _) = invalid(&appended(
+        "[cia402.option_codes_without_object]\nquick_stop = 2",
+    ));
+    assert_eq!(
+        key, "cia402.option_codes_without_object",
+        "the profile has 605Ah"
+    );
+    // The GHA-E has no 605Dh: halt codes CiA402 reserves are refused there.
+    const GHA_E: &str = include_str!("../profiles/gha-e.toml");
+    for bad in ["halt = 0", "halt = 5"] {
+        let text = format!("{GHA_E}\n[cia402.option_codes_without_object]\n{bad}\n");
+        let (key, _) = invalid(&text);
+        assert_eq!(key, "cia402.option_codes_without_object", "{bad}");
+    }
+    let ok = format!("{GHA_E}\n[cia402.option_codes_without_object]\nhalt = 2\n");
+    assert!(od_gen::parse(&ok, "ok").is_ok());
     // The RSE's bit 15 "home found"; it may not share a bit with another flag.
     let rse = od_gen::builtin("rse").unwrap();
     assert!(od_gen::rust::generate(&[rse]).contains(

@@ -9,6 +9,7 @@ pub mod io_module;
 pub mod raw_sdo;
 pub mod session;
 pub mod soem;
+pub mod stops;
 pub mod units;
 pub mod vendor;
 

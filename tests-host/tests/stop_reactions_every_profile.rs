@@ -21,8 +21,6 @@
 //! coasting: the power stage off at once and the motor still turning), the power stage during
 //! and after the stop, and the state the drive ends in.
 
-use std::f64::consts::TAU;
-
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
 use od_gen::Profile;
@@ -30,6 +28,7 @@ use tests_host::cia402::{
     self, FAULT, OPERATION_ENABLED, QUICK_STOP_ACTIVE, READY_TO_SWITCH_ON, SWITCHED_ON,
     SWITCH_ON_DISABLED,
 };
+use tests_host::stops::{self, Sample, Stop};
 use tests_host::vendor::{self, DcGroup, Sdo};
 use tests_host::{block_on, master_for, units};
 
@@ -41,10 +40,8 @@ const SPEED_REV_S: f64 = 10.0;
 /// The slow-down ramp 6084h and the quick-stop ramp 6085h.
 const PROFILE_RAMP_REV_S2: f64 = 20.0;
 const QUICK_STOP_RAMP_REV_S2: f64 = 40.0;
-/// A measured deceleration within this fraction of its ramp.
-const RAMP_TOLERANCE: f64 = 0.15;
-/// The drive's standstill level, rev/s (20 rpm).
-const STANDSTILL_REV_S: f64 = 20.0 / 60.0;
+/// A stop at the current or voltage limit: at least twice the steepest ramp.
+const AT_LIMIT: Stop = Stop::Limit(2.0 * QUICK_STOP_RAMP_REV_S2);
 /// Cycles watched after the command: the slowest ramp takes 0.5 s.
 const STOP_CYCLES: usize = 800;
 
@@ -54,19 +51,6 @@ const DISABLE_OPERATION: u16 = 0x07;
 const ENABLE_OPERATION: u16 = 0x0F;
 const QUICK_STOP: u16 = 0x02;
 const HALT: u16 = 0x0100;
-
-/// What brings the motor to rest.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Stop {
-    /// The power stage off at once.
-    Coast,
-    /// Along a ramp, rev/s².
-    Ramp(f64),
-    /// At the current or the voltage limit.
-    Limit,
-    /// No stop (a halt code without a meaning).
-    None,
-}
 
 /// The stop commands, one per option-code object.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -126,15 +110,15 @@ fn expected(cause: Cause, code: i16, d: &Deviations) -> (Stop, (u16, u16)) {
     let (cia402, hold) = match (cause, code) {
         (Cause::Halt, 1) => (Ramp(PROFILE_RAMP_REV_S2), true),
         (Cause::Halt, 2) => (Ramp(QUICK_STOP_RAMP_REV_S2), true),
-        (Cause::Halt, 3 | 4) => (Limit, true),
+        (Cause::Halt, 3 | 4) => (AT_LIMIT, true),
         (Cause::Halt, _) => (None, true),
         (_, 0) => (Coast, false),
         (_, 1) => (Ramp(PROFILE_RAMP_REV_S2), false),
         (Cause::QuickStop | Cause::Fault, 2) => (Ramp(QUICK_STOP_RAMP_REV_S2), false),
-        (Cause::QuickStop | Cause::Fault, 3 | 4) => (Limit, false),
+        (Cause::QuickStop | Cause::Fault, 3 | 4) => (AT_LIMIT, false),
         (Cause::QuickStop, 5) => (Ramp(PROFILE_RAMP_REV_S2), true),
         (Cause::QuickStop, 6) => (Ramp(QUICK_STOP_RAMP_REV_S2), true),
-        (Cause::QuickStop, 7 | 8) => (Limit, true),
+        (Cause::QuickStop, 7 | 8) => (AT_LIMIT, true),
         // Reserved: the drive function is disabled.
         _ => (Coast, false),
     };
@@ -170,20 +154,6 @@ impl Case {
     }
 }
 
-/// What one cycle brought back, and the motor and power stage of the axis.
-#[derive(Clone, Copy, Debug)]
-struct Sample {
-    statusword: u16,
-    rev_s: f64,
-    gates: bool,
-}
-
-impl Sample {
-    fn is(&self, state: cia402::State) -> bool {
-        cia402::is(self.statusword, state)
-    }
-}
-
 async fn cycle(
     m: &InProcess,
     md: &MainDevice<'_>,
@@ -192,13 +162,7 @@ async fn cycle(
     (cw, velocity): (u16, i32),
 ) -> Sample {
     let inputs = vendor::exchange_dc_command(m, md, group, (cw, CSV, velocity), CYCLE_NS).await;
-    let segment = m.shared.segment();
-    let servo = &segment.drives()[0].servos[axis];
-    Sample {
-        statusword: vendor::u16_at(&inputs, 0),
-        rev_s: servo.plant.mech_speed_rad_s() / TAU,
-        gates: servo.latched().gates,
-    }
+    Sample::of(m, axis, vendor::u16_at(&inputs, 0))
 }
 
 /// The ramps and the code (after the PDOs of [`vendor::into_op_dc_velocity`]).
@@ -262,101 +226,6 @@ async fn stop(
     Ok(samples)
 }
 
-/// The deceleration from 80 % to 20 % of the speed, rev/s², or how far it got.
-fn deceleration(samples: &[Sample]) -> Result<f64, String> {
-    let at = |fraction: f64| {
-        samples
-            .iter()
-            .position(|s| s.rev_s <= fraction * SPEED_REV_S)
-            .ok_or_else(|| {
-                format!(
-                    "never below {:.0} % of the speed (ends at {:.2} rev/s)",
-                    fraction * 100.0,
-                    samples.last().map_or(0.0, |s| s.rev_s)
-                )
-            })
-    };
-    let (high, low) = (at(0.8)?, at(0.2)?);
-    let seconds = ((low - high).max(1)) as f64 * CYCLE_S;
-    Ok(0.6 * SPEED_REV_S / seconds)
-}
-
-/// What is wrong with a stop, if anything.
-fn check(
-    samples: &[Sample],
-    stop: Stop,
-    end: (u16, u16),
-    via: Option<(u16, u16)>,
-) -> Result<(), String> {
-    let last = samples.last().ok_or("no samples")?;
-    if let Some(state) = via {
-        if !samples.iter().any(|s| s.is(state)) {
-            return Err(format!("never in {:#06x} under {:#06x}", state.1, state.0));
-        }
-    }
-    match stop {
-        Stop::None => {
-            if (last.rev_s - SPEED_REV_S).abs() > 0.3 || !last.gates {
-                return Err(format!("stopped: {:.2} rev/s", last.rev_s));
-            }
-        }
-        Stop::Coast => {
-            // The power stage off in the cycle the drive leaves Operation Enabled (a command at
-            // once, a fault when it trips), and from then on; friction only.
-            let left = samples
-                .iter()
-                .position(|s| !s.is(OPERATION_ENABLED))
-                .ok_or("never left Operation Enabled")?;
-            if samples.iter().skip(left + 1).any(|s| s.gates) {
-                return Err("the power stage stays on".into());
-            }
-            let later = samples[(left + 100).min(samples.len() - 1)].rev_s;
-            if later < 0.3 * SPEED_REV_S {
-                return Err(format!("braked to {later:.2} rev/s in 0.1 s: not coasting"));
-            }
-        }
-        Stop::Ramp(ramp) => {
-            let d = deceleration(samples)?;
-            if (d - ramp).abs() > RAMP_TOLERANCE * ramp {
-                return Err(format!("decelerated at {d:.1} rev/s², the ramp is {ramp}"));
-            }
-        }
-        Stop::Limit => {
-            let d = deceleration(samples)?;
-            if d < 2.0 * QUICK_STOP_RAMP_REV_S2 {
-                return Err(format!("decelerated at only {d:.1} rev/s² at the limit"));
-            }
-        }
-    }
-    if stop != Stop::Coast && stop != Stop::None {
-        // Under power until at rest.
-        if let Some(s) = samples
-            .iter()
-            .find(|s| !s.gates && s.rev_s.abs() > STANDSTILL_REV_S * 2.0)
-        {
-            return Err(format!("power stage off at {:.2} rev/s", s.rev_s));
-        }
-        if last.rev_s.abs() > STANDSTILL_REV_S {
-            return Err(format!("not at rest: {:.2} rev/s", last.rev_s));
-        }
-        // Held (quick stop 5-8, halt) or disabled.
-        let held = end == QUICK_STOP_ACTIVE || end == OPERATION_ENABLED;
-        if last.gates != held {
-            return Err(format!(
-                "power stage {} at rest",
-                if last.gates { "on" } else { "off" }
-            ));
-        }
-    }
-    if !last.is(end) {
-        return Err(format!(
-            "ends in statusword {:#06x}, expected {:#06x} under {:#06x}",
-            last.statusword, end.1, end.0
-        ));
-    }
-    Ok(())
-}
-
 /// Every value each option-code object of the profile allows (its range, or its list).
 fn codes(profile: &Profile, index: u16) -> Vec<i16> {
     let Some(entry) = profile.entry(index, 0) else {
@@ -389,7 +258,9 @@ fn every_stop(case: Case) {
                     .then_some(SWITCH_ON_DISABLED);
                 let result = stop(&case, &profile, cause, code)
                     .await
-                    .and_then(|samples| check(&samples, stop_kind, end, via));
+                    .and_then(|samples| {
+                        stops::check(&samples, (stop_kind, end, via), (SPEED_REV_S, CYCLE_S))
+                    });
                 if let Err(e) = result {
                     failures.push(format!("{index:04X}h = {code} ({stop_kind:?}): {e}"));
                 }

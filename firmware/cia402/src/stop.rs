@@ -14,7 +14,11 @@
 //! A code CiA402 does not define (reserved, manufacturer-specific) has no [`Reaction`]; the
 //! caller decides (the device disables the drive function: the motor coasts). A profile gives
 //! such codes a meaning with [`VendorCode`]s (the GHA-E stops on 6085h with code 2 of 605Bh and
-//! 605Ch), and may ignore 605Eh altogether (its fault stop does not follow the object).
+//! 605Ch), and may ignore 605Eh altogether (its fault stop does not follow the object). A
+//! profile without an object may still name the code the drive works with (the RSE halts as
+//! with 605Dh = 1), and the commands may disable at once in the torque modes
+//! ([`Reactions::commands_at_once`], the Σ-V-SD). In homing the slow-down ramp is the homing
+//! acceleration 609Ah (the drive picks the ramp).
 
 /// How the motor is brought to rest.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -177,6 +181,17 @@ impl Reactions {
         fault: Reaction::COAST,
     };
 
+    /// These reactions with quick stop, shutdown and disable operation disabling the drive
+    /// function at once (code 0): the Σ-V-SD's rule in its torque modes (§6.4).
+    pub const fn commands_at_once(self) -> Self {
+        Self {
+            quick_stop: Reaction::COAST,
+            shutdown: Reaction::COAST,
+            disable_operation: Reaction::COAST,
+            ..self
+        }
+    }
+
     /// The reaction to `cause` (`None`: a halt the drive does not support).
     pub const fn of(&self, cause: Cause) -> Option<Reaction> {
         match cause {
@@ -231,6 +246,32 @@ pub const fn reaction(cause: Cause, code: i16) -> Option<Reaction> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn commands_at_once_disable_for_the_commands_only() {
+        let ramp = Reaction {
+            deceleration: Deceleration::QuickStopRamp,
+            after: After::Disable,
+        };
+        let halt = Some(Reaction {
+            deceleration: Deceleration::ProfileRamp,
+            after: After::Hold,
+        });
+        let r = Reactions {
+            quick_stop: ramp,
+            shutdown: ramp,
+            disable_operation: ramp,
+            halt,
+            fault: ramp,
+        }
+        .commands_at_once();
+        assert_eq!(r.quick_stop, Reaction::COAST);
+        assert_eq!(r.shutdown, Reaction::COAST);
+        assert_eq!(r.disable_operation, Reaction::COAST);
+        // Halt and the fault reaction keep their codes.
+        assert_eq!(r.halt, halt);
+        assert_eq!(r.fault, ramp);
+    }
 
     #[test]
     fn quick_stop_codes_follow_cia402() {

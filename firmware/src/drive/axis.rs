@@ -641,7 +641,13 @@ impl DriveAxis {
         if due.has(Groups::OPTIONS) {
             self.settings.refresh_options(ram, vars, self.rules);
         }
-        let reactions = self.settings.reactions;
+        let reactions = if self.rules.torque_modes_stop_at_once
+            && matches!(self.mode, Mode::ProfileTorque | Mode::CyclicTorque)
+        {
+            self.settings.reactions.commands_at_once()
+        } else {
+            self.settings.reactions
+        };
         let mut refused_during_homing = false;
         let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
             if requested != self.running_mode {
@@ -1121,6 +1127,12 @@ impl DriveAxis {
             Motion::Run => (true, loop_mode, 0.0),
             Motion::Stop(d) => {
                 let deceleration = match d {
+                    // CiA402's slow-down ramp is the homing acceleration 609Ah in homing.
+                    Deceleration::ProfileRamp
+                        if matches!(mode, Mode::Homing) && vars.homing_acceleration.is_some() =>
+                    {
+                        self.settings.homing_speeds.2
+                    }
                     Deceleration::ProfileRamp => self.settings.profile_deceleration,
                     Deceleration::QuickStopRamp => self.settings.quick_stop_deceleration,
                     // At once: the speed loop brakes at the current limit. The DC link is not

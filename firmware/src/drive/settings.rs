@@ -252,12 +252,15 @@ impl Settings {
     /// Reads the option codes (needed before the units are known), with the profile's own
     /// codes and a 605Eh the profile ignores (`rules`).
     pub fn refresh_options(&mut self, ram: &[u8], vars: &AppVars, rules: &Cia402Rules) {
+        let implied = rules.implied_option_codes;
         let codes = OptionCodes {
-            quick_stop: read_i16(ram, vars.quick_stop_option_code),
-            shutdown: read_i16(ram, vars.shutdown_option_code),
-            disable_operation: read_i16(ram, vars.disable_operation_option_code),
-            halt: read_i16(ram, vars.halt_option_code),
+            quick_stop: read_i16(ram, vars.quick_stop_option_code).or(implied.quick_stop),
+            shutdown: read_i16(ram, vars.shutdown_option_code).or(implied.shutdown),
+            disable_operation: read_i16(ram, vars.disable_operation_option_code)
+                .or(implied.disable_operation),
+            halt: read_i16(ram, vars.halt_option_code).or(implied.halt),
             fault_reaction: read_i16(ram, vars.fault_reaction_option_code)
+                .or(implied.fault_reaction)
                 .filter(|_| !rules.fault_reaction_ignored),
             vendor: rules.stop_codes,
         };
