@@ -197,6 +197,24 @@ pub fn can_show(mode: i8, c: Shows) -> bool {
         || (EXTRA_CONDITIONS.contains(&c) && (c != Shows::TargetReached || cyclic_target))
 }
 
+/// Whether any of `overrides` shows `c` (a const fn: a drive decides at build time what it
+/// must watch).
+pub const fn shown_in(overrides: &[Override], c: Shows) -> bool {
+    let mut i = 0;
+    while i < overrides.len() {
+        let bits = &overrides[i].layout.bits;
+        let mut b = 0;
+        while b < bits.len() {
+            if bits[b] as u8 == c as u8 {
+                return true;
+            }
+            b += 1;
+        }
+        i += 1;
+    }
+    false
+}
+
 /// The statusword bits 10–13 of the mode the drive runs, resolved once when the mode changes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModeStatus {
@@ -224,6 +242,12 @@ impl ModeStatus {
             relayout: standard != Some(own),
             extra,
         })
+    }
+
+    /// Whether the mode's bits need any work beyond CiA402's: a moved bit or a condition to
+    /// work out (the drive skips [`Self::apply`] otherwise, in every cycle).
+    pub const fn differs(&self) -> bool {
+        self.relayout || self.extra.0 != 0
     }
 
     /// Whether the layout shows `c` where CiA402's does not (the drive must work it out).
@@ -329,6 +353,9 @@ mod tests {
             layout: csv,
         }];
         assert_eq!(layout(CSV, &overrides), Some(csv));
+        assert!(shown_in(&overrides, Synchronised));
+        assert!(!shown_in(&overrides, FollowsCommand));
+        assert!(!shown_in(&[], Synchronised));
         assert_eq!(layout(CSP, &overrides), cia402(CSP));
         // The mode's code set bit 11 (a limit) and bit 12 (follows): neither shows here.
         assert_eq!(
@@ -369,7 +396,9 @@ mod tests {
             assert_eq!(own.needs(c), needed, "{c:?}");
         }
         // CiA402's CSP: nothing to work out beyond the mode's own bits, and nothing moved.
+        assert!(own.differs());
         let standard = ModeStatus::of(CSP, &overrides).unwrap();
+        assert!(!standard.differs());
         assert!(!standard.needs(FollowsCommand));
         assert_eq!(
             standard.apply(0x1237 | 1 << 13, Conditions::NONE),

@@ -104,7 +104,8 @@ pub struct DriveAxis {
     running_mode: u8,
     /// `running_mode` as the drive runs it (decoded once per change, not every cycle).
     mode: Mode,
-    /// What statusword bits 10–13 show in `running_mode` (resolved once per change).
+    /// What statusword bits 10–13 show in `running_mode` where the profile's layout differs
+    /// from CiA402's (resolved once per change).
     mode_status: Option<ModeStatus>,
     /// The cyclic position or velocity target inside its window (6067h/6068h, 606Dh/606Eh),
     /// where the profile shows it (statusword bit 10 in the RSE's and SDV3-E's CSP and CSV).
@@ -114,6 +115,9 @@ pub struct DriveAxis {
     speed_zero_timer: WindowTimer,
     /// The slave runs the cycle in sync (OP on SYNC0 without sync errors).
     pub(super) in_sync: bool,
+    /// The profile shows the synchronisation in a statusword bit (the SDV3-E's "successful
+    /// synchronization": the master's outputs of each cycle count).
+    shows_synchronisation: bool,
     /// A homing run has completed since power-on (`Cia402Rules::home_found_statusword`).
     homed: bool,
     /// How long the following error has been outside 6065h (statusword bit 13).
@@ -239,6 +243,10 @@ impl DriveAxis {
             cyclic_target_timer: WindowTimer::new(),
             speed_zero_timer: WindowTimer::new(),
             in_sync: false,
+            shows_synchronisation: mode_status::shown_in(
+                profile.cia402.mode_statusword,
+                Shows::Synchronised,
+            ),
             homed: false,
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
@@ -313,7 +321,9 @@ impl DriveAxis {
     pub(super) fn refresh_settings(&mut self, ram: &[u8]) {
         let mut due = self.settings_due;
         if due.has(Groups::OPTIONS) {
-            self.settings.refresh_options(ram, self.vars, self.rules);
+            let torque_mode = self.runs_torque_mode();
+            self.settings
+                .refresh_options(ram, self.vars, self.rules, torque_mode);
         }
         let Some(counts_per_rev) = self.port.as_ref().map(|p| p.counts_per_rev) else {
             return;
@@ -509,13 +519,14 @@ impl DriveAxis {
         self.csp_extrapolation
     }
 
-    /// Whether the profile shows the synchronisation in a statusword bit (the SDV3-E's
-    /// "successful synchronization": the master's outputs of each cycle count).
+    /// Whether the axis runs a torque mode (profile or cyclic synchronous torque).
+    fn runs_torque_mode(&self) -> bool {
+        matches!(self.mode, Mode::ProfileTorque | Mode::CyclicTorque)
+    }
+
+    /// Whether the profile shows the synchronisation in a statusword bit.
     pub(super) fn shows_synchronisation(&self) -> bool {
-        self.rules
-            .mode_statusword
-            .iter()
-            .any(|o| o.layout.shows(Shows::Synchronised))
+        self.shows_synchronisation
     }
 
     /// The SYNC0 of the next cycle brought no new outputs.
@@ -639,15 +650,10 @@ impl DriveAxis {
         let due = self.settings_due | self.settings_live;
         self.settings_due = Groups::NONE;
         if due.has(Groups::OPTIONS) {
-            self.settings.refresh_options(ram, vars, self.rules);
+            let torque_mode = self.runs_torque_mode();
+            self.settings
+                .refresh_options(ram, vars, self.rules, torque_mode);
         }
-        let reactions = if self.rules.torque_modes_stop_at_once
-            && matches!(self.mode, Mode::ProfileTorque | Mode::CyclicTorque)
-        {
-            self.settings.reactions.commands_at_once()
-        } else {
-            self.settings.reactions
-        };
         let mut refused_during_homing = false;
         let mode = read_bytes::<1>(ram, vars.modes_of_operation).map(|[requested]| {
             if requested != self.running_mode {
@@ -662,9 +668,18 @@ impl DriveAxis {
                 if supported && !locked {
                     self.running_mode = requested;
                     self.mode = Mode::from_object(requested as i8);
-                    self.mode_status = ModeStatus::of(requested as i8, self.rules.mode_statusword);
+                    // Kept only where the profile's bits differ from CiA402's (the mode's code
+                    // sets those).
+                    self.mode_status = ModeStatus::of(requested as i8, self.rules.mode_statusword)
+                        .filter(ModeStatus::differs);
                     self.cyclic_target_timer.reset();
                     self.speed_zero_timer.reset();
+                    if self.rules.torque_modes_stop_at_once {
+                        // The stops depend on the mode: resolved again at once.
+                        let torque_mode = self.runs_torque_mode();
+                        self.settings
+                            .refresh_options(ram, vars, self.rules, torque_mode);
+                    }
                 }
             }
             [self.running_mode]
@@ -694,7 +709,7 @@ impl DriveAxis {
             self.torque_limited = f.current_limited;
         }
         let at_rest = feedback.as_ref().is_none_or(|f| self.at_rest(f));
-        let step = self.device.step(cw, reactions, at_rest);
+        let step = self.device.step(cw, self.settings.reactions, at_rest);
         if step.fault_cleared.is_some() {
             write_u16(ram, vars.error_code, 0);
         }

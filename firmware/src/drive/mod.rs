@@ -78,6 +78,8 @@ pub struct Drive {
     /// The profile's split settings and their values `[whole, high, low]` as last seen.
     split_values: &'static [SplitValue],
     split_seen: [[u32; 3]; MAX_SPLIT_VALUES],
+    /// The slave runs the cycle in sync (`Application::synchronisation`).
+    in_sync: bool,
 }
 
 /// The most `[[split_value]]` settings a profile has (od-gen checks it).
@@ -110,6 +112,7 @@ impl Drive {
             od: &profile.od,
             split_values: profile.split_values,
             split_seen: [[0; 3]; MAX_SPLIT_VALUES],
+            in_sync: false,
         }
     }
 
@@ -160,6 +163,7 @@ impl Drive {
     /// display, the axis exchange.
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
         for axis in self.axes.iter_mut().flatten() {
+            axis.in_sync = self.in_sync;
             axis.step(ram, cycle_ns);
         }
     }
@@ -468,9 +472,8 @@ impl Application for Drive {
     }
 
     fn synchronisation(&mut self, in_sync: bool) {
-        for axis in self.axes.iter_mut().flatten() {
-            axis.in_sync = in_sync;
-        }
+        // Handed to the axes in the cycle's loop (`Self::step`).
+        self.in_sync = in_sync;
     }
 
     fn outputs_mapped(&mut self, outputs: &PdoPlan) {

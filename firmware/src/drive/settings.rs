@@ -250,8 +250,15 @@ impl Settings {
     };
 
     /// Reads the option codes (needed before the units are known), with the profile's own
-    /// codes and a 605Eh the profile ignores (`rules`).
-    pub fn refresh_options(&mut self, ram: &[u8], vars: &AppVars, rules: &Cia402Rules) {
+    /// codes, the codes it implies without an object and a 605Eh it ignores (`rules`);
+    /// `torque_mode`: the axis runs a torque mode (where a profile may stop at once).
+    pub fn refresh_options(
+        &mut self,
+        ram: &[u8],
+        vars: &AppVars,
+        rules: &Cia402Rules,
+        torque_mode: bool,
+    ) {
         let implied = rules.implied_option_codes;
         let codes = OptionCodes {
             quick_stop: read_i16(ram, vars.quick_stop_option_code).or(implied.quick_stop),
@@ -264,7 +271,12 @@ impl Settings {
                 .filter(|_| !rules.fault_reaction_ignored),
             vendor: rules.stop_codes,
         };
-        self.reactions = Reactions::from(codes);
+        let reactions = Reactions::from(codes);
+        self.reactions = if torque_mode && rules.torque_modes_stop_at_once {
+            reactions.commands_at_once()
+        } else {
+            reactions
+        };
     }
 
     /// Reads the `groups` but the option codes from `ram`, converted with `units` and the
