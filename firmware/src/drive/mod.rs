@@ -361,10 +361,12 @@ impl Application for Drive {
         if !self.split_values.is_empty() {
             self.sync_split_values(ram, false);
         }
+        let in_sync = self.in_sync;
         for i in 0..MAX_AXES {
             let Some(axis) = self.axis_mut(i) else {
                 continue;
             };
+            axis.in_sync = in_sync;
             let before = axis.fault_code();
             let warning_before = axis.warning();
             axis.step(ram, cycle_ns);
@@ -472,7 +474,7 @@ impl Application for Drive {
     }
 
     fn synchronisation(&mut self, in_sync: bool) {
-        // Handed to the axes in the cycle's loop (`Self::step`).
+        // Handed to the axes in the cycle's loop.
         self.in_sync = in_sync;
     }
 
