@@ -1,7 +1,8 @@
 //! Every profile reports the drive's faults as its manual's alarms, end to end: ethercrab runs
 //! the simulated drive in cyclic synchronous velocity (DC SYNC0 at 1 ms), the simulated board
 //! injects a fault (the power stage over its temperature, the motor's thermal switch, the DC
-//! link over its limit, a serial encoder whose frames fail their CRC), and the drive must go to
+//! link over or under its limits, a load driving the rotor over the speed limit, a serial encoder
+//! whose frames fail their CRC, an encoder reading that jumps), and the drive must go to
 //! Fault with 603Fh, the emergency's code and manufacturer field and 1001h as the profile's
 //! `[motor_faults]` table maps that fault (each entry a row of the manual's alarm table, e.g.
 //! the SDV3-E's AH: 4210h, error No. 26h, auxiliary code 8003h, Table 5-1; the GHA-E's AH
@@ -11,10 +12,13 @@ use board_sim::inproc::InProcess;
 use board_sim::plant::EncoderFaultInjection;
 use ethercrab::MainDevice;
 use tests_host::vendor::{self, DcGroup};
-use tests_host::{block_on, cia402, emcy, master_for};
+
+use tests_host::{block_on, cia402, emcy, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
 const CSV: i8 = cia402::CYCLIC_SYNCHRONOUS_VELOCITY;
+/// Statusword bit 4.
+const VOLTAGE_ENABLED: u16 = 1 << 4;
 /// 1001h bit 0: generic error.
 const GENERIC_ERROR: u8 = 0x01;
 /// The longest a fault takes to trip (the confirmation times are at most a few hundred ms).
@@ -26,15 +30,22 @@ enum Injection {
     DriveOverTemperature,
     MotorOverTemperature,
     BusOverVoltage,
+    BusUnderVoltage,
     EncoderCrc,
+    EncoderJump,
 }
 
 impl Injection {
-    const ALL: [Injection; 4] = [
+    // Over-speed cannot be injected here: a load driving the rotor over the trip level makes
+    // the back-EMF exceed the 48 V bus, the inverter loses current control and over-current
+    // trips first (as on a real drive), and the drive's own speed stays below it on 48 V.
+    const ALL: [Injection; 6] = [
         Injection::DriveOverTemperature,
         Injection::MotorOverTemperature,
         Injection::BusOverVoltage,
+        Injection::BusUnderVoltage,
         Injection::EncoderCrc,
+        Injection::EncoderJump,
     ];
 
     /// The `[motor_faults]` key of the fault it raises.
@@ -43,7 +54,9 @@ impl Injection {
             Injection::DriveOverTemperature => "drive_over_temperature",
             Injection::MotorOverTemperature => "motor_over_temperature",
             Injection::BusOverVoltage => "bus_over_voltage",
+            Injection::BusUnderVoltage => "bus_under_voltage",
             Injection::EncoderCrc => "encoder_crc",
+            Injection::EncoderJump => "encoder_jump",
         }
     }
 
@@ -60,8 +73,16 @@ impl Injection {
             Injection::BusOverVoltage => {
                 plant.set_bus_voltage(f64::from(protection.bus_over_voltage_v) + 5.0)
             }
+            Injection::BusUnderVoltage => {
+                plant.set_bus_voltage(f64::from(protection.bus_under_voltage_v) - 5.0)
+            }
             Injection::EncoderCrc => {
                 plant.set_encoder_fault(Some(EncoderFaultInjection::CrcErrors))
+            }
+            Injection::EncoderJump => {
+                // Half a turn in one sample: far beyond what the motor can move.
+                let counts = (units::COUNTS_PER_REV / 2.0) as i64;
+                plant.set_encoder_fault(Some(EncoderFaultInjection::Jump { counts }))
             }
         }
     }
@@ -109,6 +130,20 @@ async fn fault(name: &str, profile: &od_gen::Profile, injection: Injection) -> R
         if cia402::is(sw, cia402::FAULT) && emergency.is_some() {
             break;
         }
+    }
+    if matches!(injection, Injection::BusUnderVoltage)
+        && profile.cia402.switch_on_requires_main_power
+    {
+        // The Σ-V-SD (§3.1 *4): main power off takes Operation Enabled to Switch On Disabled,
+        // bit 4 "voltage enabled" clear; the under-voltage protection is armed only while
+        // enabled, so no alarm follows.
+        return if cia402::is(sw, cia402::SWITCH_ON_DISABLED) && sw & VOLTAGE_ENABLED == 0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "main power off: {sw:#06x}, expected Switch On Disabled"
+            ))
+        };
     }
     if !cia402::is(sw, cia402::FAULT) {
         return Err(format!("no Fault: {sw:#06x}"));

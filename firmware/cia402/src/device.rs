@@ -53,6 +53,8 @@ pub struct Device {
     power_cycle_required: bool,
     /// Safe torque off holds ([`Self::set_safe_torque_off`]).
     safe_torque_off: bool,
+    /// The cause of the fault is still there ([`Self::set_fault_cause_present`]).
+    fault_cause_present: bool,
 }
 
 /// CiA402 behaviour a profile adds to the standard.
@@ -107,6 +109,7 @@ impl Device {
             main_power: false,
             power_cycle_required: false,
             safe_torque_off: false,
+            fault_cause_present: false,
         }
     }
 
@@ -132,6 +135,13 @@ impl Device {
     /// enabled" and, with [`DeviceRules::switch_on_requires_main_power`], transition 3.
     pub fn set_main_power(&mut self, on: bool) {
         self.main_power = on;
+    }
+
+    /// Whether the cause of the active fault is still there (a temperature still over its
+    /// level, a bus voltage still out of range): CiA402 transition 15 resets a fault "if no
+    /// fault exists currently", so a fault reset edge meanwhile is consumed without effect.
+    pub fn set_fault_cause_present(&mut self, present: bool) {
+        self.fault_cause_present = present;
     }
 
     /// The PDS state.
@@ -179,8 +189,9 @@ impl Device {
     pub fn step(&mut self, cw: u16, reactions: Reactions, at_rest: bool) -> Step {
         self.reactions = reactions;
         let mut requested = pds::next(self.state, cw, self.previous_controlword);
-        if self.state == PdsState::Fault && self.fault_permanent {
-            // Not resettable: only a power cycle leaves Fault.
+        if self.state == PdsState::Fault && (self.fault_permanent || self.fault_cause_present) {
+            // Not resettable (only a power cycle leaves Fault), or not yet (the cause is still
+            // there: the edge is used up, a new one is needed once it is gone).
             requested = PdsState::Fault;
         }
         if self.rules.switch_on_requires_main_power && !self.main_power {
@@ -472,6 +483,23 @@ mod tests {
             assert_ne!(step.statusword & sw::FAULT, 0);
         }
         assert_eq!(d.fault_code(), Some(0x7305));
+    }
+
+    #[test]
+    fn a_fault_reset_while_the_cause_is_there_is_used_up() {
+        let mut d = Device::new();
+        d.initialised();
+        d.fault(0x4210);
+        d.set_fault_cause_present(true);
+        let step = d.step(cw::FAULT_RESET, NO_OBJECTS.into(), true);
+        assert_eq!(d.state(), PdsState::Fault, "{:#06x}", step.statusword);
+        // The cause goes while bit 7 is still high: no new edge, no reset.
+        d.set_fault_cause_present(false);
+        d.step(cw::FAULT_RESET, NO_OBJECTS.into(), true);
+        assert_eq!(d.state(), PdsState::Fault);
+        d.step(0, NO_OBJECTS.into(), true);
+        d.step(cw::FAULT_RESET, NO_OBJECTS.into(), true);
+        assert_eq!(d.state(), PdsState::SwitchOnDisabled);
     }
 
     #[test]

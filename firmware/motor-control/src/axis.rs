@@ -245,6 +245,9 @@ pub struct AxisFeedback {
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
+    /// The cause of the latched fault is still there: a fault reset is refused meanwhile
+    /// ([`crate::protection::Protections::cause_present`]).
+    pub fault_cause_present: bool,
 }
 
 /// Results of a commissioning run.
@@ -417,6 +420,7 @@ impl AxisLink {
                     drive_load: 0.0,
                     stopping: false,
                     current_limited: false,
+                    fault_cause_present: false,
                     switches: Switches {
                         positive_limit: false,
                         negative_limit: false,
@@ -485,6 +489,9 @@ pub struct Axis {
     /// Sequence number of the last command taken (0 = the initial value of the link).
     command_seq: u32,
     previous_fault_reset: bool,
+    /// The cause of the latched fault was still there at the last sample (checked only while
+    /// faulted).
+    fault_cause_present: bool,
     offsets: PhaseCurrents,
     offset_calibration: OffsetCalibration,
     alignment: Alignment,
@@ -608,6 +615,7 @@ impl Axis {
             command: AxisCommand::default(),
             command_seq: 0,
             previous_fault_reset: false,
+            fault_cause_present: false,
             offsets: PhaseCurrents::default(),
             offset_calibration: OffsetCalibration::new(cfg.offset_samples, cfg.max_offset_a),
             alignment,
@@ -832,8 +840,16 @@ impl Axis {
             }
             AxisState::Identified => Output::OFF,
             AxisState::Faulted => {
+                // Whether the fault's cause is still there, for the drive's fault reset too
+                // (worked out only while faulted: not in the running period's budget).
+                let inputs = self.protection_inputs(sample, false);
+                self.fault_cause_present = self
+                    .fault
+                    .is_some_and(|f| self.protections.cause_present(f, &inputs));
+                // A rising edge resets, unless the fault's cause is still there (the edge is
+                // used up: CiA402 transition 15 "if no fault exists currently").
                 let reset = self.command.fault_reset && !self.previous_fault_reset;
-                if reset {
+                if reset && !self.fault_cause_present {
                     self.fault = None;
                     self.protections.reset();
                     self.state = AxisState::Disabled;
@@ -888,17 +904,9 @@ impl Axis {
                     self.velocity_observed = true;
                 }
             }
-            let fault = self.protections.check(&ProtectionInputs {
-                id: self.last_id,
-                iq: self.last_iq,
-                bus_voltage: sample.bus_voltage,
-                velocity: self.last_velocity,
-                encoder: sample.position,
-                temperature: sample.temperature,
-                motor_overtemp: sample.motor_overtemp,
-                following_error: self.position_loop.following_error(),
-                enabled,
-            });
+            let fault = self
+                .protections
+                .check(&self.protection_inputs(sample, enabled));
             if let Some(fault) = fault {
                 if !(fault.allows_controlled_stop() && self.state == AxisState::Running) {
                     return self.trip(fault, link);
@@ -939,6 +947,22 @@ impl Axis {
         Output::OFF
     }
 
+    /// What the protections judge in this period's `sample` (`enabled`: the gates switch).
+    #[inline(always)]
+    fn protection_inputs(&self, sample: &Sample, enabled: bool) -> ProtectionInputs {
+        ProtectionInputs {
+            id: self.last_id,
+            iq: self.last_iq,
+            bus_voltage: sample.bus_voltage,
+            velocity: self.last_velocity,
+            encoder: sample.position,
+            temperature: sample.temperature,
+            motor_overtemp: sample.motor_overtemp,
+            following_error: self.position_loop.following_error(),
+            enabled,
+        }
+    }
+
     fn publish(&mut self, link: &AxisLink) {
         link.feedback.write(AxisFeedback {
             state: self.state,
@@ -957,6 +981,7 @@ impl Axis {
                 && self.command.mode == ControlMode::Stop
                 && !self.stop_ramp.done(),
             current_limited: self.state == AxisState::Running && self.current_limited,
+            fault_cause_present: self.fault_cause_present,
             switches: Switches {
                 positive_limit: self.captures.positive_limit.level,
                 negative_limit: self.captures.negative_limit.level,

@@ -686,6 +686,33 @@ impl Protections {
         self.following_error.reset();
     }
 
+    /// Whether the cause of `fault` is still there in the sample `inputs` (the raw condition,
+    /// before any confirmation time): a fault reset is refused meanwhile. Faults that are
+    /// events (over-current, an encoder jump, a following error, the commissioning faults)
+    /// have no lasting cause.
+    ///
+    /// Timing: control interrupt, only while the axis is faulted; a few compares.
+    pub fn cause_present(&self, fault: MotorFault, inputs: &ProtectionInputs) -> bool {
+        match fault {
+            MotorFault::BusOverVoltage => above(inputs.bus_voltage, self.bus_over_voltage_v),
+            MotorFault::BusUnderVoltage => below(inputs.bus_voltage, self.bus_under_voltage_v),
+            MotorFault::OverSpeed => above(inputs.velocity.abs(), self.over_speed),
+            MotorFault::EncoderSignalLoss | MotorFault::EncoderCrc => inputs.encoder.is_err(),
+            MotorFault::DriveOverTemperature => {
+                above(inputs.temperature, self.drive_over_temperature_c)
+            }
+            MotorFault::MotorOverTemperature => inputs.motor_overtemp,
+            MotorFault::MotorOverload => self.motor_i2t.load() >= 1.0,
+            MotorFault::DriveOverload => self.drive_i2t.load() >= 1.0,
+            MotorFault::OverCurrent
+            | MotorFault::EncoderJump
+            | MotorFault::FollowingError
+            | MotorFault::CurrentOffset
+            | MotorFault::Alignment
+            | MotorFault::Identification => false,
+        }
+    }
+
     /// New following-error window (6065h, increments; [`FOLLOWING_ERROR_WINDOW_OFF`]: off) and
     /// timeout (6066h, ms).
     pub fn set_following_error(&mut self, window: u32, timeout_ms: u16) {
@@ -776,6 +803,49 @@ mod tests {
     }
 
     // --- over-current -------------------------------------------------------------------------
+
+    #[test]
+    fn a_lasting_cause_is_present_until_it_is_gone() {
+        let p = protections();
+        let cfg = ProtectionConfig::default();
+        let ok = healthy(0);
+        let hot = ProtectionInputs {
+            temperature: cfg.drive_over_temperature_c + 1.0,
+            ..ok
+        };
+        assert!(p.cause_present(MotorFault::DriveOverTemperature, &hot));
+        assert!(!p.cause_present(MotorFault::DriveOverTemperature, &ok));
+        let high = ProtectionInputs {
+            bus_voltage: cfg.bus_over_voltage_v + 1.0,
+            ..ok
+        };
+        assert!(p.cause_present(MotorFault::BusOverVoltage, &high));
+        let low = ProtectionInputs {
+            bus_voltage: cfg.bus_under_voltage_v - 1.0,
+            enabled: false,
+            ..ok
+        };
+        assert!(p.cause_present(MotorFault::BusUnderVoltage, &low));
+        let switch = ProtectionInputs {
+            motor_overtemp: true,
+            ..ok
+        };
+        assert!(p.cause_present(MotorFault::MotorOverTemperature, &switch));
+        let lost = ProtectionInputs {
+            encoder: Err(EncoderFault::SignalLoss),
+            ..ok
+        };
+        assert!(p.cause_present(MotorFault::EncoderSignalLoss, &lost));
+        assert!(!p.cause_present(MotorFault::EncoderSignalLoss, &ok));
+        // Events have no lasting cause.
+        for f in [
+            MotorFault::OverCurrent,
+            MotorFault::EncoderJump,
+            MotorFault::FollowingError,
+        ] {
+            assert!(!p.cause_present(f, &hot), "{f:?}");
+        }
+    }
 
     #[test]
     fn over_current_trips_on_the_first_sample_above_the_level_in_any_phase_and_sign() {

@@ -704,6 +704,7 @@ impl DriveAxis {
         }
         if let Some(f) = &feedback {
             self.device.set_main_power(f.main_power);
+            self.device.set_fault_cause_present(f.fault_cause_present);
             self.device.set_safe_torque_off(f.safe_torque_off);
             self.safe_torque_off = f.safe_torque_off;
             self.torque_limited = f.current_limited;
