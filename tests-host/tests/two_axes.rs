@@ -6,7 +6,9 @@
 //! Each axis runs its own state machine, mode of operation, homing and faults: axis 1 follows a
 //! cyclic synchronous position stream while axis 2 is still disabled, then homes, then moves in
 //! profile position; a fault of axis 2 (its drive over-temperature) is reported in axis 2's
-//! 683Fh and in an EMCY carrying axis number 2 in byte 7 (§2.7), and axis 1 runs on.
+//! 683Fh and in an EMCY carrying axis number 2 in byte 7 (§2.7), and axis 1 runs on. Both axes
+//! also follow CSP streams at the same time, and a fault of axis 1 leaves axis 2's motion
+//! undisturbed.
 
 use std::f64::consts::TAU;
 
@@ -411,6 +413,98 @@ fn sigma_v_sd_2axis_a_fault_of_axis_2_is_its_own() {
             sd.sdo_read::<u8>(0x1001, 0).await.expect("1001h"),
             0,
             "no error left"
+        );
+    });
+}
+
+/// Both axes follow their own CSP streams at the same time (axis 1 out to +2 rev while axis 2
+/// goes to −3 rev); then axis 1's power stage overheats while axis 2 moves back to 0: axis 1
+/// faults with its own 603Fh and an EMCY for axis 1 (§2.7 byte 7 = 1), and axis 2's motion
+/// goes on undisturbed to its target.
+#[test]
+fn sigma_v_sd_2axis_both_axes_move_at_once_and_a_fault_of_axis_1_leaves_axis_2_running() {
+    let sm1_start = od_gen::builtin("sigma-v-sd-2axis")
+        .expect("profile")
+        .sm
+        .mailbox_in
+        .start;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd-2axis", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = into_op(&m, md, CSP, CSP).await;
+        let mut s = cycle(&m, md, &group, [0, 0], [0, 0]).await;
+        for cw in [SHUTDOWN; 5]
+            .into_iter()
+            .chain([SWITCH_ON; 5])
+            .chain([ENABLE_OPERATION; 30])
+        {
+            s = cycle(&m, md, &group, [cw, cw], [0, 0]).await;
+        }
+        assert_eq!(s.statusword.map(|w| w & STATE_MASK), [OPERATION_ENABLED; 2]);
+
+        // Ramps over 1 s: +2 rev and −3 rev, halfway and at the end both where commanded.
+        let ramp = |to: f64, k: i64| ((to * CPR) as i64 * k.min(1000) / 1000) as i32;
+        for k in 0..=1200 {
+            s = cycle(
+                &m,
+                md,
+                &group,
+                [ENABLE_OPERATION; 2],
+                [ramp(2.0, k), ramp(-3.0, k)],
+            )
+            .await;
+            if k == 500 {
+                // One cycle of lag at most: 2 rev/s and 3 rev/s are 2 and 3 mrev per ms.
+                assert!((s.revolutions[0] - 1.0).abs() < 5e-3, "{:?}", s.revolutions);
+                assert!((s.revolutions[1] + 1.5).abs() < 5e-3, "{:?}", s.revolutions);
+            }
+        }
+        assert!((s.revolutions[0] - 2.0).abs() < 1e-3, "{:?}", s.revolutions);
+        assert!((s.revolutions[1] + 3.0).abs() < 1e-3, "{:?}", s.revolutions);
+
+        // Axis 1 overheats while axis 2 ramps back to 0.
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_drive_temperature(HOT_C);
+        let back = |k: i64| ((-3.0 * CPR) as i64 * (1000 - k.min(1000)) / 1000) as i32;
+        let mut faulted_at = None;
+        for k in 0..=1200 {
+            s = cycle(
+                &m,
+                md,
+                &group,
+                [ENABLE_OPERATION; 2],
+                [ramp(2.0, 1000), back(k)],
+            )
+            .await;
+            if faulted_at.is_none() && s.statusword[0] & FAULT_BIT != 0 {
+                faulted_at = Some(k);
+            }
+            assert_eq!(
+                s.statusword[1] & STATE_MASK,
+                OPERATION_ENABLED,
+                "axis 2 runs on (cycle {k})"
+            );
+        }
+        assert!(faulted_at.is_some(), "axis 1 faults");
+        assert!(
+            s.revolutions[1].abs() < 1e-3,
+            "axis 2 at 0: {:?}",
+            s.revolutions
+        );
+        let coe = emergency(&m, md, &group, [ENABLE_OPERATION; 2], [0, 0], sm1_start).await;
+        assert_eq!(u16::from_le_bytes([coe[2], coe[3]]), DRIVE_OVER_TEMPERATURE);
+        assert_eq!(coe[9], 1, "§2.7: byte 7 = axis number 1");
+        let sd = group.subdevice(md, 0).expect("drive");
+        assert_eq!(
+            sd.sdo_read::<u16>(0x603F, 0).await.expect("603Fh"),
+            DRIVE_OVER_TEMPERATURE
+        );
+        assert_eq!(
+            sd.sdo_read::<u16>(0x603F + AXIS_2, 0).await.expect("683Fh"),
+            0,
+            "axis 2 has no error"
         );
     });
 }
