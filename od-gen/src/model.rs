@@ -2153,7 +2153,7 @@ pub struct ModeStatusword {
 pub use cia402::mode_status::Shows as ModeBit;
 
 /// The profile-file spellings of [`ModeBit`]s and what each shows (for the profile document).
-pub const MODE_BITS: [(&str, ModeBit, &str); 11] = [
+pub const MODE_BITS: [(&str, ModeBit, &str); 12] = [
     ("nothing", ModeBit::Nothing, "–"),
     ("target_reached", ModeBit::TargetReached, "target reached"),
     (
@@ -2192,6 +2192,11 @@ pub const MODE_BITS: [(&str, ModeBit, &str); 11] = [
         "interpolation_active",
         ModeBit::InterpolationActive,
         "ip mode active",
+    ),
+    (
+        "software_limit",
+        ModeBit::SoftwareLimit,
+        "position command or actual position beyond 607Dh",
     ),
 ];
 

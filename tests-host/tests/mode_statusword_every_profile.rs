@@ -6,12 +6,15 @@
 //! | profile | CSP | CSV | CST | PV | HM | manual |
 //! |---|---|---|---|---|---|---|
 //! | standard, gha-e, sigma-v-sd | –, limit, follows, following error | –, limit, follows, – | –, limit, follows, – | reached, limit, speed zero, – | reached, limit, attained, error | CiA402; GHA-E §5.4; Σ-V-SD §4.7 |
-//! | rse | reached, limit, follows, following error | reached, limit, follows, – | –, limit, follows, – | as CiA402 | as CiA402 | 7.2 |
+//! | rse | reached, software limit, follows, following error | reached, software limit, follows, – | –, software limit, follows, – | reached, software limit, speed zero, – | reached, software limit, attained, error | 7.2 |
 //! | sdv3-e, osd-g-e | reached, limit, synchronisation, following error | reached, speed zero, synchronisation, – | –, –, synchronisation, – | reached, speed zero, –, – | reached, –, attained, error | §7.5–§7.10 |
 //!
 //! (bits 10, 11, 12, 13; "follows": the drive follows the command value; "synchronisation":
-//! SYNC0 and the master's data of the cycle normal.) The RSE also shows "home found" on bit 15
-//! from the first completed homing run on, in every mode (7.2).
+//! SYNC0 and the master's data of the cycle normal; "software limit": the RSE's bit 11, the
+//! position command or feedback beyond 607Dh and nothing else.) A CSP target beyond the
+//! software limits sets bit 11 in every profile (internal limit, the SDV3-E's limiter, the
+//! RSE's software limit); a torque at its limit does not on the RSE. The RSE also shows "home
+//! found" on bit 15 from the first completed homing run on, in every mode (7.2).
 //!
 //! The tables here are the manuals', not the profile files': a profile that moved a bit the
 //! wrong way fails.
@@ -34,6 +37,8 @@ const HOME_HERE: i8 = 35;
 const SPEED_REV_S: f64 = 5.0;
 /// The profile ramps 6083h/6084h: 5 rev/s in 0.1 s.
 const RAMP_REV_S2: f64 = 50.0;
+/// Statusword bit 11.
+const INTERNAL_LIMIT: u16 = 1 << 11;
 /// Statusword bit 15 (manufacturer-specific).
 const BIT_15: u16 = 1 << 15;
 
@@ -43,6 +48,7 @@ enum Shows {
     Nothing,
     Reached,
     Limit,
+    SoftwareLimit,
     SpeedZero,
     Follows,
     Synchronised,
@@ -58,16 +64,19 @@ fn manual(profile: &str, mode: i8) -> [Shows; 4] {
     let rse = profile == "rse";
     match mode {
         CSP if sdv3 => [Reached, Limit, Synchronised, FollowingError],
-        CSP if rse => [Reached, Limit, Follows, FollowingError],
+        CSP if rse => [Reached, SoftwareLimit, Follows, FollowingError],
         CSP => [Nothing, Limit, Follows, FollowingError],
         CSV if sdv3 => [Reached, SpeedZero, Synchronised, Nothing],
-        CSV if rse => [Reached, Limit, Follows, Nothing],
+        CSV if rse => [Reached, SoftwareLimit, Follows, Nothing],
         CSV => [Nothing, Limit, Follows, Nothing],
         CST if sdv3 => [Nothing, Nothing, Synchronised, Nothing],
+        CST if rse => [Nothing, SoftwareLimit, Follows, Nothing],
         CST => [Nothing, Limit, Follows, Nothing],
         PV if sdv3 => [Reached, SpeedZero, Nothing, Nothing],
+        PV if rse => [Reached, SoftwareLimit, SpeedZero, Nothing],
         PV => [Reached, Limit, SpeedZero, Nothing],
         HM if sdv3 => [Reached, Nothing, Attained, HomingError],
+        HM if rse => [Reached, SoftwareLimit, Attained, HomingError],
         HM => [Reached, Limit, Attained, HomingError],
         _ => unreachable!("mode {mode}"),
     }
@@ -94,7 +103,7 @@ fn expected(profile: &str, mode: i8, now: Now) -> u16 {
             Synchronised => now.synchronised,
             Attained => now.attained,
             // Nothing is limited, lagging or failing in these runs.
-            Nothing | Limit | FollowingError | HomingError => false,
+            Nothing | Limit | SoftwareLimit | FollowingError | HomingError => false,
         };
         if on {
             bits |= 1 << (10 + n);
@@ -190,6 +199,31 @@ fn mode_bits(name: &str) {
         let sw = run.hold((vendor::ENABLE_OPERATION, CSP, 0), 50).await;
         assert!(cia402::is(sw, OPERATION_ENABLED), "{name}: {sw:#06x}");
         run.check("CSP at rest", sw, CSP, at_rest);
+
+        // A CSP target (607Ah by SDO) beyond 607Dh: limited to it, bit 11 in every profile;
+        // back inside, bit 11 clears; the limits off again (min = max).
+        let w = (0.01 * units::COUNTS_PER_REV / units::increments_per_unit(&profile)) as i32;
+        let sd = run.group.subdevice(md, 0).expect("drive");
+        for (sub, value) in [(1u8, -w), (2, w)] {
+            sd.sdo_write(0x607D, sub, value).await.expect("607Dh");
+        }
+        sd.sdo_write(0x607A, 0, 2 * w).await.expect("607Ah");
+        let sw = run.hold((vendor::ENABLE_OPERATION, CSP, 0), 20).await;
+        assert_ne!(
+            sw & INTERNAL_LIMIT,
+            0,
+            "{name}: CSP target beyond 607Dh: {sw:#06x}"
+        );
+        sd.sdo_write(0x607A, 0, 0i32).await.expect("607Ah");
+        let sw = run.hold((vendor::ENABLE_OPERATION, CSP, 0), 50).await;
+        assert_eq!(
+            sw & INTERNAL_LIMIT,
+            0,
+            "{name}: back inside 607Dh: {sw:#06x}"
+        );
+        for sub in [1u8, 2] {
+            sd.sdo_write(0x607D, sub, 0i32).await.expect("607Dh");
+        }
 
         let sw = run.hold((vendor::ENABLE_OPERATION, CST, 0), 50).await;
         run.check("CST, no torque", sw, CST, at_rest);

@@ -9,7 +9,8 @@
 //! | sdv3-e, osd-g-e | 60E0h | 60E1h | Table 6-2 (no 6072h) |
 //!
 //! All in ‰ of the rated torque (the vendors' 0.1 %). Where the manual's CST statusword has
-//! bit 11 "internal limit active" (CiA402, the Σ-V-SD), it shows while the torque is limited.
+//! bit 11 "internal limit active" (CiA402, the Σ-V-SD), it shows while the torque is limited;
+//! the RSE's bit 11 shows the software position limits only (7.2) and stays clear.
 
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
@@ -90,7 +91,10 @@ async fn limited(
 async fn torque_limits(name: &str) -> Result<(), String> {
     let profile = od_gen::builtin(name).expect("profile");
     let has_6072 = profile.entry(0x6072, 0).is_some();
+    // CiA402 and the Σ-V-SD show the limited torque on bit 11; the RSE's bit 11 is the
+    // software position limit alone (7.2): clear here.
     let bit_11 = matches!(name, "standard" | "sigma-v-sd");
+    let bit_11_clear = name == "rse";
     let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
@@ -125,6 +129,11 @@ async fn torque_limits(name: &str) -> Result<(), String> {
         }
         if bit_11 && sw & INTERNAL_LIMIT == 0 {
             return Err(format!("check {k}: bit 11 clear while limited: {sw:#06x}"));
+        }
+        if bit_11_clear && sw & INTERNAL_LIMIT != 0 {
+            return Err(format!(
+                "check {k}: bit 11 set by a torque limit: {sw:#06x}"
+            ));
         }
     }
     // Within the limits the target is taken as it is.

@@ -50,6 +50,9 @@ pub enum Shows {
     HomingError,
     /// Interpolated position: ip mode active.
     InterpolationActive,
+    /// The position command or the actual position beyond a software limit 607Dh (the RSE's
+    /// bit 11, which shows nothing else).
+    SoftwareLimit,
 }
 
 impl Shows {
@@ -181,11 +184,12 @@ pub fn relayout(mode: i8, statusword: u16, layout: &Layout, extra: Conditions) -
 
 /// The conditions a profile layout may show beyond CiA402's for the mode: the drive works
 /// them out in any mode (target reached only in the cyclic position and velocity modes).
-pub const EXTRA_CONDITIONS: [Shows; 4] = [
+pub const EXTRA_CONDITIONS: [Shows; 5] = [
     Shows::SpeedZero,
     Shows::Synchronised,
     Shows::FollowsCommand,
     Shows::TargetReached,
+    Shows::SoftwareLimit,
 ];
 
 /// Whether a profile layout may show `c` in `mode` (a 6060h value): CiA402's conditions of
@@ -272,7 +276,7 @@ mod tests {
     use Shows::*;
 
     /// Every condition.
-    const ALL: [Shows; 11] = [
+    const ALL: [Shows; 12] = [
         Nothing,
         TargetReached,
         InternalLimit,
@@ -284,6 +288,7 @@ mod tests {
         HomingAttained,
         HomingError,
         InterpolationActive,
+        SoftwareLimit,
     ];
 
     #[test]
@@ -412,6 +417,7 @@ mod tests {
         assert!(can_show(CSV, SpeedZero));
         assert!(can_show(CSP, TargetReached));
         assert!(can_show(CST, Synchronised));
+        assert!(can_show(PT, SoftwareLimit));
         assert!(can_show(PP, SetPointAcknowledge));
         // Not worked out there: a torque window in CST, a following error in CSV, set-point
         // acknowledge outside profile position.

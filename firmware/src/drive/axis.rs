@@ -554,11 +554,13 @@ impl DriveAxis {
     }
 
     /// The conditions the mode's statusword layout shows beyond CiA402's (`status.needs`):
-    /// synchronisation, speed zero outside profile velocity, target reached in CSP/CSV.
+    /// synchronisation, speed zero outside profile velocity, target reached in CSP/CSV, the
+    /// position command limited by the software limits (`software_limited`) or the actual
+    /// position beyond them.
     fn extra_conditions(
         &mut self,
         status: &ModeStatus,
-        (mode, motion): (Mode, Motion),
+        (mode, motion, software_limited): (Mode, Motion, bool),
         set_point: &modes::SetPoint,
         feedback: &AxisFeedback,
         (cycle_ns, counts_per_rev): (u32, u32),
@@ -579,6 +581,13 @@ impl DriveAxis {
                 Shows::SpeedZero,
                 self.speed_zero_timer.step(still, time_ms, cycle_ns),
             );
+        }
+        if status.needs(Shows::SoftwareLimit) {
+            let beyond = self
+                .settings
+                .software_limits
+                .is_some_and(|l| l.clamp(feedback.position).1);
+            extra.set(Shows::SoftwareLimit, software_limited || beyond);
         }
         if status.needs(Shows::TargetReached) {
             let inside = match mode {
@@ -965,6 +974,8 @@ impl DriveAxis {
         let mut set_point = modes::set_point(mode, targets, feedback.position);
         let mut mode_statusword = 0;
         let mut target_ignored = false;
+        // The position command was limited by 607Dh in this cycle.
+        let mut software_limited = false;
         if let Some(limit) = self.rules.max_interpolation_speed {
             let interpolated = matches!(mode, Mode::CyclicPosition | Mode::InterpolatedPosition);
             if interpolated && matches!(motion, Motion::Run) {
@@ -1022,6 +1033,9 @@ impl DriveAxis {
             );
             set_point = out.set_point;
             mode_statusword = out.statusword;
+            // Profile position reports a target beyond a software limit on bit 11.
+            software_limited = matches!(mode, Mode::ProfilePosition)
+                && out.statusword & statusword::INTERNAL_LIMIT_ACTIVE != 0;
             if let Some(home) = out.home_found {
                 self.homed = true;
                 // The home position reads as the home offset from now on.
@@ -1077,6 +1091,7 @@ impl DriveAxis {
                 set_point.position = position;
                 if limited {
                     mode_statusword |= statusword::INTERNAL_LIMIT_ACTIVE;
+                    software_limited = true;
                 }
             }
             let switches = feedback.switches;
@@ -1201,7 +1216,7 @@ impl DriveAxis {
         if let Some(status) = self.mode_status {
             let extra = self.extra_conditions(
                 &status,
-                (mode, motion),
+                (mode, motion, software_limited),
                 &set_point,
                 feedback,
                 (cycle_ns, port.counts_per_rev),
