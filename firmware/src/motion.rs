@@ -426,6 +426,7 @@ mod tests {
     const CIA402: profile_position::Rules = profile_position::Rules {
         bit6_set_is_absolute: false,
         no_change_on_set_point: false,
+        no_buffer: false,
     };
 
     fn inputs(cw: u16, target: i32) -> Inputs {

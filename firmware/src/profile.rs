@@ -518,6 +518,9 @@ pub struct Cia402Rules {
     /// Profile position: controlword bit 9 "change on set-point" is honoured (false: ignored,
     /// GHA-E and RSE).
     pub pp_change_on_set_point: bool,
+    /// Profile position: a set-point without bit 5 waits in a buffer of one while a move runs
+    /// (false: no buffer, bit 12 stays set until the move ends; the RSE).
+    pub pp_set_point_buffer: bool,
     /// The homing methods (6098h values) the drive runs, ascending.
     pub homing_methods: &'static [i8],
     /// `(vendor method, CiA402 method)`: vendor numbers that run a CiA402 method.
@@ -690,6 +693,7 @@ impl Cia402Rules {
         cia402::profile_position::Rules {
             bit6_set_is_absolute: self.pp_bit6_absolute,
             no_change_on_set_point: !self.pp_change_on_set_point,
+            no_buffer: !self.pp_set_point_buffer,
         }
     }
 }

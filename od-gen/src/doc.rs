@@ -1157,6 +1157,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.pp_bit6_absolute {
         out.push_str("- Profile position: controlword bit 6 set means an absolute target (CiA402: relative).\n");
     }
+    if !r.pp_set_point_buffer {
+        out.push_str("- Profile position: no set-point buffer: after a set-point without bit 5, bit 12 stays set until the move has reached its target, and a new set-point is taken only then.\n");
+    }
     if !r.pp_change_on_set_point {
         out.push_str("- Profile position: controlword bit 9 (change on set-point) is not supported and ignored.\n");
     }

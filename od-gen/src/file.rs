@@ -865,6 +865,7 @@ impl Default for Cia402File {
             switch_on_requires_main_power: false,
             pp_bit6_absolute: false,
             pp_change_on_set_point: true,
+            pp_set_point_buffer: true,
             homing_methods: None,
             homing_method_aliases: Vec::new(),
             touch_probe_bit7: None,
@@ -1111,6 +1112,10 @@ pub struct Cia402File {
     /// Profile position: controlword bit 9 "change on set-point" is supported (default true).
     #[serde(default = "yes")]
     pub pp_change_on_set_point: bool,
+    /// Profile position: a set-point given without bit 5 waits in a buffer of one while a
+    /// move runs (default true); false: no buffer, bit 12 stays set until the move ends.
+    #[serde(default = "yes")]
+    pub pp_set_point_buffer: bool,
     /// The homing methods (6098h values) the drive runs (default: every CiA402 method).
     #[serde(default)]
     pub homing_methods: Option<Vec<i8>>,

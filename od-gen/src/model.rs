@@ -2084,6 +2084,8 @@ pub struct Cia402Rules {
     pub pp_bit6_absolute: bool,
     /// Profile position: controlword bit 9 is honoured.
     pub pp_change_on_set_point: bool,
+    /// Profile position: a set-point without bit 5 may wait in a buffer while a move runs.
+    pub pp_set_point_buffer: bool,
     /// The homing methods the drive runs (6098h values), ascending.
     pub homing_methods: Vec<i8>,
     /// `(vendor method, CiA402 method)`: vendor numbers that run a CiA402 method.
@@ -2404,6 +2406,7 @@ impl Default for Cia402Rules {
             switch_on_requires_main_power: false,
             pp_bit6_absolute: false,
             pp_change_on_set_point: true,
+            pp_set_point_buffer: true,
             homing_methods: CIA402_HOMING_METHODS.to_vec(),
             homing_method_aliases: Vec::new(),
             touch_probe_bit7: TouchProbeBit7::None,

@@ -530,6 +530,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         switch_on_requires_main_power: f.cia402.switch_on_requires_main_power,
         pp_bit6_absolute: f.cia402.pp_bit6_absolute,
         pp_change_on_set_point: f.cia402.pp_change_on_set_point,
+        pp_set_point_buffer: f.cia402.pp_set_point_buffer,
         homing_methods: homing_methods(&f.cia402)?,
         homing_method_aliases: f
             .cia402

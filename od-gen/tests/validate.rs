@@ -1399,7 +1399,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, pp_set_point_buffer: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false }"
     ));
     // A profile's own option codes: 605Bh = 2 stops on 6085h (the GHA-E), generated as the
     // firmware's VendorCode; an object outside 605Ah-605Eh and an unknown stop are refused.
@@ -1618,13 +1618,15 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(od_gen::rust::generate(&[sigma]).contains("function_bits: 0x1317"));
     // Profile position: CiA402's bit 6 and bit 9 unless the profile says otherwise.
     let p = od_gen::parse(
-        &appended("[cia402]\npp_bit6_absolute = true\npp_change_on_set_point = false"),
+        &appended("[cia402]\npp_bit6_absolute = true\npp_change_on_set_point = false\npp_set_point_buffer = false"),
         "ok",
     )
     .unwrap();
     assert!(p.cia402.pp_bit6_absolute && !p.cia402.pp_change_on_set_point);
-    assert!(od_gen::rust::generate(&[p])
-        .contains("pp_bit6_absolute: true, pp_change_on_set_point: false, homing_methods"));
+    assert!(!p.cia402.pp_set_point_buffer);
+    assert!(od_gen::rust::generate(&[p]).contains(
+        "pp_bit6_absolute: true, pp_change_on_set_point: false, pp_set_point_buffer: false, homing_methods"
+    ));
     // Homing methods: CiA402 methods or aliases, each once; the list comes out sorted.
     let p = od_gen::parse(
         &appended("[cia402]\nhoming_methods = [35, 1, 36]\nhoming_method_aliases = [[36, 19]]"),

@@ -5,9 +5,11 @@
 //!
 //! - set of set-points (bit 5 = 0): the second set-point, given while the first move runs, waits
 //!   in the buffer (bit 12 stays set); the motor stops on the first target, then goes on to the
-//!   second;
-//! - change set immediately (bit 5 = 1): the second set-point replaces the first at once; the
-//!   motor runs through the first target without stopping;
+//!   second. The RSE has no buffer (7.5): bit 12 stays set after the first handshake until the
+//!   first move has ended, so the master gives the second set-point only then (a master waits
+//!   for bit 12 to fall before raising bit 4 on every profile);
+//! - change set immediately (bit 5 = 1 with both set-points): the second set-point replaces the
+//!   first at once; the motor runs through the first target without stopping;
 //! - relative targets (bit 6 with the profile's polarity: the SDV3-E's and OSD-G-E's bit 6 set
 //!   means absolute, §7.5): each target adds to the previous one;
 //! - change on set-point (bit 9) where the manual supports it (standard, SDV3-E, OSD-G-E,
@@ -50,6 +52,8 @@ struct Manual {
     bit6_absolute: bool,
     /// Bit 9 "change on set-point" works.
     change_on_set_point: bool,
+    /// A set-point given while a move runs waits in a buffer (the RSE has none).
+    set_point_buffer: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -85,10 +89,19 @@ impl Drive<'_> {
         s
     }
 
-    /// A set-point: bit 4 until the drive acknowledges it (bit 12), then bit 4 cleared until
-    /// the drive takes the acknowledge back or `until_free` cycles (a buffered set-point keeps
-    /// bit 12 set while the buffer is full).
-    async fn set_point(&mut self, cw: u16, target: i32) -> Result<(), String> {
+    /// A set-point: bit 4 low until bit 12 is clear (the drive can take one), bit 4 until the
+    /// drive acknowledges it (bit 12), then bit 4 cleared.
+    async fn set_point(&mut self, cw: u16, target: i32) -> Result<bool, String> {
+        let mut free = false;
+        for _ in 0..3_000 {
+            if self.cycle(cw, target).await.statusword & SET_POINT_ACKNOWLEDGE == 0 {
+                free = true;
+                break;
+            }
+        }
+        if !free {
+            return Err(format!("bit 12 never fell before set-point {target}"));
+        }
         let mut acknowledged = false;
         for _ in 0..50 {
             if self.cycle(cw | NEW_SET_POINT, target).await.statusword & SET_POINT_ACKNOWLEDGE != 0
@@ -101,7 +114,8 @@ impl Drive<'_> {
             return Err(format!("set-point {target} not acknowledged"));
         }
         self.cycle(cw, target).await;
-        Ok(())
+        // Whether bit 12 still holds once bit 4 is down.
+        Ok(self.cycle(cw, target).await.statusword & SET_POINT_ACKNOWLEDGE != 0)
     }
 }
 
@@ -157,7 +171,14 @@ async fn run(
     let units = |rev: f64| (rev * units::COUNTS_PER_REV / per_unit).round() as i32;
     let base = vendor::ENABLE_OPERATION | mode_bit;
     let (first_bits, first) = moves[0];
-    d.set_point(base | first_bits, units(first)).await?;
+    let held = d.set_point(base | first_bits, units(first)).await?;
+    // Without a buffer, bit 12 holds through a move started without bit 5; else it falls.
+    let holds = !manual.set_point_buffer && first_bits & CHANGE_SET_IMMEDIATELY == 0;
+    if held != holds {
+        return Err(format!(
+            "bit 12 after the first handshake: {held}, expected {holds}"
+        ));
+    }
     // The second set-point a third of the way into the first move.
     for _ in 0..100 {
         d.cycle(base | first_bits, units(first)).await;
@@ -215,7 +236,10 @@ fn every_handshake(manual: Manual) {
         let r = run(
             &manual,
             &profile,
-            [(0, FIRST_REV), (CHANGE_SET_IMMEDIATELY, SECOND_REV)],
+            [
+                (CHANGE_SET_IMMEDIATELY, FIRST_REV),
+                (CHANGE_SET_IMMEDIATELY, SECOND_REV),
+            ],
             false,
         )
         .await
@@ -277,6 +301,7 @@ fn standard_profile_position_handshakes() {
         profile: "standard",
         bit6_absolute: false,
         change_on_set_point: true,
+        set_point_buffer: true,
     });
 }
 
@@ -286,6 +311,7 @@ fn gha_e_profile_position_handshakes() {
         profile: "gha-e",
         bit6_absolute: false,
         change_on_set_point: false,
+        set_point_buffer: true,
     });
 }
 
@@ -295,6 +321,7 @@ fn rse_profile_position_handshakes() {
         profile: "rse",
         bit6_absolute: false,
         change_on_set_point: false,
+        set_point_buffer: false,
     });
 }
 
@@ -304,6 +331,7 @@ fn sdv3_e_profile_position_set_of_setpoints_and_handshakes() {
         profile: "sdv3-e",
         bit6_absolute: true,
         change_on_set_point: true,
+        set_point_buffer: true,
     });
 }
 
@@ -313,6 +341,7 @@ fn osd_g_e_profile_position_handshakes() {
         profile: "osd-g-e",
         bit6_absolute: true,
         change_on_set_point: true,
+        set_point_buffer: true,
     });
 }
 
@@ -322,5 +351,6 @@ fn sigma_v_sd_profile_position_handshakes() {
         profile: "sigma-v-sd",
         bit6_absolute: false,
         change_on_set_point: true,
+        set_point_buffer: true,
     });
 }

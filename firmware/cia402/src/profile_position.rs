@@ -41,6 +41,10 @@ pub struct Rules {
     pub bit6_set_is_absolute: bool,
     /// Bit 9 "change on set-point" is not supported and ignored (GHA-E, RSE).
     pub no_change_on_set_point: bool,
+    /// No set-point buffer (the RSE, 7.5): after a set-point without bit 5, bit 12 stays set
+    /// until the move has reached its target, and a new one is accepted only then; with bit 5
+    /// it falls with bit 4 as usual.
+    pub no_buffer: bool,
 }
 
 /// A set-point: where to go and how.
@@ -67,6 +71,9 @@ pub struct ProfilePosition<P> {
     previous_new_set_point: bool,
     /// A set-point was accepted on the rising edge of bit 4, which is still high.
     acknowledged: bool,
+    /// Without a buffer: the move under way was accepted without bit 5, so bit 12 holds until
+    /// it has reached its target.
+    holding: bool,
 }
 
 impl<P: Copy> Default for ProfilePosition<P> {
@@ -84,6 +91,7 @@ impl<P: Copy> ProfilePosition<P> {
             last_target: None,
             previous_new_set_point: false,
             acknowledged: false,
+            holding: false,
         }
     }
 
@@ -107,7 +115,8 @@ impl<P: Copy> ProfilePosition<P> {
         if rising {
             self.acknowledged = self.accept(cw, rules, target_object, held_position, profile);
         }
-        if self.acknowledged || self.buffered.is_some() {
+        if self.acknowledged || self.buffered.is_some() || (self.holding && self.current.is_some())
+        {
             SET_POINT_ACKNOWLEDGE
         } else {
             0
@@ -123,9 +132,15 @@ impl<P: Copy> ProfilePosition<P> {
         profile: P,
     ) -> bool {
         let immediately = cw & CHANGE_SET_IMMEDIATELY != 0;
-        if !immediately && self.buffered.is_some() {
+        let full = if rules.no_buffer {
+            self.current.is_some()
+        } else {
+            self.buffered.is_some()
+        };
+        if !immediately && full {
             return false;
         }
+        self.holding = rules.no_buffer && !immediately;
         let bit6 = cw & ABS_REL != 0;
         let relative = bit6 != rules.bit6_set_is_absolute;
         // The preceding target: the buffered move's when one waits behind the current one.
@@ -206,6 +221,7 @@ mod tests {
     const CIA402: Rules = Rules {
         bit6_set_is_absolute: false,
         no_change_on_set_point: false,
+        no_buffer: false,
     };
     const ENABLED: u16 = 0x0F;
 
@@ -295,10 +311,51 @@ mod tests {
     }
 
     #[test]
+    fn without_a_buffer_bit_12_holds_until_the_move_has_ended() {
+        let rse = Rules {
+            no_buffer: true,
+            ..CIA402
+        };
+        let mut p = pp();
+        assert_eq!(
+            p.step(ENABLED | NEW_SET_POINT, rse, 1000, 0, 0),
+            SET_POINT_ACKNOWLEDGE
+        );
+        // Bit 4 falls: bit 12 stays while the move runs.
+        assert_eq!(p.step(ENABLED, rse, 1000, 0, 0), SET_POINT_ACKNOWLEDGE);
+        // A new set-point without bit 5 meanwhile is not taken.
+        p.step(ENABLED | NEW_SET_POINT, rse, 2000, 0, 0);
+        p.step(ENABLED, rse, 2000, 0, 0);
+        assert_eq!(p.current().unwrap().target, 1000);
+        assert_eq!(p.buffered(), None, "no buffer");
+        p.reached();
+        assert_eq!(
+            p.step(ENABLED, rse, 2000, 0, 0),
+            0,
+            "bit 12 falls at the target"
+        );
+        // With bit 5 the set-point replaces the move at once and bit 12 falls with bit 4.
+        p.step(ENABLED | NEW_SET_POINT, rse, 3000, 0, 0);
+        p.step(ENABLED, rse, 3000, 0, 0);
+        assert_eq!(
+            p.step(
+                ENABLED | CHANGE_SET_IMMEDIATELY | NEW_SET_POINT,
+                rse,
+                4000,
+                0,
+                0
+            ),
+            SET_POINT_ACKNOWLEDGE
+        );
+        assert_eq!(p.current().unwrap().target, 4000);
+        assert_eq!(p.step(ENABLED | CHANGE_SET_IMMEDIATELY, rse, 4000, 0, 0), 0);
+    }
+
+    #[test]
     fn bit6_polarity_and_bit9_follow_the_profile() {
         let sdv3 = Rules {
             bit6_set_is_absolute: true,
-            no_change_on_set_point: false,
+            ..CIA402
         };
         let mut p = pp();
         p.step(ENABLED | ABS_REL | NEW_SET_POINT, sdv3, 1000, 70, 0);
@@ -315,8 +372,8 @@ mod tests {
             (CIA402, true),
             (
                 Rules {
-                    bit6_set_is_absolute: false,
                     no_change_on_set_point: true,
+                    ..CIA402
                 },
                 false,
             ),
