@@ -146,6 +146,29 @@ async fn into_op(m: &InProcess, md: &MainDevice<'_>, mode_1: i8, mode_2: i8) -> 
         .expect("OP")
 }
 
+/// Both axes through shutdown, switch on and enable operation, targets at 0: Operation Enabled.
+async fn enable_both(m: &InProcess, md: &MainDevice<'_>, group: &OpGroup) -> Both {
+    let mut s = cycle(m, md, group, [0, 0], [0, 0]).await;
+    for cw in [SHUTDOWN; 5]
+        .into_iter()
+        .chain([SWITCH_ON; 5])
+        .chain([ENABLE_OPERATION; 30])
+    {
+        s = cycle(m, md, group, [cw, cw], [0, 0]).await;
+    }
+    assert_eq!(s.statusword.map(|w| w & STATE_MASK), [OPERATION_ENABLED; 2]);
+    s
+}
+
+/// Where the profile's SM1 (mailbox in) starts.
+fn sm1_start() -> u16 {
+    od_gen::builtin("sigma-v-sd-2axis")
+        .expect("profile")
+        .sm
+        .mailbox_in
+        .start
+}
+
 /// Waits (cycling both axes with `cw`/`target`) for an emergency in SM1 and returns its CoE
 /// part: CoE header, EMCY code, 1001h, manufacturer field (bytes 3–7).
 async fn emergency(
@@ -335,25 +358,13 @@ fn sigma_v_sd_2axis_moves_both_axes_independently() {
 
 #[test]
 fn sigma_v_sd_2axis_a_fault_of_axis_2_is_its_own() {
-    let sm1_start = od_gen::builtin("sigma-v-sd-2axis")
-        .expect("profile")
-        .sm
-        .mailbox_in
-        .start;
+    let sm1_start = sm1_start();
     block_on(async {
         let (m, transport) = master_for(Segment::new("sigma-v-sd-2axis", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
         let group = into_op(&m, md, CSP, CSP).await;
-        let mut s = cycle(&m, md, &group, [0, 0], [0, 0]).await;
-        for cw in [SHUTDOWN; 5]
-            .into_iter()
-            .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 30])
-        {
-            s = cycle(&m, md, &group, [cw, cw], [0, 0]).await;
-        }
-        assert_eq!(s.statusword.map(|w| w & STATE_MASK), [OPERATION_ENABLED; 2]);
+        let mut s = enable_both(&m, md, &group).await;
 
         m.shared.segment().drives_mut()[0].servos[1]
             .plant
@@ -423,25 +434,13 @@ fn sigma_v_sd_2axis_a_fault_of_axis_2_is_its_own() {
 /// goes on undisturbed to its target.
 #[test]
 fn sigma_v_sd_2axis_both_axes_move_at_once_and_a_fault_of_axis_1_leaves_axis_2_running() {
-    let sm1_start = od_gen::builtin("sigma-v-sd-2axis")
-        .expect("profile")
-        .sm
-        .mailbox_in
-        .start;
+    let sm1_start = sm1_start();
     block_on(async {
         let (m, transport) = master_for(Segment::new("sigma-v-sd-2axis", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
         let group = into_op(&m, md, CSP, CSP).await;
-        let mut s = cycle(&m, md, &group, [0, 0], [0, 0]).await;
-        for cw in [SHUTDOWN; 5]
-            .into_iter()
-            .chain([SWITCH_ON; 5])
-            .chain([ENABLE_OPERATION; 30])
-        {
-            s = cycle(&m, md, &group, [cw, cw], [0, 0]).await;
-        }
-        assert_eq!(s.statusword.map(|w| w & STATE_MASK), [OPERATION_ENABLED; 2]);
+        let mut s = enable_both(&m, md, &group).await;
 
         // Ramps over 1 s: +2 rev and −3 rev, halfway and at the end both where commanded.
         let ramp = |to: f64, k: i64| ((to * CPR) as i64 * k.min(1000) / 1000) as i32;
