@@ -12,6 +12,7 @@ import time
 import pysoem
 
 RECEIVE_TIMEOUT_US = 20_000
+RETURN_TIMEOUT_US = 20_000
 CYCLE_NS = 1_000_000
 CYCLES = 200
 
@@ -19,6 +20,10 @@ CYCLES = 200
 def main():
     ifname = sys.argv[1]
     out = {}
+    # The simulated line answers from an ordinary process: on a loaded machine a frame through
+    # seven drives can take longer than SOEM's 2 ms default return timeout, and discovery would
+    # miss the line. 20 ms only matters when a frame is late.
+    pysoem.settings.timeouts.ret = RETURN_TIMEOUT_US
     m = pysoem.Master()
     m.open(ifname)
     out["slave_count"] = m.config_init()
