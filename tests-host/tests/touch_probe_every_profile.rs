@@ -16,6 +16,11 @@
 //! | rse | none (bit 2 "meaningless") | yes | — | 7.9 |
 //! | sdv3-e, osd-g-e | both probes (Z) | yes | EXT1/EXT2 on EI3/EI5 (3002h:03/05 = 40/41) | §7.12 |
 //! | sigma-v-sd, sigma-v-sd-2axis (axis 2) | probe 1 only (phase C) | no (one sampling enable) | — | §6.10 |
+//!
+//! 60B9h bits 6/7 (14/15 for probe 2), which CiA402 leaves to the manufacturer, as each manual
+//! has them: the SDV3-E's and OSD-G-E's bit 6 shows the trigger source (1 = Z phase) and bit 7
+//! toggles on every stored position (§7.12), the Σ-V-SD's bit 7 toggles likewise (§6.10), the
+//! RSE's bit 7 is the probe input's level (7.9); elsewhere they stay 0.
 
 use std::f64::consts::TAU;
 
@@ -40,6 +45,9 @@ const FALLING: u16 = 1 << 5;
 const ENABLED: u16 = 1 << 0;
 const RISING_STORED: u16 = 1 << 1;
 const FALLING_STORED: u16 = 1 << 2;
+/// 60B9h bits 6 and 7 of probe 1 (manufacturer-specific).
+const BIT6: u16 = 1 << 6;
+const BIT7: u16 = 1 << 7;
 /// The motor starts here and runs to `END_REV`; the sensors' active ranges, revolutions.
 const START_REV: f64 = -0.5;
 const END_REV: f64 = 2.2;
@@ -56,6 +64,21 @@ struct Probes {
     falling: bool,
     /// SDO writes the probes need first.
     setup: &'static [Sdo],
+    /// What 60B9h bit 7 (15) shows.
+    bit7: Bit7,
+    /// 60B9h bit 6 (14) shows the trigger source (1 = index).
+    bit6_source: bool,
+}
+
+/// What 60B9h bit 7 (15) shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Bit7 {
+    /// Nothing (0).
+    Nothing,
+    /// Toggles on every stored position.
+    Toggle,
+    /// The probe input's level.
+    Level,
 }
 
 impl Probes {
@@ -156,14 +179,36 @@ async fn run(p: &Probes, profile: &Profile, uses: [Use; 2]) -> Result<(), String
             / TAU
     };
     let mut cycles = 0;
+    let sd = group.subdevice(md, 0).expect("drive");
+    let mut level_seen = [false; 2];
     while rotor(&m) < END_REV {
         cycles += 1;
         if cycles > 5_000 {
             return Err(format!("the motor did not get there: {:.2} rev", rotor(&m)));
         }
         cycle(&m, md, &group, vendor::ENABLE_OPERATION, velocity).await;
+        // Inside a sensor's range (a few cycles in): an input-level bit 7 shows it.
+        let here = rotor(&m);
+        for (n, (a, b)) in [PROBE1, PROBE2].into_iter().enumerate() {
+            if p.bit7 == Bit7::Level && !level_seen[n] && here > a + 0.02 && here < b - 0.02 {
+                level_seen[n] = true;
+                let status = sd
+                    .sdo_read::<u16>(o(0x60B9), 0)
+                    .await
+                    .map_err(|e| format!("60B9h: {e:?}"))?;
+                if status & BIT7 << (8 * n) == 0 {
+                    return Err(format!(
+                        "probe {} input active, 60B9h {status:#06x}: bit {} clear",
+                        n + 1,
+                        7 + 8 * n
+                    ));
+                }
+            }
+        }
     }
-    let sd = group.subdevice(md, 0).expect("drive");
+    if p.bit7 == Bit7::Level && level_seen != [true; 2] {
+        return Err("never inside a sensor's range".into());
+    }
     let read_i32 = |index| {
         let sd = &sd;
         async move {
@@ -229,8 +274,18 @@ async fn run(p: &Probes, profile: &Profile, uses: [Use; 2]) -> Result<(), String
             }
         }
     }
-    // Bits 0-2 and 8-10 (bits 6/7 and 14/15 are the profiles' own).
-    const MASK: u16 = 0x0707;
+    // Bits 6/7 and 14/15, the profiles' own (the motor is past both sensors now).
+    for (n, u) in uses.iter().enumerate() {
+        let shift = 8 * n;
+        if p.bit6_source && u.function & SOURCE_INDEX != 0 {
+            expected_status |= BIT6 << shift;
+        }
+        let stores = u.counts.0 + u.counts.1;
+        if p.bit7 == Bit7::Toggle && stores % 2 == 1 {
+            expected_status |= BIT7 << shift;
+        }
+    }
+    const MASK: u16 = 0xC7C7;
     if status & MASK != expected_status {
         return Err(format!(
             "60B9h {status:#06x}, expected {expected_status:#06x} under {MASK:#06x}"
@@ -269,6 +324,8 @@ fn standard_touch_probes_latch_every_edge_and_source() {
         index: [true, true],
         falling: true,
         setup: &[],
+        bit7: Bit7::Nothing,
+        bit6_source: false,
     });
 }
 
@@ -280,6 +337,8 @@ fn gha_e_touch_probes_latch_every_edge_and_source() {
         index: [true, true],
         falling: true,
         setup: &[],
+        bit7: Bit7::Nothing,
+        bit6_source: false,
     });
 }
 
@@ -291,6 +350,8 @@ fn rse_touch_probes_latch_every_edge_on_the_input() {
         index: [false, false],
         falling: true,
         setup: &[],
+        bit7: Bit7::Level,
+        bit6_source: false,
     });
 }
 
@@ -305,6 +366,8 @@ fn sdv3_e_touch_probes_latch_every_edge_and_source() {
         index: [true, true],
         falling: true,
         setup: SDV3_E_EXT_INPUTS,
+        bit7: Bit7::Toggle,
+        bit6_source: true,
     });
 }
 
@@ -316,6 +379,8 @@ fn osd_g_e_touch_probes_latch_every_edge_and_source() {
         index: [true, true],
         falling: true,
         setup: SDV3_E_EXT_INPUTS,
+        bit7: Bit7::Toggle,
+        bit6_source: true,
     });
 }
 
@@ -327,6 +392,8 @@ fn sigma_v_sd_touch_probes_latch_on_input_and_phase_c() {
         index: [true, false],
         falling: false,
         setup: &[],
+        bit7: Bit7::Toggle,
+        bit6_source: false,
     });
 }
 
@@ -338,5 +405,7 @@ fn sigma_v_sd_2axis_axis_2_touch_probes_latch_on_input_and_phase_c() {
         index: [true, false],
         falling: false,
         setup: &[],
+        bit7: Bit7::Toggle,
+        bit6_source: false,
     });
 }
