@@ -577,6 +577,9 @@ pub struct Cia402Rules {
     /// Quick stop, shutdown and disable operation disable the drive function at once in the
     /// torque modes, whatever their option codes (the Σ-V-SD, §6.4).
     pub torque_modes_stop_at_once: bool,
+    /// Halt in the torque modes takes the torque demand to zero instead of decelerating the
+    /// motor on a ramp (the Σ-V-SD, §6.4); the motor runs out under its load.
+    pub torque_modes_halt_zero_torque: bool,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

@@ -1143,6 +1143,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             );
         }
     }
+    if r.torque_modes_halt_zero_torque {
+        out.push_str("- Halt (controlword bit 8) in profile torque and cyclic synchronous torque takes the torque demand to zero; the drive stays in Operation Enabled.\n");
+    }
     if r.torque_modes_stop_at_once {
         out.push_str("- In profile torque and cyclic synchronous torque, quick stop, shutdown and disable operation disable the drive function at once (code 0).\n");
     }

@@ -890,6 +890,7 @@ impl Default for Cia402File {
             home_found_statusword: None,
             option_codes_without_object: OptionCodesFile::default(),
             torque_modes_stop_at_once: false,
+            torque_modes_halt_zero_torque: false,
         }
     }
 }
@@ -1195,6 +1196,9 @@ pub struct Cia402File {
     /// Quick stop, shutdown and disable operation disable the drive at once in PT and CST.
     #[serde(default)]
     pub torque_modes_stop_at_once: bool,
+    /// Halt in PT and CST takes the torque demand to zero (not a speed ramp).
+    #[serde(default)]
+    pub torque_modes_halt_zero_torque: bool,
 }
 
 /// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.

@@ -2139,6 +2139,8 @@ pub struct Cia402Rules {
     pub option_codes_without_object: [Option<i16>; 5],
     /// Quick stop, shutdown and disable operation disable the drive at once in PT and CST.
     pub torque_modes_stop_at_once: bool,
+    /// Halt in PT and CST takes the torque demand to zero.
+    pub torque_modes_halt_zero_torque: bool,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2431,6 +2433,7 @@ impl Default for Cia402Rules {
             home_found_statusword: None,
             option_codes_without_object: [None; 5],
             torque_modes_stop_at_once: false,
+            torque_modes_halt_zero_torque: false,
         }
     }
 }

@@ -598,6 +598,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             &declared,
         )?,
         torque_modes_stop_at_once: f.cia402.torque_modes_stop_at_once,
+        torque_modes_halt_zero_torque: f.cia402.torque_modes_halt_zero_torque,
         home_found_statusword: f
             .cia402
             .home_found_statusword

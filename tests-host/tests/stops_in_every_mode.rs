@@ -12,6 +12,7 @@
 //! | standard, sigma-v-sd | halt, 605Dh = 1 | HM | the homing acceleration 609Ah (the slow-down ramp of homing) | CiA402; Σ-V-SD §6.4 |
 //! | sigma-v-sd | quick stop, 605Ah = 2 | PT, CST | the power stage off at once ("always code 0") | §6.4 |
 //! | sigma-v-sd | quick stop, 605Ah = 2 | PV | quick-stop ramp 6085h | §6.4 |
+//! | sigma-v-sd | halt, 605Dh = 1 | CST | the torque demand to zero: powered, the motor runs out under its friction (faster than the slow-down ramp), Operation Enabled | §6.4 |
 //! | rse | halt without 605Dh | PV, CSV | as 605Dh = 1: slow-down ramp 6084h, Operation Enabled | 6.2 |
 //! | gha-e, sdv3-e | halt | CSV | ignored: the motor runs on | GHA-E §5.3.2 "this bit is invalid"; SDV3-E §7.2 bit 8 reserved |
 
@@ -233,6 +234,8 @@ fn sigma_v_sd_torque_modes_stop_at_once_and_halt_in_homing_on_609ah() {
         quick_stop("sigma-v-sd", PT, Stop::Coast),
         quick_stop("sigma-v-sd", CST, Stop::Coast),
         quick_stop("sigma-v-sd", PV, Stop::Ramp(QUICK_STOP_RAMP_REV_S2)),
+        // Zero torque: the plant's friction decelerates the motor faster than 6084h would.
+        halt("sigma-v-sd", CST, Stop::Limit(2.0 * PROFILE_RAMP_REV_S2)),
         halt("sigma-v-sd", HM, Stop::Ramp(HOMING_RAMP_REV_S2)),
     ]);
 }

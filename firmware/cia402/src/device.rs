@@ -78,6 +78,8 @@ pub struct Step {
     pub fault_cleared: Option<u16>,
     /// What the axis does.
     pub motion: Motion,
+    /// The stop under way is a halt (controlword bit 8 in Operation Enabled, 605Dh).
+    pub halted: bool,
 }
 
 impl Default for Device {
@@ -305,6 +307,7 @@ impl Device {
             statusword,
             fault_cleared,
             motion,
+            halted,
         }
     }
 

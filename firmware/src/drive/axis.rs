@@ -739,7 +739,13 @@ impl DriveAxis {
             } else {
                 Mode::Other
             };
-            self.exchange_with_axis(ram, (cw, mode, step.motion), feedback, cycle_ns, due);
+            self.exchange_with_axis(
+                ram,
+                (cw, mode, step.motion, step.halted),
+                feedback,
+                cycle_ns,
+                due,
+            );
         } else if matches!(step.motion, Motion::Run) {
             if let Some(target) = read_bytes::<4>(ram, vars.target_position) {
                 write_bytes(ram, vars.position_actual_value, target);
@@ -810,7 +816,7 @@ impl DriveAxis {
     fn exchange_with_axis(
         &mut self,
         ram: &mut [u8],
-        (cw, mode, motion): (u16, Mode, Motion),
+        (cw, mode, motion, halted): (u16, Mode, Motion, bool),
         feedback: &mut AxisFeedback,
         cycle_ns: u32,
         mut due: Groups,
@@ -1084,6 +1090,15 @@ impl DriveAxis {
             }
         }
         let mut motion = motion;
+        if halted
+            && self.rules.torque_modes_halt_zero_torque
+            && matches!(mode, Mode::ProfileTorque | Mode::CyclicTorque)
+        {
+            // Profile rule (the Σ-V-SD §6.4): a halt in the torque modes takes the torque
+            // demand to zero, the motor running out under its load, instead of a ramp.
+            set_point.torque = 0.0;
+            motion = Motion::Run;
+        }
         if !matches!(mode, Mode::Homing) {
             if let Some(l) = limits.filter(|_| set_point.control == modes::Loop::Position) {
                 // A position target beyond a software limit is limited to it (bit 11).
