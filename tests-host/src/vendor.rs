@@ -271,6 +271,18 @@ pub fn overheat_power_stage(m: &InProcess, axis: usize) {
     servo.plant.set_drive_temperature(f64::from(level) + 10.0);
 }
 
+/// Puts the two touch-probe sensors of the first drive's axis `axis` at `probes`: each input is
+/// active between its two angles, revolutions.
+pub fn place_probe_sensors(m: &InProcess, axis: usize, probes: [(f64, f64); 2]) {
+    let turn = std::f64::consts::TAU;
+    m.shared.segment().drives_mut()[0].servos[axis]
+        .plant
+        .set_switches(board_sim::plant::SwitchParams {
+            probes: probes.map(|(a, b)| Some((a * turn, b * turn))),
+            ..Default::default()
+        });
+}
+
 /// The little-endian u16 at byte `at` of an image.
 pub fn u16_at(image: &[u8], at: usize) -> u16 {
     u16::from_le_bytes([image[at], image[at + 1]])

@@ -21,7 +21,7 @@
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
 use od_gen::Profile;
-use tests_host::vendor::{self, DcGroup, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo, ENABLE_OPERATION, SHUTDOWN, SWITCH_ON};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -36,9 +36,6 @@ const QUICK_STOP_ACTIVE: u16 = 0x0217;
 const FAULT_REACTION_ACTIVE: u16 = 0x021F;
 const FAULT: u16 = 0x0218;
 /// CiA402 Table 5 controlwords.
-const SHUTDOWN: u16 = 0x0006;
-const SWITCH_ON: u16 = 0x0007;
-const ENABLE_OPERATION: u16 = 0x000F;
 const DISABLE_VOLTAGE: u16 = 0x0000;
 const QUICK_STOP: u16 = 0x0002;
 const FAULT_RESET: u16 = 0x0080;

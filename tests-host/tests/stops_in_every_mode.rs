@@ -21,7 +21,7 @@ use ethercrab::MainDevice;
 use od_gen::Profile;
 use tests_host::cia402::{self, OPERATION_ENABLED, SWITCH_ON_DISABLED};
 use tests_host::stops::{self, Sample, Stop};
-use tests_host::vendor::{self, DcGroup, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo, ENABLE_OPERATION};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -45,7 +45,6 @@ const FAR_REV: f64 = 1000.0;
 /// Cycles watched after the command: the slowest ramp takes 0.5 s.
 const STOP_CYCLES: usize = 800;
 
-const ENABLE_OPERATION: u16 = 0x0F;
 const QUICK_STOP: u16 = 0x02;
 const HALT: u16 = 0x0100;
 /// Profile position "new set-point", homing "start".

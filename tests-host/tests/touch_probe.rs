@@ -10,7 +10,7 @@ use std::f64::consts::TAU;
 
 use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
-use tests_host::{block_on, csp, master};
+use tests_host::{block_on, csp, master, vendor};
 
 const CPR: f64 = (1u32 << 20) as f64;
 const ENABLE_OPERATION: u16 = 0x0F;
@@ -46,18 +46,7 @@ fn touch_probes_latch_the_edge_positions_of_inputs_and_index() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        {
-            let mut segment = m.shared.segment();
-            segment.drives_mut()[0].servos[0]
-                .plant
-                .set_switches(SwitchParams {
-                    probes: [
-                        Some((PROBE1.0 * TAU, PROBE1.1 * TAU)),
-                        Some((PROBE2.0 * TAU, PROBE2.1 * TAU)),
-                    ],
-                    ..SwitchParams::default()
-                });
-        }
+        vendor::place_probe_sensors(&m, 0, [PROBE1, PROBE2]);
         let group = csp::into_op_with_mode(&m, md, PV).await;
         let sd = group.subdevice(md, 0).expect("drive");
         // Probe 1: single trigger, both edges, its input. Probe 2: continuous, rising, on the

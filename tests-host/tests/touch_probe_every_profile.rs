@@ -25,7 +25,6 @@
 use std::f64::consts::TAU;
 
 use board_sim::inproc::InProcess;
-use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
 use od_gen::Profile;
 use tests_host::cia402::{self, OPERATION_ENABLED};
@@ -148,18 +147,10 @@ async fn run(p: &Probes, profile: &Profile, uses: [Use; 2]) -> Result<(), String
     let (m, transport) = master_for(board_sim::Segment::new(p.profile, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
-    {
-        let mut segment = m.shared.segment();
-        let plant = &mut segment.drives_mut()[0].servos[p.axis].plant;
-        plant.set_switches(SwitchParams {
-            probes: [
-                Some((PROBE1.0 * TAU, PROBE1.1 * TAU)),
-                Some((PROBE2.0 * TAU, PROBE2.1 * TAU)),
-            ],
-            ..SwitchParams::default()
-        });
-        plant.set_rotor_position(START_REV * TAU);
-    }
+    vendor::place_probe_sensors(&m, p.axis, [PROBE1, PROBE2]);
+    m.shared.segment().drives_mut()[0].servos[p.axis]
+        .plant
+        .set_rotor_position(START_REV * TAU);
     let mut setup = p.setup.to_vec();
     let function = uses[0].function | uses[1].function << 8;
     setup.push(Sdo::U16(o(0x60B8), 0, function));

@@ -13,7 +13,6 @@
 
 use std::f64::consts::TAU;
 
-use board_sim::plant::SwitchParams;
 use ethercrab::MainDevice;
 use tests_host::vendor::{self, Sdo};
 use tests_host::{block_on, cia402, master_for, units};
@@ -35,15 +34,7 @@ async fn probes_while_homing(name: &str, off: [bool; 2]) -> Result<(), String> {
     let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
-    m.shared.segment().drives_mut()[0].servos[0]
-        .plant
-        .set_switches(SwitchParams {
-            probes: [
-                Some((PROBE1.0 * TAU, PROBE1.1 * TAU)),
-                Some((PROBE2.0 * TAU, PROBE2.1 * TAU)),
-            ],
-            ..SwitchParams::default()
-        });
+    vendor::place_probe_sensors(&m, 0, [PROBE1, PROBE2]);
     let setup = [
         Sdo::U16(0x60B8, 0, FUNCTION),
         Sdo::I8(0x6098, 0, SEARCH_POSITIVE),

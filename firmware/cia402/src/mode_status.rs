@@ -88,11 +88,14 @@ impl Conditions {
     /// The conditions CiA402's layout of `mode` (a 6060h value) shows in statusword bits
     /// 10–13 of `statusword` (the bits as the mode's code sets them).
     pub fn from_cia402(mode: i8, statusword: u16) -> Self {
+        cia402(mode).map_or(Self::NONE, |l| Self::shown(&l, statusword))
+    }
+
+    /// The conditions `layout` shows in statusword bits 10–13 of `statusword`.
+    fn shown(layout: &Layout, statusword: u16) -> Self {
         let mut c = Self::NONE;
-        if let Some(layout) = cia402(mode) {
-            for (bit, shows) in layout.bits.iter().enumerate() {
-                c.set(*shows, statusword & (FIRST_BIT << bit) != 0);
-            }
+        for (bit, shows) in layout.bits.iter().enumerate() {
+            c.set(*shows, statusword & (FIRST_BIT << bit) != 0);
         }
         c
     }
@@ -177,7 +180,12 @@ pub fn layout(mode: i8, overrides: &[Override]) -> Option<Layout> {
 /// Statusword bits 10–13 of `statusword` (set as CiA402's layout of `mode` has them) moved to
 /// `layout`, with the `extra` conditions only the layout shows; the other bits unchanged.
 pub fn relayout(mode: i8, statusword: u16, layout: &Layout, extra: Conditions) -> u16 {
-    let mut c = Conditions::from_cia402(mode, statusword);
+    moved(cia402(mode).as_ref(), statusword, layout, extra)
+}
+
+/// [`relayout`] from the `standard` layout the bits are set in.
+fn moved(standard: Option<&Layout>, statusword: u16, layout: &Layout, extra: Conditions) -> u16 {
+    let mut c = standard.map_or(Conditions::NONE, |l| Conditions::shown(l, statusword));
     c.0 |= extra.0;
     (statusword & !MODE_BITS) | layout.statusword(c)
 }
@@ -222,7 +230,8 @@ pub const fn shown_in(overrides: &[Override], c: Shows) -> bool {
 /// The statusword bits 10–13 of the mode the drive runs, resolved once when the mode changes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModeStatus {
-    mode: i8,
+    /// CiA402's layout of the mode (how the mode's code sets the bits).
+    standard: Option<Layout>,
     layout: Layout,
     /// The layout differs from CiA402's for the mode.
     relayout: bool,
@@ -241,7 +250,7 @@ impl ModeStatus {
             extra.set(c, !standard.is_some_and(|l| l.shows(c)));
         }
         Some(Self {
-            mode,
+            standard,
             layout: own,
             relayout: standard != Some(own),
             extra,
@@ -263,7 +272,7 @@ impl ModeStatus {
     /// layout, with the `extra` conditions the drive worked out.
     pub fn apply(&self, statusword: u16, extra: Conditions) -> u16 {
         if self.relayout {
-            relayout(self.mode, statusword, &self.layout, extra)
+            moved(self.standard.as_ref(), statusword, &self.layout, extra)
         } else {
             statusword
         }
