@@ -208,9 +208,25 @@ impl AlarmTable {
         record: None,
     };
 
-    /// The alarm reported as `report`, if the profile lists it.
+    /// The alarm `report` is, if it is one of the profile's.
     pub fn entry(&self, report: &FaultReport) -> Option<&'static AlarmEntry> {
-        self.entries.iter().find(|e| e.report == *report)
+        report
+            .alarm
+            .and_then(|at| self.entries.get(usize::from(at)))
+    }
+
+    /// `report` as the profile's alarm that reports exactly these codes (the first such row),
+    /// for an error raised by its codes alone (the EtherCAT stack's `ErrorReport`); unchanged
+    /// when no row matches.
+    pub fn with_alarm(&self, report: FaultReport) -> FaultReport {
+        let same_codes = |e: &&AlarmEntry| {
+            (e.report.error_code, e.report.emcy_code, e.report.emcy_data)
+                == (report.error_code, report.emcy_code, report.emcy_data)
+        };
+        self.entries
+            .iter()
+            .find(same_codes)
+            .map_or(report, |e| e.report)
     }
 
     /// Whether the profile keeps alarm records (a history list or selected records).
@@ -503,6 +519,49 @@ mod tests {
         ram[8] = 0;
         log.downloaded(&TABLE, &mut ram, 0x3200, 0);
         assert_eq!(u(&ram, NUMBER), 0, "selector 0 selects nothing");
+    }
+
+    /// The RSE's AL.120 and AL.123 report the same codes (its manual states none, the profile
+    /// gives both 7300h): each fault is its own alarm all the same, and a code without an alarm
+    /// is none of them, even where an alarm has that code.
+    #[test]
+    fn an_alarm_is_known_by_its_row_not_by_its_codes() {
+        let shared = |alarm| FaultReport {
+            alarm: Some(alarm),
+            ..FaultReport::code(0x7300)
+        };
+        static ENTRIES: [AlarmEntry; 2] = [
+            AlarmEntry {
+                report: FaultReport {
+                    alarm: Some(0),
+                    ..FaultReport::code(0x7300)
+                },
+                number: 120,
+                resettable: false,
+            },
+            AlarmEntry {
+                report: FaultReport {
+                    alarm: Some(1),
+                    ..FaultReport::code(0x7300)
+                },
+                number: 123,
+                resettable: true,
+            },
+        ];
+        let table = AlarmTable {
+            entries: &ENTRIES,
+            ..AlarmTable::NONE
+        };
+        assert_eq!(table.entry(&shared(0)).map(|e| e.number), Some(120));
+        assert_eq!(table.entry(&shared(1)).map(|e| e.number), Some(123));
+        assert_eq!(table.entry(&FaultReport::code(0x7300)), None);
+        assert_eq!(table.entry(&shared(2)), None, "no such row");
+        // An error raised by its codes alone is the first row with them.
+        assert_eq!(table.with_alarm(FaultReport::code(0x7300)), shared(0));
+        assert_eq!(
+            table.with_alarm(FaultReport::code(0x4310)),
+            FaultReport::code(0x4310)
+        );
     }
 
     #[test]

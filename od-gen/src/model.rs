@@ -1607,6 +1607,9 @@ pub struct MotorFaultCode {
     pub error_code: u16,
     /// The EMCY message.
     pub emcy: EmcyCode,
+    /// The `[[alarm]]` it is (its position in [`Profile::alarms`]); `None` for a code without an
+    /// alarm. An alarm is known by this, not by its codes, which several rows may share.
+    pub alarm: Option<usize>,
 }
 
 /// One row of a drive's alarm table (`[[alarm]]`).

@@ -1228,11 +1228,13 @@ fn fault_report(r: &MotorFaultFile, alarms: &[Alarm], key: &str) -> Result<Motor
                 code: *c,
                 data: [0; 5],
             },
+            alarm: None,
         }),
         MotorFaultFile::Alarm(display) => {
-            let a = alarms
+            let (at, a) = alarms
                 .iter()
-                .find(|a| a.display == *display)
+                .enumerate()
+                .find(|(_, a)| a.display == *display)
                 .ok_or_else(|| {
                     fault(
                         key,
@@ -1242,6 +1244,7 @@ fn fault_report(r: &MotorFaultFile, alarms: &[Alarm], key: &str) -> Result<Motor
             Ok(MotorFaultCode {
                 error_code: a.error_code,
                 emcy: a.emcy,
+                alarm: Some(at),
             })
         }
     }

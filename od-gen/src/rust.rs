@@ -301,8 +301,8 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             let d = code.emcy.data;
             let _ = writeln!(
                 out,
-                "        FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }}, // {name}",
-                code.error_code, code.emcy.code, d[0], d[1], d[2], d[3], d[4]
+                "        FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}], alarm: {} }}, // {name}",
+                code.error_code, code.emcy.code, d[0], d[1], d[2], d[3], d[4], alarm_ref(code.alarm)
             );
         }
         let _ = writeln!(out, "    ];");
@@ -538,11 +538,12 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             .map(|w| {
                 let d = w.report.emcy.data;
                 format!(
-                    "{drive}::alarm_log::Warning {{ condition: {drive}::alarm_log::WarningCondition::{}, report: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }} }}",
+                    "{drive}::alarm_log::Warning {{ condition: {drive}::alarm_log::WarningCondition::{}, report: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}], alarm: {} }} }}",
                     w.condition.rust_value(),
                     w.report.error_code,
                     w.report.emcy.code,
-                    d[0], d[1], d[2], d[3], d[4]
+                    d[0], d[1], d[2], d[3], d[4],
+                    alarm_ref(w.report.alarm)
                 )
             })
             .collect();
@@ -769,13 +770,15 @@ fn alarm_table(out: &mut String, p: &Profile, layout: &RamLayout, drive: &str) {
     let entries: Vec<String> = p
         .alarms
         .iter()
-        .map(|alarm| {
+        .enumerate()
+        .map(|(at, alarm)| {
             let d = alarm.emcy.data;
             format!(
-                "{drive}::alarm_log::AlarmEntry {{ report: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}] }}, number: {}, resettable: {} }}",
+                "{drive}::alarm_log::AlarmEntry {{ report: FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [{:#04x}, {:#04x}, {:#04x}, {:#04x}, {:#04x}], alarm: {} }}, number: {}, resettable: {} }}",
                 alarm.error_code,
                 alarm.emcy.code,
                 d[0], d[1], d[2], d[3], d[4],
+                alarm_ref(Some(at)),
                 // validate checked that the numbers of a profile with alarm objects fit.
                 a.number.of(alarm).and_then(|n| u16::try_from(n).ok()).unwrap_or(0),
                 alarm.resettable
@@ -843,9 +846,17 @@ fn alarm_table(out: &mut String, p: &Profile, layout: &RamLayout, drive: &str) {
 /// A `FaultReport` literal of `c` (603Fh code, EMCY code and manufacturer field).
 fn fault_report(c: &MotorFaultCode) -> String {
     format!(
-        "FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?} }}",
-        c.error_code, c.emcy.code, c.emcy.data
+        "FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: {:?}, alarm: {} }}",
+        c.error_code,
+        c.emcy.code,
+        c.emcy.data,
+        alarm_ref(c.alarm)
     )
+}
+
+/// `FaultReport::alarm` of the `[[alarm]]` at `at` (`None`: no alarm).
+fn alarm_ref(at: Option<usize>) -> String {
+    at.map_or("None".into(), |i| format!("Some({i})"))
 }
 
 /// `Some(FaultReport { .. })` of `c`, or `None`.

@@ -225,7 +225,7 @@ fn motor_fault_table_order_matches_the_names() {
         .zip(MOTOR_FAULT_NAMES)
         .map(|(c, n)| {
             format!(
-                "FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00] }}, // {n}",
+                "FaultReport {{ error_code: {:#06x}, emcy_code: {:#06x}, emcy_data: [0x00, 0x00, 0x00, 0x00, 0x00], alarm: None }}, // {n}",
                 c.error_code, c.error_code
             )
         })

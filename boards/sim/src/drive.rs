@@ -31,6 +31,15 @@ pub const LED_PERIOD_NS: u64 = 10_000_000;
 /// fallback does every 10 ms: re-evaluates waiting transitions and timeouts.
 pub const BACKGROUND_POLL_PERIOD_NS: u64 = 10_000_000;
 
+/// Why [`SimDrive::fit_servo`] failed.
+#[derive(Debug)]
+pub enum FitError {
+    /// The drive's profile has no axis of that number.
+    NoSuchAxis(usize),
+    /// The firmware refused to start after the power cycle.
+    Slave(SlaveError),
+}
+
 /// A drive: ESC + firmware.
 pub struct SimDrive {
     /// The simulated ESC.
@@ -136,6 +145,20 @@ impl SimDrive {
         self.next_free_run_ns = now + FREE_RUN_PERIOD_NS;
         self.next_poll_ns = now + BACKGROUND_POLL_PERIOD_NS;
         Ok(())
+    }
+
+    /// Fits axis `axis` (0 = the first) with `servo`: a board built with other hardware (a
+    /// motor, encoder or protection levels other than the reference servo's), e.g. to provoke a
+    /// fault the reference board cannot reach. The drive is then power cycled so that the
+    /// firmware starts with the new axis attached; call it before a master opens the drive.
+    /// `Err` if the drive has no such axis (the servo is not fitted).
+    pub fn fit_servo(&mut self, axis: usize, servo: SimServo) -> Result<(), FitError> {
+        let slot = self
+            .servos
+            .get_mut(axis)
+            .ok_or(FitError::NoSuchAxis(axis))?;
+        *slot = servo;
+        self.power_cycle().map_err(FitError::Slave)
     }
 
     /// Earliest simulated time at which the drive has something to do.

@@ -12,15 +12,22 @@ pub struct FaultReport {
     pub emcy_code: u16,
     /// EMCY bytes 3–7 (manufacturer-specific error field).
     pub emcy_data: [u8; 5],
+    /// The row of the profile's alarm table this report is (its position in the table), which
+    /// the alarm objects show by number; `None` for a fault the table has no alarm for. Kept
+    /// apart from the codes because rows may share them (the RSE's manual states no 603Fh
+    /// codes or EMCY bytes, so e.g. AL.120, AL.123 and AL.125 all report 7300h).
+    pub alarm: Option<u16>,
 }
 
 impl FaultReport {
-    /// A fault reported with the same code in 603Fh and the EMCY, no manufacturer data.
+    /// A fault reported with the same code in 603Fh and the EMCY, no manufacturer data, and no
+    /// alarm of the profile's table.
     pub const fn code(code: u16) -> Self {
         Self {
             error_code: code,
             emcy_code: code,
             emcy_data: [0; 5],
+            alarm: None,
         }
     }
 }

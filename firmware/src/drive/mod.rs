@@ -433,14 +433,13 @@ impl Application for Drive {
         // record of it.
         let new = self.axes.iter().flatten().any(|a| a.fault_code().is_none());
         for axis in self.axes.iter_mut().flatten() {
-            axis.report_fault(
-                FaultReport {
-                    error_code: report.error_code,
-                    emcy_code: report.emcy_code,
-                    emcy_data: report.emcy_data,
-                },
-                ram,
-            );
+            let report = self.alarm_table.with_alarm(FaultReport {
+                error_code: report.error_code,
+                emcy_code: report.emcy_code,
+                emcy_data: report.emcy_data,
+                alarm: None,
+            });
+            axis.report_fault(report, ram);
         }
         if new {
             self.alarm_raised(0, ram);
