@@ -580,6 +580,12 @@ pub struct Cia402Rules {
     /// Halt in the torque modes takes the torque demand to zero instead of decelerating the
     /// motor on a ramp (the Σ-V-SD, §6.4); the motor runs out under its load.
     pub torque_modes_halt_zero_torque: bool,
+    /// The parameter that, set to 1, switches the software position limits 607Dh off (the
+    /// SDV3-E's P2.25 "position command format" 1 = infinite length); read at power-on.
+    pub software_limits_off: Option<Operand>,
+    /// The software position limits act only once the position is referenced: after a homing
+    /// run, or from power-on with an absolute encoder (the Σ-V-SD, §6.8 (2)).
+    pub software_limits_need_reference: bool,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

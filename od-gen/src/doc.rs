@@ -1143,6 +1143,16 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             );
         }
     }
+    if let Some((index, sub)) = r.software_limits_off {
+        let _ = writeln!(
+            out,
+            "- With {index:04X}h:{sub:02X}h = 1 at power-on the software position limits 607Dh \
+             are off (infinite length)."
+        );
+    }
+    if r.software_limits_need_reference {
+        out.push_str("- The software position limits 607Dh act only once the position is referenced: after a homing run, or from power-on with an absolute encoder.\n");
+    }
     if r.torque_modes_halt_zero_torque {
         out.push_str("- Halt (controlword bit 8) in profile torque and cyclic synchronous torque takes the torque demand to zero; the drive stays in Operation Enabled.\n");
     }

@@ -891,6 +891,8 @@ impl Default for Cia402File {
             option_codes_without_object: OptionCodesFile::default(),
             torque_modes_stop_at_once: false,
             torque_modes_halt_zero_torque: false,
+            software_limits_off: None,
+            software_limits_need_reference: false,
         }
     }
 }
@@ -1199,6 +1201,14 @@ pub struct Cia402File {
     /// Halt in PT and CST takes the torque demand to zero (not a speed ramp).
     #[serde(default)]
     pub torque_modes_halt_zero_torque: bool,
+    /// The parameter (`"0xIIII:S"`) whose value 1, at power-on, switches the software position
+    /// limits 607Dh off.
+    #[serde(default)]
+    pub software_limits_off: Option<String>,
+    /// The software position limits 607Dh act only once the position is referenced: after a
+    /// homing run, or at once with an absolute encoder.
+    #[serde(default)]
+    pub software_limits_need_reference: bool,
 }
 
 /// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.

@@ -2144,6 +2144,10 @@ pub struct Cia402Rules {
     pub torque_modes_stop_at_once: bool,
     /// Halt in PT and CST takes the torque demand to zero.
     pub torque_modes_halt_zero_torque: bool,
+    /// The parameter whose value 1 (at power-on) switches the software position limits off.
+    pub software_limits_off: Option<(u16, u8)>,
+    /// The software position limits act only after homing or with an absolute encoder.
+    pub software_limits_need_reference: bool,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2437,6 +2441,8 @@ impl Default for Cia402Rules {
             option_codes_without_object: [None; 5],
             torque_modes_stop_at_once: false,
             torque_modes_halt_zero_torque: false,
+            software_limits_off: None,
+            software_limits_need_reference: false,
         }
     }
 }

@@ -599,6 +599,11 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         )?,
         torque_modes_stop_at_once: f.cia402.torque_modes_stop_at_once,
         torque_modes_halt_zero_torque: f.cia402.torque_modes_halt_zero_torque,
+        software_limits_off: entry_ref(
+            f.cia402.software_limits_off.as_deref(),
+            "cia402.software_limits_off",
+        )?,
+        software_limits_need_reference: f.cia402.software_limits_need_reference,
         home_found_statusword: f
             .cia402
             .home_found_statusword

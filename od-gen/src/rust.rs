@@ -606,9 +606,17 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             })
             .collect();
         let _ = writeln!(out, "        adjusting: &[{}],", services.join(", "));
+        // A parameter a rule reads (validated: a writable integer parameter in RAM).
+        let ram_parameter = |entry: Option<(u16, u8)>| -> String {
+            entry.map_or("None".into(), |(index, sub)| {
+                let at = layout.offsets.get(&(index, sub)).copied().unwrap_or(0);
+                let len = p.entry(index, sub).map_or(0, |e| e.byte_len());
+                format!("Some({drive}::profile::Operand::Ram {{ at: {at}, len: {len} }})")
+            })
+        };
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, pp_set_point_buffer: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {}, stop_codes: &[{}], fault_reaction_ignored: {}, mode_statusword: &[{}], home_found_statusword: {}, implied_option_codes: cia402::stop::OptionCodes {{ quick_stop: {:?}, shutdown: {:?}, disable_operation: {:?}, halt: {:?}, fault_reaction: {:?}, vendor: &[] }}, torque_modes_stop_at_once: {}, torque_modes_halt_zero_torque: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, pp_set_point_buffer: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {}, stop_codes: &[{}], fault_reaction_ignored: {}, mode_statusword: &[{}], home_found_statusword: {}, implied_option_codes: cia402::stop::OptionCodes {{ quick_stop: {:?}, shutdown: {:?}, disable_operation: {:?}, halt: {:?}, fault_reaction: {:?}, vendor: &[] }}, torque_modes_stop_at_once: {}, torque_modes_halt_zero_torque: {}, software_limits_off: {}, software_limits_need_reference: {} }},",
             optional_fault_report(p.cia402.enable_without_mode_error.as_ref()),
             optional_fault_report(p.cia402.mode_change_while_homing_error.as_ref()),
             p.cia402.stops_end_switched_off,
@@ -653,12 +661,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                 "Some({})",
                 statusword_flag(drive, f)
             )),
-            // Validated: a writable integer parameter in RAM.
-            p.cia402.csp_extrapolation.map_or("None".into(), |(index, sub)| {
-                let at = layout.offsets.get(&(index, sub)).copied().unwrap_or(0);
-                let len = p.entry(index, sub).map_or(0, |e| e.byte_len());
-                format!("Some({drive}::profile::Operand::Ram {{ at: {at}, len: {len} }})")
-            }),
+            ram_parameter(p.cia402.csp_extrapolation),
             p.cia402
                 .stop_codes
                 .iter()
@@ -696,7 +699,9 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.option_codes_without_object[3],
             p.cia402.option_codes_without_object[4],
             p.cia402.torque_modes_stop_at_once,
-            p.cia402.torque_modes_halt_zero_torque
+            p.cia402.torque_modes_halt_zero_torque,
+            ram_parameter(p.cia402.software_limits_off),
+            p.cia402.software_limits_need_reference
         );
     }
     let _ = writeln!(out, "    }};\n");

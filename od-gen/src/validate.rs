@@ -908,6 +908,9 @@ fn esm(p: &Profile) -> Result<(), Fault> {
     if let Some(entry) = p.cia402.csp_extrapolation {
         integer_parameter(p, entry, "cia402.csp_extrapolation")?;
     }
+    if let Some(entry) = p.cia402.software_limits_off {
+        integer_parameter(p, entry, "cia402.software_limits_off")?;
+    }
     if let Some(t) = &p.cia402.touch_probe_inputs {
         for &entry in &t.entries {
             integer_parameter(p, entry, "cia402.touch_probe_inputs.entries")?;

@@ -282,7 +282,7 @@ fn attach_servos(slave: &mut DriveSlave<SIM_RAM>, servos: &[SimServo]) {
     let (drive, ram) = slave.application();
     for (axis, servo) in servos.iter().enumerate() {
         // `servos` has one servo per axis of the profile the drive was made for.
-        let _ = drive.attach_axis(axis, servo.link(), servo.counts_per_rev(), ram);
+        let _ = drive.attach_axis(axis, servo.link(), servo.encoder_spec(), ram);
     }
 }
 

@@ -155,9 +155,14 @@ impl SimServo {
         self.link.publish(command);
     }
 
-    /// The encoder's increments per revolution (for [`firmware::drive::Drive::attach_axis`]).
+    /// The encoder's increments per revolution.
     pub fn counts_per_rev(&self) -> u32 {
         counts_per_rev(&self.plant.config().encoder)
+    }
+
+    /// The encoder as the firmware describes it (for [`firmware::drive::Drive::attach_axis`]).
+    pub fn encoder_spec(&self) -> EncoderSpec {
+        encoder_spec(&self.plant.config().encoder)
     }
 
     /// The link, for the drive application ([`firmware::drive::Drive::attach_axis`]). Only

@@ -39,6 +39,7 @@ use crate::motion::{self, HomingInputs, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
 use crate::motor::math;
+use crate::motor::servo::EncoderSpec;
 use crate::motor::trajectory::SaneLimits;
 use crate::profile::{
     self, AppVars, Cia402Rules, DriveProfile, ProbeInputAssignment, UnitRatios, MOTOR_FAULT_COUNT,
@@ -65,6 +66,8 @@ pub(super) struct AxisPort {
     pub(super) link: &'static AxisLink,
     /// The motor encoder's increments per revolution (unit factors in rpm).
     pub(super) counts_per_rev: u32,
+    /// The encoder gives the position from power-on (absolute): a referenced position.
+    absolute: bool,
     /// The axis' trip counter at the last fault raised here.
     trips_seen: u32,
     /// The motor data objects (R, Ld, Lq, J as the objects hold them) last handed to the axis
@@ -176,6 +179,9 @@ pub struct DriveAxis {
     /// CSP extrapolates over a cycle without new outputs (`Cia402Rules::csp_extrapolation`,
     /// as set at power-on).
     csp_extrapolation: bool,
+    /// The software position limits are switched off (`Cia402Rules::software_limits_off`, read
+    /// at power-on).
+    software_limits_off: bool,
     /// The SYNC0 of this cycle brought no new outputs (`Drive::outputs_missed`).
     outputs_missed: bool,
     /// CSP with extrapolation: the last target taken (increments) and its step from the one
@@ -263,6 +269,7 @@ impl DriveAxis {
             safe_torque_off: false,
             torque_limited: false,
             csp_extrapolation: false,
+            software_limits_off: false,
             outputs_missed: false,
             csp_last: None,
             warnings: profile.warnings,
@@ -294,10 +301,12 @@ impl DriveAxis {
     /// parameters were loaded at power-on). The board calls
     /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `counts_per_rev` is its
     /// encoder's resolution (for profiles whose velocity unit is in rpm).
-    pub(super) fn attach(&mut self, link: &'static AxisLink, counts_per_rev: u32, ram: &[u8]) {
+    pub(super) fn attach(&mut self, link: &'static AxisLink, encoder: EncoderSpec, ram: &[u8]) {
+        let counts_per_rev = encoder.counts_per_rev();
         let mut port = AxisPort {
             link,
             counts_per_rev,
+            absolute: encoder.is_absolute(),
             trips_seen: link.feedback().trips,
             model_sent: None,
             results_written: false,
@@ -472,6 +481,11 @@ impl DriveAxis {
         self.csp_extrapolation = self
             .rules
             .csp_extrapolation
+            .is_some_and(|parameter| parameter.value(ram, 0) == 1);
+        // The SDV3-E's P2.25 too.
+        self.software_limits_off = self
+            .rules
+            .software_limits_off
             .is_some_and(|parameter| parameter.value(ram, 0) == 1);
         // The parameters were loaded.
         self.settings_due = Groups::ALL;
@@ -1001,11 +1015,14 @@ impl DriveAxis {
             }
         }
         // Software position limits (607Dh), in drive increments; not while homing looks for
-        // its references.
-        let limits = self
-            .settings
-            .software_limits
-            .filter(|_| !matches!(mode, Mode::Homing));
+        // its references, not where the profile switched them off or they wait for a
+        // referenced position.
+        let referenced = self.homed || port.absolute;
+        let limits = self.settings.software_limits.filter(|_| {
+            !matches!(mode, Mode::Homing)
+                && !self.software_limits_off
+                && (referenced || !self.rules.software_limits_need_reference)
+        });
         if motion::is_profile_mode(mode) {
             let mut inputs = profile_inputs(
                 ram,
@@ -1223,8 +1240,14 @@ impl DriveAxis {
             Mode::CyclicPosition | Mode::CyclicVelocity | Mode::CyclicTorque
         );
         // CiA402 bit 12 in the cyclic modes: the master's target is the loop's input (not
-        // while a stop or a limit holds the motor, nor when the target was ignored).
-        let follows = cyclic && matches!(motion, Motion::Run) && !target_ignored;
+        // while a stop or a limit holds the motor, nor when the target was ignored, nor before
+        // the loops run: the current-sensor calibration and, with an incremental encoder, the
+        // commutation alignment after enable take a while, and a master keeps its target at
+        // the actual position until this bit is set).
+        let follows = cyclic
+            && matches!(motion, Motion::Run)
+            && !target_ignored
+            && feedback.state == AxisState::Running;
         if follows {
             mode_statusword |= FOLLOWS_COMMAND;
         }

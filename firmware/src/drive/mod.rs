@@ -35,6 +35,7 @@ use crate::adjust::service::{Progress, Refusal};
 use crate::adjust::{Action, AdjustingService};
 use crate::alarm_log::{AlarmLog, AlarmTable};
 use crate::motor::axis::{AxisFeedback, AxisLink, AxisState};
+use crate::motor::servo::EncoderSpec;
 use crate::profile::{DriveProfile, SplitValue, MAX_AXES};
 
 /// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
@@ -119,17 +120,18 @@ impl Drive {
     /// Connects the control interrupt of axis `axis`'s motor (0 = the first axis): from now on
     /// its set-points go to it and its actual values come from it; the commissioned motor data
     /// in `ram` go to it at once (the parameters were loaded at power-on). The board calls
-    /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `counts_per_rev` is its
-    /// encoder's resolution (for profiles whose velocity unit is in rpm).
+    /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `encoder` is its
+    /// encoder (its resolution for profiles whose velocity unit is in rpm; whether it is
+    /// absolute for the rules that need a referenced position).
     pub fn attach_axis(
         &mut self,
         axis: usize,
         link: &'static AxisLink,
-        counts_per_rev: u32,
+        encoder: EncoderSpec,
         ram: &[u8],
     ) -> Result<(), NoSuchAxis> {
         let drive_axis = self.axis_mut(axis).ok_or(NoSuchAxis(axis))?;
-        drive_axis.attach(link, counts_per_rev, ram);
+        drive_axis.attach(link, encoder, ram);
         Ok(())
     }
 

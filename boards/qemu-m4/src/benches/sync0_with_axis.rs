@@ -76,7 +76,7 @@ impl Bench {
         let axis = Axis::new(cfg).map_err(|_| "the axis configuration was refused")?;
         let (drive, ram) = setup.core.application();
         drive
-            .attach_axis(0, &LINK, SERVO_400W.encoder.counts_per_rev(), ram)
+            .attach_axis(0, &LINK, SERVO_400W.encoder, ram)
             .map_err(|_| "the profile has no axis 0")?;
         Ok(Self { setup, axis })
     }
