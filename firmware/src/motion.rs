@@ -86,6 +86,12 @@ pub struct HomingInputs {
     pub signals: homing::Signals,
     /// The profile's time limit of a run, ms (`None` or 0: none).
     pub timeout_ms: Option<u32>,
+    /// The drive function is disabled (a start there follows the profile's rules).
+    pub disabled: bool,
+    /// The motor is at speed zero.
+    pub speed_zero: bool,
+    /// The profile's start rules.
+    pub rules: homing::Rules,
 }
 
 /// The set-point of a profile mode and the statusword bits it sets.
@@ -243,6 +249,9 @@ impl ProfileModes {
         let out = self.homing.step(&homing::Inputs {
             controlword: inputs.controlword,
             running: inputs.running,
+            disabled: h.disabled,
+            speed_zero: h.speed_zero,
+            rules: h.rules,
             method: h.method,
             signals: h.signals,
             demand_position: self.trajectory.position(),
@@ -587,6 +596,7 @@ mod tests {
                 speeds: (1000.0, 100.0, 10_000.0),
                 signals: homing::Signals::default(),
                 timeout_ms: None,
+                ..HomingInputs::default()
             }),
             ..inputs(ENABLED, 0)
         };

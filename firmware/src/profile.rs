@@ -586,6 +586,9 @@ pub struct Cia402Rules {
     /// The software position limits act only once the position is referenced: after a homing
     /// run, or from power-on with an absolute encoder (the Σ-V-SD, §6.8 (2)).
     pub software_limits_need_reference: bool,
+    /// How a homing run may start where the manual adds to CiA402 (current-position methods
+    /// while disabled or only at speed zero, a start while disabled as an error).
+    pub homing: cia402::homing::Rules,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

@@ -1150,6 +1150,15 @@ fn cia402_rules(out: &mut String, p: &Profile) {
              are off (infinite length)."
         );
     }
+    if r.homing_here_while_disabled {
+        out.push_str("- Homing on the current position (methods 35, 37) also runs while the drive function is disabled (controlword bit 4 in any state with 6060h = 6).\n");
+    }
+    if r.homing_start_while_disabled_error {
+        out.push_str("- A homing start (controlword bit 4) while the drive function is disabled ends in a homing error (statusword bit 13).\n");
+    }
+    if r.homing_here_needs_speed_zero {
+        out.push_str("- Homing on the current position (method 35) started while the motor is not at speed zero ends in a homing error (statusword bit 13).\n");
+    }
     if r.software_limits_need_reference {
         out.push_str("- The software position limits 607Dh act only once the position is referenced: after a homing run, or from power-on with an absolute encoder.\n");
     }

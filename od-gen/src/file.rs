@@ -893,6 +893,9 @@ impl Default for Cia402File {
             torque_modes_halt_zero_torque: false,
             software_limits_off: None,
             software_limits_need_reference: false,
+            homing_here_while_disabled: false,
+            homing_start_while_disabled_error: false,
+            homing_here_needs_speed_zero: false,
         }
     }
 }
@@ -1209,6 +1212,15 @@ pub struct Cia402File {
     /// homing run, or at once with an absolute encoder.
     #[serde(default)]
     pub software_limits_need_reference: bool,
+    /// The current-position homing methods (35, 37) also run while the drive is disabled.
+    #[serde(default)]
+    pub homing_here_while_disabled: bool,
+    /// A homing start while the drive is disabled is a homing error.
+    #[serde(default)]
+    pub homing_start_while_disabled_error: bool,
+    /// The current-position homing methods run only at speed zero (else a homing error).
+    #[serde(default)]
+    pub homing_here_needs_speed_zero: bool,
 }
 
 /// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.

@@ -2148,6 +2148,12 @@ pub struct Cia402Rules {
     pub software_limits_off: Option<(u16, u8)>,
     /// The software position limits act only after homing or with an absolute encoder.
     pub software_limits_need_reference: bool,
+    /// The current-position homing methods (35, 37) also run while the drive is disabled.
+    pub homing_here_while_disabled: bool,
+    /// A homing start while the drive is disabled is a homing error.
+    pub homing_start_while_disabled_error: bool,
+    /// The current-position homing methods run only at speed zero (else a homing error).
+    pub homing_here_needs_speed_zero: bool,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2443,6 +2449,9 @@ impl Default for Cia402Rules {
             torque_modes_halt_zero_torque: false,
             software_limits_off: None,
             software_limits_need_reference: false,
+            homing_here_while_disabled: false,
+            homing_start_while_disabled_error: false,
+            homing_here_needs_speed_zero: false,
         }
     }
 }

@@ -272,6 +272,22 @@ impl Default for Homing {
     }
 }
 
+/// A profile's rules for the start of a run, where its manual adds to CiA402.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rules {
+    /// The current-position methods (35, 37) also run while the drive function is disabled
+    /// (the Σ-V-SD, §4.9: "does not require the drive device to be in operation enabled
+    /// state").
+    pub here_while_disabled: bool,
+    /// A start while the drive function is disabled ends in a homing error (the SDV3-E,
+    /// §4.4: "perform homing if the servo is not enabled").
+    pub start_while_disabled_error: bool,
+    /// The current-position methods run only while the motor is at speed zero; started
+    /// while it moves they end in a homing error (the SDV3-E, §4.4: "perform position preset
+    /// when speed zero is not established").
+    pub here_needs_speed_zero: bool,
+}
+
 /// The inputs of one homing cycle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Inputs {
@@ -279,6 +295,12 @@ pub struct Inputs {
     pub controlword: u16,
     /// The axis runs the mode's demand (Operation Enabled, no halt or stop).
     pub running: bool,
+    /// The drive function is disabled (neither Operation Enabled nor a stop under way).
+    pub disabled: bool,
+    /// The motor is at speed zero (its actual speed inside the profile's zero-speed range).
+    pub speed_zero: bool,
+    /// The profile's start rules.
+    pub rules: Rules,
     /// 6098h, filtered by the profile (`None`: a method the profile does not support).
     pub method: Option<Reference>,
     /// The switches and index pulses.
@@ -331,11 +353,26 @@ impl Homing {
         let rising = start && !self.previous_start;
         self.previous_start = start;
         let mut home_found = None;
-        if rising && i.running {
+        let here = i.method == Some(Reference::Here);
+        if rising && i.disabled && here && i.rules.here_while_disabled {
+            // The current position is the home without the drive function (the demand is the
+            // actual position while disabled).
+            self.reference = i.method;
+            home_found = Some(i.demand_position);
+            self.phase = Phase::Done {
+                home: i.demand_position,
+            };
+        } else if rising && i.disabled && i.rules.start_while_disabled_error {
+            self.reference = i.method;
+            self.phase = Phase::Error;
+        } else if rising && i.running {
             self.reference = i.method;
             self.elapsed_ns = 0;
             self.phase = match i.method {
                 None => Phase::Error,
+                Some(Reference::Here) if i.rules.here_needs_speed_zero && !i.speed_zero => {
+                    Phase::Error
+                }
                 Some(Reference::Here) => {
                     home_found = Some(i.demand_position);
                     Phase::Done {
@@ -647,6 +684,9 @@ mod tests {
             let out = h.step(&Inputs {
                 controlword: cw,
                 running: true,
+                disabled: false,
+                speed_zero: true,
+                rules: Rules::default(),
                 method: method(m),
                 signals: axis.signals,
                 demand_position: axis.position,
@@ -785,6 +825,9 @@ mod tests {
         let mut i = Inputs {
             controlword: 0x0F,
             running: true,
+            disabled: false,
+            speed_zero: true,
+            rules: Rules::default(),
             method: method(34),
             signals: Signals::default(),
             demand_position: 0,
@@ -809,6 +852,82 @@ mod tests {
         assert_eq!(h.step(&i).statusword, TARGET_REACHED);
     }
 
+    /// The profiles' start rules: the SDV3-E's homing errors for a start while disabled and a
+    /// preset while moving, the Σ-V-SD's current-position method while disabled; CiA402 alone
+    /// ignores a start while disabled.
+    #[test]
+    fn start_rules_of_the_profiles() {
+        let inputs = |running: bool, speed_zero: bool, rules: Rules, m: i8| Inputs {
+            controlword: 0x1F,
+            running,
+            disabled: !running,
+            speed_zero,
+            rules,
+            method: method(m),
+            signals: Signals::default(),
+            demand_position: 77,
+            demand_at_rest: true,
+            at_target: true,
+            timeout_ms: None,
+            cycle_ns: 1_000_000,
+        };
+        let start = |i: Inputs| {
+            let mut h = Homing::new();
+            let out = h.step(&i);
+            (out.statusword, out.home_found)
+        };
+        let sdv3_e = Rules {
+            start_while_disabled_error: true,
+            here_needs_speed_zero: true,
+            ..Rules::default()
+        };
+        let sigma_v_sd = Rules {
+            here_while_disabled: true,
+            ..Rules::default()
+        };
+        let cia402 = Rules::default();
+        // Disabled: CiA402 does not start (not started, at rest).
+        assert_eq!(
+            start(inputs(false, true, cia402, 35)),
+            (TARGET_REACHED, None)
+        );
+        assert_eq!(
+            start(inputs(false, true, cia402, 34)),
+            (TARGET_REACHED, None)
+        );
+        // The SDV3-E: a homing error, whatever the method.
+        for m in [35, 34, 19] {
+            assert_eq!(
+                start(inputs(false, true, sdv3_e, m)),
+                (HOMING_ERROR | TARGET_REACHED, None),
+                "{m}"
+            );
+        }
+        // The Σ-V-SD: the current position is the home; the other methods wait.
+        assert_eq!(
+            start(inputs(false, true, sigma_v_sd, 35)),
+            (HOMING_ATTAINED | TARGET_REACHED, Some(77))
+        );
+        assert_eq!(
+            start(inputs(false, true, sigma_v_sd, 34)),
+            (TARGET_REACHED, None)
+        );
+        // Enabled, moving: the SDV3-E's preset is an error; CiA402's takes the position.
+        assert_eq!(
+            start(inputs(true, false, sdv3_e, 35)),
+            (HOMING_ERROR | TARGET_REACHED, None)
+        );
+        assert_eq!(
+            start(inputs(true, false, cia402, 35)),
+            (HOMING_ATTAINED | TARGET_REACHED, Some(77))
+        );
+        // At speed zero the SDV3-E presets.
+        assert_eq!(
+            start(inputs(true, true, sdv3_e, 35)),
+            (HOMING_ATTAINED | TARGET_REACHED, Some(77))
+        );
+    }
+
     #[test]
     fn a_run_past_the_time_limit_ends_in_a_homing_error() {
         // Method 34 with no index pulse ever: the search goes on until the limit (a profile's
@@ -817,6 +936,9 @@ mod tests {
         let mut i = Inputs {
             controlword: 0x1F,
             running: true,
+            disabled: false,
+            speed_zero: true,
+            rules: Rules::default(),
             method: method(34),
             signals: Signals::default(),
             demand_position: 0,

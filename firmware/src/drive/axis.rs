@@ -1041,10 +1041,14 @@ impl DriveAxis {
             if matches!(mode, Mode::Homing) {
                 // Read only where needed: a seqlock read of the captures.
                 let captures = shifted_captures(link.captures(), self.position_shift);
+                let (threshold, _) = self.speed_zero_threshold(port.counts_per_rev);
                 if let Some(homing) = inputs.homing.as_mut() {
                     homing.method = read_bytes::<1>(ram, vars.homing_method)
                         .and_then(|[m]| self.rules.homing_reference(m as i8));
                     homing.signals = homing_signals(&captures);
+                    homing.disabled = matches!(motion, Motion::Off);
+                    homing.speed_zero = feedback.velocity.abs() <= threshold;
+                    homing.rules = self.rules.homing;
                 }
             }
             let out = self.profile_modes.step(
