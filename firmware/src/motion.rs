@@ -153,6 +153,17 @@ impl ProfileModes {
         self.trajectory = Trajectory::at(t.position().saturating_add(delta), t.velocity());
     }
 
+    /// `mode` was selected with controlword `cw`: whether bit 4, already set, starts a
+    /// profile-position set-point or a homing run at once (`start`, a profile's rule) or waits
+    /// for its next rising edge (CiA402).
+    pub fn enter(&mut self, mode: Mode, cw: u16, start: bool) {
+        match mode {
+            Mode::ProfilePosition => self.set_points.enter(cw, start),
+            Mode::Homing => self.homing.enter(cw, start),
+            _ => {}
+        }
+    }
+
     /// Whether a homing run is under way.
     pub fn homing_running(&self) -> bool {
         self.homing.running()

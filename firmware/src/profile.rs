@@ -589,6 +589,10 @@ pub struct Cia402Rules {
     /// How a homing run may start where the manual adds to CiA402 (current-position methods
     /// while disabled or only at speed zero, a start while disabled as an error).
     pub homing: cia402::homing::Rules,
+    /// A mode change into profile position or homing with controlword bit 4 already set
+    /// starts the set-point or the run at once (the Σ-V-SD, §3.2 "Dynamic Mode Change");
+    /// otherwise (CiA402) they wait for bit 4's next rising edge.
+    pub mode_entry_starts: bool,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

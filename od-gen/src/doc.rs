@@ -1150,6 +1150,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
              are off (infinite length)."
         );
     }
+    if r.mode_entry_starts {
+        out.push_str("- A mode change into profile position or homing with controlword bit 4 already set starts the set-point or the homing run at once (CiA402: at bit 4's next rising edge).\n");
+    }
     if r.homing_here_while_disabled {
         out.push_str("- Homing on the current position (methods 35, 37) also runs while the drive function is disabled (controlword bit 4 in any state with 6060h = 6).\n");
     }

@@ -896,6 +896,7 @@ impl Default for Cia402File {
             homing_here_while_disabled: false,
             homing_start_while_disabled_error: false,
             homing_here_needs_speed_zero: false,
+            mode_entry_starts: false,
         }
     }
 }
@@ -1221,6 +1222,9 @@ pub struct Cia402File {
     /// The current-position homing methods run only at speed zero (else a homing error).
     #[serde(default)]
     pub homing_here_needs_speed_zero: bool,
+    /// A mode change into PP or homing with controlword bit 4 set starts at once.
+    #[serde(default)]
+    pub mode_entry_starts: bool,
 }
 
 /// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.

@@ -2154,6 +2154,8 @@ pub struct Cia402Rules {
     pub homing_start_while_disabled_error: bool,
     /// The current-position homing methods run only at speed zero (else a homing error).
     pub homing_here_needs_speed_zero: bool,
+    /// A mode change into PP or homing with controlword bit 4 set starts at once.
+    pub mode_entry_starts: bool,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2452,6 +2454,7 @@ impl Default for Cia402Rules {
             homing_here_while_disabled: false,
             homing_start_while_disabled_error: false,
             homing_here_needs_speed_zero: false,
+            mode_entry_starts: false,
         }
     }
 }

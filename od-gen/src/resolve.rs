@@ -607,6 +607,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         homing_here_while_disabled: f.cia402.homing_here_while_disabled,
         homing_start_while_disabled_error: f.cia402.homing_start_while_disabled_error,
         homing_here_needs_speed_zero: f.cia402.homing_here_needs_speed_zero,
+        mode_entry_starts: f.cia402.mode_entry_starts,
         home_found_statusword: f
             .cia402
             .home_found_statusword

@@ -341,6 +341,13 @@ impl Homing {
         !matches!(self.phase, Phase::Idle | Phase::Done { .. } | Phase::Error)
     }
 
+    /// The mode was selected with controlword `cw`: bit 4 already set starts a run only where
+    /// `start` (a profile's rule: the Σ-V-SD's dynamic mode change, §3.2 "Homing will be
+    /// started immediately"); CiA402 starts on a rising edge seen in the mode.
+    pub fn enter(&mut self, cw: u16, start: bool) {
+        self.previous_start = !start && cw & HOMING_START != 0;
+    }
+
     /// Forgets an attained or failed homing (the mode was left): the statusword starts as
     /// "not started".
     pub fn leave(&mut self) {

@@ -200,6 +200,14 @@ impl<P: Copy> ProfilePosition<P> {
         self.current = self.buffered.take();
     }
 
+    /// The mode was selected with controlword `cw`: bit 4 already set counts as a new set-point
+    /// only where `start` (a profile's rule: the Σ-V-SD's dynamic mode change, §3.2 "New
+    /// positioning will be started immediately"); CiA402 takes a set-point on a rising edge
+    /// seen in the mode, so there it waits for the next one.
+    pub fn enter(&mut self, cw: u16, start: bool) {
+        self.previous_new_set_point = !start && cw & NEW_SET_POINT != 0;
+    }
+
     /// Drops every set-point (quick stop, disable, another mode): the drive holds
     /// `held_position` (user units), which relative set-points then add to.
     pub fn clear(&mut self, held_position: i64) {
@@ -258,6 +266,24 @@ mod tests {
             0,
             "bit 4 fell, buffer free"
         );
+    }
+
+    /// Bit 4 carried into the mode: CiA402 waits for its next rising edge, the Σ-V-SD's
+    /// dynamic mode change takes it at once.
+    #[test]
+    fn bit_4_held_across_a_mode_change_starts_only_by_the_rule() {
+        let mut p = pp();
+        p.enter(ENABLED | NEW_SET_POINT, false);
+        assert_eq!(p.step(ENABLED | NEW_SET_POINT, CIA402, 1000, 0, 7), 0);
+        assert_eq!(p.current(), None, "CiA402: no edge");
+        p.step(ENABLED, CIA402, 1000, 0, 7);
+        p.step(ENABLED | NEW_SET_POINT, CIA402, 1000, 0, 7);
+        assert_eq!(p.current().map(|s| s.target), Some(1000), "the next edge");
+        let mut p = pp();
+        p.enter(ENABLED | NEW_SET_POINT, true);
+        let ack = p.step(ENABLED | NEW_SET_POINT, CIA402, 1000, 0, 7);
+        assert_eq!(ack, SET_POINT_ACKNOWLEDGE, "started at the change");
+        assert_eq!(p.current().map(|s| s.target), Some(1000));
     }
 
     #[test]

@@ -697,6 +697,8 @@ impl DriveAxis {
                         .filter(ModeStatus::differs);
                     self.cyclic_target_timer.reset();
                     self.speed_zero_timer.reset();
+                    self.profile_modes
+                        .enter(self.mode, cw, self.rules.mode_entry_starts);
                     if self.rules.torque_modes_stop_at_once {
                         // The stops depend on the mode: resolved again at once.
                         let torque_mode = self.runs_torque_mode();
