@@ -153,13 +153,13 @@ impl ProfileModes {
         self.trajectory = Trajectory::at(t.position().saturating_add(delta), t.velocity());
     }
 
-    /// `mode` was selected with controlword `cw`: whether bit 4, already set, starts a
-    /// profile-position set-point or a homing run at once (`start`, a profile's rule) or waits
-    /// for its next rising edge (CiA402).
-    pub fn enter(&mut self, mode: Mode, cw: u16, start: bool) {
+    /// `mode` was selected; `previous_cw` is the controlword of the cycle before: whether bit
+    /// 4 carried into the mode starts a profile-position set-point or a homing run at once
+    /// (`start`, a profile's rule) or waits for its next rising edge (CiA402).
+    pub fn enter(&mut self, mode: Mode, previous_cw: u16, start: bool) {
         match mode {
-            Mode::ProfilePosition => self.set_points.enter(cw, start),
-            Mode::Homing => self.homing.enter(cw, start),
+            Mode::ProfilePosition => self.set_points.enter(previous_cw, start),
+            Mode::Homing => self.homing.enter(previous_cw, start),
             _ => {}
         }
     }

@@ -341,11 +341,12 @@ impl Homing {
         !matches!(self.phase, Phase::Idle | Phase::Done { .. } | Phase::Error)
     }
 
-    /// The mode was selected with controlword `cw`: bit 4 already set starts a run only where
-    /// `start` (a profile's rule: the Σ-V-SD's dynamic mode change, §3.2 "Homing will be
-    /// started immediately"); CiA402 starts on a rising edge seen in the mode.
-    pub fn enter(&mut self, cw: u16, start: bool) {
-        self.previous_start = !start && cw & HOMING_START != 0;
+    /// The mode was selected; `previous_cw` is the controlword of the cycle before. Bit 4 set
+    /// there and carried into the mode starts a run only where `start` (a profile's rule: the
+    /// Σ-V-SD's dynamic mode change, §3.2 "Homing will be started immediately"); CiA402 starts
+    /// on a rising edge. Bit 4 rising in the selecting cycle itself is an edge either way.
+    pub fn enter(&mut self, previous_cw: u16, start: bool) {
+        self.previous_start = !start && previous_cw & HOMING_START != 0;
     }
 
     /// Forgets an attained or failed homing (the mode was left): the statusword starts as

@@ -200,12 +200,13 @@ impl<P: Copy> ProfilePosition<P> {
         self.current = self.buffered.take();
     }
 
-    /// The mode was selected with controlword `cw`: bit 4 already set counts as a new set-point
-    /// only where `start` (a profile's rule: the Σ-V-SD's dynamic mode change, §3.2 "New
-    /// positioning will be started immediately"); CiA402 takes a set-point on a rising edge
-    /// seen in the mode, so there it waits for the next one.
-    pub fn enter(&mut self, cw: u16, start: bool) {
-        self.previous_new_set_point = !start && cw & NEW_SET_POINT != 0;
+    /// The mode was selected; `previous_cw` is the controlword of the cycle before. Bit 4 set
+    /// there and carried into the mode counts as a new set-point only where `start` (a
+    /// profile's rule: the Σ-V-SD's dynamic mode change, §3.2 "New positioning will be started
+    /// immediately"); CiA402 takes a set-point on a rising edge of bit 4, so there it waits for
+    /// the next one. Bit 4 rising in the selecting cycle itself is an edge either way.
+    pub fn enter(&mut self, previous_cw: u16, start: bool) {
+        self.previous_new_set_point = !start && previous_cw & NEW_SET_POINT != 0;
     }
 
     /// Drops every set-point (quick stop, disable, another mode): the drive holds
@@ -272,6 +273,12 @@ mod tests {
     /// dynamic mode change takes it at once.
     #[test]
     fn bit_4_held_across_a_mode_change_starts_only_by_the_rule() {
+        // Rising in the selecting cycle: an edge.
+        let mut p = pp();
+        p.enter(ENABLED, false);
+        let ack = p.step(ENABLED | NEW_SET_POINT, CIA402, 1000, 0, 7);
+        assert_eq!(ack, SET_POINT_ACKNOWLEDGE);
+        // Carried in from the cycle before.
         let mut p = pp();
         p.enter(ENABLED | NEW_SET_POINT, false);
         assert_eq!(p.step(ENABLED | NEW_SET_POINT, CIA402, 1000, 0, 7), 0);

@@ -182,6 +182,8 @@ pub struct DriveAxis {
     /// The software position limits are switched off (`Cia402Rules::software_limits_off`, read
     /// at power-on).
     software_limits_off: bool,
+    /// The controlword of the previous cycle (edges of bit 4 across a mode change).
+    previous_controlword: u16,
     /// The SYNC0 of this cycle brought no new outputs (`Drive::outputs_missed`).
     outputs_missed: bool,
     /// CSP with extrapolation: the last target taken (increments) and its step from the one
@@ -270,6 +272,7 @@ impl DriveAxis {
             torque_limited: false,
             csp_extrapolation: false,
             software_limits_off: false,
+            previous_controlword: 0,
             outputs_missed: false,
             csp_last: None,
             warnings: profile.warnings,
@@ -666,6 +669,7 @@ impl DriveAxis {
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
         let vars = self.vars;
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
+        let previous_cw = core::mem::replace(&mut self.previous_controlword, cw);
         // The axis feedback of this cycle, read once (a seqlock read).
         let mut feedback = self.port.as_ref().map(|port| port.link.feedback());
         // The settings the RxPDO maps, and any the drive wrote since the last refresh (a split
@@ -698,7 +702,7 @@ impl DriveAxis {
                     self.cyclic_target_timer.reset();
                     self.speed_zero_timer.reset();
                     self.profile_modes
-                        .enter(self.mode, cw, self.rules.mode_entry_starts);
+                        .enter(self.mode, previous_cw, self.rules.mode_entry_starts);
                     if self.rules.torque_modes_stop_at_once {
                         // The stops depend on the mode: resolved again at once.
                         let torque_mode = self.runs_torque_mode();
