@@ -593,6 +593,10 @@ pub struct Cia402Rules {
     /// starts the set-point or the run at once (the Σ-V-SD, §3.2 "Dynamic Mode Change");
     /// otherwise (CiA402) they wait for bit 4's next rising edge.
     pub mode_entry_starts: bool,
+    /// The torque-reached parameters A, B, C in 0.1 % of the rated torque (the RSE's
+    /// 2008h:0Ah-0Ch): the condition [`cia402::mode_status::Shows::TorqueReached`] sets above
+    /// A + B and clears below A + C.
+    pub torque_reached: Option<[Operand; 3]>,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

@@ -897,6 +897,7 @@ impl Default for Cia402File {
             homing_start_while_disabled_error: false,
             homing_here_needs_speed_zero: false,
             mode_entry_starts: false,
+            torque_reached: None,
         }
     }
 }
@@ -1225,6 +1226,11 @@ pub struct Cia402File {
     /// A mode change into PP or homing with controlword bit 4 set starts at once.
     #[serde(default)]
     pub mode_entry_starts: bool,
+    /// The parameters (`"0xIIII:S"`, 0.1 % of the rated torque) of the torque-reached
+    /// condition: the reference A, the "on" margin B and the "off" margin C (on above A + B,
+    /// off below A + C).
+    #[serde(default)]
+    pub torque_reached: Option<[String; 3]>,
 }
 
 /// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.

@@ -2156,6 +2156,9 @@ pub struct Cia402Rules {
     pub homing_here_needs_speed_zero: bool,
     /// A mode change into PP or homing with controlword bit 4 set starts at once.
     pub mode_entry_starts: bool,
+    /// The torque-reached parameters A, B, C (0.1 % of the rated torque): on above A + B, off
+    /// below A + C.
+    pub torque_reached: Option<[(u16, u8); 3]>,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2172,7 +2175,7 @@ pub struct ModeStatusword {
 pub use cia402::mode_status::Shows as ModeBit;
 
 /// The profile-file spellings of [`ModeBit`]s and what each shows (for the profile document).
-pub const MODE_BITS: [(&str, ModeBit, &str); 12] = [
+pub const MODE_BITS: [(&str, ModeBit, &str); 13] = [
     ("nothing", ModeBit::Nothing, "–"),
     ("target_reached", ModeBit::TargetReached, "target reached"),
     (
@@ -2216,6 +2219,11 @@ pub const MODE_BITS: [(&str, ModeBit, &str); 12] = [
         "software_limit",
         ModeBit::SoftwareLimit,
         "position command or actual position beyond 607Dh",
+    ),
+    (
+        "torque_reached",
+        ModeBit::TorqueReached,
+        "torque reached ([cia402] torque_reached levels, with hysteresis)",
     ),
 ];
 
@@ -2455,6 +2463,7 @@ impl Default for Cia402Rules {
             homing_start_while_disabled_error: false,
             homing_here_needs_speed_zero: false,
             mode_entry_starts: false,
+            torque_reached: None,
         }
     }
 }

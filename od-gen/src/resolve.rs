@@ -608,6 +608,20 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         homing_start_while_disabled_error: f.cia402.homing_start_while_disabled_error,
         homing_here_needs_speed_zero: f.cia402.homing_here_needs_speed_zero,
         mode_entry_starts: f.cia402.mode_entry_starts,
+        torque_reached: f
+            .cia402
+            .torque_reached
+            .as_ref()
+            .map(|[a, b, c]| -> Result<[(u16, u8); 3], Fault> {
+                let key = "cia402.torque_reached";
+                let entry = |s: &String| {
+                    entry_ref(Some(s), key)?.ok_or_else(|| {
+                        fault(key, Invalid::Value(format!("`{s}` is not \"0xIIII:S\"")))
+                    })
+                };
+                Ok([entry(a)?, entry(b)?, entry(c)?])
+            })
+            .transpose()?,
         home_found_statusword: f
             .cia402
             .home_found_statusword

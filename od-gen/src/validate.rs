@@ -911,6 +911,22 @@ fn esm(p: &Profile) -> Result<(), Fault> {
     if let Some(entry) = p.cia402.software_limits_off {
         integer_parameter(p, entry, "cia402.software_limits_off")?;
     }
+    for entry in p.cia402.torque_reached.into_iter().flatten() {
+        integer_parameter(p, entry, "cia402.torque_reached")?;
+    }
+    let shows_torque_reached = p
+        .cia402
+        .mode_statusword
+        .iter()
+        .any(|m| m.bits.contains(&crate::model::ModeBit::TorqueReached));
+    if shows_torque_reached && p.cia402.torque_reached.is_none() {
+        return Err(fault(
+            "cia402.mode_statusword",
+            Invalid::Value(
+                "`torque_reached` is shown but [cia402] torque_reached names no parameters".into(),
+            ),
+        ));
+    }
     if let Some(t) = &p.cia402.touch_probe_inputs {
         for &entry in &t.entries {
             integer_parameter(p, entry, "cia402.touch_probe_inputs.entries")?;

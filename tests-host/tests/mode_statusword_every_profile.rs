@@ -55,6 +55,8 @@ enum Shows {
     FollowingError,
     Attained,
     HomingError,
+    /// The RSE's PT/CST "target torque reached" (2008h:0Ah-0Ch; `rse_torque_reached.rs`).
+    TorqueReached,
 }
 use Shows::*;
 
@@ -70,7 +72,7 @@ fn manual(profile: &str, mode: i8) -> [Shows; 4] {
         CSV if rse => [Reached, SoftwareLimit, Follows, Nothing],
         CSV => [Nothing, Limit, Follows, Nothing],
         CST if sdv3 => [Nothing, Nothing, Synchronised, Nothing],
-        CST if rse => [Nothing, SoftwareLimit, Follows, Nothing],
+        CST if rse => [TorqueReached, SoftwareLimit, Follows, Nothing],
         CST => [Nothing, Limit, Follows, Nothing],
         PV if sdv3 => [Reached, SpeedZero, Nothing, Nothing],
         PV if rse => [Reached, SoftwareLimit, SpeedZero, Nothing],
@@ -102,8 +104,9 @@ fn expected(profile: &str, mode: i8, now: Now) -> u16 {
             Follows => now.follows,
             Synchronised => now.synchronised,
             Attained => now.attained,
-            // Nothing is limited, lagging or failing in these runs.
-            Nothing | Limit | SoftwareLimit | FollowingError | HomingError => false,
+            // Nothing is limited, lagging or failing in these runs; no torque is commanded
+            // (the RSE's torque-reached reference is set above the standstill noise).
+            Nothing | Limit | SoftwareLimit | FollowingError | HomingError | TorqueReached => false,
         };
         if on {
             bits |= 1 << (10 + n);
@@ -159,6 +162,10 @@ fn mode_bits(name: &str) {
         Sdo::I8(0x6098, 0, HOME_HERE),
     ];
     let mut setup = setup.to_vec();
+    if name == "rse" {
+        // Torque reached from 5 % of the rated torque (2008h:0Ah A; B = C = 0).
+        setup.push(Sdo::U16(0x2008, 0x0A, 50));
+    }
     if name == "gha-e" {
         // 606Dh counts instruction units/s (its velocity unit); the default 100 is below the
         // speed ripple of the simulated motor at 5 rev/s: 0.05 rev/s.

@@ -53,6 +53,10 @@ pub enum Shows {
     /// The position command or the actual position beyond a software limit 607Dh (the RSE's
     /// bit 11, which shows nothing else).
     SoftwareLimit,
+    /// The actual torque has reached the profile's torque-reached level, with hysteresis: set
+    /// above the "on" level, cleared below the "off" level (the RSE's "target torque reached"
+    /// from 2008h:0Ah-0Ch in PT and CST).
+    TorqueReached,
 }
 
 impl Shows {
@@ -192,21 +196,28 @@ fn moved(standard: Option<&Layout>, statusword: u16, layout: &Layout, extra: Con
 
 /// The conditions a profile layout may show beyond CiA402's for the mode: the drive works
 /// them out in any mode (target reached only in the cyclic position and velocity modes).
-pub const EXTRA_CONDITIONS: [Shows; 5] = [
+pub const EXTRA_CONDITIONS: [Shows; 6] = [
     Shows::SpeedZero,
     Shows::Synchronised,
     Shows::FollowsCommand,
     Shows::TargetReached,
     Shows::SoftwareLimit,
+    Shows::TorqueReached,
 ];
 
 /// Whether a profile layout may show `c` in `mode` (a 6060h value): CiA402's conditions of
 /// the mode, and those of [`EXTRA_CONDITIONS`] the drive works out there.
 pub fn can_show(mode: i8, c: Shows) -> bool {
     let cyclic_target = matches!(mode, CSP | CSV);
+    let torque_mode = matches!(mode, PT | CST);
+    let extra = match c {
+        Shows::TargetReached => cyclic_target,
+        Shows::TorqueReached => torque_mode,
+        _ => true,
+    };
     c == Shows::Nothing
         || cia402(mode).is_some_and(|l| l.shows(c))
-        || (EXTRA_CONDITIONS.contains(&c) && (c != Shows::TargetReached || cyclic_target))
+        || (EXTRA_CONDITIONS.contains(&c) && extra)
 }
 
 /// Whether any of `overrides` shows `c` (a const fn: a drive decides at build time what it
@@ -285,7 +296,7 @@ mod tests {
     use Shows::*;
 
     /// Every condition.
-    const ALL: [Shows; 12] = [
+    const ALL: [Shows; 13] = [
         Nothing,
         TargetReached,
         InternalLimit,
@@ -298,6 +309,7 @@ mod tests {
         HomingError,
         InterpolationActive,
         SoftwareLimit,
+        TorqueReached,
     ];
 
     #[test]
@@ -427,6 +439,8 @@ mod tests {
         assert!(can_show(CSP, TargetReached));
         assert!(can_show(CST, Synchronised));
         assert!(can_show(PT, SoftwareLimit));
+        assert!(can_show(PT, TorqueReached) && can_show(CST, TorqueReached));
+        assert!(!can_show(CSP, TorqueReached) && !can_show(PV, TorqueReached));
         assert!(can_show(PP, SetPointAcknowledge));
         // Not worked out there: a torque window in CST, a following error in CSV, set-point
         // acknowledge outside profile position.

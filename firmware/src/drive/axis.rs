@@ -42,7 +42,8 @@ use crate::motor::math;
 use crate::motor::servo::EncoderSpec;
 use crate::motor::trajectory::SaneLimits;
 use crate::profile::{
-    self, AppVars, Cia402Rules, DriveProfile, ProbeInputAssignment, UnitRatios, MOTOR_FAULT_COUNT,
+    self, AppVars, Cia402Rules, DriveProfile, Operand, ProbeInputAssignment, UnitRatios,
+    MOTOR_FAULT_COUNT,
 };
 use ethercat_slave::od::Profile;
 use ethercat_slave::pdo::PdoPlan;
@@ -184,6 +185,8 @@ pub struct DriveAxis {
     software_limits_off: bool,
     /// The controlword of the previous cycle (edges of bit 4 across a mode change).
     previous_controlword: u16,
+    /// The torque-reached condition (`Cia402Rules::torque_reached`), kept between its levels.
+    torque_reached: bool,
     /// The SYNC0 of this cycle brought no new outputs (`Drive::outputs_missed`).
     outputs_missed: bool,
     /// CSP with extrapolation: the last target taken (increments) and its step from the one
@@ -273,6 +276,7 @@ impl DriveAxis {
             csp_extrapolation: false,
             software_limits_off: false,
             previous_controlword: 0,
+            torque_reached: false,
             outputs_missed: false,
             csp_last: None,
             warnings: profile.warnings,
@@ -581,7 +585,7 @@ impl DriveAxis {
         set_point: &modes::SetPoint,
         feedback: &AxisFeedback,
         (cycle_ns, counts_per_rev): (u32, u32),
-        position_ratio: units::Ratio,
+        (position_ratio, torque_levels): (units::Ratio, Option<TorqueLevels>),
     ) -> mode_status::Conditions {
         let mut extra = mode_status::Conditions::NONE;
         extra.set(
@@ -598,6 +602,16 @@ impl DriveAxis {
                 Shows::SpeedZero,
                 self.speed_zero_timer.step(still, time_ms, cycle_ns),
             );
+        }
+        if let Some(levels) = torque_levels {
+            // Hysteresis: on above the "on" level, off below the "off" level, else kept.
+            let torque = feedback.torque.abs();
+            if !running || torque < levels.off {
+                self.torque_reached = false;
+            } else if torque > levels.on {
+                self.torque_reached = true;
+            }
+            extra.set(Shows::TorqueReached, self.torque_reached);
         }
         if status.needs(Shows::SoftwareLimit) {
             let beyond = self
@@ -1262,13 +1276,19 @@ impl DriveAxis {
             mode_statusword |= FOLLOWS_COMMAND;
         }
         if let Some(status) = self.mode_status {
+            // Read only where a layout shows it (the RSE's PT/CST bit 10).
+            let torque_levels = self
+                .rules
+                .torque_reached
+                .filter(|_| status.needs(Shows::TorqueReached))
+                .map(|levels| torque_reached_levels(ram, levels, self.settings.rated_nm));
             let extra = self.extra_conditions(
                 &status,
                 (mode, motion, software_limited),
                 &set_point,
                 feedback,
                 (cycle_ns, port.counts_per_rev),
-                position_ratio,
+                (position_ratio, torque_levels),
             );
             mode_statusword = status.apply(mode_statusword, extra);
         }
@@ -1640,6 +1660,27 @@ fn profile_inputs(
         _ => {}
     }
     inputs
+}
+
+/// The levels of the torque-reached condition, N·m (magnitudes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TorqueLevels {
+    /// Set above this.
+    on: f32,
+    /// Cleared below this.
+    off: f32,
+}
+
+/// The torque-reached levels from the parameters A, B, C (0.1 % of `rated_nm`): on at A + B,
+/// off at A + C.
+fn torque_reached_levels(ram: &[u8], [a, b, c]: [Operand; 3], rated_nm: f32) -> TorqueLevels {
+    // The parameters are UINTs of at most 32 bits: the sums cannot overflow in f32.
+    let permille = |o: Operand| o.value(ram, 0) as f32;
+    let nm = |p: f32| units::torque_from_permille_f32(p, rated_nm);
+    TorqueLevels {
+        on: nm(permille(a) + permille(b)),
+        off: nm(permille(a) + permille(c)),
+    }
 }
 
 /// Whether a set-point step of `step` increments in one interpolation period of `period_ns` is
