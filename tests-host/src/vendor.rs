@@ -295,8 +295,13 @@ pub fn i32_at(image: &[u8], at: usize) -> i32 {
 
 /// The simulated motor of the first drive: its speed, rpm, and angle, revolutions.
 pub fn motor(m: &InProcess) -> (f64, f64) {
+    motor_of_axis(m, 0)
+}
+
+/// [`motor`] of axis `axis` (0 = the first).
+pub fn motor_of_axis(m: &InProcess, axis: usize) -> (f64, f64) {
     let segment = m.shared.segment();
-    let plant = &segment.drives()[0].servos[0].plant;
+    let plant = &segment.drives()[0].servos[axis].plant;
     (
         plant.mech_speed_rad_s() / std::f64::consts::TAU * 60.0,
         plant.mech_angle_rad() / std::f64::consts::TAU,

@@ -9,7 +9,9 @@
 //! - profile velocity and cyclic synchronous velocity: the motor turns at the target speed;
 //! - cyclic synchronous torque and profile torque: a torque the motor accelerates with.
 //!
-//! The mode changes while the drive stays in Operation Enabled; 6061h shows each mode. Homing is
+//! The mode changes while the drive stays in Operation Enabled; 6061h shows each mode. The
+//! two-axis Σ-V-SD runs the same on its second axis (its objects 6840h.., PDOs 1610h/1A10h),
+//! the first axis left off. Homing is
 //! covered per profile by `homing_methods.rs` (every method), `homing.rs`, `vendor_modes.rs`,
 //! `two_axes.rs` and `motion_soem.rs`.
 
@@ -18,7 +20,8 @@ use board_sim::Segment;
 use ethercrab::MainDevice;
 use od_gen::model::Profile;
 use tests_host::vendor::{
-    self, enable_sequence, i32_at, motor, u16_at, DcGroup as Group, Sdo, ENABLE_OPERATION,
+    self, axis_object, enable_sequence, i32_at, motor_of_axis, u16_at, DcGroup as Group, Sdo,
+    ENABLE_OPERATION,
 };
 use tests_host::{block_on, master_for, units};
 
@@ -67,16 +70,19 @@ const TX_SW: usize = 0;
 const TX_MODE: usize = 2;
 const TX_POSITION: usize = 3;
 
-/// INIT → OP with DC SYNC0 at 1 ms, the layout mapped and the profile-mode objects set.
-async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile) -> Group {
+/// INIT → OP with DC SYNC0 at 1 ms, the layout of axis `axis` (0 = the first: its objects and
+/// its PDOs 1600h/1A00h plus 10h per axis, assigned alone) mapped and its profile-mode objects
+/// set.
+async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, axis: usize) -> Group {
     let entries = |layout: &[(u16, u8)]| -> Vec<(u16, u8, u8)> {
         layout
             .iter()
-            .map(|&(index, bits)| (index, 0, bits))
+            .map(|&(index, bits)| (axis_object(index, axis), 0, bits))
             .collect()
     };
-    let mut setup = vendor::remap(0x1600, 0x1C12, &entries(&RX));
-    setup.extend(vendor::remap(0x1A00, 0x1C13, &entries(&TX)));
+    let pdo_offset = 0x10 * axis as u16;
+    let mut setup = vendor::remap(0x1600 + pdo_offset, 0x1C12, &entries(&RX));
+    setup.extend(vendor::remap(0x1A00 + pdo_offset, 0x1C13, &entries(&TX)));
     let speed = units::velocity(p, PROFILE_SPEED);
     let accel = units::acceleration(p, ACCELERATION);
     for (index, value) in [
@@ -88,7 +94,7 @@ async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile) -> Group {
     ] {
         // Only the objects the profile has (the SDV3-E has no 6087h).
         if p.entry(index, 0).is_some() {
-            setup.push(Sdo::U32(index, 0, value));
+            setup.push(Sdo::U32(axis_object(index, axis), 0, value));
         }
     }
     // A position window of 0 (the GHA-E's default) asks for the exact increment: 1/1000
@@ -96,7 +102,7 @@ async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile) -> Group {
     let window = p.entry(0x6067, 0).map(|e| e.initial_bytes());
     if window.is_some_and(|b| b.iter().all(|x| *x == 0)) {
         let window = (CPR / 1000.0 / units::increments_per_unit(p)).ceil() as u32;
-        setup.push(Sdo::U32(0x6067, 0, window));
+        setup.push(Sdo::U32(axis_object(0x6067, axis), 0, window));
     }
     vendor::into_op_dc(m, md, &setup, CYCLE_NS).await
 }
@@ -122,7 +128,16 @@ struct Command {
     torque: i16,
 }
 
-async fn cycle(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command) -> Sample {
+/// The axis a scenario drives (0 = the first).
+#[derive(Clone, Copy)]
+struct Axis(usize);
+
+async fn cycle(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    (group, axis): (&Group, Axis),
+    c: Command,
+) -> Sample {
     let sd = group.subdevice(md, 0).expect("drive");
     {
         let mut out = sd.outputs_raw_mut();
@@ -135,7 +150,7 @@ async fn cycle(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command) ->
     group.tx_rx_dc(md).await.expect("tx/rx");
     m.shared.advance(CYCLE_NS);
     let inp = sd.inputs_raw();
-    let (rpm, rev) = motor(m);
+    let (rpm, rev) = motor_of_axis(m, axis.0);
     Sample {
         sw: u16_at(&inp, TX_SW),
         mode: inp[TX_MODE] as i8,
@@ -146,7 +161,13 @@ async fn cycle(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command) ->
 }
 
 /// Runs `n` cycles of `c`; the last sample.
-async fn run(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command, n: usize) -> Sample {
+async fn run(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: (&Group, Axis),
+    c: Command,
+    n: usize,
+) -> Sample {
     let mut s = None;
     for _ in 0..n {
         s = Some(cycle(m, md, group, c).await);
@@ -155,14 +176,19 @@ async fn run(m: &InProcess, md: &MainDevice<'_>, group: &Group, c: Command, n: u
 }
 
 fn every_mode_moves_the_motor(name: &str) {
+    every_mode_moves_the_motor_of_axis(name, 0);
+}
+
+fn every_mode_moves_the_motor_of_axis(name: &str, axis: usize) {
     let p = od_gen::builtin(name).expect("profile");
     let rpm_to_object = |rpm: f64| units::target_velocity(&p, rpm / 60.0);
     block_on(async {
         let (m, transport) = master_for(Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = into_op(&m, md, &p).await;
-        let mut s = cycle(&m, md, &group, Command::default()).await;
+        let group = into_op(&m, md, &p, axis).await;
+        let group = (&group, Axis(axis));
+        let mut s = cycle(&m, md, group, Command::default()).await;
         // The first SYNC0s after the request: hold the enable sequence long enough.
         for cw in std::iter::repeat_n(0u16, 40).chain(enable_sequence(30)) {
             let c = Command {
@@ -171,7 +197,7 @@ fn every_mode_moves_the_motor(name: &str) {
                 position: s.position,
                 ..Command::default()
             };
-            s = cycle(&m, md, &group, c).await;
+            s = cycle(&m, md, group, c).await;
         }
         assert_eq!(
             s.sw & STATE_MASK,
@@ -190,7 +216,7 @@ fn every_mode_moves_the_motor(name: &str) {
                 position: start + one_rev * k.min(500) / 500,
                 ..Command::default()
             };
-            s = cycle(&m, md, &group, c).await;
+            s = cycle(&m, md, group, c).await;
         }
         assert_eq!(s.mode, CSP, "{name}: 6061h");
         assert!(
@@ -215,19 +241,19 @@ fn every_mode_moves_the_motor(name: &str) {
         };
         let mut acknowledged = false;
         for _ in 0..10 {
-            s = cycle(&m, md, &group, pp(NEW_SET_POINT)).await;
+            s = cycle(&m, md, group, pp(NEW_SET_POINT)).await;
             acknowledged |= s.sw & SET_POINT_ACKNOWLEDGE != 0;
         }
         assert!(acknowledged, "{name} PP: bit 12");
         let mut reached = None;
         for k in 0..2_000 {
-            s = cycle(&m, md, &group, pp(0)).await;
+            s = cycle(&m, md, group, pp(0)).await;
             if k > 20 && s.sw & TARGET_REACHED != 0 {
                 reached = Some(k);
                 break;
             }
         }
-        s = run(&m, md, &group, pp(0), 50).await;
+        s = run(&m, md, group, pp(0), 50).await;
         assert_eq!(s.mode, PP, "{name}: 6061h");
         assert!(reached.is_some(), "{name} PP: bit 10: {:#06x}", s.sw);
         assert!(
@@ -243,7 +269,7 @@ fn every_mode_moves_the_motor(name: &str) {
             velocity: rpm_to_object(300.0),
             ..Command::default()
         };
-        s = run(&m, md, &group, pv, 600).await;
+        s = run(&m, md, group, pv, 600).await;
         assert_eq!(s.mode, PV, "{name}: 6061h");
         assert!((s.rpm - 300.0).abs() < 10.0, "{name} PV: {:.0} rpm", s.rpm);
         let csv = Command {
@@ -257,7 +283,7 @@ fn every_mode_moves_the_motor(name: &str) {
                 velocity: rpm_to_object(ramp),
                 ..csv
             };
-            s = cycle(&m, md, &group, c).await;
+            s = cycle(&m, md, group, c).await;
         }
         assert_eq!(s.mode, CSV, "{name}: 6061h");
         assert!((s.rpm - 600.0).abs() < 10.0, "{name} CSV: {:.0} rpm", s.rpm);
@@ -268,7 +294,7 @@ fn every_mode_moves_the_motor(name: &str) {
                 velocity: rpm_to_object(ramp),
                 ..csv
             };
-            s = cycle(&m, md, &group, c).await;
+            s = cycle(&m, md, group, c).await;
         }
         assert!(s.rpm.abs() < 10.0, "{name}: at rest, {:.0} rpm", s.rpm);
 
@@ -281,7 +307,7 @@ fn every_mode_moves_the_motor(name: &str) {
                 ..Command::default()
             };
             let before = s.rpm;
-            s = run(&m, md, &group, torque, 100).await;
+            s = run(&m, md, group, torque, 100).await;
             assert_eq!(s.mode, mode, "{name}: 6061h");
             assert!(
                 s.rpm > before + 100.0,
@@ -296,7 +322,7 @@ fn every_mode_moves_the_motor(name: &str) {
                     velocity: rpm_to_object(ramp),
                     ..csv
                 };
-                s = cycle(&m, md, &group, c).await;
+                s = cycle(&m, md, group, c).await;
             }
             assert!(s.rpm.abs() < 10.0, "{name}: at rest, {:.0} rpm", s.rpm);
         }
@@ -337,4 +363,9 @@ fn gha_e_every_mode_moves_the_motor() {
 #[test]
 fn sigma_v_sd_every_mode_moves_the_motor() {
     every_mode_moves_the_motor("sigma-v-sd");
+}
+
+#[test]
+fn sigma_v_sd_2axis_every_mode_moves_the_second_motor() {
+    every_mode_moves_the_motor_of_axis("sigma-v-sd-2axis", 1);
 }
