@@ -1150,6 +1150,35 @@ fn cia402_rules(out: &mut String, p: &Profile) {
              are off (infinite length)."
         );
     }
+    if let Some(u) = &r.unit_ranges {
+        let range = |name: &str, r: Option<crate::model::RatioRange>| {
+            r.map(|r| {
+                let (lo, hi) = if r.inclusive {
+                    ("≤", "≤")
+                } else {
+                    ("<", "<")
+                };
+                format!(
+                    "{}/{} {lo} {name} {hi} {}/{}",
+                    r.min.0, r.min.1, r.max.0, r.max.1
+                )
+            })
+        };
+        let ranges: Vec<String> = [
+            range("position factor", u.position),
+            range("velocity factor", u.velocity),
+            range("acceleration factor", u.acceleration),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        let _ = writeln!(
+            out,
+            "- The unit factors (numerator/denominator) must stay within {}: outside, they do not take effect and raise 603Fh {:04X}h.",
+            ranges.join(", "),
+            u.error.error_code
+        );
+    }
     if r.mode_entry_starts {
         out.push_str("- A mode change into profile position or homing with controlword bit 4 already set starts the set-point or the homing run at once (CiA402: at bit 4's next rising edge).\n");
     }

@@ -898,6 +898,7 @@ impl Default for Cia402File {
             homing_here_needs_speed_zero: false,
             mode_entry_starts: false,
             torque_reached: None,
+            unit_ranges: None,
         }
     }
 }
@@ -1231,6 +1232,39 @@ pub struct Cia402File {
     /// off below A + C).
     #[serde(default)]
     pub torque_reached: Option<[String; 3]>,
+    /// `[cia402.unit_ranges]`: the ratios the unit factors may have, and the error outside.
+    #[serde(default)]
+    pub unit_ranges: Option<UnitRangesFile>,
+}
+
+/// `[cia402.unit_ranges]`: the range of numerator/denominator of each unit factor, checked when
+/// the factors take effect (the Σ-V-SD's A.A20, §4.5 (3)-(5)); `error` is raised outside.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UnitRangesFile {
+    /// The error (a code or an alarm's display).
+    pub error: MotorFaultFile,
+    /// `[units] position`'s range.
+    #[serde(default)]
+    pub position: Option<RatioRangeFile>,
+    /// `[units] velocity`'s range.
+    #[serde(default)]
+    pub velocity: Option<RatioRangeFile>,
+    /// `[units] acceleration`'s range (of its numerator/denominator, before its scale).
+    #[serde(default)]
+    pub acceleration: Option<RatioRangeFile>,
+}
+
+/// A range of ratios: `min` and `max` as `[numerator, denominator]`, the ends included or not.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RatioRangeFile {
+    /// The smallest ratio.
+    pub min: [u32; 2],
+    /// The largest ratio.
+    pub max: [u32; 2],
+    /// The ends belong to the range.
+    pub inclusive: bool,
 }
 
 /// `[cia402.option_codes_without_object]`: a code per option-code object the profile lacks.

@@ -2159,6 +2159,32 @@ pub struct Cia402Rules {
     /// The torque-reached parameters A, B, C (0.1 % of the rated torque): on above A + B, off
     /// below A + C.
     pub torque_reached: Option<[(u16, u8); 3]>,
+    /// The ranges of the unit factors' ratios and the error outside them.
+    pub unit_ranges: Option<UnitRanges>,
+}
+
+/// `[cia402.unit_ranges]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UnitRanges {
+    /// Raised when a factor taking effect is outside its range.
+    pub error: MotorFaultCode,
+    /// The position factor's range.
+    pub position: Option<RatioRange>,
+    /// The velocity factor's range.
+    pub velocity: Option<RatioRange>,
+    /// The acceleration factor's range (before its scale).
+    pub acceleration: Option<RatioRange>,
+}
+
+/// A range of ratios `min..max` (numerator, denominator), with or without its ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RatioRange {
+    /// The smallest ratio.
+    pub min: (u32, u32),
+    /// The largest ratio.
+    pub max: (u32, u32),
+    /// The ends belong to the range.
+    pub inclusive: bool,
 }
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
@@ -2464,6 +2490,7 @@ impl Default for Cia402Rules {
             homing_here_needs_speed_zero: false,
             mode_entry_starts: false,
             torque_reached: None,
+            unit_ranges: None,
         }
     }
 }

@@ -608,6 +608,12 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         homing_start_while_disabled_error: f.cia402.homing_start_while_disabled_error,
         homing_here_needs_speed_zero: f.cia402.homing_here_needs_speed_zero,
         mode_entry_starts: f.cia402.mode_entry_starts,
+        unit_ranges: f
+            .cia402
+            .unit_ranges
+            .as_ref()
+            .map(|u| unit_ranges(u, &alarms))
+            .transpose()?,
         torque_reached: f
             .cia402
             .torque_reached
@@ -1239,6 +1245,43 @@ fn motor_faults(
         };
     }
     Ok(codes)
+}
+
+/// `[cia402.unit_ranges]`: each range with positive ends, min ≤ max.
+fn unit_ranges(
+    u: &crate::file::UnitRangesFile,
+    alarms: &[Alarm],
+) -> Result<crate::model::UnitRanges, Fault> {
+    const KEY: &str = "cia402.unit_ranges";
+    let range = |r: Option<crate::file::RatioRangeFile>| {
+        r.map(|r| {
+            let ([a, b], [c, d]) = (r.min, r.max);
+            // min ≤ max as fractions: a/b ≤ c/d ⇔ a·d ≤ c·b (all positive).
+            if a == 0
+                || b == 0
+                || c == 0
+                || d == 0
+                || u64::from(a) * u64::from(d) > u64::from(c) * u64::from(b)
+            {
+                return Err(fault(
+                    KEY,
+                    Invalid::Value(format!("{a}/{b}..{c}/{d}: positive ends, min ≤ max")),
+                ));
+            }
+            Ok(crate::model::RatioRange {
+                min: (a, b),
+                max: (c, d),
+                inclusive: r.inclusive,
+            })
+        })
+        .transpose()
+    };
+    Ok(crate::model::UnitRanges {
+        error: fault_report(&u.error, alarms, &format!("{KEY}.error"))?,
+        position: range(u.position)?,
+        velocity: range(u.velocity)?,
+        acceleration: range(u.acceleration)?,
+    })
 }
 
 /// A code (the same in 603Fh and the EMCY, no manufacturer data) or an alarm's display (its

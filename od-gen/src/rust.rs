@@ -617,7 +617,7 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
         };
         let _ = writeln!(
             out,
-            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, pp_set_point_buffer: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {}, stop_codes: &[{}], fault_reaction_ignored: {}, mode_statusword: &[{}], home_found_statusword: {}, implied_option_codes: cia402::stop::OptionCodes {{ quick_stop: {:?}, shutdown: {:?}, disable_operation: {:?}, halt: {:?}, fault_reaction: {:?}, vendor: &[] }}, torque_modes_stop_at_once: {}, torque_modes_halt_zero_torque: {}, software_limits_off: {}, software_limits_need_reference: {}, homing: cia402::homing::Rules {{ here_while_disabled: {}, start_while_disabled_error: {}, here_needs_speed_zero: {} }}, mode_entry_starts: {}, torque_reached: {} }},",
+            "        cia402: {drive}::profile::Cia402Rules {{ enable_without_mode_error: {}, mode_change_while_homing_error: {}, stops_end_switched_off: {}, switch_on_requires_main_power: {}, pp_bit6_absolute: {}, pp_change_on_set_point: {}, pp_set_point_buffer: {}, homing_methods: &{:?}, homing_method_aliases: &{:?}, touch_probe: cia402::touch_probe::Rules {{ bit7: cia402::touch_probe::Bit7::{}, bit6_shows_source: {}, function_bits: {:#06x}, off_while_homing: [{}, {}] }}, following_error_fault: {}, digital_inputs_limits_swapped: {}, following_error_zero_window_off: {}, home_offset_added: {}, store_requires_power_cycle: &{:?}, touch_probe_inputs: {}, max_interpolation_speed: {:?}, homing_error_alarm: {}, safe_torque_off: {}, torque_limit_statusword: {}, csp_extrapolation: {}, stop_codes: &[{}], fault_reaction_ignored: {}, mode_statusword: &[{}], home_found_statusword: {}, implied_option_codes: cia402::stop::OptionCodes {{ quick_stop: {:?}, shutdown: {:?}, disable_operation: {:?}, halt: {:?}, fault_reaction: {:?}, vendor: &[] }}, torque_modes_stop_at_once: {}, torque_modes_halt_zero_torque: {}, software_limits_off: {}, software_limits_need_reference: {}, homing: cia402::homing::Rules {{ here_while_disabled: {}, start_while_disabled_error: {}, here_needs_speed_zero: {} }}, mode_entry_starts: {}, torque_reached: {}, unit_ranges: {} }},",
             optional_fault_report(p.cia402.enable_without_mode_error.as_ref()),
             optional_fault_report(p.cia402.mode_change_while_homing_error.as_ref()),
             p.cia402.stops_end_switched_off,
@@ -709,6 +709,23 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
             p.cia402.mode_entry_starts,
             p.cia402.torque_reached.map_or("None".into(), |entries| {
                 format!("Some([{}])", entries.map(ram_operand).join(", "))
+            }),
+            p.cia402.unit_ranges.map_or("None".into(), |u| {
+                let range = |r: Option<crate::model::RatioRange>| {
+                    r.map_or("None".into(), |r| {
+                        format!(
+                            "Some({drive}::profile::RatioRange {{ min: {:?}, max: {:?}, inclusive: {} }})",
+                            r.min, r.max, r.inclusive
+                        )
+                    })
+                };
+                format!(
+                    "Some({drive}::profile::UnitRanges {{ error: {}, position: {}, velocity: {}, acceleration: {} }})",
+                    fault_report(&u.error),
+                    range(u.position),
+                    range(u.velocity),
+                    range(u.acceleration)
+                )
             })
         );
     }

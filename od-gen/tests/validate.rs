@@ -1399,7 +1399,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.stops_end_switched_off);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, pp_set_point_buffer: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false, torque_modes_halt_zero_torque: false, software_limits_off: None, software_limits_need_reference: false, homing: cia402::homing::Rules { here_while_disabled: false, start_while_disabled_error: false, here_needs_speed_zero: false }, mode_entry_starts: false, torque_reached: None }"
+        "enable_without_mode_error: None, mode_change_while_homing_error: None, stops_end_switched_off: true, switch_on_requires_main_power: false, pp_bit6_absolute: false, pp_change_on_set_point: true, pp_set_point_buffer: true, homing_methods: &[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 33, 34, 35, 37], homing_method_aliases: &[], touch_probe: cia402::touch_probe::Rules { bit7: cia402::touch_probe::Bit7::None, bit6_shows_source: false, function_bits: 0xffff, off_while_homing: [false, false] }, following_error_fault: true, digital_inputs_limits_swapped: false, following_error_zero_window_off: false, home_offset_added: false, store_requires_power_cycle: &[], touch_probe_inputs: None, max_interpolation_speed: None, homing_error_alarm: None, safe_torque_off: None, torque_limit_statusword: None, csp_extrapolation: None, stop_codes: &[], fault_reaction_ignored: false, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false, torque_modes_halt_zero_torque: false, software_limits_off: None, software_limits_need_reference: false, homing: cia402::homing::Rules { here_while_disabled: false, start_while_disabled_error: false, here_needs_speed_zero: false }, mode_entry_starts: false, torque_reached: None, unit_ranges: None }"
     ));
     // A profile's own option codes: 605Bh = 2 stops on 6085h (the GHA-E), generated as the
     // firmware's VendorCode; an object outside 605Ah-605Eh and an unknown stop are refused.
@@ -1413,7 +1413,7 @@ fn cia402_rules_are_resolved_and_checked() {
     assert!(p.cia402.fault_reaction_ignored);
     let rust = od_gen::rust::generate(&[p]);
     assert!(rust.contains(
-        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false, torque_modes_halt_zero_torque: false, software_limits_off: None, software_limits_need_reference: false, homing: cia402::homing::Rules { here_while_disabled: false, start_while_disabled_error: false, here_needs_speed_zero: false }, mode_entry_starts: false, torque_reached: None }"
+        "stop_codes: &[cia402::stop::VendorCode { cause: cia402::stop::Cause::Shutdown, code: 2, reaction: cia402::stop::Reaction { deceleration: cia402::stop::Deceleration::QuickStopRamp, after: cia402::stop::After::Disable } }], fault_reaction_ignored: true, mode_statusword: &[], home_found_statusword: None, implied_option_codes: cia402::stop::OptionCodes { quick_stop: None, shutdown: None, disable_operation: None, halt: None, fault_reaction: None, vendor: &[] }, torque_modes_stop_at_once: false, torque_modes_halt_zero_torque: false, software_limits_off: None, software_limits_need_reference: false, homing: cia402::homing::Rules { here_while_disabled: false, start_while_disabled_error: false, here_needs_speed_zero: false }, mode_entry_starts: false, torque_reached: None, unit_ranges: None }"
     ));
     for bad in [
         "[[cia402.stop_codes]]\nobject = \"0x6060\"\ncode = 2\nstop = \"coast\"",
@@ -1449,6 +1449,15 @@ fn cia402_rules_are_resolved_and_checked() {
     ] {
         let (key, _) = invalid(&appended(&format!("[[cia402.mode_statusword]]\n{bad}")));
         assert_eq!(key, "cia402.mode_statusword", "{bad}");
+    }
+    // Unit ranges need positive ends with min ≤ max, and a known error.
+    for bad in [
+        "error = 0x6320\nposition = { min = [2, 1], max = [1, 1], inclusive = true }",
+        "error = 0x6320\nvelocity = { min = [0, 1], max = [1, 1], inclusive = true }",
+        "error = \"A.NONE\"",
+    ] {
+        let (key, _) = invalid(&appended(&format!("[cia402.unit_ranges]\n{bad}")));
+        assert!(key.starts_with("cia402.unit_ranges"), "{bad}: {key}");
     }
     // The RSE's torque-reached parameters are generated as RAM operands.
     let rse = od_gen::builtin("rse").unwrap();

@@ -246,3 +246,81 @@ fn sigma_v_sd_user_units_take_effect_on_2300h() {
         );
     });
 }
+
+/// Σ-V-SD §4.5 (3)-(5): a user unit outside its "available value range" raises alarm A.A20
+/// when 2300h = 1 would make it take effect (603Fh 0A20h, EMCY FF00h with the alarm code and
+/// the axis number, §2.7); the unit in force stays; a fault reset does not clear it (the
+/// profile's decision: it needs corrected units and 2300h, or a power cycle). Inside the range,
+/// at its ends where they belong to it, 2300h takes the unit.
+#[test]
+fn sigma_v_sd_user_units_outside_their_range_raise_a_a20() {
+    use tests_host::{csp, emcy};
+    const SIGMA_CSP: i8 = 8;
+    const FAULT_RESET: u16 = 0x80;
+    const FAULT: u16 = 0x08;
+    let p = od_gen::builtin("sigma-v-sd").expect("profile");
+    let a_a20 = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "A.A20")
+        .expect("alarm A.A20");
+    // (object, numerator, in range): 2301h 1/4096 < N/D < 4096; 2302h 1/128 <= N/D <= 524288;
+    // 2303h 1/128 <= N/D <= 16384.
+    let cases: [(u16, u32, bool); 6] = [
+        (0x2301, 4095, true),
+        (0x2301, 4096, false),
+        (0x2302, 524_288, true),
+        (0x2302, 524_289, false),
+        (0x2303, 16_384, true),
+        (0x2303, 16_385, false),
+    ];
+    for (object, numerator, inside) in cases {
+        block_on(async {
+            let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+            tokio::task::spawn_local(transport);
+            let md: &MainDevice<'_> = &m.maindevice;
+            let group = csp::into_op_with_mode(&m, md, SIGMA_CSP).await;
+            let (_, before) = csp::cycle(&m, md, &group, 0, 0).await;
+            while emcy::read(md, p.sm.mailbox_in.start)
+                .await
+                .expect("mailbox")
+                .is_some()
+            {}
+            let sd = group.subdevice(md, 0).expect("drive");
+            sd.sdo_write(object, 1, numerator).await.expect("numerator");
+            sd.sdo_write(0x2300, 0, 1u32).await.expect("2300h = 1");
+            let mut sw = 0;
+            let mut emergency = None;
+            for _ in 0..10 {
+                (sw, _) = csp::cycle(&m, md, &group, 0, 0).await;
+                if let Some(e) = emcy::read(md, p.sm.mailbox_in.start)
+                    .await
+                    .expect("mailbox")
+                {
+                    emergency.get_or_insert(e);
+                }
+            }
+            let code: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
+            let what = format!("{object:04X}h:01 = {numerator}");
+            if inside {
+                assert_eq!(sw & FAULT, 0, "{what}: no fault ({sw:#06x})");
+                assert_eq!(emergency, None, "{what}");
+                return;
+            }
+            assert_ne!(sw & FAULT, 0, "{what}: A.A20 ({sw:#06x})");
+            assert_eq!(code, a_a20.error_code, "{what}: 603Fh");
+            let e = emergency.expect("an emergency");
+            assert_eq!((e.code, e.data), (0xFF00, a_a20.emcy.data), "{what}: EMCY");
+            // The unit in force stayed (6064h unchanged).
+            let (_, after) = csp::cycle(&m, md, &group, 0, 0).await;
+            assert!((after - before).abs() <= 2, "{what}: {before} -> {after}");
+            // A fault reset does not clear it.
+            for cw in [0, FAULT_RESET, 0] {
+                for _ in 0..5 {
+                    (sw, _) = csp::cycle(&m, md, &group, cw, 0).await;
+                }
+            }
+            assert_ne!(sw & FAULT, 0, "{what}: A.A20 holds through a reset");
+        });
+    }
+}

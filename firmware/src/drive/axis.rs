@@ -42,8 +42,8 @@ use crate::motor::math;
 use crate::motor::servo::EncoderSpec;
 use crate::motor::trajectory::SaneLimits;
 use crate::profile::{
-    self, AppVars, Cia402Rules, DriveProfile, Operand, ProbeInputAssignment, UnitRatios,
-    MOTOR_FAULT_COUNT,
+    self, AccelerationUnit, AppVars, Cia402Rules, DriveProfile, Factor, Operand,
+    ProbeInputAssignment, RatioRange, UnitRatios, MOTOR_FAULT_COUNT,
 };
 use ethercat_slave::od::Profile;
 use ethercat_slave::pdo::PdoPlan;
@@ -187,6 +187,8 @@ pub struct DriveAxis {
     previous_controlword: u16,
     /// The torque-reached condition (`Cia402Rules::torque_reached`), kept between its levels.
     torque_reached: bool,
+    /// A fault a download's check found, raised in the next cycle (which reports new faults).
+    pending_fault: Option<FaultReport>,
     /// The SYNC0 of this cycle brought no new outputs (`Drive::outputs_missed`).
     outputs_missed: bool,
     /// CSP with extrapolation: the last target taken (increments) and its step from the one
@@ -277,6 +279,7 @@ impl DriveAxis {
             software_limits_off: false,
             previous_controlword: 0,
             torque_reached: false,
+            pending_fault: None,
             outputs_missed: false,
             csp_last: None,
             warnings: profile.warnings,
@@ -408,14 +411,45 @@ impl DriveAxis {
     /// The unit-factor command was written (the Σ-V-SD's 2300h, §4.5 (2)): 1 in Switch On
     /// Disabled makes the factors' objects as they are now take effect; the command reads 0
     /// again when it is done (anything else, or another state, is not acted on).
+    /// Factors outside the profile's ranges (`Cia402Rules::unit_ranges`) do not take effect
+    /// and raise its error (the Σ-V-SD's A.A20).
     pub(super) fn apply_units(&mut self, ram: &mut [u8]) {
         let command = read_u32(ram, self.vars.units_apply);
         let ready = self.device.state() == PdsState::SwitchOnDisabled;
-        if let (Some(1), true, Some(port)) = (command, ready, self.port.as_ref()) {
-            self.latched_units = Some(self.vars.unit_ratios(ram, port.counts_per_rev));
-            self.settings_due |= Groups::UNITS;
+        let counts_per_rev = self.port.as_ref().map(|port| port.counts_per_rev);
+        if let (Some(1), true, Some(counts_per_rev)) = (command, ready, counts_per_rev) {
+            match self.units_out_of_range(ram, counts_per_rev) {
+                // Raised in the next cycle, which reports it (EMCY, alarm record).
+                Some(error) => self.pending_fault = Some(error),
+                None => {
+                    self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
+                    self.settings_due |= Groups::UNITS;
+                }
+            }
         }
         write_bytes(ram, self.vars.units_apply, 0u32.to_le_bytes());
+    }
+
+    /// The profile's error when a unit factor as its objects hold it now is outside its range
+    /// (`Cia402Rules::unit_ranges`), `None` when they are all inside (or have no range).
+    fn units_out_of_range(&self, ram: &[u8], counts_per_rev: u32) -> Option<FaultReport> {
+        let ranges = self.rules.unit_ranges?;
+        let inside = |range: Option<RatioRange>, factor: &Factor| {
+            range.is_none_or(|r| {
+                r.contains(
+                    factor.numerator.value(ram, counts_per_rev),
+                    factor.denominator.value(ram, counts_per_rev),
+                )
+            })
+        };
+        let acceleration = match &self.vars.acceleration_unit {
+            AccelerationUnit::Factor(factor) => inside(ranges.acceleration, factor),
+            _ => true,
+        };
+        let all_inside = inside(ranges.position, &self.vars.position_factor)
+            && inside(ranges.velocity, &self.vars.velocity_factor)
+            && acceleration;
+        (!all_inside).then_some(ranges.error)
     }
 
     /// The digital output levels the board drives (CiA402 60FEh:01 layout: bit 0 the holding
@@ -499,6 +533,11 @@ impl DriveAxis {
         self.refresh_settings(ram);
         let statusword = self.device.initialised();
         self.write_statusword(ram, statusword);
+        // Stored unit factors outside the profile's ranges: its error from power-on.
+        let counts_per_rev = self.port.as_ref().map(|port| port.counts_per_rev);
+        if let Some(error) = counts_per_rev.and_then(|c| self.units_out_of_range(ram, c)) {
+            self.report_fault(error, ram);
+        }
     }
 
     /// The PDS state.
@@ -682,6 +721,10 @@ impl DriveAxis {
     /// display, the axis exchange.
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
         let vars = self.vars;
+        if let Some(report) = self.pending_fault.take() {
+            // Found by a download's check: raised here, where the drive reports new faults.
+            self.report_fault(report, ram);
+        }
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
         let previous_cw = core::mem::replace(&mut self.previous_controlword, cw);
         // The axis feedback of this cycle, read once (a seqlock read).
