@@ -2176,16 +2176,8 @@ pub struct UnitRanges {
     pub acceleration: Option<RatioRange>,
 }
 
-/// A range of ratios `min..max` (numerator, denominator), with or without its ends.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct RatioRange {
-    /// The smallest ratio.
-    pub min: (u32, u32),
-    /// The largest ratio.
-    pub max: (u32, u32),
-    /// The ends belong to the range.
-    pub inclusive: bool,
-}
+/// The range a unit factor's ratio may have (the firmware's own type).
+pub use cia402::units::RatioRange;
 
 /// What statusword bits 10-13 show in a mode (`firmware: cia402::mode_status::Override`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -167,10 +167,24 @@ pub async fn into_op_dc_mapped(
     (outputs, inputs): (&[MappedEntry], &[MappedEntry]),
     cycle_ns: u64,
 ) -> DcGroup {
+    into_op_dc(m, md, &mapping(outputs, inputs), cycle_ns).await
+}
+
+/// The SDO downloads that map `outputs` into 1600h and `inputs` into 1A00h (index, subindex,
+/// bits each, in image order), each PDO assigned alone by 1C12h/1C13h.
+pub fn mapping(outputs: &[MappedEntry], inputs: &[MappedEntry]) -> Vec<Sdo> {
     let mut setup = remap(0x1600, 0x1C12, outputs);
     setup.extend(remap(0x1A00, 0x1C13, inputs));
-    into_op_dc(m, md, &setup, cycle_ns).await
+    setup
 }
+
+/// The position layout the per-profile scenarios share (outputs 6040h, 6060h, 607Ah; inputs
+/// 6041h, 6064h): [`exchange_dc_command`]'s `(cw, mode, 607Ah)`, the statusword at byte 0 and
+/// 6064h at byte 2 of the inputs.
+pub const POSITION_MAPPING: ([MappedEntry; 3], [MappedEntry; 2]) = (
+    [(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
+    [(0x6041, 0, 16), (0x6064, 0, 32)],
+);
 
 /// The velocity layout the per-profile scenarios share (outputs 6040h, 6060h, 60FFh; inputs
 /// 6041h, 6061h, 606Ch): every manual lets 1600h/1A00h be remapped in PREOP.

@@ -13,7 +13,7 @@
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, remap, DcGroup, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo, POSITION_MAPPING};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -78,12 +78,7 @@ fn change(name: &str) -> Outcome {
         let (m, transport) = master_for(Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut sdos = remap(
-            0x1600,
-            0x1C12,
-            &[(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
-        );
-        sdos.extend(remap(0x1A00, 0x1C13, &[(0x6041, 0, 16), (0x6064, 0, 32)]));
+        let mut sdos = vendor::mapping(&POSITION_MAPPING.0, &POSITION_MAPPING.1);
         let ramp = units::acceleration(&profile, RAMP_REV_S2);
         sdos.extend([
             Sdo::U32(0x6081, 0, units::velocity(&profile, SPEED_REV_S)),

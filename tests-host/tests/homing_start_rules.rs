@@ -14,7 +14,7 @@
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, remap, DcGroup, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo, POSITION_MAPPING};
 use tests_host::{block_on, cia402, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -75,12 +75,7 @@ impl Drive<'_> {
 
 /// Drive 0 from INIT to OP in homing mode with method 35.
 async fn into_op<'a>(m: &'a InProcess, md: &'a MainDevice<'a>) -> Drive<'a> {
-    let mut sdos = remap(
-        0x1600,
-        0x1C12,
-        &[(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
-    );
-    sdos.extend(remap(0x1A00, 0x1C13, &[(0x6041, 0, 16), (0x6064, 0, 32)]));
+    let mut sdos = vendor::mapping(&POSITION_MAPPING.0, &POSITION_MAPPING.1);
     sdos.push(Sdo::I8(0x6098, 0, HOME_HERE));
     let group = vendor::into_op_dc(m, md, &sdos, CYCLE_NS).await;
     let drive = Drive { m, md, group };

@@ -14,7 +14,7 @@ use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
 use od_gen::Profile;
-use tests_host::vendor::{self, remap, DcGroup};
+use tests_host::vendor::{self, DcGroup};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -90,16 +90,10 @@ fn offsets(name: &str) -> Outcome {
         let (m, transport) = master_for(Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut sdos = remap(
-            0x1600,
-            0x1C12,
+        let sdos = vendor::mapping(
             &[(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
-        );
-        sdos.extend(remap(
-            0x1A00,
-            0x1C13,
             &[(0x6041, 0, 16), (0x6064, 0, 32), (0x606C, 0, 32)],
-        ));
+        );
         let group = vendor::into_op_dc(&m, md, &sdos, CYCLE_NS).await;
         let d = Drive {
             m: &m,

@@ -8,7 +8,7 @@
 
 use board_sim::Segment;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, remap, Sdo};
+use tests_host::vendor::{self, Sdo};
 use tests_host::{block_on, cia402, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -29,12 +29,10 @@ fn bit_10(mode: i8, steps: &[i16]) -> Vec<bool> {
         let (m, transport) = master_for(Segment::new("rse", 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut sdos = remap(
-            0x1600,
-            0x1C12,
+        let mut sdos = vendor::mapping(
             &[(0x6040, 0, 16), (0x6060, 0, 8), (0x6071, 0, 16)],
+            &[(0x6041, 0, 16), (0x6077, 0, 16)],
         );
-        sdos.extend(remap(0x1A00, 0x1C13, &[(0x6041, 0, 16), (0x6077, 0, 16)]));
         sdos.extend([
             Sdo::U16(0x2008, 0x0A, A),
             Sdo::U16(0x2008, 0x0B, B),

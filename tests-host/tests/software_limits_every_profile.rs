@@ -20,7 +20,7 @@ use board_sim::servo::{axis_config, SimServo, Tuning};
 use board_sim::Segment;
 use ethercrab::MainDevice;
 use tests_host::session::{power_cycle, session, Step};
-use tests_host::vendor::{self, remap, DcGroup, Sdo};
+use tests_host::vendor::{self, DcGroup, Sdo, POSITION_MAPPING};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -146,12 +146,7 @@ fn run(name: &str, setup: Setup) -> Outcome {
         let (m, transport) = master_for(segment);
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let mut sdos = remap(
-            0x1600,
-            0x1C12,
-            &[(0x6040, 0, 16), (0x6060, 0, 8), (0x607A, 0, 32)],
-        );
-        sdos.extend(remap(0x1A00, 0x1C13, &[(0x6041, 0, 16), (0x6064, 0, 32)]));
+        let mut sdos = vendor::mapping(&POSITION_MAPPING.0, &POSITION_MAPPING.1);
         sdos.push(Sdo::I8(0x6098, 0, HOME_HERE));
         if setup.infinite_length_written {
             sdos.push(Sdo::I32(P2_25.0, P2_25.1, 1));

@@ -256,6 +256,39 @@ pub fn actual_position(increments: i64, ratio: Ratio) -> i32 {
     position_object(ratio.position_from_internal(increments))
 }
 
+/// A range of ratios between `min` and `max` (each numerator, denominator), with or without
+/// its ends: the values a unit factor may have (the Σ-V-SD's 2301h-2303h, §4.5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RatioRange {
+    /// The smallest ratio.
+    pub min: (u32, u32),
+    /// The largest ratio.
+    pub max: (u32, u32),
+    /// The ends belong to the range.
+    pub inclusive: bool,
+}
+
+impl RatioRange {
+    /// Whether `numerator / denominator` is in the range (compared as products, exact; a
+    /// denominator of 0 is not a ratio).
+    pub fn contains(&self, numerator: u32, denominator: u32) -> bool {
+        use core::cmp::Ordering::{Greater, Less};
+        if denominator == 0 {
+            return false;
+        }
+        // n/d against a/b: n·b against a·d (u32 × u32 fits u64).
+        let against = |(a, b): (u32, u32)| {
+            (u64::from(numerator) * u64::from(b)).cmp(&(u64::from(a) * u64::from(denominator)))
+        };
+        let (low, high) = (against(self.min), against(self.max));
+        if self.inclusive {
+            low != Less && high != Greater
+        } else {
+            low == Greater && high == Less
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -375,5 +408,31 @@ mod tests {
     fn commissioned_values_round_to_object_units() {
         assert_eq!(to_object_units(0.25, MICRO), 250_000);
         assert_eq!(to_object_units(1.2e-3, NANO), 1_200_000);
+    }
+}
+
+#[cfg(test)]
+mod ratio_ranges {
+    use super::RatioRange;
+
+    /// The Σ-V-SD's 2301h "1/4096 < N/D < 4096" and 2302h "1/128 <= N/D <= 524288" (§4.5).
+    #[test]
+    fn ratios_are_compared_exactly_with_or_without_the_ends() {
+        let open = RatioRange {
+            min: (1, 4096),
+            max: (4096, 1),
+            inclusive: false,
+        };
+        assert!(open.contains(1, 1) && open.contains(4095, 1) && open.contains(2, 8191));
+        assert!(!open.contains(4096, 1) && !open.contains(1, 4096) && !open.contains(8192, 2));
+        assert!(!open.contains(u32::MAX, 1) && !open.contains(1, u32::MAX));
+        let closed = RatioRange {
+            min: (1, 128),
+            max: (524_288, 1),
+            inclusive: true,
+        };
+        assert!(closed.contains(524_288, 1) && closed.contains(1, 128) && closed.contains(2, 256));
+        assert!(!closed.contains(524_289, 1) && !closed.contains(1, 129));
+        assert!(!closed.contains(1, 0) && !closed.contains(0, 0), "no ratio");
     }
 }
