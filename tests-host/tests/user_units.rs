@@ -324,3 +324,42 @@ fn sigma_v_sd_user_units_outside_their_range_raise_a_a20() {
         });
     }
 }
+
+/// Σ-V-SD §4.5: user units stored outside their range (1010h sub 3, the 23xxh objects) raise
+/// A.A20 at the next power-on: the drive comes up in Fault with 603Fh 0A20h.
+#[test]
+fn sigma_v_sd_stored_user_units_outside_their_range_raise_a_a20_at_power_on() {
+    use tests_host::csp;
+    use tests_host::session::{power_cycle, session, Step};
+    const SIGMA_CSP: i8 = 8;
+    const FAULT: u16 = 0x08;
+    /// 1010h:03 "save" (23xxh and 6xxxh, §4.2 (5)).
+    const STORE_23XX: (u16, u8, u32) = (0x1010, 3, 0x6576_6173);
+    let p = od_gen::builtin("sigma-v-sd").expect("profile");
+    let a_a20 = p
+        .alarms
+        .iter()
+        .find(|a| a.display == "A.A20")
+        .expect("alarm A.A20");
+    let segment = Segment::new("sigma-v-sd", 1).expect("profile");
+    let (mut segment, out) = session(
+        segment,
+        &[
+            Step::Write(0x2301, 1, 8192),
+            Step::Write(STORE_23XX.0, STORE_23XX.1, STORE_23XX.2),
+        ],
+    );
+    assert!(out.iter().all(Result::is_ok), "{out:?}");
+    power_cycle(&mut segment);
+    block_on(async {
+        let (m, transport) = master_for(segment);
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = csp::into_op_with_mode(&m, md, SIGMA_CSP).await;
+        let (sw, _) = csp::cycle(&m, md, &group, 0, 0).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        let code: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
+        assert_ne!(sw & FAULT, 0, "A.A20 from power-on: {sw:#06x}");
+        assert_eq!(code, a_a20.error_code, "603Fh");
+    });
+}

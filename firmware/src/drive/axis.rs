@@ -309,8 +309,9 @@ impl DriveAxis {
     /// Connects the motor's control interrupt: from now on the set-points go to it and the
     /// actual values come from it; the commissioned motor data in `ram` go to it at once (the
     /// parameters were loaded at power-on). The board calls
-    /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `counts_per_rev` is its
-    /// encoder's resolution (for profiles whose velocity unit is in rpm).
+    /// [`crate::motor::axis::Axis::control_step`] with the same `link`; `encoder` is its
+    /// encoder (the resolution for profiles whose velocity unit is in rpm, and whether the
+    /// position is referenced from power-on).
     pub(super) fn attach(&mut self, link: &'static AxisLink, encoder: EncoderSpec, ram: &[u8]) {
         let counts_per_rev = encoder.counts_per_rev();
         let mut port = AxisPort {
