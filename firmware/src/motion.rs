@@ -217,6 +217,7 @@ impl ProfileModes {
                     inputs.move_limits,
                 )
             } else {
+                self.set_points.observe(inputs.controlword);
                 0
             };
         let mut home_found = None;
@@ -589,6 +590,33 @@ mod tests {
             out.set_point.position, held,
             "the quick stop dropped the set-point"
         );
+    }
+
+    #[test]
+    fn a_set_point_on_enable_is_an_edge_against_the_disabled_cycles() {
+        let mode = Mode::ProfilePosition;
+        let disabled = |cw, i: Inputs| Inputs {
+            controlword: cw,
+            running: false,
+            ..i
+        };
+        let enabled = |i: Inputs, target| Inputs {
+            actual_position: i.actual_position,
+            ..inputs(ENABLED | NEW_SET_POINT, target)
+        };
+        // Bit 4 high when the drive was disabled, low while disabled, high with the enable:
+        // a rising edge (CiA402), so the set-point is taken and the move made.
+        let mut m = ProfileModes::new();
+        let (_, i) = run(&mut m, mode, inputs(ENABLED | NEW_SET_POINT, 0), 5, |_| {});
+        let (_, i) = run(&mut m, mode, disabled(0x06, i), 5, |_| {});
+        let (out, _) = run(&mut m, mode, enabled(i, 5_000), 400, |_| {});
+        assert_eq!(out.set_point.position, 5_000, "taken on the enable");
+        // Bit 4 held high through the disabled cycles: no edge, the drive holds.
+        let mut m = ProfileModes::new();
+        let (_, i) = run(&mut m, mode, inputs(ENABLED | NEW_SET_POINT, 0), 5, |_| {});
+        let (_, i) = run(&mut m, mode, disabled(0x07 | NEW_SET_POINT, i), 5, |_| {});
+        let (out, _) = run(&mut m, mode, enabled(i, 5_000), 400, |_| {});
+        assert_eq!(out.set_point.position, 0, "no edge, nothing taken");
     }
 
     #[test]

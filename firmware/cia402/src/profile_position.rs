@@ -209,6 +209,13 @@ impl<P: Copy> ProfilePosition<P> {
         self.previous_new_set_point = !start && previous_cw & NEW_SET_POINT != 0;
     }
 
+    /// A cycle in which set-points are not taken (the axis not enabled): bit 4 is still
+    /// followed, so that the next rising edge is one against the controlword of the cycle
+    /// before (CiA402 6040h bit 4), not against the last one seen while enabled.
+    pub fn observe(&mut self, cw: u16) {
+        self.previous_new_set_point = cw & NEW_SET_POINT != 0;
+    }
+
     /// Drops every set-point (quick stop, disable, another mode): the drive holds
     /// `held_position` (user units), which relative set-points then add to.
     pub fn clear(&mut self, held_position: i64) {
