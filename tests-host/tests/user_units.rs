@@ -326,11 +326,12 @@ fn sigma_v_sd_user_units_outside_their_range_raise_a_a20() {
 }
 
 /// Σ-V-SD §4.5: user units stored outside their range (1010h sub 3, the 23xxh objects) raise
-/// A.A20 at the next power-on: the drive comes up in Fault with 603Fh 0A20h.
+/// A.A20 at the next power-on: the drive comes up in Fault with 603Fh 0A20h and announces it
+/// with its emergency once it cycles.
 #[test]
 fn sigma_v_sd_stored_user_units_outside_their_range_raise_a_a20_at_power_on() {
-    use tests_host::csp;
     use tests_host::session::{power_cycle, session, Step};
+    use tests_host::{csp, emcy};
     const SIGMA_CSP: i8 = 8;
     const FAULT: u16 = 0x08;
     /// 1010h:03 "save" (23xxh and 6xxxh, §4.2 (5)).
@@ -357,6 +358,15 @@ fn sigma_v_sd_stored_user_units_outside_their_range_raise_a_a20_at_power_on() {
         let md: &MainDevice<'_> = &m.maindevice;
         let group = csp::into_op_with_mode(&m, md, SIGMA_CSP).await;
         let (sw, _) = csp::cycle(&m, md, &group, 0, 0).await;
+        // Announced like any alarm, once the drive cycles: its emergency (§2.7).
+        let mut emergencies = Vec::new();
+        while let Some(e) = emcy::read(md, p.sm.mailbox_in.start)
+            .await
+            .expect("mailbox")
+        {
+            emergencies.push((e.code, e.data));
+        }
+        assert_eq!(emergencies, [(0xFF00, a_a20.emcy.data)], "EMCY");
         let sd = group.subdevice(md, 0).expect("drive");
         let code: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
         assert_ne!(sw & FAULT, 0, "A.A20 from power-on: {sw:#06x}");

@@ -187,8 +187,9 @@ pub struct DriveAxis {
     previous_controlword: u16,
     /// The torque-reached condition (`Cia402Rules::torque_reached`), kept between its levels.
     torque_reached: bool,
-    /// A fault a download's check found, raised in the next cycle (which reports new faults).
-    pending_fault: Option<FaultReport>,
+    /// The drive announced the active fault (its EMCY and alarm record): a fault raised
+    /// anywhere (the cycle, a download's check, power-on) is announced at the next cycle.
+    pub(super) fault_announced: bool,
     /// The SYNC0 of this cycle brought no new outputs (`Drive::outputs_missed`).
     outputs_missed: bool,
     /// CSP with extrapolation: the last target taken (increments) and its step from the one
@@ -279,7 +280,7 @@ impl DriveAxis {
             software_limits_off: false,
             previous_controlword: 0,
             torque_reached: false,
-            pending_fault: None,
+            fault_announced: false,
             outputs_missed: false,
             csp_last: None,
             warnings: profile.warnings,
@@ -420,8 +421,8 @@ impl DriveAxis {
         let counts_per_rev = self.port.as_ref().map(|port| port.counts_per_rev);
         if let (Some(1), true, Some(counts_per_rev)) = (command, ready, counts_per_rev) {
             match self.units_out_of_range(ram, counts_per_rev) {
-                // Raised in the next cycle, which reports it (EMCY, alarm record).
-                Some(error) => self.pending_fault = Some(error),
+                // The next cycle announces it (EMCY, alarm record).
+                Some(error) => self.report_fault(error, ram),
                 None => {
                     self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
                     self.settings_due |= Groups::UNITS;
@@ -722,10 +723,6 @@ impl DriveAxis {
     /// display, the axis exchange.
     pub fn step(&mut self, ram: &mut [u8], cycle_ns: u32) {
         let vars = self.vars;
-        if let Some(report) = self.pending_fault.take() {
-            // Found by a download's check: raised here, where the drive reports new faults.
-            self.report_fault(report, ram);
-        }
         let mut cw = read_u16(ram, vars.controlword).unwrap_or(0);
         let previous_cw = core::mem::replace(&mut self.previous_controlword, cw);
         // The axis feedback of this cycle, read once (a seqlock read).

@@ -369,7 +369,7 @@ impl Application for Drive {
                 continue;
             };
             axis.in_sync = in_sync;
-            let before = axis.fault_code();
+            let announced = axis.fault_announced;
             let warning_before = axis.warning();
             axis.step(ram, cycle_ns);
             let warning_after = axis.warning();
@@ -385,9 +385,10 @@ impl Application for Drive {
             let Some(axis) = self.axis_mut(i) else {
                 continue;
             };
-            let event = match (before, axis.fault_code()) {
-                (None, None) => continue,
-                (Some(_), None) => {
+            let fault = axis.fault_code();
+            axis.fault_announced = fault.is_some();
+            let event = match (announced, fault) {
+                (true, None) => {
                     let (emcy_code, _) = axis.fault_emcy();
                     self.show_active_alarms(ram);
                     // The unit's error stays while another axis still holds it.
@@ -396,7 +397,7 @@ impl Application for Drive {
                     }
                     AppEvent::ErrorCleared(emcy_code)
                 }
-                (None, Some(_)) => {
+                (false, Some(_)) => {
                     let (emcy_code, data) = axis.fault_emcy();
                     self.alarm_raised(i, ram);
                     AppEvent::ErrorRaised {
@@ -442,6 +443,8 @@ impl Application for Drive {
                 alarm: None,
             });
             axis.report_fault(report, ram);
+            // The slave sends its EMCY; the record follows here.
+            axis.fault_announced = true;
         }
         if new {
             self.alarm_raised(0, ram);
