@@ -587,6 +587,9 @@ pub struct Cia402Rules {
     /// The software position limits act only once the position is referenced: after a homing
     /// run, or from power-on with an absolute encoder (the Σ-V-SD, §6.8 (2)).
     pub software_limits_need_reference: bool,
+    /// 607Dh is relative to the machine home: a target is compared with 607Dh - 607Ch (the
+    /// Σ-V-SD, §4.8 (2) "corrected by the home offset").
+    pub software_limits_less_home_offset: bool,
     /// How a homing run may start where the manual adds to CiA402 (current-position methods
     /// while disabled or only at speed zero, a start while disabled as an error).
     pub homing: cia402::homing::Rules,

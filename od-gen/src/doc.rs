@@ -1194,6 +1194,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.software_limits_need_reference {
         out.push_str("- The software position limits 607Dh act only once the position is referenced: after a homing run, or from power-on with an absolute encoder.\n");
     }
+    if r.software_limits_less_home_offset {
+        out.push_str("- The software position limits 607Dh are relative to the machine home: a target is compared with 607Dh:01 - 607Ch and 607Dh:02 - 607Ch.\n");
+    }
     if r.torque_modes_halt_zero_torque {
         out.push_str("- Halt (controlword bit 8) in profile torque and cyclic synchronous torque takes the torque demand to zero; the drive stays in Operation Enabled.\n");
     }

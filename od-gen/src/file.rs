@@ -893,6 +893,7 @@ impl Default for Cia402File {
             torque_modes_halt_zero_torque: false,
             software_limits_off: None,
             software_limits_need_reference: false,
+            software_limits_less_home_offset: false,
             homing_here_while_disabled: false,
             homing_start_while_disabled_error: false,
             homing_here_needs_speed_zero: false,
@@ -1215,6 +1216,10 @@ pub struct Cia402File {
     /// homing run, or at once with an absolute encoder.
     #[serde(default)]
     pub software_limits_need_reference: bool,
+    /// 607Dh is relative to the machine home: the limits a target is compared with are
+    /// 607Dh - 607Ch.
+    #[serde(default)]
+    pub software_limits_less_home_offset: bool,
     /// The current-position homing methods (35, 37) also run while the drive is disabled.
     #[serde(default)]
     pub homing_here_while_disabled: bool,

@@ -2148,6 +2148,8 @@ pub struct Cia402Rules {
     pub software_limits_off: Option<(u16, u8)>,
     /// The software position limits act only after homing or with an absolute encoder.
     pub software_limits_need_reference: bool,
+    /// 607Dh is relative to the machine home: the limits compared are 607Dh - 607Ch.
+    pub software_limits_less_home_offset: bool,
     /// The current-position homing methods (35, 37) also run while the drive is disabled.
     pub homing_here_while_disabled: bool,
     /// A homing start while the drive is disabled is a homing error.
@@ -2477,6 +2479,7 @@ impl Default for Cia402Rules {
             torque_modes_halt_zero_torque: false,
             software_limits_off: None,
             software_limits_need_reference: false,
+            software_limits_less_home_offset: false,
             homing_here_while_disabled: false,
             homing_start_while_disabled_error: false,
             homing_here_needs_speed_zero: false,

@@ -604,6 +604,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             "cia402.software_limits_off",
         )?,
         software_limits_need_reference: f.cia402.software_limits_need_reference,
+        software_limits_less_home_offset: f.cia402.software_limits_less_home_offset,
         homing_here_while_disabled: f.cia402.homing_here_while_disabled,
         homing_start_while_disabled_error: f.cia402.homing_start_while_disabled_error,
         homing_here_needs_speed_zero: f.cia402.homing_here_needs_speed_zero,

@@ -13,7 +13,8 @@
 //! - The Σ-V-SD (§6.8 (2)) limits "when homing is completed" or "an absolute encoder is
 //!   connected": with an incremental encoder the target passes the limit until a homing run
 //!   (method 35, the current position); the standard profile (CiA402 states no such
-//!   condition) limits with an incremental encoder from the start.
+//!   condition) limits with an incremental encoder from the start. Its limits are "relative to
+//!   the machine home position", compared as 607Dh - 607Ch (§4.8 (2)).
 
 use board_sim::plant::{EncoderParams, PlantConfig};
 use board_sim::servo::{axis_config, SimServo, Tuning};
@@ -61,11 +62,16 @@ struct Outcome {
 impl Outcome {
     /// The motor stopped at 607Dh:02 and showed bit 11.
     fn limited(&self) -> Result<(), String> {
-        if (self.end_rev - LIMIT_REV).abs() > AT_REST_REV
-            || self.furthest_rev > LIMIT_REV + AT_REST_REV
+        self.limited_at(LIMIT_REV)
+    }
+
+    /// The motor stopped at `limit_rev` from the start, never went beyond it, and showed bit 11.
+    fn limited_at(&self, limit_rev: f64) -> Result<(), String> {
+        if (self.end_rev - limit_rev).abs() > AT_REST_REV
+            || self.furthest_rev > limit_rev + AT_REST_REV
             || self.statusword & INTERNAL_LIMIT == 0
         {
-            return Err(format!("not limited at {LIMIT_REV} rev: {self:?}"));
+            return Err(format!("not limited at {limit_rev} rev: {self:?}"));
         }
         Ok(())
     }
@@ -93,6 +99,8 @@ struct Setup {
     limits_equal: bool,
     /// A homing run (method 35) before the move.
     home_first: bool,
+    /// 607Ch written before the move, rev (in the profile's position units).
+    home_offset_rev: f64,
 }
 
 /// The drive of `name` as `setup` wants it, before a master opens it.
@@ -179,6 +187,14 @@ fn run(name: &str, setup: Setup) -> Outcome {
                 (sw, position) = cycle(&m, md, &group, (start, HOMING, position)).await;
             }
             assert_ne!(sw & cia402::HOMING_ATTAINED, 0, "{name}: homed {sw:#06x}");
+            for _ in 0..5 {
+                (sw, position) =
+                    cycle(&m, md, &group, (vendor::ENABLE_OPERATION, CSP, position)).await;
+            }
+        }
+        if setup.home_offset_rev != 0.0 {
+            let offset = (setup.home_offset_rev * units_per_rev).round() as i32;
+            sd.sdo_write(0x607C, 0, offset).await.expect("607Ch");
             for _ in 0..5 {
                 (sw, position) =
                     cycle(&m, md, &group, (vendor::ENABLE_OPERATION, CSP, position)).await;
@@ -297,6 +313,21 @@ fn sigma_v_sd_with_an_incremental_encoder_limits_only_after_homing() {
     };
     if let Err(e) = run("sigma-v-sd", homed).limited() {
         panic!("homed: {e}");
+    }
+}
+
+/// Σ-V-SD §4.8 (2): 607Dh is relative to the machine home; a target is compared with
+/// 607Dh - 607Ch. With 607Ch a quarter turn, the limit half a turn on stops the motor a
+/// quarter turn on.
+#[test]
+fn sigma_v_sd_limits_are_corrected_by_the_home_offset() {
+    const OFFSET_REV: f64 = 0.25;
+    let setup = Setup {
+        home_offset_rev: OFFSET_REV,
+        ..Setup::default()
+    };
+    if let Err(e) = run("sigma-v-sd", setup).limited_at(LIMIT_REV - OFFSET_REV) {
+        panic!("607Ch = {OFFSET_REV} rev: {e}");
     }
 }
 

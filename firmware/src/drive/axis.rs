@@ -350,14 +350,8 @@ impl DriveAxis {
             return;
         };
         let units = self.unit_ratios(ram, counts_per_rev, &mut due);
-        let zero_window_off = self.rules.following_error_zero_window_off;
-        self.settings.refresh(
-            ram,
-            self.vars,
-            (&units, self.polarity),
-            zero_window_off,
-            due,
-        );
+        self.settings
+            .refresh(ram, self.vars, (&units, self.polarity), self.rules, due);
         self.settings_due = Groups::NONE;
     }
 
@@ -977,9 +971,8 @@ impl DriveAxis {
         }
         let pol = self.polarity;
         if !due.is_empty() {
-            let zero_window_off = self.rules.following_error_zero_window_off;
             self.settings
-                .refresh(ram, vars, (&units, pol), zero_window_off, due);
+                .refresh(ram, vars, (&units, pol), self.rules, due);
         }
         let rated_nm = self.settings.rated_nm;
         if self.rules.home_offset_added {

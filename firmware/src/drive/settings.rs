@@ -122,7 +122,7 @@ struct Member {
 }
 
 /// The most variables of all groups ([`members`]).
-const MEMBERS: usize = 39;
+const MEMBERS: usize = 40;
 
 /// Every variable each group reads (a variable may serve several groups).
 fn members(vars: &AppVars) -> [Member; MEMBERS] {
@@ -165,6 +165,8 @@ fn members(vars: &AppVars) -> [Member; MEMBERS] {
         m(G::HOMING, vars.homing_timeout, 2),
         m(G::POSITION_LIMITS, vars.software_position_limit_min, 4),
         m(G::POSITION_LIMITS, vars.software_position_limit_max, 4),
+        // Where 607Dh is relative to the machine home.
+        m(G::POSITION_LIMITS, vars.home_offset, 4),
         m(G::FOLLOWING_ERROR, vars.following_error_window, 4),
         m(G::FOLLOWING_ERROR, vars.following_error_timeout, 2),
         unit(u0),
@@ -280,14 +282,14 @@ impl Settings {
     }
 
     /// Reads the `groups` but the option codes from `ram`, converted with `units` and the
-    /// position `polarity`; `zero_window_off`: 6065h = 0 switches the following-error check
-    /// off (a profile rule).
+    /// position `polarity` and the profile's `rules` (6065h = 0 switching the following-error
+    /// check off, 607Dh relative to the machine home).
     pub fn refresh(
         &mut self,
         ram: &[u8],
         vars: &AppVars,
         (units, polarity): (&UnitRatios, Polarity),
-        zero_window_off: bool,
+        rules: &Cia402Rules,
         groups: Groups,
     ) {
         if groups.has(Groups::TORQUE) {
@@ -303,10 +305,13 @@ impl Settings {
             self.refresh_homing(ram, vars, units);
         }
         if groups.has(Groups::POSITION_LIMITS) {
-            self.software_limits = software_limits(ram, vars, units.position, polarity);
+            let less_home_offset = rules.software_limits_less_home_offset;
+            self.software_limits =
+                software_limits(ram, vars, units.position, polarity, less_home_offset);
         }
         if groups.has(Groups::FOLLOWING_ERROR) {
             self.following_error_window = read_u32(ram, vars.following_error_window).map(|w| {
+                let zero_window_off = rules.following_error_zero_window_off;
                 if w == FOLLOWING_ERROR_OFF || (w == 0 && zero_window_off) {
                     FOLLOWING_ERROR_OFF
                 } else {
@@ -418,15 +423,23 @@ fn torque_limits(ram: &[u8], vars: &AppVars, rated_nm: f32) -> Option<(f32, f32)
 }
 
 /// The software position limits 607Dh in drive increments, `None` when disabled (min ≥ max)
-/// or absent.
+/// or absent. `less_home_offset`: 607Dh is relative to the machine home, the limits are
+/// 607Dh - 607Ch (the Σ-V-SD §4.8 (2) "Corrected min. position limit = min. position limit -
+/// home offset").
 fn software_limits(
     ram: &[u8],
     vars: &AppVars,
     ratio: units::Ratio,
     polarity: Polarity,
+    less_home_offset: bool,
 ) -> Option<SoftwareLimits> {
-    let min = read_i32(ram, vars.software_position_limit_min)?;
-    let max = read_i32(ram, vars.software_position_limit_max)?;
+    let offset = if less_home_offset {
+        read_i32(ram, vars.home_offset).unwrap_or(0)
+    } else {
+        0
+    };
+    let min = read_i32(ram, vars.software_position_limit_min)?.saturating_sub(offset);
+    let max = read_i32(ram, vars.software_position_limit_max)?.saturating_sub(offset);
     // With the position polarity the user's minimum is the drive's maximum.
     let (min, max) = if polarity.position {
         (polarity.position(max), polarity.position(min))
@@ -461,6 +474,8 @@ mod tests {
         assert_eq!(of(0x6083), Groups::RAMPS | Groups::HOMING);
         // Both entries of an array (a complete access names only the first).
         assert_eq!(of(0x607D), Groups::POSITION_LIMITS);
+        // Where 607Dh is relative to the machine home.
+        assert_eq!(of(0x607C), Groups::POSITION_LIMITS);
         assert_eq!(of(0x6099), Groups::HOMING);
         assert_eq!(of(0x6065), Groups::FOLLOWING_ERROR);
         // Process values and absent objects are no settings.
