@@ -11,7 +11,10 @@
 //! from every start its figure draws a path from: outside and inside the home switch, and
 //! beyond a home cam so that the search reverses at the limit switch. The home must be found,
 //! the motor must stop on it, 6064h must read 607Ch there, and the statusword must show
-//! 13/12/10 = 0/0/1 before the start, 0/0/0 while searching and 0/1/1 at the end.
+//! 13/12/10 = 0/0/1 before the start, 0/0/0 while searching and 0/1/1 at the end. The path
+//! follows the figure: the first motion in the figure's initial direction (by the switch's
+//! state at the start), never faster than 6099h:01, a search for a switch at 6099h:01, and
+//! the approach onto the home at the zero-search speed 6099h:02.
 //!
 //! Each profile runs the methods its manual lists, as the manual defines them:
 //!
@@ -53,6 +56,12 @@ const POSITION_TOLERANCE_INC: f64 = 60.0;
 const SEARCH_REV_S: f64 = 5.0;
 const ZERO_SEARCH_REV_S: f64 = 1.0;
 const ACCELERATION_REV_S2: f64 = 200.0;
+/// The path checks: a motion counts from this far (rev); speeds within this factor of
+/// 6099h; the approach onto the home is the last this many cycles before the rotor stays
+/// there (at the search speed a quarter of a revolution).
+const PATH_RESOLUTION_REV: f64 = 0.01;
+const SPEED_TOLERANCE: f64 = 1.1;
+const APPROACH_CYCLES: usize = 50;
 /// The longest run: a cam search reversing at a limit, then up to a revolution at the
 /// zero-search speed for the index.
 const MAX_CYCLES: usize = 10_000;
@@ -76,6 +85,12 @@ struct Machine {
 }
 
 impl Machine {
+    /// Whether the home switch or cam is active at `position` (rev).
+    fn on_home_switch(&self, position: f64) -> bool {
+        self.home
+            .is_some_and(|(low, high)| (low..=high).contains(&position))
+    }
+
     fn switches(&self) -> SwitchParams {
         SwitchParams {
             limit_neg_rad: Some(self.negative_limit * TAU),
@@ -116,6 +131,34 @@ struct Figure {
     home: f64,
     /// The run moves (not the current-position methods).
     searches: bool,
+    /// The run looks for a switch first, at the search speed 6099h:01, where it does not start
+    /// on its home switch (methods 1–30).
+    switch_search: bool,
+    /// The direction of the first motion from each start (+1 positive, -1 negative).
+    first_directions: Vec<f64>,
+}
+
+/// The direction a run of base method `base` (1–14, 33, 34) first moves in from `start` on
+/// `machine` (IEC 61800-7-201, homing mode): limit-switch methods towards their switch; the
+/// home-switch methods 3–6 by the switch's state; the cam methods 7–14 positive (7–10) or
+/// negative (11–14) off the cam, towards the edge they look for when they start on it.
+fn first_direction(base: i8, machine: &Machine, start: f64) -> f64 {
+    let on_switch = machine.on_home_switch(start);
+    let (on, off) = match base {
+        1 | 33 => (-1.0, -1.0),
+        2 | 34 => (1.0, 1.0),
+        3 | 4 => (-1.0, 1.0),
+        5 | 6 => (1.0, -1.0),
+        7 | 8 => (-1.0, 1.0),
+        9 | 10 => (1.0, 1.0),
+        11 | 12 => (1.0, -1.0),
+        _ => (-1.0, -1.0),
+    };
+    if on_switch {
+        on
+    } else {
+        off
+    }
 }
 
 /// The CiA402 figure of `method` (IEC 61800-7-201, homing mode).
@@ -137,11 +180,14 @@ fn cia402_figure(method: i8) -> Option<Figure> {
             // The first index pulse in the negative (33) or positive (34) direction.
             let start = 0.3;
             let home = if method == 33 { 0.0 } else { 1.0 };
+            let machine = limits(-FAR, FAR);
             return Some(Figure {
-                machine: limits(-FAR, FAR),
+                machine,
                 starts: vec![start],
                 home,
                 searches: true,
+                switch_search: false,
+                first_directions: vec![first_direction(method, &machine, start)],
             });
         }
         35 | 37 => {
@@ -151,16 +197,23 @@ fn cia402_figure(method: i8) -> Option<Figure> {
                 starts: vec![0.3],
                 home: 0.3,
                 searches: false,
+                switch_search: false,
+                first_directions: vec![0.0],
             });
         }
         _ => return None,
     };
     let home = |index: Home| edge_home.unwrap_or(index);
-    let figure = |machine, starts: &[f64], edge: f64, index: Home| Figure {
+    let figure = |machine: Machine, starts: &[f64], edge: f64, index: Home| Figure {
         machine,
         starts: starts.to_vec(),
         home: home(index).from(edge),
         searches: true,
+        switch_search: true,
+        first_directions: starts
+            .iter()
+            .map(|&start| first_direction(base, &machine, start))
+            .collect(),
     };
     let positive_home_switch = Machine {
         home: Some((LOW, FAR * 10.0)),
@@ -453,6 +506,70 @@ fn check_homed(
     Ok(())
 }
 
+/// What is wrong with the path of a run from `start` that homed, if anything: the first motion
+/// in `direction`; never faster than the search speed 6099h:01, which a search for a switch
+/// reaches (a run that starts on its home switch has found it and looks for the edge at the
+/// zero-search speed); the last stretch onto the home at the zero-search speed 6099h:02 (the
+/// figures' slow approach to the edge or index pulse).
+fn check_path(
+    samples: &[Sample],
+    figure: &Figure,
+    start: f64,
+    direction: f64,
+) -> Result<(), String> {
+    if !figure.searches {
+        return Ok(());
+    }
+    let moved = samples
+        .iter()
+        .find(|s| (s.revolutions - start).abs() > PATH_RESOLUTION_REV)
+        .ok_or("never moved")?;
+    if (moved.revolutions - start).signum() != direction {
+        return Err(format!(
+            "first moved to {:.3} rev, the figure starts {}",
+            moved.revolutions,
+            if direction > 0.0 {
+                "positive"
+            } else {
+                "negative"
+            }
+        ));
+    }
+    let speeds: Vec<f64> = samples
+        .windows(2)
+        .map(|w| (w[1].revolutions - w[0].revolutions) * 1e9 / CYCLE_NS as f64)
+        .collect();
+    let peak = speeds.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if peak > SEARCH_REV_S * SPEED_TOLERANCE {
+        return Err(format!(
+            "{peak:.2} rev/s, faster than 6099h:01 ({SEARCH_REV_S} rev/s)"
+        ));
+    }
+    let switch_search = figure.switch_search && !figure.machine.on_home_switch(start);
+    if switch_search && peak < SEARCH_REV_S / SPEED_TOLERANCE {
+        return Err(format!(
+            "searched at {peak:.2} rev/s, not 6099h:01 ({SEARCH_REV_S} rev/s)"
+        ));
+    }
+    // The arrival: from here on the rotor stays at the home.
+    let arrival = speeds.len()
+        - samples[1..]
+            .iter()
+            .rev()
+            .take_while(|s| (s.revolutions - figure.home).abs() <= PATH_RESOLUTION_REV)
+            .count();
+    let approach = &speeds[arrival.saturating_sub(APPROACH_CYCLES)..arrival];
+    if let Some(fast) = approach
+        .iter()
+        .find(|v| v.abs() > ZERO_SEARCH_REV_S * SPEED_TOLERANCE)
+    {
+        return Err(format!(
+            "approached the home at {fast:.2} rev/s, not 6099h:02 ({ZERO_SEARCH_REV_S} rev/s)"
+        ));
+    }
+    Ok(())
+}
+
 /// A method the manual does not list: the run ends at once in a homing error at rest.
 fn check_refused(samples: &[Sample], start: f64) -> Result<(), String> {
     let last = samples.last().ok_or("no samples")?;
@@ -499,10 +616,13 @@ fn every_method(manual: Manual) {
     block_on(async {
         for &method in &manual.methods {
             let figure = manual.figure(method);
-            for &start in &figure.starts {
+            for (&start, &direction) in figure.starts.iter().zip(&figure.first_directions) {
                 let result = home(&manual, &profile, method, figure.machine, start, MAX_CYCLES)
                     .await
-                    .and_then(|samples| check_homed(&samples, &figure, (per_unit, tolerance)));
+                    .and_then(|samples| {
+                        check_homed(&samples, &figure, (per_unit, tolerance))?;
+                        check_path(&samples, &figure, start, direction)
+                    });
                 if let Err(e) = result {
                     failures.push(format!("method {method} from {start:.1} rev: {e}"));
                 }
