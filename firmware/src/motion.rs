@@ -621,9 +621,10 @@ mod tests {
 
     #[test]
     fn homing_target_reached_compares_the_deviation_in_user_units() {
-        // 13 increments per unit, window 0 (the GHA-E's default): the motor one increment short
-        // of a home on a unit boundary is less than a unit off, so the target is reached; a
-        // whole unit off, it is not.
+        // 13 increments per unit, window 0 (the GHA-E's default): the deviation rounds to the
+        // nearest unit, as 6064h does, so the motor up to six increments (less than half a
+        // unit) off a home on a unit boundary has reached it (6064h reads the home); seven or
+        // a whole unit off, it has not.
         let home = 13 * 1000;
         let homing = |actual_position| Inputs {
             controlword: ENABLED | homing::HOMING_START,
@@ -640,7 +641,12 @@ mod tests {
             ..inputs(ENABLED, 0)
         };
         let done = homing::HOMING_ATTAINED | TARGET_REACHED;
-        for (actual, reached) in [(home - 1, true), (home + 12, true), (home - 13, false)] {
+        for (actual, reached) in [
+            (home - 6, true),
+            (home + 6, true),
+            (home + 7, false),
+            (home - 13, false),
+        ] {
             let mut m = ProfileModes::new();
             // Take over at the home, then start homing on the current position.
             m.step(Mode::Homing, &homing(home), CIA402, 0.0, DT);

@@ -150,7 +150,8 @@ impl Ratio {
         self.numerator == self.denominator
     }
 
-    /// A position in user units as increments, saturating at the i64 range.
+    /// A position in user units as increments (the nearest, halves away from zero), saturating
+    /// at the i64 range.
     #[inline]
     pub fn position_to_internal(self, user: i64) -> i64 {
         if self.is_one() {
@@ -159,7 +160,9 @@ impl Ratio {
         scale(user, self.numerator, self.denominator)
     }
 
-    /// Increments as a position in user units (rounded toward zero), saturating.
+    /// Increments as a position in user units (the nearest, halves away from zero),
+    /// saturating. With at least one increment per unit this is the inverse of
+    /// [`Self::position_to_internal`]: a target of `u` units, reached, reads back as `u`.
     #[inline]
     pub fn position_from_internal(self, increments: i64) -> i64 {
         if self.is_one() {
@@ -169,16 +172,35 @@ impl Ratio {
     }
 }
 
-/// `value × multiplier / divisor` (`divisor` > 0) rounded toward zero, saturating at the i64
-/// range: in 64 bits when the product fits (the common case, a short library division on the
-/// Cortex-M4), else in 128.
+/// `value × multiplier / divisor` (`divisor` > 0) rounded to the nearest (halves away from
+/// zero), saturating at the i64 range: in 64 bits when the product fits (the common case, a
+/// short library division on the Cortex-M4), else in 128. Rounding to the nearest both ways
+/// makes a position survive the round trip through the other unit (truncating both ways
+/// loses a unit whenever the increments of a target have a fraction).
 fn scale(value: i64, multiplier: u64, divisor: u64) -> i64 {
     let narrow = i64::try_from(multiplier)
         .ok()
         .zip(i64::try_from(divisor).ok())
-        .and_then(|(m, d)| value.checked_mul(m).map(|p| p / d));
+        .and_then(|(m, d)| {
+            let product = value.checked_mul(m)?;
+            let (quotient, remainder) = (product / d, product % d);
+            // |remainder| < d: twice it fits when d ≤ i64::MAX / 2, else use 128 bits.
+            let twice = remainder.unsigned_abs().checked_mul(2)?;
+            Some(if twice >= d.unsigned_abs() {
+                quotient + product.signum()
+            } else {
+                quotient
+            })
+        });
     narrow.unwrap_or_else(|| {
-        let wide = i128::from(value) * i128::from(multiplier) / i128::from(divisor);
+        let (m, d) = (i128::from(multiplier), i128::from(divisor));
+        let product = i128::from(value) * m;
+        let (quotient, remainder) = (product / d, product % d);
+        let wide = if remainder.unsigned_abs() * 2 >= d.unsigned_abs() {
+            quotient + product.signum()
+        } else {
+            quotient
+        };
         i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
     })
 }
@@ -299,7 +321,12 @@ mod tests {
         let r = Ratio::new(10_000, 1);
         assert_eq!(r.position_to_internal(3), 30_000);
         assert_eq!(r.position_from_internal(30_009), 3);
-        assert_eq!(r.position_from_internal(-30_009), -3, "toward zero");
+        assert_eq!(r.position_from_internal(-30_009), -3);
+        // The nearest unit, halves away from zero.
+        assert_eq!(r.position_from_internal(34_999), 3);
+        assert_eq!(r.position_from_internal(35_000), 4);
+        assert_eq!(r.position_from_internal(-35_000), -4);
+        assert_eq!(r.position_from_internal(-34_999), -3);
         assert_eq!(r.scale().velocity_to_internal(2.5), 25_000.0);
         assert_eq!(r.scale().velocity_from_internal(25_000.0), 2.5);
         // 1 user unit = 1/4 increment (numerator < denominator).
@@ -309,6 +336,17 @@ mod tests {
         // 0.1 rpm per velocity unit at 2^17 increments/rev: × 131072 / 600.
         let rpm = Ratio::new(1 << 17, 1).times(Ratio::new(1, 600));
         assert_eq!(rpm.scale().velocity_to_internal(600.0), 131_072.0);
+    }
+
+    #[test]
+    fn a_target_reads_back_as_itself_through_a_fractional_ratio() {
+        // The GHA-E's 6091h = 131072 / 10000: 13.1072 increments per instruction unit.
+        let r = Ratio::new(131_072, 10_000);
+        for user in (-100_000..100_000).step_by(7) {
+            assert_eq!(r.position_from_internal(r.position_to_internal(user)), user);
+        }
+        assert_eq!(r.position_to_internal(12_345), 161_808, "161 808.384");
+        assert_eq!(r.position_to_internal(-1), -13, "-13.1072");
     }
 
     #[test]
@@ -332,10 +370,11 @@ mod tests {
         assert_eq!(r.position_to_internal(1 << 40), 1 << 50);
         assert_eq!(r.position_to_internal(-(1 << 40)), -(1 << 50));
         assert_eq!(r.position_from_internal(1 << 50), 1 << 40);
-        // Near the boundary both ways agree with the exact quotient, rounded toward zero.
+        // Near the boundary both ways agree with the exact quotient, rounded to the nearest:
+        // i64::MAX = 3k + 1, so MAX / 3 = k + 1/3 and 2 MAX / 3 = 2k + 2/3.
         let third = Ratio::new(i64::MAX as u64, 3);
         assert_eq!(third.position_to_internal(1), i64::MAX / 3);
-        assert_eq!(third.position_to_internal(-2), -(i64::MAX / 3 * 2));
+        assert_eq!(third.position_to_internal(-2), -(i64::MAX / 3 * 2) - 1);
     }
 
     #[test]
@@ -370,7 +409,9 @@ mod tests {
         let r = Ratio::new(1000, 1);
         // Actual 5 000 000 increments = 5000 units; a target of 5010 units is 10 units ahead.
         assert_eq!(target_position(5010, 5_000_000, r), 5_010_000);
-        assert_eq!(actual_position(5_000_999, r), 5000);
+        // The nearest unit.
+        assert_eq!(actual_position(5_000_499, r), 5000);
+        assert_eq!(actual_position(5_000_500, r), 5001);
         // Across the wrap of the 32-bit user object.
         let near = (i64::from(i32::MAX) - 1) * 1000;
         assert_eq!(target_position(i32::MIN, near, r), near + 2000);
