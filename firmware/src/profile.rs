@@ -170,6 +170,10 @@ pub struct AppVars {
     /// `[units] velocity_window` (the velocity factor unless the profile counts them apart,
     /// e.g. in whole rpm).
     pub velocity_window_factor: Factor,
+    /// ‰ of the rated torque 6076h per unit of the torque objects (6071h, 6072h, 6074h,
+    /// 6077h, 6087h, 60B2h, 60E0h, 60E1h): `[units] torque` (1, CiA402's 0.1 %, unless the
+    /// profile has a torque unit, e.g. the Σ-V-SD's 2304h).
+    pub torque_factor: Factor,
 }
 
 /// What an acceleration object (6083h–6085h, 609Ah) counts.
@@ -240,6 +244,8 @@ pub struct UnitRatios {
     pub acceleration: AccelerationRatio,
     /// Increments/s per unit of 606Dh/606Fh.
     pub velocity_window: Scale,
+    /// ‰ of the rated torque per torque unit.
+    pub torque: Scale,
 }
 
 /// Whether two arrays of words are equal, compared word by word: a derived `==` of an array
@@ -273,7 +279,7 @@ impl Factor {
 impl AppVars {
     /// The OD RAM entries (offset, length) the unit factors read (e.g. 6091h:01/02): the
     /// conversions change only when one of them does.
-    pub const fn unit_factor_objects(&self) -> [Option<(u16, u8)>; 8] {
+    pub const fn unit_factor_objects(&self) -> [Option<(u16, u8)>; 10] {
         let [p0, p1] = self.position_factor.objects();
         let [v0, v1] = self.velocity_factor.objects();
         let [a0, a1] = match &self.acceleration_unit {
@@ -281,7 +287,8 @@ impl AppVars {
             AccelerationUnit::VelocityPerSecond | AccelerationUnit::MsToRpm(_) => [None, None],
         };
         let [w0, w1] = self.velocity_window_factor.objects();
-        [p0, p1, v0, v1, a0, a1, w0, w1]
+        let [t0, t1] = self.torque_factor.objects();
+        [p0, p1, v0, v1, a0, a1, w0, w1, t0, t1]
     }
 
     /// The axis' unit conversions from the factors' objects in `ram` now, with the encoder's
@@ -296,6 +303,7 @@ impl AppVars {
                 .velocity_window_factor
                 .ratio(ram, counts_per_rev)
                 .scale(),
+            torque: self.torque_factor.ratio(ram, counts_per_rev).scale(),
         }
     }
 }
@@ -462,6 +470,7 @@ impl AppVars {
         velocity_factor: Factor::ONE,
         acceleration_unit: AccelerationUnit::VelocityPerSecond,
         velocity_window_factor: Factor::ONE,
+        torque_factor: Factor::ONE,
     };
 }
 
@@ -617,6 +626,8 @@ pub struct UnitRanges {
     pub velocity: Option<RatioRange>,
     /// The acceleration factor's range (its numerator/denominator, before its scale).
     pub acceleration: Option<RatioRange>,
+    /// [`AppVars::torque_factor`]'s range (before its scale).
+    pub torque: Option<RatioRange>,
 }
 
 /// A manufacturer-specific statusword bit (8, 14 or 15) that shows a condition, and its value

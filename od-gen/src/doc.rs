@@ -778,8 +778,15 @@ fn units(out: &mut String, p: &Profile) {
             format!("increments/s = value × {}", factor(&p.units.velocity)),
         ],
         vec![
-            "torque (6071h, 6077h)".to_string(),
-            "0.1 % of the motor rated torque 6076h".to_string(),
+            "torque (6071h, 6077h, ...)".to_string(),
+            if p.units.torque == Factor::ONE {
+                "0.1 % of the motor rated torque 6076h".to_string()
+            } else {
+                format!(
+                    "‰ of the motor rated torque 6076h = value × {}",
+                    factor(&p.units.torque)
+                )
+            },
         ],
     ];
     md_table(out, &["object", "conversion (read every cycle)"], &rows);
@@ -1168,6 +1175,7 @@ fn cia402_rules(out: &mut String, p: &Profile) {
             range("position factor", u.position),
             range("velocity factor", u.velocity),
             range("acceleration factor", u.acceleration),
+            range("torque factor", u.torque),
         ]
         .into_iter()
         .flatten()

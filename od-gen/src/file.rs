@@ -301,6 +301,11 @@ pub struct UnitsFile {
     /// velocity unit; a factor table (e.g. whole rpm: the SDV3-E's, the RSE's).
     #[serde(default)]
     pub velocity_window: Option<toml::Value>,
+    /// ‰ of the rated torque per unit of the torque objects (6071h, 6072h, 6074h, 6077h,
+    /// 6087h, 60B2h, 60E0h, 60E1h): absent = 1 (CiA402's 0.1 %); a factor table (the
+    /// Σ-V-SD's 2304h).
+    #[serde(default)]
+    pub torque: Option<toml::Value>,
 }
 
 /// `[storage]`: what the parameter storage (1010h/1011h) stores beyond the default rule (RAM,
@@ -1258,6 +1263,9 @@ pub struct UnitRangesFile {
     /// `[units] acceleration`'s range (of its numerator/denominator, before its scale).
     #[serde(default)]
     pub acceleration: Option<RatioRangeFile>,
+    /// `[units] torque`'s range (of its numerator/denominator, before its scale).
+    #[serde(default)]
+    pub torque: Option<RatioRangeFile>,
 }
 
 /// A range of ratios: `min` and `max` as `[numerator, denominator]`, the ends included or not.

@@ -1576,6 +1576,8 @@ pub struct Units {
     pub acceleration: Acceleration,
     /// Increments/s per unit of the velocity window 606Dh and threshold 606Fh.
     pub velocity_window: Factor,
+    /// ‰ of the rated torque per unit of the torque objects.
+    pub torque: Factor,
 }
 
 /// What an acceleration object (6083h–6085h, 609Ah) counts (`[units] acceleration`).
@@ -2176,6 +2178,8 @@ pub struct UnitRanges {
     pub velocity: Option<RatioRange>,
     /// The acceleration factor's range (before its scale).
     pub acceleration: Option<RatioRange>,
+    /// The torque factor's range (before its scale).
+    pub torque: Option<RatioRange>,
 }
 
 /// The range a unit factor's ratio may have (the firmware's own type).

@@ -691,6 +691,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             velocity: Factor::ONE,
             acceleration: crate::model::Acceleration::VelocityPerSecond,
             velocity_window: Factor::ONE,
+            torque: Factor::ONE,
         },
         decisions: f
             .decisions
@@ -806,11 +807,16 @@ fn units(u: &crate::file::UnitsFile, p: &Profile) -> Result<Units, Fault> {
         None => velocity,
         Some(v) => factor(v, p, "units.velocity_window")?,
     };
+    let torque = match &u.torque {
+        None => Factor::ONE,
+        Some(v) => factor(v, p, "units.torque")?,
+    };
     Ok(Units {
         position,
         velocity,
         acceleration,
         velocity_window,
+        torque,
     })
 }
 
@@ -1282,6 +1288,7 @@ fn unit_ranges(
         position: range(u.position)?,
         velocity: range(u.velocity)?,
         acceleration: range(u.acceleration)?,
+        torque: range(u.torque)?,
     })
 }
 

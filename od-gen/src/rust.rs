@@ -526,6 +526,11 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                 "                velocity_window_factor: {},",
                 factor(p, &layout, &p.units.velocity_window, axis)
             );
+            let _ = writeln!(
+                out,
+                "                torque_factor: {},",
+                factor(p, &layout, &p.units.torque, axis)
+            );
             let _ = writeln!(out, "            }},");
         }
         let _ = writeln!(out, "        ],");
@@ -721,11 +726,12 @@ fn module(out: &mut String, p: &Profile, target: &Target) {
                     })
                 };
                 format!(
-                    "Some({drive}::profile::UnitRanges {{ error: {}, position: {}, velocity: {}, acceleration: {} }})",
+                    "Some({drive}::profile::UnitRanges {{ error: {}, position: {}, velocity: {}, acceleration: {}, torque: {} }})",
                     fault_report(&u.error),
                     range(u.position),
                     range(u.velocity),
-                    range(u.acceleration)
+                    range(u.acceleration),
+                    range(u.torque)
                 )
             })
         );

@@ -3,7 +3,9 @@
 //! × 6091h:01 / 6091h:02) and velocities in instruction units/s; with the polarity 607Eh = 224
 //! the same objects turn the motor the other way. Commanded by ethercrab over
 //! PDOs with DC SYNC0 (the GHA-E runs in DC mode only), the simulated motor turns by the
-//! converted amount and 6064h reads back in user units.
+//! converted amount and 6064h reads back in user units. The Σ-V-SD's user units 2301h–2304h
+//! take effect on 2300h, within their ranges (else A.A20), the torque unit 2304h on every
+//! torque object.
 
 use board_sim::Segment;
 use ethercrab::MainDevice;
@@ -247,7 +249,7 @@ fn sigma_v_sd_user_units_take_effect_on_2300h() {
     });
 }
 
-/// Σ-V-SD §4.5 (3)-(5): a user unit outside its "available value range" raises alarm A.A20
+/// Σ-V-SD §4.5 (3)-(6): a user unit outside its "available value range" raises alarm A.A20
 /// when 2300h = 1 would make it take effect (603Fh 0A20h, EMCY FF00h with the alarm code and
 /// the axis number, §2.7); the unit in force stays; a fault reset does not clear it (the
 /// profile's decision: it needs corrected units and 2300h, or a power cycle). Inside the range,
@@ -265,14 +267,16 @@ fn sigma_v_sd_user_units_outside_their_range_raise_a_a20() {
         .find(|a| a.display == "A.A20")
         .expect("alarm A.A20");
     // (object, numerator, in range): 2301h 1/4096 < N/D < 4096; 2302h 1/128 <= N/D <= 524288;
-    // 2303h 1/128 <= N/D <= 16384.
-    let cases: [(u16, u32, bool); 6] = [
+    // 2303h 1/128 <= N/D <= 16384; 2304h 1/256 <= N/D <= 1 (its denominator 10 by default).
+    let cases: [(u16, u32, bool); 8] = [
         (0x2301, 4095, true),
         (0x2301, 4096, false),
         (0x2302, 524_288, true),
         (0x2302, 524_289, false),
         (0x2303, 16_384, true),
         (0x2303, 16_385, false),
+        (0x2304, 10, true),
+        (0x2304, 11, false),
     ];
     for (object, numerator, inside) in cases {
         block_on(async {
@@ -372,4 +376,64 @@ fn sigma_v_sd_stored_user_units_outside_their_range_raise_a_a20_at_power_on() {
         assert_ne!(sw & FAULT, 0, "A.A20 from power-on: {sw:#06x}");
         assert_eq!(code, a_a20.error_code, "603Fh");
     });
+}
+
+/// Σ-V-SD §1.2.3 / §4.5 (6): 1 Trq. unit = 2304h:01 / 2304h:02 % of the rated torque (default
+/// 1/10 = 0.1 %), for every torque object (6071h, 6077h, 60E0h, ...), in force after 2300h = 1.
+/// With 1/1 (1 %) a target 6071h = 20 gives the torque 6071h = 200 gives at the default
+/// (20 % of the rated 1.27 N·m on a locked rotor), 6077h reads it in the same unit, and a
+/// positive torque limit 60E0h = 10 holds it at 10 %.
+#[test]
+fn sigma_v_sd_torque_user_unit_2304h_scales_every_torque_object() {
+    const CST: i8 = 10;
+    /// 6076h of the Σ-V-SD profile, N·m.
+    const RATED_NM: f64 = 1.27;
+    // 2304h:02 with 2304h:01 = 1 (None: the default 1/10).
+    let run = |per_cent_denominator: Option<u32>, target: i16, limit: Option<i16>| {
+        block_on(async move {
+            let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+            tokio::task::spawn_local(transport);
+            let md: &MainDevice<'_> = &m.maindevice;
+            let mut setup = Vec::new();
+            if let Some(denominator) = per_cent_denominator {
+                // In PREOP, Switch On Disabled: 2300h = 1 puts the unit in force.
+                setup.extend([
+                    Sdo::U32(0x2304, 1, 1),
+                    Sdo::U32(0x2304, 2, denominator),
+                    Sdo::U32(0x2300, 0, 1),
+                ]);
+            }
+            let group = vendor::into_op_dc_velocity(&m, md, (0, &setup), CST, CYCLE_NS).await;
+            m.shared.segment().drives_mut()[0].servos[0]
+                .plant
+                .set_driven_speed(Some(0.0));
+            let sd = group.subdevice(md, 0).expect("drive");
+            if let Some(limit) = limit {
+                sd.sdo_write(0x60E0, 0, limit as u16).await.expect("60E0h");
+            }
+            sd.sdo_write(0x6071, 0, target).await.expect("6071h");
+            for cw in vendor::enable_sequence(20).chain([ENABLE_OPERATION; 100]) {
+                vendor::exchange_dc_command(&m, md, &group, (cw, CST, 0), CYCLE_NS).await;
+            }
+            let actual: i16 = sd.sdo_read(0x6077, 0).await.expect("6077h");
+            let torque_nm = m.shared.segment().drives()[0].servos[0]
+                .plant
+                .electromagnetic_torque_nm();
+            (actual, torque_nm)
+        })
+    };
+    let check = |what: &str, (actual, torque_nm): (i16, f64), object: i16, per_cent: f64| {
+        let expected_nm = per_cent / 100.0 * RATED_NM;
+        assert!(
+            (torque_nm - expected_nm).abs() < 0.03 * expected_nm,
+            "{what}: {torque_nm:.4} N·m, {expected_nm:.4} expected"
+        );
+        assert!(
+            (actual - object).abs() <= 1 + object / 50,
+            "{what}: 6077h = {actual}, {object} expected"
+        );
+    };
+    check("0.1 %, 6071h = 200", run(None, 200, None), 200, 20.0);
+    check("1 %, 6071h = 20", run(Some(1), 20, None), 20, 20.0);
+    check("1 %, 60E0h = 10", run(Some(1), 30, Some(10)), 10, 10.0);
 }

@@ -101,6 +101,11 @@ impl Scale {
     pub fn velocity_from_internal(self, increments_per_s: f32) -> f32 {
         increments_per_s * self.from_internal
     }
+
+    /// Internal units per user unit (numerator / denominator).
+    pub fn factor(self) -> f32 {
+        self.to_internal
+    }
 }
 
 impl Ratio {

@@ -444,7 +444,8 @@ impl DriveAxis {
         };
         let all_inside = inside(ranges.position, &self.vars.position_factor)
             && inside(ranges.velocity, &self.vars.velocity_factor)
-            && acceleration;
+            && acceleration
+            && inside(ranges.torque, &self.vars.torque_factor);
         (!all_inside).then_some(ranges.error)
     }
 
@@ -975,6 +976,8 @@ impl DriveAxis {
                 .refresh(ram, vars, (&units, pol), self.rules, due);
         }
         let rated_nm = self.settings.rated_nm;
+        // The torque objects' unit.
+        let object_rated_nm = self.settings.object_rated_nm;
         if self.rules.home_offset_added {
             // The GHA-E's 6064h = position from the home + 607Ch, before homing too and at once
             // when 607Ch changes: the offset is part of the drive positions' shift, so every
@@ -999,7 +1002,7 @@ impl DriveAxis {
         };
         let torque_in = |at| {
             let permille = read_bytes::<2>(ram, at).map_or(0, i16::from_le_bytes);
-            units::torque_from_permille(pol.torque(permille), rated_nm)
+            units::torque_from_permille(pol.torque(permille), object_rated_nm)
         };
         // Only the targets the mode takes are read (each read and conversion costs).
         let used = mode.targets_used();
@@ -1363,7 +1366,7 @@ impl DriveAxis {
                 velocity_ratio.velocity_from_internal(v),
             ))
         };
-        let torque_out = |t: f32| pol.torque(units::torque_to_permille(t, rated_nm));
+        let torque_out = |t: f32| pol.torque(units::torque_to_permille(t, object_rated_nm));
         write_bytes(
             ram,
             vars.position_demand_value,

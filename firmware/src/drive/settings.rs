@@ -60,7 +60,8 @@ impl Groups {
     pub const ALL: Self = Self(u8::MAX);
     /// The groups whose values are converted with the unit factors.
     pub const UNIT_DEPENDENT: Self = Self(
-        Self::RAMPS.0
+        Self::TORQUE.0
+            | Self::RAMPS.0
             | Self::WINDOWS.0
             | Self::HOMING.0
             | Self::POSITION_LIMITS.0
@@ -122,7 +123,7 @@ struct Member {
 }
 
 /// The most variables of all groups ([`members`]).
-const MEMBERS: usize = 40;
+const MEMBERS: usize = 42;
 
 /// Every variable each group reads (a variable may serve several groups).
 fn members(vars: &AppVars) -> [Member; MEMBERS] {
@@ -132,7 +133,7 @@ fn members(vars: &AppVars) -> [Member; MEMBERS] {
         at: o.map(|(at, _)| at),
         len: o.map_or(0, |(_, len)| u16::from(len)),
     };
-    let [u0, u1, u2, u3, u4, u5, u6, u7] = vars.unit_factor_objects();
+    let [u0, u1, u2, u3, u4, u5, u6, u7, u8, u9] = vars.unit_factor_objects();
     use Groups as G;
     [
         m(G::OPTIONS, vars.quick_stop_option_code, 2),
@@ -177,6 +178,8 @@ fn members(vars: &AppVars) -> [Member; MEMBERS] {
         unit(u5),
         unit(u6),
         unit(u7),
+        unit(u8),
+        unit(u9),
     ]
 }
 
@@ -196,6 +199,9 @@ pub(super) struct Settings {
     pub reactions: Reactions,
     /// 6076h, N·m.
     pub rated_nm: f32,
+    /// The rated torque in the torque objects' unit: a torque object counts ‰ of this
+    /// (6076h × the torque unit's ‰ per unit; 6076h with CiA402's 0.1 %).
+    pub object_rated_nm: f32,
     /// 6072h with 60E0h/60E1h (positive, negative magnitudes in the objects' sense, N·m):
     /// the lower of the general and the direction's limit; `None` without any of them.
     pub torque_limits: Option<(f32, f32)>,
@@ -234,6 +240,7 @@ impl Settings {
     pub const UNREAD: Self = Self {
         reactions: Reactions::NONE,
         rated_nm: 1.0,
+        object_rated_nm: 1.0,
         torque_limits: None,
         torque_slope: 0.0,
         max_motor_speed: None,
@@ -293,7 +300,7 @@ impl Settings {
         groups: Groups,
     ) {
         if groups.has(Groups::TORQUE) {
-            self.refresh_torque(ram, vars);
+            self.refresh_torque(ram, vars, units);
         }
         if groups.has(Groups::RAMPS) {
             self.refresh_ramps(ram, vars, units);
@@ -324,12 +331,15 @@ impl Settings {
         }
     }
 
-    fn refresh_torque(&mut self, ram: &[u8], vars: &AppVars) {
+    fn refresh_torque(&mut self, ram: &[u8], vars: &AppVars, units: &UnitRatios) {
         let rated_nm = units::rated_torque_nm(read_u32(ram, vars.motor_rated_torque));
         self.rated_nm = rated_nm;
-        self.torque_limits = torque_limits(ram, vars, rated_nm);
-        let slope_permille = read_u32(ram, vars.torque_slope).unwrap_or(0);
-        self.torque_slope = units::torque_from_permille_f32(slope_permille as f32, rated_nm);
+        // The torque objects count ‰ of this (the rated torque in their unit).
+        let object_rated_nm = rated_nm * units.torque.factor();
+        self.object_rated_nm = object_rated_nm;
+        self.torque_limits = torque_limits(ram, vars, object_rated_nm);
+        let slope = read_u32(ram, vars.torque_slope).unwrap_or(0);
+        self.torque_slope = units::torque_from_permille_f32(slope as f32, object_rated_nm);
     }
 
     fn refresh_ramps(&mut self, ram: &[u8], vars: &AppVars, units: &UnitRatios) {
