@@ -568,6 +568,13 @@ fn synchronisation(out: &mut String, p: &Profile) {
                 .map_or("—".into(), |b| format!("byte {b}")),
         ],
         vec![
+            "Emergency of a motor fault".into(),
+            p.emcy.motor_fault_code.map_or(
+                "its 603Fh code".into(),
+                |(code, byte)| format!("{} with the 603Fh code in bytes {byte}-{}", hex16(code), byte + 1),
+            ),
+        ],
+        vec![
             "Emergency of an AL error".into(),
             format!(
                 "{} [state before, AL status code, state after, 0]",

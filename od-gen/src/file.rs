@@ -715,6 +715,16 @@ pub struct EmcyFile {
     /// (1, 2, ...) a drive error belongs to (the Σ-V-SD's byte 7); none by default.
     #[serde(default)]
     pub axis_number_byte: Option<u8>,
+    /// The emergency code of every motor fault given by its 603Fh code (`[motor_faults]`
+    /// codes, not alarms): the 603Fh code then travels in the manufacturer field from
+    /// `motor_fault_code_byte` on (little-endian; the Σ-V-SD's FF00h with the code in bytes
+    /// 4–5). None: the 603Fh code is the emergency code (CiA402).
+    #[serde(default)]
+    pub motor_fault_code: Option<u16>,
+    /// The first of the two EMCY bytes (3–6) that carry a motor fault's 603Fh code under
+    /// `motor_fault_code`.
+    #[serde(default)]
+    pub motor_fault_code_byte: Option<u8>,
 }
 
 fn cia301() -> String {
@@ -734,6 +744,8 @@ impl Default for EmcyFile {
             error_register: cia301(),
             al_error_code: ESM_TRANSITION_EMCY,
             axis_number_byte: None,
+            motor_fault_code: None,
+            motor_fault_code_byte: None,
         }
     }
 }

@@ -1340,6 +1340,9 @@ pub struct EmcyRules {
     pub al_error_code: u16,
     /// The EMCY byte (3–7) that carries the axis number of a drive error.
     pub axis_number_byte: Option<u8>,
+    /// The emergency code of every motor fault given by its 603Fh code, and the first EMCY
+    /// byte (3–6) of the two that carry that 603Fh code (`[emcy] motor_fault_code`).
+    pub motor_fault_code: Option<(u16, u8)>,
 }
 
 /// EtherCAT state machine rules of a profile (`[esm]`).

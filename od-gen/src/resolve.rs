@@ -293,6 +293,28 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             }
             b => b,
         },
+        motor_fault_code: match (f.emcy.motor_fault_code, f.emcy.motor_fault_code_byte) {
+            (None, None) => None,
+            (Some(code), Some(byte))
+                if code != 0
+                    && (*EMCY_DATA_BYTES.start()..*EMCY_DATA_BYTES.end()).contains(&byte)
+                    && f.emcy
+                        .axis_number_byte
+                        .is_none_or(|a| a != byte && a != byte + 1) =>
+            {
+                Some((code, byte))
+            }
+            _ => {
+                return Err(fault(
+                    "emcy.motor_fault_code",
+                    Invalid::Value(
+                        "a code other than 0x0000 with motor_fault_code_byte 3 to 6, clear of \
+                         axis_number_byte"
+                            .into(),
+                    ),
+                ))
+            }
+        },
     };
     let kind = match f.kind.as_deref() {
         None => ProfileKind::Drive,
@@ -304,7 +326,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         })?,
     };
     let motor_faults = match kind {
-        ProfileKind::Drive => motor_faults(&f.motor_faults, &alarms)?,
+        ProfileKind::Drive => motor_faults(&f.motor_faults, &alarms, emcy.motor_fault_code)?,
         ProfileKind::Device if f.motor_faults.is_empty() => {
             [MotorFaultCode::default(); MOTOR_FAULT_COUNT]
         }
@@ -1224,9 +1246,12 @@ fn alarms(f: &ProfileFile) -> Result<Vec<Alarm>, Fault> {
 /// code, or an alarm's display (its 603Fh code and EMCY bytes). Unknown names are reported
 /// first (the first in key order), then every missing name at once. Zero codes are checked in
 /// [`crate::validate`].
+/// `[motor_faults]`; `as_emcy`: the emergency code every fault given by its 603Fh code is sent
+/// with, and the EMCY byte its 603Fh code goes to (`[emcy] motor_fault_code`).
 fn motor_faults(
     map: &BTreeMap<String, MotorFaultFile>,
     alarms: &[Alarm],
+    as_emcy: Option<(u16, u8)>,
 ) -> Result<[MotorFaultCode; MOTOR_FAULT_COUNT], Fault> {
     if let Some(name) = map
         .keys()
@@ -1250,6 +1275,16 @@ fn motor_faults(
             None => MotorFaultCode::default(),
             Some(r) => fault_report(r, alarms, &format!("motor_faults.{name}"))?,
         };
+        if let (Some((emcy_code, byte)), MotorFaultCode { alarm: None, .. }) = (as_emcy, *code) {
+            // The manufacturer field is EMCY bytes 3-7; resolve checked byte 3..=6.
+            let at = usize::from(byte - EMCY_DATA_BYTES.start());
+            let mut data = [0u8; 5];
+            data[at..at + 2].copy_from_slice(&code.error_code.to_le_bytes());
+            code.emcy = EmcyCode {
+                code: emcy_code,
+                data,
+            };
+        }
     }
     Ok(codes)
 }

@@ -1729,6 +1729,42 @@ fn the_emcy_axis_number_byte_lies_in_the_manufacturer_field() {
     }
 }
 
+/// `[emcy] motor_fault_code`: every motor fault given by a code is sent with that emergency code
+/// and its 603Fh code in two manufacturer bytes (the Σ-V-SD's FF00h, §2.7); the two bytes lie
+/// in the field and clear of the axis number.
+#[test]
+fn the_emcy_motor_fault_code_carries_the_603fh_code_in_the_manufacturer_field() {
+    let text = appended("[emcy]\nmotor_fault_code = 0xFF00\nmotor_fault_code_byte = 4");
+    let p = od_gen::parse(&text, "standard.toml").expect("valid");
+    assert_eq!(p.emcy.motor_fault_code, Some((0xFF00, 4)));
+    for fault in &p.motor_faults {
+        let [low, high] = fault.error_code.to_le_bytes();
+        assert_eq!(fault.emcy.code, 0xFF00);
+        assert_eq!(
+            fault.emcy.data,
+            [0, low, high, 0, 0],
+            "{:04X}h",
+            fault.error_code
+        );
+    }
+    let plain = od_gen::parse(STANDARD, "standard.toml").expect("standard");
+    assert!(plain
+        .motor_faults
+        .iter()
+        .all(|f| f.emcy.code == f.error_code));
+    for bad in [
+        "motor_fault_code = 0xFF00",
+        "motor_fault_code_byte = 4",
+        "motor_fault_code = 0xFF00\nmotor_fault_code_byte = 2",
+        "motor_fault_code = 0xFF00\nmotor_fault_code_byte = 7",
+        "motor_fault_code = 0\nmotor_fault_code_byte = 4",
+        "motor_fault_code = 0xFF00\nmotor_fault_code_byte = 4\naxis_number_byte = 5",
+    ] {
+        let (key, _) = invalid(&appended(&format!("[emcy]\n{bad}")));
+        assert_eq!(key, "emcy.motor_fault_code", "{bad}");
+    }
+}
+
 /// `[alarm_objects]`: the objects must be integer RAM entries, the numbers fit them, the clear
 /// command needs a history.
 #[test]

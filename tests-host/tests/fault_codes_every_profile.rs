@@ -4,7 +4,8 @@
 //! manufacturer field and 1001h as the profile's `[motor_faults]` table maps that fault (each
 //! entry a row of the manual's alarm table, e.g. the SDV3-E's AH: 4210h, error No. 26h,
 //! auxiliary code 8003h, Table 5-1; the GHA-E's AH 4210h, §6.2; the RSE's AL.248; the
-//! Σ-V-SD's 4210h with the axis number in byte 7, §2.7).
+//! Σ-V-SD's 4210h in 603Fh, its EMCY FF00h with 4210h in bytes 4-5 and the axis number in
+//! byte 7, §2.7).
 //!
 //! Every fault of the firmware (`motor::MotorFault`) is provoked the way it happens on a
 //! machine: the power stage or the motor over temperature, the DC link over or under its
@@ -234,14 +235,17 @@ async fn cycle(
 
 /// What a drive's manual says a fault shows: a row of its alarm table (the display, and the
 /// 603Fh code where the manual states one), or, where its table has no alarm for the fault, a
-/// CiA402 / IEC 61800-7-201 error code (603Fh = EMCY code, no manufacturer data).
+/// CiA402 / IEC 61800-7-201 error code (603Fh = EMCY code, no manufacturer data), or such a
+/// code in 603Fh with the emergency a manual prescribes for every error (the Σ-V-SD's §2.7:
+/// FF00h, the code in bytes 4-5).
 #[derive(Clone, Copy, Debug)]
 enum Report {
     Alarm(&'static str, Option<u16>),
     Code(u16),
+    CodeAsFf00(u16),
 }
 
-use Report::{Alarm, Code};
+use Report::{Alarm, Code, CodeAsFf00};
 
 /// The report the manual of profile `name` gives for the fault `injection` raises.
 fn manual(name: &str, injection: Injection) -> Report {
@@ -296,9 +300,13 @@ fn manual(name: &str, injection: Injection) -> Report {
             I::Alignment => Code(0x7122),
             I::Identification => Code(0x6320),
         },
-        // The standard profile: the CiA402 / IEC 61800-7-201 error-code table. The Σ-V-SD's
-        // manual has no alarm table (it is in SIEP S800000 94): the same codes (its profile's
-        // decision "motor_faults").
+        // The Σ-V-SD's manual has no alarm table (it is in SIEP S800000 94): the standard
+        // profile's codes (its decision "motor_faults"), in the EMCY form of §2.7.
+        "sigma-v-sd" => match manual("standard", injection) {
+            Code(code) => CodeAsFf00(code),
+            other => other,
+        },
+        // The standard profile: the CiA402 / IEC 61800-7-201 error-code table.
         _ => Code(match injection {
             I::DriveOverTemperature => 0x4210,
             I::MotorOverTemperature => 0x4310,
@@ -322,6 +330,18 @@ fn manual(name: &str, injection: Injection) -> Report {
 fn expected(profile: &od_gen::Profile, report: Report) -> Result<(u16, EmcyCode, u32), String> {
     match report {
         Code(code) => Ok((code, EmcyCode { code, data: [0; 5] }, 0)),
+        CodeAsFf00(code) => {
+            // §2.7: bytes 4-5 (manufacturer field 1-2) the code, byte 7 the axis (set below).
+            let [low, high] = code.to_le_bytes();
+            Ok((
+                code,
+                EmcyCode {
+                    code: 0xFF00,
+                    data: [0, low, high, 0, 0],
+                },
+                0,
+            ))
+        }
         Alarm(display, stated) => {
             let alarm = profile
                 .alarms

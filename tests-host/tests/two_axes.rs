@@ -384,10 +384,12 @@ fn sigma_v_sd_2axis_a_fault_of_axis_2_is_its_own() {
             "axis 1 runs on"
         );
         let coe = emergency(&m, md, &group, [ENABLE_OPERATION; 2], [0, 0], sm1_start).await;
+        // §2.7: code FF00h always, the error's code in bytes 4-5.
+        assert_eq!(u16::from_le_bytes([coe[2], coe[3]]), 0xFF00, "EMCY code");
         assert_eq!(
-            u16::from_le_bytes([coe[2], coe[3]]),
+            u16::from_le_bytes([coe[6], coe[7]]),
             DRIVE_OVER_TEMPERATURE,
-            "EMCY code"
+            "EMCY bytes 4-5"
         );
         assert_eq!(coe[4], 0x01, "1001h: generic error only (§4.2)");
         assert_eq!(coe[9], 2, "§2.7: byte 7 = axis number 2");
@@ -493,7 +495,8 @@ fn sigma_v_sd_2axis_both_axes_move_at_once_and_a_fault_of_axis_1_leaves_axis_2_r
             s.revolutions
         );
         let coe = emergency(&m, md, &group, [ENABLE_OPERATION; 2], [0, 0], sm1_start).await;
-        assert_eq!(u16::from_le_bytes([coe[2], coe[3]]), DRIVE_OVER_TEMPERATURE);
+        assert_eq!(u16::from_le_bytes([coe[2], coe[3]]), 0xFF00, "§2.7: FF00h");
+        assert_eq!(u16::from_le_bytes([coe[6], coe[7]]), DRIVE_OVER_TEMPERATURE);
         assert_eq!(coe[9], 1, "§2.7: byte 7 = axis number 1");
         let sd = group.subdevice(md, 0).expect("drive");
         assert_eq!(
