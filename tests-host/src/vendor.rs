@@ -250,6 +250,37 @@ pub async fn exchange_dc_command(
     exchange_dc(m, md, group, &[(0, &image)], cycle_ns).await
 }
 
+/// Drive 0 of a DC group, commanded cycle by cycle with [`exchange_dc_command`] (an output
+/// image that starts with 6040h, 6060h and one 32-bit value).
+pub struct DcDrive<'a> {
+    pub m: &'a InProcess,
+    pub md: &'a MainDevice<'a>,
+    pub group: DcGroup,
+    pub cycle_ns: u64,
+}
+
+impl DcDrive<'_> {
+    /// `n` cycles of `command` (controlword, mode, 32-bit value); the input image of the last
+    /// one (empty when `n` is 0).
+    pub async fn hold(&self, command: (u16, i8, i32), n: usize) -> Vec<u8> {
+        let mut inputs = Vec::new();
+        for _ in 0..n {
+            inputs =
+                exchange_dc_command(self.m, self.md, &self.group, command, self.cycle_ns).await;
+        }
+        inputs
+    }
+
+    /// [`Self::hold`], the last statusword (the image's first word; 0 when `n` is 0).
+    pub async fn hold_statusword(&self, command: (u16, i8, i32), n: usize) -> u16 {
+        let inputs = self.hold(command, n).await;
+        if inputs.len() < 2 {
+            return 0;
+        }
+        u16_at(&inputs, 0)
+    }
+}
+
 /// One cycle of `cycle_ns` phase-locked to the drive's free-run timer: `outputs` (byte offset,
 /// little-endian bytes) written into the output image, the frame exchanged; the input image the
 /// drive sent back.

@@ -10,10 +10,9 @@
 //!   positioning will be started immediately", "Homing mode: ... Homing will be started
 //!   immediately".
 
-use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, DcGroup, Sdo, POSITION_MAPPING};
+use tests_host::vendor::{self, DcDrive, Sdo, POSITION_MAPPING};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -34,25 +33,18 @@ const MOVE_CYCLES: usize = 1_500;
 const AT_TARGET_REV: f64 = 0.01;
 
 struct Drive<'a> {
-    m: &'a InProcess,
-    md: &'a MainDevice<'a>,
-    group: DcGroup,
+    bus: DcDrive<'a>,
     units_per_rev: f64,
 }
 
 impl Drive<'_> {
     /// `n` cycles of (cw, mode, 607Ah); the last statusword and 6064h in rev.
     async fn hold(&self, command: (u16, i8, i32), n: usize) -> (u16, f64) {
-        let mut out = (0, 0.0);
-        for _ in 0..n {
-            let inputs =
-                vendor::exchange_dc_command(self.m, self.md, &self.group, command, CYCLE_NS).await;
-            out = (
-                vendor::u16_at(&inputs, 0),
-                f64::from(vendor::i32_at(&inputs, 2)) / self.units_per_rev,
-            );
-        }
-        out
+        let inputs = self.bus.hold(command, n).await;
+        (
+            vendor::u16_at(&inputs, 0),
+            f64::from(vendor::i32_at(&inputs, 2)) / self.units_per_rev,
+        )
     }
 }
 
@@ -89,9 +81,12 @@ fn change(name: &str) -> Outcome {
         ]);
         let group = vendor::into_op_dc(&m, md, &sdos, CYCLE_NS).await;
         let d = Drive {
-            m: &m,
-            md,
-            group,
+            bus: DcDrive {
+                m: &m,
+                md,
+                group,
+                cycle_ns: CYCLE_NS,
+            },
             units_per_rev,
         };
         d.hold((0, PV, 0), vendor::SYNC0_START_CYCLES).await;

@@ -14,7 +14,7 @@
 use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, DcGroup, Sdo, POSITION_MAPPING};
+use tests_host::vendor::{self, DcDrive, Sdo, POSITION_MAPPING};
 use tests_host::{block_on, cia402, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -49,27 +49,13 @@ fn result(statusword: u16) -> Result {
 }
 
 struct Drive<'a> {
-    m: &'a InProcess,
-    md: &'a MainDevice<'a>,
-    group: DcGroup,
+    bus: DcDrive<'a>,
 }
 
 impl Drive<'_> {
     /// `n` cycles of controlword `cw` in homing mode; the last statusword.
     async fn hold(&self, cw: u16, n: usize) -> u16 {
-        let mut sw = 0;
-        for _ in 0..n {
-            let inputs = vendor::exchange_dc_command(
-                self.m,
-                self.md,
-                &self.group,
-                (cw, HOMING, 0),
-                CYCLE_NS,
-            )
-            .await;
-            sw = vendor::u16_at(&inputs, 0);
-        }
-        sw
+        self.bus.hold_statusword((cw, HOMING, 0), n).await
     }
 }
 
@@ -78,7 +64,14 @@ async fn into_op<'a>(m: &'a InProcess, md: &'a MainDevice<'a>) -> Drive<'a> {
     let mut sdos = vendor::mapping(&POSITION_MAPPING.0, &POSITION_MAPPING.1);
     sdos.push(Sdo::I8(0x6098, 0, HOME_HERE));
     let group = vendor::into_op_dc(m, md, &sdos, CYCLE_NS).await;
-    let drive = Drive { m, md, group };
+    let drive = Drive {
+        bus: DcDrive {
+            m,
+            md,
+            group,
+            cycle_ns: CYCLE_NS,
+        },
+    };
     drive.hold(0, vendor::SYNC0_START_CYCLES).await;
     drive
 }

@@ -19,11 +19,10 @@
 //! The tables here are the manuals', not the profile files': a profile that moved a bit the
 //! wrong way fails.
 
-use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
 use od_gen::Profile;
 use tests_host::cia402::{self, OPERATION_ENABLED, SWITCHED_ON};
-use tests_host::vendor::{self, DcGroup, Sdo};
+use tests_host::vendor::{self, DcDrive, Sdo};
 use tests_host::{block_on, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -116,28 +115,14 @@ fn expected(profile: &str, mode: i8, now: Now) -> u16 {
 }
 
 struct Run<'a> {
-    m: &'a InProcess,
-    md: &'a MainDevice<'a>,
-    group: DcGroup,
+    bus: DcDrive<'a>,
     name: &'a str,
 }
 
 impl Run<'_> {
     /// `cycles` cycles of (cw, mode, 60FFh); the last statusword.
     async fn hold(&self, (cw, mode, velocity): (u16, i8, i32), cycles: usize) -> u16 {
-        let mut sw = 0;
-        for _ in 0..cycles {
-            let inputs = vendor::exchange_dc_command(
-                self.m,
-                self.md,
-                &self.group,
-                (cw, mode, velocity),
-                CYCLE_NS,
-            )
-            .await;
-            sw = vendor::u16_at(&inputs, 0);
-        }
-        sw
+        self.bus.hold_statusword((cw, mode, velocity), cycles).await
     }
 
     fn check(&self, what: &str, sw: u16, mode: i8, now: Now) {
@@ -179,9 +164,12 @@ fn mode_bits(name: &str) {
         let md: &MainDevice<'_> = &m.maindevice;
         let group = vendor::into_op_dc_velocity(&m, md, (0, &setup), CSP, CYCLE_NS).await;
         let run = Run {
-            m: &m,
-            md,
-            group,
+            bus: DcDrive {
+                m: &m,
+                md,
+                group,
+                cycle_ns: CYCLE_NS,
+            },
             name,
         };
         let in_sync = Now {
@@ -210,7 +198,7 @@ fn mode_bits(name: &str) {
         // A CSP target (607Ah by SDO) beyond 607Dh: limited to it, bit 11 in every profile;
         // back inside, bit 11 clears; the limits off again (min = max).
         let w = (0.01 * units::COUNTS_PER_REV / units::increments_per_unit(&profile)) as i32;
-        let sd = run.group.subdevice(md, 0).expect("drive");
+        let sd = run.bus.group.subdevice(md, 0).expect("drive");
         for (sub, value) in [(1u8, -w), (2, w)] {
             sd.sdo_write(0x607D, sub, value).await.expect("607Dh");
         }

@@ -10,11 +10,10 @@
 //!   accelerates (CiA402; the RSE; the Σ-V-SD "60B2h added to the torque reference"; the
 //!   GHA-E, whose 60B2h is an INT32).
 
-use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
 use od_gen::Profile;
-use tests_host::vendor::{self, DcGroup};
+use tests_host::vendor::{self, DcDrive};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -32,31 +31,24 @@ const POSITION_TOLERANCE_REV: f64 = 0.002;
 const VELOCITY_TOLERANCE_REV_S: f64 = 0.05;
 
 struct Drive<'a> {
-    m: &'a InProcess,
-    md: &'a MainDevice<'a>,
-    group: DcGroup,
+    bus: DcDrive<'a>,
     profile: &'a Profile,
 }
 
 impl Drive<'_> {
     /// `n` cycles of (cw, mode, 607Ah); the last (statusword, 6064h, 606Ch).
     async fn hold(&self, command: (u16, i8, i32), n: usize) -> (u16, i32, i32) {
-        let mut out = (0, 0, 0);
-        for _ in 0..n {
-            let inputs =
-                vendor::exchange_dc_command(self.m, self.md, &self.group, command, CYCLE_NS).await;
-            out = (
-                vendor::u16_at(&inputs, 0),
-                vendor::i32_at(&inputs, 2),
-                vendor::i32_at(&inputs, 6),
-            );
-        }
-        out
+        let inputs = self.bus.hold(command, n).await;
+        (
+            vendor::u16_at(&inputs, 0),
+            vendor::i32_at(&inputs, 2),
+            vendor::i32_at(&inputs, 6),
+        )
     }
 
     /// Writes `value` into `index`:00 at the entry's size.
     async fn write(&self, index: u16, value: i32) {
-        let sd = self.group.subdevice(self.md, 0).expect("drive");
+        let sd = self.bus.group.subdevice(self.bus.md, 0).expect("drive");
         let len = self
             .profile
             .entry(index, 0)
@@ -96,9 +88,12 @@ fn offsets(name: &str) -> Outcome {
         );
         let group = vendor::into_op_dc(&m, md, &sdos, CYCLE_NS).await;
         let d = Drive {
-            m: &m,
-            md,
-            group,
+            bus: DcDrive {
+                m: &m,
+                md,
+                group,
+                cycle_ns: CYCLE_NS,
+            },
             profile: &profile,
         };
         let (_, start, _) = d.hold((0, CSP, 0), vendor::SYNC0_START_CYCLES).await;
@@ -131,7 +126,7 @@ fn offsets(name: &str) -> Outcome {
         if has(0x60B2) && cia402::supports(supported, CST) {
             d.write(0x60B2, TORQUE_OFFSET_PERMILLE).await;
             let (_, _, velocity) = d.hold((vendor::ENABLE_OPERATION, CST, 0), 100).await;
-            let sd = d.group.subdevice(md, 0).expect("drive");
+            let sd = d.bus.group.subdevice(md, 0).expect("drive");
             let demand: i16 = sd.sdo_read(0x6074, 0).await.expect("6074h");
             out.cst = Some((demand, rev_s(velocity)));
             d.write(0x60B2, 0).await;

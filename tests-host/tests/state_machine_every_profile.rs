@@ -21,7 +21,7 @@
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
 use od_gen::Profile;
-use tests_host::vendor::{self, DcGroup, Sdo, ENABLE_OPERATION, SHUTDOWN, SWITCH_ON};
+use tests_host::vendor::{self, DcDrive, Sdo, ENABLE_OPERATION, SHUTDOWN, SWITCH_ON};
 use tests_host::{block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -55,9 +55,7 @@ struct Manual {
 }
 
 struct Drive<'a> {
-    m: &'a InProcess,
-    md: &'a MainDevice<'a>,
-    group: DcGroup,
+    bus: DcDrive<'a>,
     name: &'static str,
     velocity: i32,
 }
@@ -65,14 +63,9 @@ struct Drive<'a> {
 impl Drive<'_> {
     /// `cycles` cycles with controlword `cw`; the last statusword.
     async fn hold(&self, cw: u16, cycles: usize) -> u16 {
-        let mut sw = 0;
-        for _ in 0..cycles {
-            let command = (cw, CSV, self.velocity);
-            let inputs =
-                vendor::exchange_dc_command(self.m, self.md, &self.group, command, CYCLE_NS).await;
-            sw = vendor::u16_at(&inputs, 0);
-        }
-        sw
+        self.bus
+            .hold_statusword((cw, CSV, self.velocity), cycles)
+            .await
     }
 
     /// Controlword `cw` until the state settles; asserts bits 0–9 for `transition`.
@@ -94,7 +87,7 @@ impl Drive<'_> {
     }
 
     fn motor_rev_s(&self) -> f64 {
-        let segment = self.m.shared.segment();
+        let segment = self.bus.m.shared.segment();
         segment.drives()[0].servos[0].plant.mech_speed_rad_s() / std::f64::consts::TAU
     }
 }
@@ -122,9 +115,12 @@ async fn into_op<'a>(
     }
     let group = vendor::into_op_dc_velocity(m, md, (0, &setup), CSV, CYCLE_NS).await;
     Drive {
-        m,
-        md,
-        group,
+        bus: DcDrive {
+            m,
+            md,
+            group,
+            cycle_ns: CYCLE_NS,
+        },
         name: manual.name,
         velocity: 0,
     }
