@@ -10,6 +10,7 @@
 //!   (2)/(3), CiA402 6040h/6041h of the mode).
 
 use ethercrab::MainDevice;
+use tests_host::vendor::{self, Sdo};
 use tests_host::{block_on, master_for};
 
 const CPR: f64 = (1u32 << 20) as f64;
@@ -24,61 +25,26 @@ fn interpolated_position_follows_the_interpolation_data(name: &str) {
     const IP: i8 = 7;
     const ENABLE_INTERPOLATION: u16 = 1 << 4;
     const IP_MODE_ACTIVE: u16 = 1 << 12;
-    fn mapping(index: u16, sub: u8, bits: u8) -> u32 {
-        u32::from(index) << 16 | u32::from(sub) << 8 | u32::from(bits)
-    }
     block_on(async {
         let (m, transport) = master_for(board_sim::Segment::new(name, 1).expect("profile"));
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("init");
-        {
-            let sd = group.subdevice(md, 0).expect("drive");
-            sd.sdo_write(0x6060, 0, IP).await.expect("6060h");
-            // RxPDO 1600h: controlword and the interpolation data record.
-            sd.sdo_write(0x1C12, 0, 0u8).await.expect("1C12h:00 = 0");
-            sd.sdo_write(0x1600, 0, 0u8).await.expect("1600h:00 = 0");
-            sd.sdo_write(0x1600, 1, mapping(0x6040, 0, 16))
-                .await
-                .expect("1600h:01");
-            sd.sdo_write(0x1600, 2, mapping(0x60C1, 1, 32))
-                .await
-                .expect("1600h:02");
-            sd.sdo_write(0x1600, 0, 2u8).await.expect("1600h:00 = 2");
-            sd.sdo_write(0x1C12, 0, 1u8).await.expect("1C12h:00 = 1");
-        }
-        let group = tests_host::dc_safe_op(&m, md, group, CYCLE_NS)
-            .await
-            .expect("SAFE-OP")
-            .request_into_op(md)
-            .await
-            .expect("OP");
+        // RxPDO 1600h: controlword and the interpolation data record; the default TxPDO
+        // (6041h, 6064h first on both profiles).
+        let mut setup = vendor::remap(0x1600, 0x1C12, &[(0x6040, 0, 16), (0x60C1, 1, 32)]);
+        setup.push(Sdo::I8(0x6060, 0, IP));
+        let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
         let cycle = |cw: u16, target: i32| {
-            let sd = group.subdevice(md, 0).expect("drive");
-            {
-                let mut out = sd.outputs_raw_mut();
-                out[0..2].copy_from_slice(&cw.to_le_bytes());
-                out[2..6].copy_from_slice(&target.to_le_bytes());
-            }
-            let fut = group.tx_rx_dc(md);
             let (m, group) = (&m, &group);
             async move {
-                fut.await.expect("tx/rx");
-                m.shared.advance(CYCLE_NS);
-                let sd = group.subdevice(md, 0).expect("drive");
-                let inp = sd.inputs_raw();
+                let outputs: [(usize, &[u8]); 2] =
+                    [(0, &cw.to_le_bytes()), (2, &target.to_le_bytes())];
+                let inputs = vendor::exchange_dc(m, md, group, &outputs, CYCLE_NS).await;
                 let rev = m.shared.segment().drives()[0].servos[0]
                     .plant
                     .mech_angle_rad()
                     / TAU;
-                (
-                    u16::from_le_bytes([inp[0], inp[1]]),
-                    i32::from_le_bytes([inp[2], inp[3], inp[4], inp[5]]),
-                    rev,
-                )
+                (vendor::u16_at(&inputs, 0), vendor::i32_at(&inputs, 2), rev)
             }
         };
         let mut s = (0, 0, 0.0);
