@@ -189,7 +189,7 @@ fn scale(value: i64, multiplier: u64, divisor: u64) -> i64 {
         .and_then(|(m, d)| {
             let product = value.checked_mul(m)?;
             let (quotient, remainder) = (product / d, product % d);
-            // |remainder| < d: twice it fits when d ≤ i64::MAX / 2, else use 128 bits.
+            // |remainder| < d ≤ i64::MAX: twice it fits a u64.
             let twice = remainder.unsigned_abs().checked_mul(2)?;
             Some(if twice >= d.unsigned_abs() {
                 quotient + product.signum()

@@ -549,8 +549,8 @@ impl DriveAxis {
 
     /// Raises CiA402 error `code`: the drive goes through Fault Reaction Active to Fault
     /// (statusword bit 3), controlword reads 0 (the reaction disables the drive), and 603Fh
-    /// holds `code` until a fault reset (controlword bit 7 rising edge) leaves Fault. The caller
-    /// reports the EMCY.
+    /// holds `code` until a fault reset (controlword bit 7 rising edge) leaves Fault. The next
+    /// cycle announces it (EMCY, alarm record).
     pub fn fault(&mut self, code: u16, ram: &mut [u8]) {
         self.report_fault(FaultReport::code(code), ram);
     }
