@@ -547,6 +547,10 @@ pub struct Cia402Rules {
     /// The home offset 607Ch is added to every position object, not only set at the home
     /// (the GHA-E: 6064h = 6063h / ratio + 607Ch).
     pub home_offset_added: bool,
+    /// With an absolute encoder, 607Ch as it is at power-on is added to every position object
+    /// from power-on (the Σ-V-SD, §4.9 (1): "the home offset is added to the encoder absolute
+    /// position (the position actual value) in power up phase").
+    pub home_offset_added_absolute: bool,
     /// The 1010h subindexes after whose store the drive enters Operation Enabled only after a
     /// power-on (the Σ-V-SD's 1 and 4, §4.7).
     pub store_requires_power_cycle: &'static [u8],

@@ -1285,6 +1285,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }
+    if r.home_offset_added_absolute {
+        out.push_str("- With an absolute encoder, the home offset 607Ch as it is at power-on is added to every position object from power-on (6064h = the encoder's position + 607Ch); a later write takes effect at the next power-on or homing run.\n");
+    }
     for v in &p.split_values {
         let e = |(i, s): (u16, u8)| format!("{i:04X}h:{s:02X}");
         let _ = writeln!(

@@ -894,6 +894,7 @@ impl Default for Cia402File {
             digital_inputs_limits_swapped: false,
             following_error_zero_window_off: false,
             home_offset_added: false,
+            home_offset_added_absolute: false,
             store_requires_power_cycle: Vec::new(),
             touch_probe_inputs: None,
             max_interpolation_speed: None,
@@ -1180,6 +1181,10 @@ pub struct Cia402File {
     /// instead of only setting the home's position.
     #[serde(default)]
     pub home_offset_added: bool,
+    /// With an absolute encoder, 607Ch as it is at power-on is added to every position object
+    /// from power-on (a later write acts at the next power-on or homing).
+    #[serde(default)]
+    pub home_offset_added_absolute: bool,
     /// 1010h subindexes after whose store Operation Enabled needs a power-on first.
     #[serde(default)]
     pub store_requires_power_cycle: Vec<u8>,

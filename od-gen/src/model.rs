@@ -2116,6 +2116,8 @@ pub struct Cia402Rules {
     pub following_error_zero_window_off: bool,
     /// 607Ch is added to every position object.
     pub home_offset_added: bool,
+    /// With an absolute encoder, 607Ch at power-on is added to every position object.
+    pub home_offset_added_absolute: bool,
     /// 1010h subindexes after whose store Operation Enabled needs a power-on first.
     pub store_requires_power_cycle: Vec<u8>,
     /// The probe inputs must be assigned to a physical input first.
@@ -2470,6 +2472,7 @@ impl Default for Cia402Rules {
             digital_inputs_limits_swapped: false,
             following_error_zero_window_off: false,
             home_offset_added: false,
+            home_offset_added_absolute: false,
             store_requires_power_cycle: Vec::new(),
             touch_probe_inputs: None,
             max_interpolation_speed: None,

@@ -580,6 +580,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         digital_inputs_limits_swapped: f.cia402.digital_inputs_limits_swapped,
         following_error_zero_window_off: f.cia402.following_error_zero_window_off,
         home_offset_added: f.cia402.home_offset_added,
+        home_offset_added_absolute: f.cia402.home_offset_added_absolute,
         store_requires_power_cycle: store_requires_power_cycle(&f.cia402)?,
         touch_probe_inputs: f
             .cia402

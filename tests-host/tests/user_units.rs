@@ -437,3 +437,48 @@ fn sigma_v_sd_torque_user_unit_2304h_scales_every_torque_object() {
     check("1 %, 6071h = 20", run(Some(1), 20, None), 20, 20.0);
     check("1 %, 60E0h = 10", run(Some(1), 30, Some(10)), 10, 10.0);
 }
+
+/// Σ-V-SD §4.9 (1): "When an absolute encoder is connected to the SERVOPACK, the home offset is
+/// added to the encoder absolute position (the position actual value) in power up phase." With
+/// the reference servo's absolute encoder, 607Ch written and stored changes 6064h at the next
+/// power-on by exactly its value (the rotor at rest), not at the write.
+#[test]
+fn sigma_v_sd_absolute_encoder_adds_the_home_offset_at_power_on() {
+    use tests_host::csp;
+    use tests_host::session::{power_cycle, take_segment};
+    const SIGMA_CSP: i8 = 8;
+    const OFFSET: i32 = 5_000;
+    /// 1010h:03 "save" (23xxh and 6xxxh, §4.2 (5)).
+    const STORE_6XXX: (u16, u8, u32) = (0x1010, 3, 0x6576_6173);
+    let mut segment = block_on(async {
+        let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = csp::into_op_with_mode(&m, md, SIGMA_CSP).await;
+        let (_, before) = csp::cycle(&m, md, &group, 0, 0).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x607C, 0, OFFSET).await.expect("607Ch");
+        let (_, written) = csp::cycle(&m, md, &group, 0, 0).await;
+        assert!(
+            (written - before).abs() <= 2,
+            "not before the next power-on: {before} -> {written}"
+        );
+        sd.sdo_write(STORE_6XXX.0, STORE_6XXX.1, STORE_6XXX.2)
+            .await
+            .expect("1010h:03");
+        (before, take_segment(&m))
+    });
+    let before = segment.0;
+    power_cycle(&mut segment.1);
+    block_on(async move {
+        let (m, transport) = master_for(segment.1);
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = csp::into_op_with_mode(&m, md, SIGMA_CSP).await;
+        let (_, after) = csp::cycle(&m, md, &group, 0, 0).await;
+        assert!(
+            (after - before - OFFSET).abs() <= 2,
+            "6064h = the encoder's position + 607Ch: {before} -> {after}"
+        );
+    });
+}

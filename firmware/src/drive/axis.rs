@@ -132,8 +132,11 @@ pub struct DriveAxis {
     /// profile modes is a drive position; the axis works on encoder positions.
     position_shift: i64,
     /// The part of `position_shift` that is the home offset 607Ch (increments) where the
-    /// profile adds it to every position (`Cia402Rules::home_offset_added`); 0 otherwise.
+    /// profile adds it to every position (`Cia402Rules::home_offset_added`, or
+    /// `home_offset_added_absolute` with an absolute encoder); 0 otherwise.
     home_offset_shift: i64,
+    /// 607Ch as it was at power-on (`Cia402Rules::home_offset_added_absolute`).
+    home_offset_at_power_on: i32,
     /// Where the slave shows its synchronisation (1C32h:01 sync type), to tell a SYNC0 cycle
     /// from a free-run one.
     sync_type_at: Option<u16>,
@@ -265,6 +268,7 @@ impl DriveAxis {
             following_error_timer: WindowTimer::new(),
             position_shift: 0,
             home_offset_shift: 0,
+            home_offset_at_power_on: 0,
             position_demand: 0,
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             probe_function_seen: 0,
@@ -525,6 +529,10 @@ impl DriveAxis {
             .rules
             .software_limits_off
             .is_some_and(|parameter| parameter.value(ram, 0) == 1);
+        // The Σ-V-SD's home offset of an absolute encoder, as stored.
+        if self.rules.home_offset_added_absolute {
+            self.home_offset_at_power_on = read_i32(ram, self.vars.home_offset).unwrap_or(0);
+        }
         // The parameters were loaded.
         self.settings_due = Groups::ALL;
         self.refresh_settings(ram);
@@ -978,11 +986,18 @@ impl DriveAxis {
         let rated_nm = self.settings.rated_nm;
         // The torque objects' unit.
         let object_rated_nm = self.settings.object_rated_nm;
-        if self.rules.home_offset_added {
-            // The GHA-E's 6064h = position from the home + 607Ch, before homing too and at once
-            // when 607Ch changes: the offset is part of the drive positions' shift, so every
-            // position object (targets, limits, probes, demand, actual) carries it.
-            let offset = read_i32(ram, vars.home_offset).unwrap_or(0);
+        // The GHA-E's 6064h = position from the home + 607Ch, before homing too and at once when
+        // 607Ch changes; the Σ-V-SD's with an absolute encoder, 607Ch as it was at power-on.
+        let added_offset = if self.rules.home_offset_added {
+            Some(read_i32(ram, vars.home_offset).unwrap_or(0))
+        } else if self.rules.home_offset_added_absolute && port.absolute {
+            Some(self.home_offset_at_power_on)
+        } else {
+            None
+        };
+        if let Some(offset) = added_offset {
+            // The offset is part of the drive positions' shift, so every position object
+            // (targets, limits, probes, demand, actual) carries it.
             let wanted = position_ratio.position_to_internal(i64::from(pol.position(offset)));
             let delta = wanted.saturating_sub(self.home_offset_shift);
             if delta != 0 {
