@@ -1,0 +1,130 @@
+//! ADC clock and sampling time (RM0440 §21).
+//!
+//! - Clock (§21.4.3, ADCx_CCR.CKMODE): 01, 10, 11 clock the ADC synchronously from HCLK / 1,
+//!   / 2, / 4 (no jitter between the timer trigger and the start of the sampling: what a
+//!   PWM-synchronous current sample needs); 00 selects the asynchronous clock.
+//! - Sampling time (§21.4.12, ADC_SMPR1/2.`SMPx[2:0]`): 2.5, 6.5, 12.5, 24.5, 47.5, 92.5, 247.5
+//!   or 640.5 ADC clock cycles.
+//! - Conversion (§21.4.16): the sampling time plus 12.5 cycles at 12-bit resolution.
+
+use crate::{SettingError, NS_PER_S};
+
+/// The sampling times of SMP codes 0–7, in half ADC clock cycles.
+const SAMPLE_HALF_CYCLES: [u64; 8] = [5, 13, 25, 49, 95, 185, 495, 1281];
+
+/// The successive-approximation time of a 12-bit conversion, in half cycles.
+const CONVERSION_12_BIT_HALF_CYCLES: u64 = 25;
+
+/// A synchronous ADC clock: HCLK divided by 1, 2 or 4.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SynchronousClock {
+    /// ADCx_CCR.CKMODE (01, 10 or 11).
+    pub ckmode: u8,
+    /// The ADC clock, Hz.
+    pub adc_hz: u32,
+}
+
+impl SynchronousClock {
+    /// The fastest synchronous clock from `hclk_hz` that does not exceed `max_adc_hz` (the
+    /// device's limit, from its datasheet).
+    pub fn at_most(hclk_hz: u32, max_adc_hz: u32) -> Result<Self, SettingError> {
+        if hclk_hz == 0 || max_adc_hz == 0 {
+            return Err(SettingError::Zero);
+        }
+        [(0b01, 1), (0b10, 2), (0b11, 4)]
+            .into_iter()
+            .map(|(ckmode, divider)| Self {
+                ckmode,
+                adc_hz: hclk_hz / divider,
+            })
+            .find(|c| c.adc_hz <= max_adc_hz)
+            .ok_or(SettingError::TooSmall {
+                min: u64::from(hclk_hz / 4),
+            })
+    }
+}
+
+/// A sampling time as ADC_SMPRx.SMPx encodes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampleTime {
+    /// `SMPx[2:0]`.
+    pub code: u8,
+    /// The sampling time, in half ADC clock cycles.
+    pub half_cycles: u16,
+}
+
+impl SampleTime {
+    /// The shortest sampling time of at least `min_ns` (what the source impedance and the
+    /// sampling capacitor need, from the datasheet's formula) at an ADC clock of `adc_hz`.
+    pub fn at_least(adc_hz: u32, min_ns: u32) -> Result<Self, SettingError> {
+        if adc_hz == 0 {
+            return Err(SettingError::Zero);
+        }
+        // half_cycles / (2 f) ≥ t ⇔ half_cycles × 10⁹ ≥ 2 f t.
+        let needed = 2 * u64::from(adc_hz) * u64::from(min_ns);
+        SAMPLE_HALF_CYCLES
+            .iter()
+            .zip(0u8..)
+            .find(|(&half, _)| half * NS_PER_S >= needed)
+            .map(|(&half, code)| Self {
+                code,
+                half_cycles: half as u16,
+            })
+            .ok_or(SettingError::TooLarge {
+                max: SAMPLE_HALF_CYCLES[7] * NS_PER_S / (2 * u64::from(adc_hz)),
+            })
+    }
+
+    /// The time from the start of the sampling to the end of a 12-bit conversion, in ns
+    /// (rounded up), at an ADC clock of `adc_hz`.
+    pub fn conversion_ns(&self, adc_hz: u32) -> u64 {
+        let half = u64::from(self.half_cycles) + CONVERSION_12_BIT_HALF_CYCLES;
+        (half * NS_PER_S).div_ceil(2 * u64::from(adc_hz).max(1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fastest_synchronous_clock_within_the_limit() {
+        // 170 MHz HCLK and a 60 MHz limit: HCLK / 4 = 42.5 MHz (CKMODE 11).
+        assert_eq!(
+            SynchronousClock::at_most(170_000_000, 60_000_000),
+            Ok(SynchronousClock {
+                ckmode: 0b11,
+                adc_hz: 42_500_000
+            })
+        );
+        // 100 MHz: HCLK / 2.
+        assert_eq!(
+            SynchronousClock::at_most(100_000_000, 60_000_000).map(|c| c.ckmode),
+            Ok(0b10)
+        );
+        assert_eq!(
+            SynchronousClock::at_most(170_000_000, 10_000_000),
+            Err(SettingError::TooSmall { min: 42_500_000 })
+        );
+    }
+
+    #[test]
+    fn the_shortest_sampling_time_that_is_long_enough() {
+        // 42.5 MHz: one cycle is 23.5 ns. 100 ns needs 4.25 cycles → 6.5 cycles (code 1).
+        let s = SampleTime::at_least(42_500_000, 100).unwrap();
+        assert_eq!((s.code, s.half_cycles), (1, 13));
+        // A shunt amplifier's 250 ns: 10.6 cycles → 12.5 (code 2); with the 12.5-cycle
+        // conversion: 25 cycles = 588.2 ns.
+        let s = SampleTime::at_least(42_500_000, 250).unwrap();
+        assert_eq!(s.code, 2);
+        assert_eq!(s.conversion_ns(42_500_000), 589);
+        // Exactly 2.5 cycles (58.8 ns) is code 0; a nanosecond more is code 1.
+        assert_eq!(SampleTime::at_least(42_500_000, 58).unwrap().code, 0);
+        assert_eq!(SampleTime::at_least(42_500_000, 59).unwrap().code, 1);
+        // Beyond 640.5 cycles (15.07 µs) there is no code.
+        assert_eq!(
+            SampleTime::at_least(42_500_000, 20_000),
+            Err(SettingError::TooLarge { max: 15_070 })
+        );
+    }
+}
