@@ -1,13 +1,14 @@
 //! STM32G4 peripheral register settings computed from physical quantities.
 //!
-//! Every value a driver of `boards/stm32g474` writes into a timer, ADC, SPI or watchdog
-//! register comes from a function here: a PWM frequency becomes a prescaler and an auto-reload
-//! value, a dead time in nanoseconds becomes the DTG code, and so on. Each function cites the
+//! The values the drivers of `boards/stm32g474` write into timer, ADC, SPI and watchdog
+//! registers are computed here, not typed: a PWM frequency becomes a prescaler and an
+//! auto-reload value, a dead time in nanoseconds becomes the DTG code, and so on. Each function cites the
 //! formula of the reference manual (RM0440 rev 9, "STM32G4 Series advanced Arm-based 32-bit
 //! MCUs") it inverts, rounds on the safe side (a dead time is never shorter than asked, a
 //! clock never faster than allowed), reports what it achieved, and refuses what the
 //! peripheral cannot do instead of wrapping a field. The crate has no dependency and builds on
-//! the host, where its tests check worked examples.
+//! the host, where its tests check worked examples. `FACTS.md` beside this crate lists the
+//! sources of every formula and what is still unconfirmed.
 //!
 //! | module | peripheral | computes |
 //! |---|---|---|
