@@ -14,20 +14,22 @@ pub struct BaudRate {
 
 impl BaudRate {
     /// The fastest SCK from `pclk_hz` that does not exceed `max_sck_hz` (the slave's limit,
-    /// e.g. the ET1100's, with the board's margin).
-    pub fn at_most(pclk_hz: u32, max_sck_hz: u32) -> Result<Self, SettingError> {
+    /// e.g. the ET1100's). A `const fn`: a board computes its setting at compile time.
+    pub const fn at_most(pclk_hz: u32, max_sck_hz: u32) -> Result<Self, SettingError> {
         if pclk_hz == 0 || max_sck_hz == 0 {
             return Err(SettingError::Zero);
         }
-        (0u8..8)
-            .map(|br| Self {
-                br,
-                sck_hz: pclk_hz >> (br + 1),
-            })
-            .find(|b| b.sck_hz <= max_sck_hz)
-            .ok_or(SettingError::TooSmall {
-                min: u64::from(pclk_hz >> 8),
-            })
+        let mut br = 0u8;
+        while br < 8 {
+            let sck_hz = pclk_hz >> (br + 1);
+            if sck_hz <= max_sck_hz {
+                return Ok(Self { br, sck_hz });
+            }
+            br += 1;
+        }
+        Err(SettingError::TooSmall {
+            min: (pclk_hz >> 8) as u64,
+        })
     }
 }
 

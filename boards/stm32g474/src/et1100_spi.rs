@@ -36,10 +36,11 @@
 //! cannot insert a pause, while the wait-state byte lasts 8 clocks = 376 ns at 21.25 MHz.
 //!
 //! # Clock
-//! SPI3 runs from PCLK1 = 170 MHz; prescaler 8 gives 21.25 MHz, below the ET1100's 30 MHz
-//! maximum (Section III, SPI timing) with 29 % margin. One byte takes 376 ns. A 4-byte register
-//! read is 2 + 1 + 4 = 7 bytes ≈ 2.6 µs; a 128-byte mailbox read ≈ 49 µs. If the board's
-//! signal integrity is doubtful, halve [`SPI_CLOCK_HZ`] (prescaler 16, 10.6 MHz).
+//! SPI3 runs from PCLK1 = 170 MHz; the fastest prescaler within the ET1100's 30 MHz maximum
+//! (Section III, SPI timing) is 8 (`stm32g4_settings::spi::BaudRate`, at compile time): 21.25 MHz,
+//! 29 % below it. One byte takes 376 ns. A 4-byte register read is 2 + 1 + 4 = 7 bytes ≈ 2.6 µs;
+//! a 128-byte mailbox read ≈ 49 µs. If the board's signal integrity is doubtful, give the
+//! computation a lower limit (below 21.25 MHz it takes prescaler 16, 10.6 MHz).
 //!
 //! # Why blocking, not DMA
 //! Accesses are short (a register is a few µs) and are made from priority-ordered contexts that
@@ -68,6 +69,8 @@ use embassy_stm32::time::Hertz;
 use embassy_stm32::Peri;
 use hal::esc::AlEvent;
 use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
+
+use stm32g4_settings::spi::BaudRate;
 
 use crate::clocks::PCLK1_HZ;
 
@@ -102,11 +105,16 @@ const ADDRESS_SPACE: u32 = 0x1_0000;
 
 /// SPI mode of the PDI (must match the SII PDI configuration, register 0x0150).
 pub const SPI_MODE: spi::Mode = spi::MODE_3;
-/// SPI clock: PCLK1 / 8.
-pub const SPI_CLOCK_HZ: u32 = PCLK1_HZ / 8;
 /// ET1100 maximum SPI clock (Section III, SPI timing characteristics).
 const ET1100_MAX_SPI_CLOCK_HZ: u32 = 30_000_000;
-const _: () = assert!(SPI_CLOCK_HZ <= ET1100_MAX_SPI_CLOCK_HZ);
+/// SPI3's baud rate: the fastest PCLK1 / 2^(BR + 1) within the ET1100's maximum (PCLK1 / 8 at
+/// 170 MHz), computed at compile time (RM0440 §39.7.1).
+const SPI_BAUD_RATE: BaudRate = match BaudRate::at_most(PCLK1_HZ, ET1100_MAX_SPI_CLOCK_HZ) {
+    Ok(baud) => baud,
+    Err(_) => panic!("no SPI3 prescaler keeps the clock within the ET1100's maximum"),
+};
+/// SPI clock.
+pub const SPI_CLOCK_HZ: u32 = SPI_BAUD_RATE.sck_hz;
 
 /// Bytes that may be in flight (written to TXFIFO but not yet read from RXFIFO). The RXFIFO
 /// holds 4 bytes (RM0440 §39.5.9, 32-bit FIFOs), so at most 4 in flight can never overrun it.
