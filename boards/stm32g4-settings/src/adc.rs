@@ -10,7 +10,9 @@
 use crate::{SettingError, NS_PER_S};
 
 /// The sampling times of SMP codes 0–7, in half ADC clock cycles.
-const SAMPLE_HALF_CYCLES: [u64; 8] = [5, 13, 25, 49, 95, 185, 495, 1281];
+const SAMPLE_HALF_CYCLES: [u64; 8] = [5, 13, 25, 49, 95, 185, 495, LONGEST_SAMPLE_HALF_CYCLES];
+/// The longest sampling time (SMP = 111), in half cycles.
+const LONGEST_SAMPLE_HALF_CYCLES: u64 = 1281;
 
 /// The successive-approximation time of a 12-bit conversion, in half cycles.
 const CONVERSION_12_BIT_HALF_CYCLES: u64 = 25;
@@ -27,20 +29,22 @@ pub struct SynchronousClock {
 impl SynchronousClock {
     /// The fastest synchronous clock from `hclk_hz` that does not exceed `max_adc_hz` (the
     /// device's limit, from its datasheet).
-    pub fn at_most(hclk_hz: u32, max_adc_hz: u32) -> Result<Self, SettingError> {
+    pub const fn at_most(hclk_hz: u32, max_adc_hz: u32) -> Result<Self, SettingError> {
         if hclk_hz == 0 || max_adc_hz == 0 {
             return Err(SettingError::Zero);
         }
-        [(0b01, 1), (0b10, 2), (0b11, 4)]
-            .into_iter()
-            .map(|(ckmode, divider)| Self {
-                ckmode,
-                adc_hz: hclk_hz / divider,
-            })
-            .find(|c| c.adc_hz <= max_adc_hz)
-            .ok_or(SettingError::TooSmall {
-                min: u64::from(hclk_hz / 4),
-            })
+        // CKMODE 01, 10, 11: HCLK / 1, / 2, / 4.
+        let mut ckmode = 0b01u8;
+        while ckmode <= 0b11 {
+            let adc_hz = hclk_hz >> (ckmode - 1);
+            if adc_hz <= max_adc_hz {
+                return Ok(Self { ckmode, adc_hz });
+            }
+            ckmode += 1;
+        }
+        Err(SettingError::TooSmall {
+            min: (hclk_hz / 4) as u64,
+        })
     }
 }
 
@@ -56,30 +60,36 @@ pub struct SampleTime {
 impl SampleTime {
     /// The shortest sampling time of at least `min_ns` (what the source impedance and the
     /// sampling capacitor need, from the datasheet's formula) at an ADC clock of `adc_hz`.
-    pub fn at_least(adc_hz: u32, min_ns: u32) -> Result<Self, SettingError> {
+    pub const fn at_least(adc_hz: u32, min_ns: u32) -> Result<Self, SettingError> {
         if adc_hz == 0 {
             return Err(SettingError::Zero);
         }
         // half_cycles / (2 f) ≥ t ⇔ half_cycles × 10⁹ ≥ 2 f t.
-        let needed = 2 * u64::from(adc_hz) * u64::from(min_ns);
-        SAMPLE_HALF_CYCLES
-            .iter()
-            .zip(0u8..)
-            .find(|(&half, _)| half * NS_PER_S >= needed)
-            .map(|(&half, code)| Self {
-                code,
-                half_cycles: half as u16,
-            })
-            .ok_or(SettingError::TooLarge {
-                max: SAMPLE_HALF_CYCLES[7] * NS_PER_S / (2 * u64::from(adc_hz)),
-            })
+        let needed = 2 * adc_hz as u64 * min_ns as u64;
+        let mut code = 0;
+        while code < SAMPLE_HALF_CYCLES.len() {
+            let half = SAMPLE_HALF_CYCLES[code];
+            if half * NS_PER_S >= needed {
+                return Ok(Self {
+                    code: code as u8,
+                    half_cycles: half as u16,
+                });
+            }
+            code += 1;
+        }
+        Err(SettingError::TooLarge {
+            max: LONGEST_SAMPLE_HALF_CYCLES * NS_PER_S / (2 * adc_hz as u64),
+        })
     }
 
     /// The time from the start of the sampling to the end of a 12-bit conversion, in ns
     /// (rounded up), at an ADC clock of `adc_hz`.
-    pub fn conversion_ns(&self, adc_hz: u32) -> u64 {
-        let half = u64::from(self.half_cycles) + CONVERSION_12_BIT_HALF_CYCLES;
-        (half * NS_PER_S).div_ceil(2 * u64::from(adc_hz).max(1))
+    pub const fn conversion_ns(&self, adc_hz: u32) -> u64 {
+        let half = self.half_cycles as u64 + CONVERSION_12_BIT_HALF_CYCLES;
+        match adc_hz {
+            0 => 0,
+            hz => (half * NS_PER_S).div_ceil(2 * hz as u64),
+        }
     }
 }
 

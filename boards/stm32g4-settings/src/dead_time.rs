@@ -62,7 +62,7 @@ pub struct DeadTime {
 impl DeadTime {
     /// The shortest DTG code whose dead time is at least `dead_time_ns`, for a timer clocked at
     /// `timer_hz` with clock division `ckd`.
-    pub fn at_least(
+    pub const fn at_least(
         timer_hz: u32,
         ckd: ClockDivision,
         dead_time_ns: u32,
@@ -70,8 +70,8 @@ impl DeadTime {
         if timer_hz == 0 {
             return Err(SettingError::Zero);
         }
-        let dts_hz = u64::from(timer_hz) / ckd.divider();
-        let needed = (u64::from(dead_time_ns) * dts_hz).div_ceil(NS_PER_S);
+        let dts_hz = timer_hz as u64 / ckd.divider();
+        let needed = (dead_time_ns as u64 * dts_hz).div_ceil(NS_PER_S);
         let (dtg, ticks) = match needed {
             0..=127 => (needed, needed),
             128..=254 => {
@@ -100,9 +100,11 @@ impl DeadTime {
 
     /// The dead time in ns for a timer clocked at `timer_hz` with clock division `ckd`
     /// (rounded down).
-    pub fn nanoseconds(&self, timer_hz: u32, ckd: ClockDivision) -> u64 {
-        let dts_hz = (u64::from(timer_hz) / ckd.divider()).max(1);
-        u64::from(self.ticks) * NS_PER_S / dts_hz
+    pub const fn nanoseconds(&self, timer_hz: u32, ckd: ClockDivision) -> u64 {
+        match timer_hz as u64 / ckd.divider() {
+            0 => 0,
+            dts_hz => self.ticks as u64 * NS_PER_S / dts_hz,
+        }
     }
 }
 

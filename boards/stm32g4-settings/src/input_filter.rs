@@ -56,7 +56,7 @@ impl InputFilter {
     /// time between two edges of the valid signal, e.g. a quarter of an encoder line period at
     /// the top speed): the longest delay not above it, for a timer clocked at `timer_hz` with
     /// clock division `ckd`. No filter when even the weakest is too slow.
-    pub fn passing(
+    pub const fn passing(
         timer_hz: u32,
         ckd: ClockDivision,
         shortest_pulse_ns: u32,
@@ -64,33 +64,36 @@ impl InputFilter {
         if timer_hz == 0 {
             return Err(SettingError::Zero);
         }
-        let limit_ticks = u64::from(shortest_pulse_ns) * u64::from(timer_hz) / NS_PER_S;
-        let filter = FILTERS
-            .iter()
-            .zip(1u8..)
-            .map(|(&(divider, n), code)| {
-                let clocks = if code >= FROM_DTS {
-                    divider * ckd.divider()
-                } else {
-                    divider
-                };
-                Self {
-                    code,
-                    delay_ticks: clocks * n,
-                }
-            })
-            .filter(|f| f.delay_ticks <= limit_ticks)
-            // The longest delay; among equal ones the later code (more samples).
-            .max_by_key(|f| (f.delay_ticks, f.code));
-        Ok(filter.unwrap_or(Self {
+        let limit_ticks = shortest_pulse_ns as u64 * timer_hz as u64 / NS_PER_S;
+        let mut best = Self {
             code: 0,
             delay_ticks: 0,
-        }))
+        };
+        let mut i = 0;
+        while i < FILTERS.len() {
+            let (divider, n) = FILTERS[i];
+            let code = i as u8 + 1;
+            let clocks = if code >= FROM_DTS {
+                divider * ckd.divider()
+            } else {
+                divider
+            };
+            let delay_ticks = clocks * n;
+            // The longest delay that passes; among equal ones the later code (more samples).
+            if delay_ticks <= limit_ticks && delay_ticks >= best.delay_ticks {
+                best = Self { code, delay_ticks };
+            }
+            i += 1;
+        }
+        Ok(best)
     }
 
     /// The filter's delay in ns for a timer clocked at `timer_hz` (rounded up).
-    pub fn delay_ns(&self, timer_hz: u32) -> u64 {
-        (self.delay_ticks * NS_PER_S).div_ceil(u64::from(timer_hz).max(1))
+    pub const fn delay_ns(&self, timer_hz: u32) -> u64 {
+        match timer_hz {
+            0 => 0,
+            hz => (self.delay_ticks * NS_PER_S).div_ceil(hz as u64),
+        }
     }
 }
 

@@ -29,31 +29,42 @@ impl Watchdog {
     /// The finest setting whose timeout is at least `timeout_us` at an LSI of `lsi_hz` (the
     /// smallest prescaler that fits the reload into 12 bits; the reload rounded up, so the
     /// watchdog never fires before the time the caller allowed).
-    pub fn at_least(lsi_hz: u32, timeout_us: u32) -> Result<Self, SettingError> {
+    pub const fn at_least(lsi_hz: u32, timeout_us: u32) -> Result<Self, SettingError> {
         if lsi_hz == 0 || timeout_us == 0 {
             return Err(SettingError::Zero);
         }
-        let lsi_ticks = u64::from(timeout_us) * u64::from(lsi_hz);
-        (0..=PR_MAX)
-            .map(|pr| {
-                let divider = 4u64 << pr;
-                let counts = lsi_ticks.div_ceil(divider * US_PER_S);
-                (pr, counts.max(1))
-            })
-            .find(|&(_, counts)| counts <= RELOAD_MAX + 1)
-            .map(|(prescaler, counts)| Self {
-                prescaler,
-                reload: (counts - 1) as u16,
-            })
-            .ok_or(SettingError::TooLarge {
-                max: (4u64 << PR_MAX) * (RELOAD_MAX + 1) * US_PER_S / u64::from(lsi_hz),
-            })
+        let lsi_ticks = timeout_us as u64 * lsi_hz as u64;
+        let mut prescaler = 0;
+        while prescaler <= PR_MAX {
+            let divider = 4u64 << prescaler;
+            // At least one count: the shortest timeout is one divided LSI period.
+            let counts = lsi_ticks.div_ceil(divider * US_PER_S);
+            let counts = if counts == 0 { 1 } else { counts };
+            if counts <= RELOAD_MAX + 1 {
+                return Ok(Self {
+                    prescaler,
+                    reload: (counts - 1) as u16,
+                });
+            }
+            prescaler += 1;
+        }
+        Err(SettingError::TooLarge {
+            max: (4u64 << PR_MAX) * (RELOAD_MAX + 1) * US_PER_S / lsi_hz as u64,
+        })
     }
 
     /// The timeout in µs at an LSI of `lsi_hz` (rounded down).
-    pub fn timeout_us(&self, lsi_hz: u32) -> u64 {
-        let divider = 4u64 << self.prescaler.min(PR_MAX);
-        divider * (u64::from(self.reload) + 1) * US_PER_S / u64::from(lsi_hz).max(1)
+    pub const fn timeout_us(&self, lsi_hz: u32) -> u64 {
+        let prescaler = if self.prescaler > PR_MAX {
+            PR_MAX
+        } else {
+            self.prescaler
+        };
+        let divider = 4u64 << prescaler;
+        match lsi_hz {
+            0 => 0,
+            hz => divider * (self.reload as u64 + 1) * US_PER_S / hz as u64,
+        }
     }
 }
 

@@ -7,7 +7,9 @@
 //! MCUs") it inverts, rounds on the safe side (a dead time is never shorter than asked, a
 //! clock never faster than allowed), reports what it achieved, and refuses what the
 //! peripheral cannot do instead of wrapping a field. The crate has no dependency and builds on
-//! the host, where its tests check worked examples. `FACTS.md` beside this crate lists the
+//! the host, where its tests check worked examples. Every function is a `const fn`: a board
+//! computes its settings at compile time, where a request the peripheral cannot meet is a build
+//! error. `FACTS.md` beside this crate lists the
 //! sources of every formula and what is still unconfirmed.
 //!
 //! | module | peripheral | computes |
@@ -49,3 +51,34 @@ pub enum SettingError {
 
 /// Nanoseconds per second.
 pub(crate) const NS_PER_S: u64 = 1_000_000_000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // Computed at compile time, as a board does.
+    const PWM: Result<pwm::CentreAligned, SettingError> =
+        pwm::CentreAligned::new(170_000_000, 40_000);
+    const DEAD_TIME: Result<dead_time::DeadTime, SettingError> =
+        dead_time::DeadTime::at_least(170_000_000, dead_time::ClockDivision::Div1, 1_000);
+    const ADC_CLOCK: Result<adc::SynchronousClock, SettingError> =
+        adc::SynchronousClock::at_most(170_000_000, 60_000_000);
+    const SAMPLE: Result<adc::SampleTime, SettingError> =
+        adc::SampleTime::at_least(42_500_000, 250);
+    const FILTER: Result<input_filter::InputFilter, SettingError> =
+        input_filter::InputFilter::passing(170_000_000, dead_time::ClockDivision::Div1, 1_000);
+    const SPI: Result<spi::BaudRate, SettingError> =
+        spi::BaudRate::at_most(170_000_000, 30_000_000);
+    const WATCHDOG: Result<iwdg::Watchdog, SettingError> = iwdg::Watchdog::at_least(32_000, 10_000);
+
+    #[test]
+    fn every_setting_can_be_computed_at_compile_time() {
+        assert_eq!(PWM.map(|p| p.auto_reload), Ok(2125));
+        assert_eq!(DEAD_TIME.map(|d| d.dtg), Ok(0x95));
+        assert_eq!(ADC_CLOCK.map(|c| c.ckmode), Ok(0b11));
+        assert_eq!(SAMPLE.map(|s| s.code), Ok(2));
+        assert_eq!(FILTER.map(|f| f.code), Ok(0b1101));
+        assert_eq!(SPI.map(|b| b.br), Ok(0b010));
+        assert_eq!(WATCHDOG.map(|w| w.reload), Ok(79));
+    }
+}

@@ -30,24 +30,32 @@ pub struct CentreAligned {
 impl CentreAligned {
     /// The PSC/ARR whose frequency is nearest to `pwm_hz` with the finest resolution (the
     /// smallest prescaler that lets ARR fit 16 bits), for a timer clocked at `timer_hz`.
-    pub fn new(timer_hz: u32, pwm_hz: u32) -> Result<Self, SettingError> {
+    pub const fn new(timer_hz: u32, pwm_hz: u32) -> Result<Self, SettingError> {
         if timer_hz == 0 || pwm_hz == 0 {
             return Err(SettingError::Zero);
         }
-        let (timer, pwm) = (u64::from(timer_hz), u64::from(pwm_hz));
+        let (timer, pwm) = (timer_hz as u64, pwm_hz as u64);
         // ARR = 1 without prescaler is the fastest: f_TIM / 2.
         if 2 * pwm > timer {
             return Err(SettingError::TooLarge { max: timer / 2 });
         }
-        // ARR for the divider PSC + 1: half a period in counter ticks, rounded to the nearest.
-        let ticks = |divider: u64| (timer + divider * pwm) / (2 * divider * pwm);
         // The smallest divider (PSC + 1) that brings ARR into 16 bits.
-        let divider = (timer / (2 * pwm)).div_ceil(REGISTER_MAX).max(1);
+        let mut divider = (timer / (2 * pwm)).div_ceil(REGISTER_MAX);
+        if divider == 0 {
+            divider = 1;
+        }
         if divider > REGISTER_MAX + 1 {
             let min = timer.div_ceil(2 * (REGISTER_MAX + 1) * REGISTER_MAX);
             return Err(SettingError::TooSmall { min });
         }
-        let arr = ticks(divider).clamp(1, REGISTER_MAX);
+        // ARR: half a period in counter ticks, rounded to the nearest, within 1..=65535.
+        let mut arr = (timer + divider * pwm) / (2 * divider * pwm);
+        if arr < 1 {
+            arr = 1;
+        }
+        if arr > REGISTER_MAX {
+            arr = REGISTER_MAX;
+        }
         Ok(Self {
             prescaler: (divider - 1) as u16,
             auto_reload: arr as u16,
@@ -55,26 +63,32 @@ impl CentreAligned {
     }
 
     /// Counter ticks of one PWM period, at the timer clock (before the prescaler).
-    pub fn period_ticks(&self) -> u64 {
-        (u64::from(self.prescaler) + 1) * 2 * u64::from(self.auto_reload)
+    pub const fn period_ticks(&self) -> u64 {
+        (self.prescaler as u64 + 1) * 2 * self.auto_reload as u64
     }
 
     /// The frequency achieved, in mHz, for a timer clocked at `timer_hz` (rounded down).
-    pub fn frequency_mhz(&self, timer_hz: u32) -> u64 {
-        u64::from(timer_hz) * 1000 / self.period_ticks()
+    pub const fn frequency_mhz(&self, timer_hz: u32) -> u64 {
+        match self.period_ticks() {
+            0 => 0,
+            ticks => timer_hz as u64 * 1000 / ticks,
+        }
     }
 }
 
 /// TIMx_RCR for one update event every `periods` PWM periods in centre-aligned mode (the
 /// repetition counter counts half periods): 2 × `periods` − 1.
-pub fn repetition_counter(periods: u32) -> Result<u16, SettingError> {
+pub const fn repetition_counter(periods: u32) -> Result<u16, SettingError> {
     if periods == 0 {
         return Err(SettingError::Zero);
     }
-    let rep = 2 * u64::from(periods) - 1;
-    u16::try_from(rep).map_err(|_| SettingError::TooLarge {
-        max: REGISTER_MAX.div_ceil(2),
-    })
+    let rep = 2 * periods as u64 - 1;
+    if rep > REGISTER_MAX {
+        return Err(SettingError::TooLarge {
+            max: REGISTER_MAX.div_ceil(2),
+        });
+    }
+    Ok(rep as u16)
 }
 
 #[cfg(test)]
