@@ -25,6 +25,20 @@ const OPERATION_ENABLED: u16 = 0x27;
 /// 6060h modes: cyclic synchronous position / velocity.
 const CSP: u8 = 8;
 const CSV: u8 = 9;
+/// The Σ-V-SD's 6060h for cyclic synchronous position, statusword bit 3 "fault".
+const SIGMA_CSP: i8 = 8;
+const FAULT: u16 = 0x08;
+/// The Σ-V-SD's 1010h:03 "save" (23xxh and 6xxxh, §4.2 (5)) with its signature.
+const STORE_23XX_6XXX: (u16, u8, u32) = (0x1010, 3, 0x6576_6173);
+
+/// The Σ-V-SD's alarm A.A20 "user unit setting error" (§4.5 (3)-(6)).
+fn a_a20(profile: &od_gen::Profile) -> &od_gen::model::Alarm {
+    profile
+        .alarms
+        .iter()
+        .find(|a| a.display == "A.A20")
+        .expect("alarm A.A20")
+}
 
 #[test]
 fn gear_ratio_scales_positions_and_velocities_between_bus_and_motor() {
@@ -173,7 +187,6 @@ fn gha_e_csp_and_csv(polarity: u8, home_offset: i32) {
 #[test]
 fn sigma_v_sd_user_units_take_effect_on_2300h() {
     use tests_host::csp;
-    const SIGMA_CSP: i8 = 8;
     block_on(async {
         let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
@@ -257,15 +270,9 @@ fn sigma_v_sd_user_units_take_effect_on_2300h() {
 #[test]
 fn sigma_v_sd_user_units_outside_their_range_raise_a_a20() {
     use tests_host::{csp, emcy};
-    const SIGMA_CSP: i8 = 8;
     const FAULT_RESET: u16 = 0x80;
-    const FAULT: u16 = 0x08;
     let p = od_gen::builtin("sigma-v-sd").expect("profile");
-    let a_a20 = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "A.A20")
-        .expect("alarm A.A20");
+    let a_a20 = a_a20(&p);
     // (object, numerator, in range): 2301h 1/4096 < N/D < 4096; 2302h 1/128 <= N/D <= 524288;
     // 2303h 1/128 <= N/D <= 16384; 2304h 1/256 <= N/D <= 1 (its denominator 10 by default).
     let cases: [(u16, u32, bool); 8] = [
@@ -336,22 +343,14 @@ fn sigma_v_sd_user_units_outside_their_range_raise_a_a20() {
 fn sigma_v_sd_stored_user_units_outside_their_range_raise_a_a20_at_power_on() {
     use tests_host::session::{power_cycle, session, Step};
     use tests_host::{csp, emcy};
-    const SIGMA_CSP: i8 = 8;
-    const FAULT: u16 = 0x08;
-    /// 1010h:03 "save" (23xxh and 6xxxh, §4.2 (5)).
-    const STORE_23XX: (u16, u8, u32) = (0x1010, 3, 0x6576_6173);
     let p = od_gen::builtin("sigma-v-sd").expect("profile");
-    let a_a20 = p
-        .alarms
-        .iter()
-        .find(|a| a.display == "A.A20")
-        .expect("alarm A.A20");
+    let a_a20 = a_a20(&p);
     let segment = Segment::new("sigma-v-sd", 1).expect("profile");
     let (mut segment, out) = session(
         segment,
         &[
             Step::Write(0x2301, 1, 8192),
-            Step::Write(STORE_23XX.0, STORE_23XX.1, STORE_23XX.2),
+            Step::Write(STORE_23XX_6XXX.0, STORE_23XX_6XXX.1, STORE_23XX_6XXX.2),
         ],
     );
     assert!(out.iter().all(Result::is_ok), "{out:?}");
@@ -446,10 +445,7 @@ fn sigma_v_sd_torque_user_unit_2304h_scales_every_torque_object() {
 fn sigma_v_sd_absolute_encoder_adds_the_home_offset_at_power_on() {
     use tests_host::csp;
     use tests_host::session::{power_cycle, take_segment};
-    const SIGMA_CSP: i8 = 8;
     const OFFSET: i32 = 5_000;
-    /// 1010h:03 "save" (23xxh and 6xxxh, §4.2 (5)).
-    const STORE_6XXX: (u16, u8, u32) = (0x1010, 3, 0x6576_6173);
     let mut segment = block_on(async {
         let (m, transport) = master_for(Segment::new("sigma-v-sd", 1).expect("profile"));
         tokio::task::spawn_local(transport);
@@ -463,7 +459,7 @@ fn sigma_v_sd_absolute_encoder_adds_the_home_offset_at_power_on() {
             (written - before).abs() <= 2,
             "not before the next power-on: {before} -> {written}"
         );
-        sd.sdo_write(STORE_6XXX.0, STORE_6XXX.1, STORE_6XXX.2)
+        sd.sdo_write(STORE_23XX_6XXX.0, STORE_23XX_6XXX.1, STORE_23XX_6XXX.2)
             .await
             .expect("1010h:03");
         (before, take_segment(&m))
