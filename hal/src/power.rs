@@ -26,6 +26,14 @@ pub trait Inverter {
     /// Whether the gates are enabled, or will be from the next period boundary on (`enable`
     /// was called since the last `disable`).
     fn is_enabled(&self) -> bool;
+    /// Whether the power stage's hardware protection (over-current comparator, gate-driver
+    /// fault: on an STM32 the advanced timer's break input) switched the gates off since the
+    /// last call. The board keeps the gates off after a trip until `disable` and then `enable`
+    /// are called; the firmware reads this once per PWM period with the sample and latches an
+    /// over-current fault. Default: a board without such a protection, never tripped.
+    fn take_hardware_trip(&mut self) -> bool {
+        false
+    }
 }
 
 /// One sample of the phase currents, in amperes.

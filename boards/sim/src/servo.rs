@@ -218,6 +218,7 @@ impl SimServo {
         let io = &mut self.io;
         io.sample(&mut self.plant);
         let sample = Sample::read(
+            &mut io.power,
             &mut io.currents,
             &mut io.bus,
             &mut io.encoder,

@@ -301,6 +301,9 @@ pub struct Sample {
     pub probes: [ProbeCapture; 2],
     /// The safe-torque-off channels, `true` = closed (torque allowed; both must be).
     pub safe_torque_off_channels: [bool; 2],
+    /// The power stage's hardware protection switched the gates off since the last sample
+    /// ([`Inverter::take_hardware_trip`]).
+    pub power_stage_trip: bool,
 }
 
 /// What the board applies during the next PWM period.
@@ -315,8 +318,10 @@ pub struct Output {
 impl Sample {
     /// The measurements of the present PWM period through the board's drivers: phase
     /// currents, bus voltage and power-stage temperature, the motor's thermal switch, the
-    /// encoder position (each as latched at the PWM-synchronous sample).
+    /// encoder position (each as latched at the PWM-synchronous sample), and whether the power
+    /// stage's hardware protection tripped.
     pub fn read(
+        power: &mut impl Inverter,
         currents: &mut impl CurrentSense,
         bus: &mut impl BusSense,
         encoder: &mut impl Encoder,
@@ -339,6 +344,7 @@ impl Sample {
                 inputs.touch_probe(TouchProbe::Two),
             ],
             safe_torque_off_channels: inputs.safe_torque_off_channels(),
+            power_stage_trip: power.take_hardware_trip(),
         }
     }
 }
@@ -786,7 +792,11 @@ impl Axis {
             b: c.b - self.offsets.b,
             c: c.c - self.offsets.c,
         };
-        // Over-current first: gates off in this very period.
+        // Over-current first: gates off in this very period. The hardware trip (the board has
+        // switched the gates off already) counts in every state, the offset calibration too.
+        if sample.power_stage_trip {
+            return self.trip(MotorFault::OverCurrent, link);
+        }
         if self.state != AxisState::CalibratingOffsets {
             if let Some(fault) = self
                 .protections
@@ -1509,6 +1519,10 @@ mod tests {
         fn is_enabled(&self) -> bool {
             self.enabled
         }
+        fn take_hardware_trip(&mut self) -> bool {
+            // Tripped while enabled (a test sets `enabled` and expects the trip in the sample).
+            self.enabled
+        }
     }
 
     /// The 400 W servo's axis at rest on `position`, gates off, `ticks` loop ticks with
@@ -1529,6 +1543,7 @@ mod tests {
             index: None,
             probes: [ProbeCapture::default(); 2],
             safe_torque_off_channels: [true; 2],
+            power_stage_trip: false,
         };
         for _ in 0..ticks {
             link.publish(command);
@@ -1562,6 +1577,59 @@ mod tests {
     }
 
     #[test]
+    fn a_hardware_trip_latches_an_over_current_in_every_state() {
+        use crate::servo::{axis_config, Tuning, SERVO_400W};
+        let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
+        let quiet = Sample {
+            currents: PhaseCurrents::default(),
+            bus_voltage: 48.0,
+            temperature: 25.0,
+            motor_overtemp: false,
+            position: Ok(1_000),
+            switches: Switches::default(),
+            index: None,
+            probes: [ProbeCapture::default(); 2],
+            safe_torque_off_channels: [true; 2],
+            power_stage_trip: false,
+        };
+        let tripped = Sample {
+            power_stage_trip: true,
+            ..quiet
+        };
+        let enable = AxisCommand {
+            enable: true,
+            mode: ControlMode::Position,
+            position: 1_000,
+            ..AxisCommand::default()
+        };
+        // Periods after the enable at which the break fires: the first is inside the offset
+        // calibration (where the software over-current check is not run), the last in
+        // closed loop.
+        for trip_at in [2, cfg.offset_samples / 2, 5_000] {
+            let mut axis = Axis::new(cfg).unwrap();
+            // SAFETY: one thread calls both sides, one after the other.
+            let link = unsafe { AxisLink::new() };
+            link.publish(enable);
+            for _ in 0..trip_at {
+                axis.control_step(&quiet, &link);
+            }
+            let state = axis.state();
+            let out = axis.control_step(&tripped, &link);
+            assert!(!out.gates, "gates off at a trip in {state:?}");
+            assert_eq!(axis.state(), AxisState::Faulted, "trip in {state:?}");
+            assert_eq!(
+                axis.fault(),
+                Some(MotorFault::OverCurrent),
+                "trip in {state:?}"
+            );
+            // Latched: quiet samples do not bring the gates back.
+            for _ in 0..100 {
+                assert!(!axis.control_step(&quiet, &link).gates);
+            }
+        }
+    }
+
+    #[test]
     fn safe_torque_off_cuts_the_output_at_once_and_never_restarts_by_itself() {
         use crate::servo::{axis_config, Tuning, SERVO_400W};
         let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
@@ -1578,6 +1646,7 @@ mod tests {
             index: None,
             probes: [ProbeCapture::default(); 2],
             safe_torque_off_channels: [true; 2],
+            power_stage_trip: false,
         };
         let open = Sample {
             safe_torque_off_channels: [true, false],
@@ -1634,7 +1703,11 @@ mod tests {
             Board::default(),
             Board::default(),
         );
-        let s = Sample::read(&mut c, &mut b, &mut e, &mut i);
+        let mut p = Board {
+            enabled: true,
+            ..Board::default()
+        };
+        let s = Sample::read(&mut p, &mut c, &mut b, &mut e, &mut i);
         assert_eq!(
             s,
             Sample {
@@ -1651,6 +1724,7 @@ mod tests {
                 index: None,
                 probes: [ProbeCapture::default(); 2],
                 safe_torque_off_channels: [true; 2],
+                power_stage_trip: true,
             }
         );
     }

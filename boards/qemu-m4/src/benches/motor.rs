@@ -257,6 +257,7 @@ pub(super) const SAMPLE: Sample = Sample {
         edge_ns_before_position: None,
     }; 2],
     safe_torque_off_channels: [true; 2],
+    power_stage_trip: false,
 };
 
 /// An axis of the servo at `tuning`, brought to Running in CSP through its link, at rest on

@@ -1,0 +1,331 @@
+//! TIM1 as the three-phase inverter ([`hal::power::Inverter`]).
+//!
+//! # Duty and compare value
+//! The phases run in PWM mode 2 on a centre-aligned counter (RM0440 §29.3.13): a phase's
+//! high-side switch conducts while the counter is at or above its compare value, so over one
+//! period of 2 × ARR ticks it conducts 2 × (ARR − CCR) ticks and
+//!
+//! ```text
+//! duty = (ARR − CCR) / ARR        CCR = round(ARR × (1 − duty))
+//! ```
+//!
+//! CCR = ARR is a duty of 0 (low side on all period), CCR = 0 a duty of 1. Every low-side switch
+//! conducts at the valley, where the update event samples the currents.
+//!
+//! # Gate enable, disable and the break
+//! - [`Inverter::set_duties`] writes the preloaded compare registers: they act from the next
+//!   update event, the next period.
+//! - [`Inverter::enable`] arms the main output enable; [`Tim1Inverter::start_period`], the first
+//!   thing the control interrupt does after the update event, sets MOE. The first switched
+//!   period is thus one whose duties the control loop computed for it (`hal::power`); it starts
+//!   switching after the interrupt's entry latency (the ADC conversions, ≈ 1–2 µs), with both
+//!   switches of every leg off until then.
+//! - [`Inverter::disable`] clears MOE at once: every output goes to its idle level (off).
+//! - The break input (over-current comparator and gate-driver fault, wired-OR on BKIN) clears
+//!   MOE in hardware, with no software on the path. The driver sees the break flag at the next
+//!   `start_period`, reports it once through [`Inverter::take_hardware_trip`], and refuses to
+//!   switch again until [`Inverter::disable`] and then [`Inverter::enable`] are called: the
+//!   firmware latches an over-current fault, and only its fault reset brings the gates back
+//!   (automatic output enable, AOE, stays off for that reason).
+
+use hal::power::Inverter;
+
+use crate::regs::PwmTimer;
+
+/// The compare value of `duty` (0.0..=1.0, clamped; NaN is 0.5, no voltage) for a counter
+/// turning at `auto_reload`, in PWM mode 2 (see the module docs).
+pub fn compare_for_duty(duty: f32, auto_reload: u16) -> u16 {
+    let duty = if duty.is_nan() {
+        0.5
+    } else {
+        duty.clamp(0.0, 1.0)
+    };
+    let arr = f32::from(auto_reload);
+    // In 0.0..=ARR (duty is clamped), so the conversion neither saturates nor wraps.
+    let compare = arr - duty * arr + 0.5;
+    (compare as u16).min(auto_reload)
+}
+
+/// The duty a compare value gives (the inverse of [`compare_for_duty`]).
+pub fn duty_of_compare(compare: u16, auto_reload: u16) -> f32 {
+    if auto_reload == 0 {
+        return 0.0;
+    }
+    let arr = f32::from(auto_reload);
+    (arr - f32::from(compare.min(auto_reload))) / arr
+}
+
+/// Where the gates are in the enable sequence.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum GateState {
+    /// MOE cleared, not armed.
+    Off,
+    /// [`Inverter::enable`] was called: MOE is set at the next period start.
+    Armed,
+    /// MOE set, switching.
+    On,
+    /// The break input cleared MOE; stays off until `disable` then `enable`.
+    Tripped,
+}
+
+/// TIM1 as the inverter.
+pub struct Tim1Inverter<T> {
+    timer: T,
+    pwm_hz: u32,
+    gates: GateState,
+    /// A trip not yet reported through `take_hardware_trip`.
+    trip_unreported: bool,
+    /// The compare values written last (active from the next update event).
+    compares: [u16; 3],
+}
+
+impl<T: PwmTimer> Tim1Inverter<T> {
+    /// The inverter on `timer`, configured by the board for `pwm_hz`: gates off (MOE cleared),
+    /// every phase at 50 %.
+    pub fn new(mut timer: T, pwm_hz: u32) -> Self {
+        timer.set_main_output(false);
+        let centre = compare_for_duty(0.5, timer.auto_reload());
+        let compares = [centre; 3];
+        timer.set_compares(compares);
+        // A break flag from before (reset, configuration) is no trip of this run.
+        let _ = timer.take_break();
+        Self {
+            timer,
+            pwm_hz,
+            gates: GateState::Off,
+            trip_unreported: false,
+            compares,
+        }
+    }
+
+    /// The start of a PWM period, right after its update event (first thing in the control
+    /// interrupt): takes the break flag, and sets MOE if the gates were armed.
+    pub fn start_period(&mut self) {
+        if self.timer.take_break() {
+            // The hardware has cleared MOE already; clear it here too, so that nothing this
+            // driver does later can set it before the firmware's disable/enable.
+            self.timer.set_main_output(false);
+            self.gates = GateState::Tripped;
+            self.trip_unreported = true;
+            return;
+        }
+        if self.gates == GateState::Armed {
+            self.timer.set_main_output(true);
+            self.gates = GateState::On;
+        }
+    }
+
+    /// Where the gates are.
+    pub fn gates(&self) -> GateState {
+        self.gates
+    }
+
+    /// The compare values written last (active from the next update event).
+    pub fn compares(&self) -> [u16; 3] {
+        self.compares
+    }
+
+    /// The timer's registers.
+    pub fn timer(&self) -> &T {
+        &self.timer
+    }
+
+    /// The timer's registers, to change (the SYNC0 phase lock trims its period).
+    pub fn timer_mut(&mut self) -> &mut T {
+        &mut self.timer
+    }
+}
+
+impl<T: PwmTimer> Inverter for Tim1Inverter<T> {
+    fn pwm_frequency_hz(&self) -> u32 {
+        self.pwm_hz
+    }
+
+    fn set_duties(&mut self, a: f32, b: f32, c: f32) {
+        let arr = self.timer.auto_reload();
+        self.compares = [
+            compare_for_duty(a, arr),
+            compare_for_duty(b, arr),
+            compare_for_duty(c, arr),
+        ];
+        self.timer.set_compares(self.compares);
+    }
+
+    fn enable(&mut self) {
+        // A trip holds until `disable`; from `Armed` or `On` there is nothing to do.
+        if self.gates == GateState::Off {
+            self.gates = GateState::Armed;
+        }
+    }
+
+    fn disable(&mut self) {
+        self.timer.set_main_output(false);
+        self.gates = GateState::Off;
+    }
+
+    fn is_enabled(&self) -> bool {
+        matches!(self.gates, GateState::Armed | GateState::On)
+    }
+
+    fn take_hardware_trip(&mut self) -> bool {
+        core::mem::take(&mut self.trip_unreported)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// TIM1 at 40 kHz from 170 MHz (ARR 2125), as plain memory.
+    #[derive(Debug, Default)]
+    pub(crate) struct FakeTimer {
+        pub compares: [u16; 3],
+        pub moe: bool,
+        pub break_flag: bool,
+        pub moe_writes: u32,
+    }
+
+    pub(crate) const ARR_40KHZ: u16 = 2125;
+
+    impl PwmTimer for FakeTimer {
+        fn auto_reload(&self) -> u16 {
+            ARR_40KHZ
+        }
+        fn set_compares(&mut self, compares: [u16; 3]) {
+            self.compares = compares;
+        }
+        fn set_main_output(&mut self, enabled: bool) {
+            self.moe = enabled;
+            self.moe_writes += 1;
+        }
+        fn take_break(&mut self) -> bool {
+            core::mem::take(&mut self.break_flag)
+        }
+    }
+
+    /// What the hardware does on a break: BIF set, MOE cleared asynchronously.
+    fn fire_break(inverter: &mut Tim1Inverter<FakeTimer>) {
+        let t = inverter.timer_mut();
+        t.break_flag = true;
+        t.moe = false;
+    }
+
+    #[test]
+    fn duties_map_to_pwm_mode_2_compare_values() {
+        // duty = (ARR − CCR) / ARR with ARR = 2125.
+        assert_eq!(compare_for_duty(0.0, ARR_40KHZ), 2125);
+        assert_eq!(compare_for_duty(1.0, ARR_40KHZ), 0);
+        assert_eq!(compare_for_duty(0.5, ARR_40KHZ), 1063); // 1062.5 rounds up
+        assert_eq!(compare_for_duty(0.25, ARR_40KHZ), 1594); // 1593.75
+        assert_eq!(compare_for_duty(0.95, ARR_40KHZ), 106); // 106.25
+                                                            // Out of range and NaN: clamped, or no voltage.
+        assert_eq!(compare_for_duty(-0.3, ARR_40KHZ), 2125);
+        assert_eq!(compare_for_duty(7.0, ARR_40KHZ), 0);
+        assert_eq!(compare_for_duty(f32::NAN, ARR_40KHZ), 1063);
+        assert_eq!(compare_for_duty(f32::INFINITY, ARR_40KHZ), 0);
+        assert_eq!(compare_for_duty(f32::NEG_INFINITY, ARR_40KHZ), 2125);
+        // The round trip is within half a tick.
+        for i in 0..=100 {
+            let d = i as f32 / 100.0;
+            let back = duty_of_compare(compare_for_duty(d, ARR_40KHZ), ARR_40KHZ);
+            assert!(
+                (back - d).abs() <= 0.5 / f32::from(ARR_40KHZ) + 1e-6,
+                "{d} → {back}"
+            );
+        }
+        assert_eq!(duty_of_compare(0, 0), 0.0);
+    }
+
+    #[test]
+    fn a_new_inverter_is_off_at_fifty_percent() {
+        let inv = Tim1Inverter::new(
+            FakeTimer {
+                moe: true,
+                break_flag: true,
+                ..FakeTimer::default()
+            },
+            40_000,
+        );
+        assert!(!inv.timer().moe);
+        assert_eq!(inv.timer().compares, [1063; 3]);
+        assert!(!inv.is_enabled());
+        assert_eq!(inv.pwm_frequency_hz(), 40_000);
+        // The stale break flag was cleared, not reported as a trip.
+        let mut inv = inv;
+        inv.start_period();
+        assert!(!inv.take_hardware_trip());
+    }
+
+    #[test]
+    fn enable_switches_from_the_next_period_start() {
+        let mut inv = Tim1Inverter::new(FakeTimer::default(), 40_000);
+        inv.set_duties(0.25, 0.5, 0.75);
+        assert_eq!(inv.timer().compares, [1594, 1063, 531]);
+        inv.enable();
+        // Enabled as far as the firmware is concerned, but MOE waits for the period start.
+        assert!(inv.is_enabled());
+        assert!(!inv.timer().moe);
+        assert_eq!(inv.gates(), GateState::Armed);
+        inv.start_period();
+        assert!(inv.timer().moe);
+        assert_eq!(inv.gates(), GateState::On);
+        // A second enable while on writes nothing.
+        let writes = inv.timer().moe_writes;
+        inv.enable();
+        inv.start_period();
+        assert_eq!(inv.timer().moe_writes, writes);
+    }
+
+    #[test]
+    fn disable_acts_at_once() {
+        let mut inv = Tim1Inverter::new(FakeTimer::default(), 40_000);
+        inv.enable();
+        inv.start_period();
+        inv.disable();
+        assert!(!inv.timer().moe);
+        assert!(!inv.is_enabled());
+        // Disarmed: the next period does not switch.
+        inv.start_period();
+        assert!(!inv.timer().moe);
+        // A disable while only armed cancels the enable too.
+        inv.enable();
+        inv.disable();
+        inv.start_period();
+        assert!(!inv.timer().moe);
+    }
+
+    #[test]
+    fn a_break_is_reported_once_and_holds_until_disable_then_enable() {
+        let mut inv = Tim1Inverter::new(FakeTimer::default(), 40_000);
+        inv.enable();
+        inv.start_period();
+        fire_break(&mut inv);
+        inv.start_period();
+        assert_eq!(inv.gates(), GateState::Tripped);
+        assert!(!inv.is_enabled());
+        assert!(inv.take_hardware_trip());
+        assert!(!inv.take_hardware_trip(), "reported once");
+        // The firmware's output still says "gates on" until it has latched the fault: an
+        // enable does not switch again.
+        inv.enable();
+        inv.start_period();
+        assert!(!inv.timer().moe);
+        assert_eq!(inv.gates(), GateState::Tripped);
+        // Its fault reaction disables; a later enable (after the fault reset) switches again.
+        inv.disable();
+        inv.enable();
+        inv.start_period();
+        assert!(inv.timer().moe);
+    }
+
+    #[test]
+    fn a_break_while_armed_is_a_trip_too() {
+        let mut inv = Tim1Inverter::new(FakeTimer::default(), 40_000);
+        inv.enable();
+        fire_break(&mut inv);
+        inv.start_period();
+        assert!(!inv.timer().moe);
+        assert!(inv.take_hardware_trip());
+    }
+}
