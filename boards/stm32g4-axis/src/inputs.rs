@@ -6,6 +6,7 @@
 //! (limit switches, safe torque off) are wired so that a broken wire reads as the safe state:
 //! normally-closed contacts, active (open) when the pin reads low.
 
+use cia402::outputs::BRAKE as BRAKE_APPLIED;
 use hal::io::{DigitalInputs, DigitalOutputs, ProbeCapture, TouchProbe};
 
 use crate::regs::{InputPins, OutputPins};
@@ -113,9 +114,6 @@ impl<P: InputPins> DigitalInputs for BoardInputs<P> {
         ]
     }
 }
-
-/// Bit 0 of 60FEh:01: the holding brake applied.
-const BRAKE_APPLIED: u32 = 1 << 0;
 
 /// The holding-brake output on `pins`.
 pub struct BrakeOutput<P> {

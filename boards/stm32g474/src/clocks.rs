@@ -7,7 +7,9 @@
 //! | VCO | 4 MHz × 85 = 340 MHz | N multiplier; VCO must be 96–344 MHz |
 //! | SYSCLK = PLLR | 340 MHz / 2 = 170 MHz | the G474 maximum; needs range-1 boost mode above 150 MHz (RM0440 §6.1.5) and 4 flash wait states (RM0440 §3.3.3 Table 9) |
 //! | HCLK, PCLK1, PCLK2 | 170 MHz | AHB/APB prescalers 1; 170 MHz is the APB maximum |
-//! | SPI3 kernel clock | PCLK1 = 170 MHz | SPI3 sits on APB1 |
+//! | SPI3, TIM2 kernel clock | PCLK1 = 170 MHz | on APB1; with an APB prescaler of 1 the timer clock is PCLK itself |
+//! | TIM1 kernel clock | PCLK2 = 170 MHz | on APB2 |
+//! | ADC1/ADC2 clock | HCLK / 4 = 42.5 MHz | synchronous mode, see `adc` |
 //!
 //! embassy-stm32 applies the boost-mode entry sequence (AHB/2 during the switch, R1MODE = 0,
 //! wait states, then AHB/1) and the flash latency itself (`rcc::g4::init`). HSI48 is switched
@@ -32,8 +34,13 @@ const PLL_R: u32 = 2;
 
 /// SYSCLK = HCLK = core clock (DWT CYCCNT rate).
 pub const SYSCLK_HZ: u32 = HSE_HZ / PLL_M * PLL_N / PLL_R;
-/// APB1 clock: kernel clock of SPI3 (the ET1100 PDI) and of TIM4 (embassy-time).
+/// AHB clock (prescaler 1): the synchronous clock of the ADCs.
+pub const HCLK_HZ: u32 = SYSCLK_HZ;
+/// APB1 clock: kernel clock of SPI3 (the ET1100 PDI), of TIM2 (encoder) and of TIM4
+/// (embassy-time).
 pub const PCLK1_HZ: u32 = SYSCLK_HZ;
+/// APB2 clock: kernel clock of TIM1 (the inverter).
+pub const PCLK2_HZ: u32 = SYSCLK_HZ;
 
 // The derivations above, checked at compile time against the RM0440 limits.
 const _: () = {

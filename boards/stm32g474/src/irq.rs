@@ -2,7 +2,7 @@
 //!
 //! | priority | vector | context | work |
 //! |---|---|---|---|
-//! | P0 | (TIM1_UP_TIM16 / ADC1_2, later) | FOC | **reserved** for the PWM/ADC control interrupt; nothing else uses P0 and the drive lock does not mask it |
+//! | P0 | ADC1_2 (end of ADC1's injected sequence) | control | [`ControlHandler`](crate::control::ControlHandler): one PWM period of the axis; nothing else uses P0 and no lock masks it |
 //! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`on_sync0`](firmware::sync0::on_sync0) in DC modes, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
 //! | P2 | EXTI2 (SPI_IRQ, PD2) | ESC event | raw handler [`EscIrqHandler`]: clears the line and signals the ESC-event task |
 //! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`service_esc_events`] (one ESC-event round; the core also runs SM-synchronous cycles on the SM2 event), and `tasks::free_run` |
@@ -50,14 +50,19 @@ use embassy_stm32::{bind_interrupts, pac, Peri};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
+use firmware::cia402::outputs;
+use firmware::drive::DriveAxis;
 use firmware::od::{NoDomains, WithDomains};
 use firmware::slave::MailboxSide;
 use firmware::slave::SyncMode;
 use firmware::DriveCore;
 use hal::esc::AlEvent;
+use hal::io::DigitalOutputs;
 use hal::pdi::EscPdi;
 use static_cell::StaticCell;
+use stm32g4_axis::inputs::BrakeOutput;
 
+use crate::axis_io::BrakePin;
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
 use crate::lock::BasepriRawMutex;
 use crate::pins::SYNC0_EXTI_LINE;
@@ -70,7 +75,8 @@ use firmware::params::ParamStore;
 pub mod prio {
     use embassy_stm32::interrupt::Priority;
 
-    /// Reserved for the PWM/ADC FOC interrupt (DESIGN.md §3, highest priority). Unused so far.
+    /// The control interrupt: current, speed and position loops (DESIGN.md §3, highest
+    /// priority).
     pub const FOC: Priority = Priority::P0;
     /// SYNC0 / process-data cycle.
     pub const CYCLE: Priority = Priority::P1;
@@ -89,6 +95,7 @@ pub mod prio {
 bind_interrupts!(
     /// The vectors this board binds; handlers are checked against their vector at compile time.
     pub struct Irqs {
+        ADC1_2 => crate::control::ControlHandler;
         EXTI2 => EscIrqHandler;
         EXTI4 => CycleHandler;
         UART4 => EscEventExecutor;
@@ -103,6 +110,19 @@ pub struct Drive {
     pub core: DriveCore<RAM_SIZE>,
     /// The ET1100.
     pub pdi: Et1100Spi<'static>,
+    /// The holding brake, set from the axis' 60FEh:01 bit 0 after every cycle.
+    pub brake: BrakeOutput<BrakePin>,
+}
+
+impl Drive {
+    /// Sets the digital outputs to what the first axis asks (brake applied without an axis).
+    pub fn drive_outputs(&mut self) {
+        let (drive, _) = self.core.application();
+        let levels = drive
+            .axis(0)
+            .map_or(outputs::BRAKE, DriveAxis::digital_outputs);
+        self.brake.set_outputs(levels);
+    }
 }
 
 /// What only the ESC-event context (its executor and the thread-mode fallback poll) uses: the
@@ -240,13 +260,19 @@ pub struct ContextStats {
 }
 
 impl ContextStats {
-    const fn new() -> Self {
+    /// No runs yet.
+    pub const fn new() -> Self {
         Self {
             runs: AtomicU32::new(0),
             errors: AtomicU32::new(0),
             max_cycles: AtomicU32::new(0),
             last_error: AtomicU8::new(0),
         }
+    }
+
+    /// Records a run without errors that started at DWT count `started`.
+    pub fn record_run(&self, started: u32) {
+        self.record(started, Some(Ok(())));
     }
 
     fn record(&self, started: u32, result: Option<Result<(), PdiError>>) {
@@ -335,6 +361,7 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
                 let result = firmware::sync0::on_sync0(&mut d.core, &mut d.pdi, now_ns());
                 // The measured duration becomes 1C32h/1C33h:06 (calc and copy time).
                 d.core.cycle_finished(now_ns());
+                d.drive_outputs();
                 Some(result)
             } else {
                 None

@@ -5,6 +5,12 @@
 //! |---|---|
 //! | [`pins`] | the pin map (the only place that names pins) |
 //! | [`clocks`] | HSE 24 MHz → PLL → 170 MHz |
+//! | [`servo`] | the motor, encoder, power stage and analog front end this board drives |
+//! | [`pwm`] | TIM1: complementary centre-aligned PWM, dead time, break, ADC trigger |
+//! | [`adc`] | ADC1/ADC2: injected conversions of currents, bus voltage, temperature |
+//! | [`encoder`] | TIM2: incremental encoder with index capture |
+//! | [`axis_io`] | limit/home switches, thermal switch, probes, STO, brake, gate-driver enable |
+//! | [`control`] | the control interrupt (P0): one PWM period of the axis |
 //! | [`et1100_spi`] | the ET1100 SPI PDI driver (`hal::pdi::EscPdi`) |
 //! | [`irq`] | priorities, vectors, the cycle and ESC-event contexts, the shared Slave/PDI |
 //! | [`lock`] | the BASEPRI priority-ceiling lock |
@@ -17,13 +23,19 @@
 #![deny(missing_docs)]
 #![deny(clippy::missing_safety_doc)]
 
+mod adc;
+mod axis_io;
 mod clocks;
+mod control;
+mod encoder;
 mod et1100_spi;
 mod irq;
 mod leds;
 mod lock;
 mod pins;
 mod profile;
+mod pwm;
+mod servo;
 mod storage;
 mod tasks;
 mod time;
@@ -32,14 +44,22 @@ use defmt::{error, info, unwrap, warn};
 use embassy_executor::Spawner;
 use embassy_stm32::flash::{Blocking, Flash};
 use embassy_time::{Duration, Timer};
+use firmware::motor::axis::Axis;
+use firmware::motor::servo::axis_config;
 use firmware::params::ParamStore;
 use firmware::DriveCore;
 use hal::esc::regs;
 use hal::pdi::EscPdi;
 use {defmt_rtt as _, panic_probe as _};
 
+use crate::axis_io::{BrakePin, GateDriverEnable, GpioInputs};
+use crate::control::ControlContext;
 use crate::et1100_spi::Et1100Spi;
 use crate::storage::FlashStorage;
+use stm32g4_axis::control::AxisHardware;
+use stm32g4_axis::inputs::{BoardInputs, BrakeOutput};
+use stm32g4_axis::inverter::Tim1Inverter;
+use stm32g4_axis::quadrature::QuadratureEncoder;
 
 /// Start-up probe: attempts and spacing. The ET1100 loads its SII EEPROM after reset (tens of
 /// ms for a few KiB at 100/400 kHz I²C) and only then enables the SPI PDI; 100 × 10 ms = 1 s.
@@ -75,12 +95,68 @@ async fn probe_esc(pdi: &mut Et1100Spi<'_>) -> bool {
     false
 }
 
-/// Creates the slave, starts it if the ESC is ready, and installs slave and PDI as the shared
-/// drive. Returns whether the slave was started. A plain function, so that the multi-KiB
-/// `Slave` never becomes part of the main task's future.
+/// Configures the axis hardware (TIM1, ADC1/ADC2, TIM2, the GPIOs) and creates the axis.
+/// `None` (logged) if the ADCs do not start or the servo's configuration is refused: the drive
+/// then runs without a motor (no axis attached, gates off).
+fn make_axis(
+    inverter: pins::InverterPins,
+    sensing: pins::SensingPins,
+    encoder: pins::EncoderPins,
+    axis_io: pins::AxisIoPins,
+) -> (Option<ControlContext>, BrakePin) {
+    let brake = BrakePin::new(axis_io.brake);
+    let mut gate_driver = GateDriverEnable::new(inverter.gate_enable);
+    // TIM1 first: its outputs reach the pins at their off level, then the driver may wake.
+    let (tim1, pwm_pins) = pwm::configure(inverter.tim, inverter.pwm);
+    gate_driver.enable();
+    let adcs = match adc::configure(sensing.adc1, sensing.adc2, sensing.analog) {
+        Ok(adcs) => adcs,
+        Err(e) => {
+            error!("ADC start-up failed ({}): no motor control", e);
+            return (None, brake);
+        }
+    };
+    let counter = encoder::configure(encoder.tim, encoder.lines);
+    let axis = match Axis::new(axis_config(&servo::SERVO, &servo::TUNING)) {
+        Ok(axis) => axis,
+        Err(e) => {
+            error!("axis configuration refused ({}): no motor control", e);
+            return (None, brake);
+        }
+    };
+    let (currents, bus) = stm32g4_axis::sensing::sensing(&servo::FRONT_END);
+    let hardware = AxisHardware {
+        inverter: Tim1Inverter::new(tim1, servo::PWM_HZ),
+        adcs,
+        currents,
+        bus,
+        encoder: QuadratureEncoder::new(counter, servo::COUNTS_PER_REV),
+        inputs: BoardInputs::new(GpioInputs::new(axis_io.inputs), axis_io::POLARITY),
+    };
+    info!(
+        "axis: PWM {} Hz (ARR {}), dead time DTG {}, encoder filter {}",
+        servo::PWM_HZ,
+        pwm::PERIOD.auto_reload,
+        pwm::DEAD_TIME.dtg,
+        encoder::FILTER.code
+    );
+    let context = ControlContext {
+        hardware,
+        axis,
+        _pwm_pins: pwm_pins,
+        _gate_driver: gate_driver,
+    };
+    (Some(context), brake)
+}
+
+/// Creates the slave, attaches the axis if there is one, starts the slave if the ESC is ready,
+/// and installs slave and PDI as the shared drive. Returns whether the slave was started. A
+/// plain function, so that the multi-KiB `Slave` never becomes part of the main task's future.
 fn install_drive(
     mut pdi: Et1100Spi<'static>,
     flash: Flash<'static, Blocking>,
+    brake: BrakePin,
+    with_axis: bool,
     ready: bool,
 ) -> bool {
     let mut started = false;
@@ -93,13 +169,27 @@ fn install_drive(
         if core.load_parameters(&mut params).is_err() {
             warn!("stored parameters not loaded: defaults in use");
         }
+        // The axis takes the commissioned motor data from the loaded parameters.
+        if with_axis {
+            let (drive, ram) = core.application();
+            if drive
+                .attach_axis(0, &control::LINK, servo::SERVO.encoder, ram)
+                .is_err()
+            {
+                error!("the profile has no axis: the motor stays off");
+            }
+        }
         // AL status INIT and the AL event mask (drives SPI_IRQ). If the ESC is not ready yet,
         // the fallback poll task keeps probing and calls `start` once it is.
         started = ready && core.start(&mut pdi).is_ok();
         if ready && !started {
             error!("SlaveCore::start failed; the fallback poll retries");
         }
-        (irq::Drive { core, pdi }, irq::EventSide { mailbox, params })
+        let brake = BrakeOutput::new(brake);
+        (
+            irq::Drive { core, pdi, brake },
+            irq::EventSide { mailbox, params },
+        )
     });
     started
 }
@@ -117,13 +207,31 @@ async fn main(spawner: Spawner) {
         profile::PROFILE.od.device.profile
     );
 
-    let board = pins::split(p);
-    let esc = board.esc;
+    let pins::BoardPins {
+        esc,
+        leds,
+        flash,
+        inverter,
+        sensing,
+        encoder,
+        axis_io,
+    } = pins::split(p);
     let mut pdi = Et1100Spi::new(esc.spi, esc.sck, esc.miso, esc.mosi, esc.cs);
     info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
     let ready = probe_esc(&mut pdi).await;
 
-    let started = install_drive(pdi, Flash::new_blocking(board.flash), ready);
+    let (control, brake) = make_axis(inverter, sensing, encoder, axis_io);
+    let started = install_drive(
+        pdi,
+        Flash::new_blocking(flash),
+        brake,
+        control.is_some(),
+        ready,
+    );
+    // The control interrupt starts after the drive is installed: the axis is attached.
+    if let Some(context) = control {
+        control::start(context, irq::Irqs);
+    }
 
     // Unmask the ESC lines only now that the drive is installed.
     let sync0 = irq::sync0_input(esc.sync0, esc.sync0_exti, irq::Irqs);
@@ -134,7 +242,7 @@ async fn main(spawner: Spawner) {
     event_spawner.spawn(unwrap!(tasks::esc_event(esc_irq)));
     event_spawner.spawn(unwrap!(tasks::free_run()));
     spawner.spawn(unwrap!(tasks::esc_poll(started)));
-    spawner.spawn(unwrap!(tasks::leds(leds::Leds::new(board.leds))));
+    spawner.spawn(unwrap!(tasks::leds(leds::Leds::new(leds))));
     spawner.spawn(unwrap!(tasks::report()));
 
     // SYNC0's EXTI configuration belongs to `sync0`: keep it alive for ever.

@@ -1,0 +1,70 @@
+//! The servo this board drives, and its analog front end: the one place that states motor,
+//! encoder, power-stage and sensing circuit values. The peripheral settings of `pwm`, `adc` and
+//! `encoder` are computed from these at compile time.
+//!
+//! | part | value |
+//! |---|---|
+//! | motor, power stage, protections | the firmware's 48 V / 400 W reference servo ([`SERVO_400W`]): 40 kHz PWM, 200 ns dead time |
+//! | encoder | incremental, 2500 lines (10,000 increments per revolution), A/B/Z on RS-422 receivers; commutation found by alignment at every enable |
+//! | phase currents | two low-side shunts of 2 mΩ (phases a, b), amplifier gain 16 biased at 1.65 V: 32 mV/A, ±51.6 A full scale (the simulated board's 25 mA/count) |
+//! | bus voltage | 300 kΩ / 10 kΩ divider: 102 V full scale |
+//! | power-stage temperature | linear sensor on the heat sink, 0.5 V at 0 °C, 10 mV/°C |
+//! | ADC | 12 bit, VREF+ = 3.3 V |
+
+use firmware::motor::servo::{EncoderSpec, ServoSpec, Tuning, SERVO_400W};
+use stm32g4_axis::sensing::{AnalogFrontEnd, LinearScale, Shunts};
+
+/// The servo: the reference servo with this board's incremental encoder.
+pub const SERVO: ServoSpec = ServoSpec {
+    encoder: EncoderSpec::Incremental {
+        counts_per_rev: COUNTS_PER_REV,
+    },
+    ..SERVO_400W
+};
+
+/// Encoder lines per revolution.
+const ENCODER_LINES: u32 = 2_500;
+/// Increments per revolution: the timer counts every edge of A and B (x4).
+pub const COUNTS_PER_REV: u32 = 4 * ENCODER_LINES;
+
+/// The loop tuning.
+pub const TUNING: Tuning = Tuning::DEFAULT;
+
+/// PWM frequency, Hz.
+pub const PWM_HZ: u32 = SERVO.inverter.pwm_hz as u32;
+/// Dead time of every leg, ns (the gate driver's and switches' need, rounded up by `pwm`).
+pub const DEAD_TIME_NS: u32 = (SERVO.inverter.dead_time_s * 1e9 + 0.5) as u32;
+
+/// The fastest the encoder turns before the over-speed trip, increments per second.
+const MAX_COUNTS_PER_S: u32 = (SERVO.protection.over_speed_rpm / 60.0) as u32 * COUNTS_PER_REV;
+/// The shortest time between two encoder edges the input filter must pass, ns: half the edge
+/// spacing at the over-speed trip (A/B phase error of the encoder and the cable's skew).
+pub const ENCODER_SHORTEST_PULSE_NS: u32 = 1_000_000_000 / MAX_COUNTS_PER_S / 2;
+
+/// ADC resolution, bits.
+const ADC_BITS: u32 = 12;
+/// ADC reference, V.
+const VREF_V: f32 = 3.3;
+
+/// The analog front end.
+pub const FRONT_END: AnalogFrontEnd = AnalogFrontEnd {
+    shunts: Shunts::Two,
+    current: LinearScale::current_amplifier(VREF_V, ADC_BITS, 0.002, 16.0, 1.65),
+    bus: LinearScale::divider(VREF_V, ADC_BITS, 300_000.0, 10_000.0),
+    temperature: LinearScale::linear_sensor(VREF_V, ADC_BITS, 0.5, 0.010),
+};
+
+/// Shortest sampling time of a current amplifier's output (a low-impedance op-amp output with
+/// an RC filter of ≈ 20 ns), ns.
+pub const CURRENT_SAMPLE_NS: u32 = 100;
+/// Shortest sampling time of the bus divider and the temperature sensor (source impedances of
+/// ≈ 10 kΩ with a filter capacitor), ns.
+pub const SLOW_SAMPLE_NS: u32 = 1_000;
+
+const _: () = {
+    // 200 ns dead time, 40 kHz: the values the settings below were checked with.
+    assert!(DEAD_TIME_NS == 200);
+    assert!(PWM_HZ == 40_000);
+    // 5400 rpm × 10,000 / 60 = 900,000 increments/s: 1.11 µs between edges.
+    assert!(ENCODER_SHORTEST_PULSE_NS == 555);
+};
