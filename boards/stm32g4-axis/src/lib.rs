@@ -16,6 +16,7 @@
 //! | [`quadrature`] | a 32-bit timer in encoder mode with the index captured | [`hal::encoder::Encoder`] |
 //! | [`inputs`] | GPIO levels of switches, enable and STO inputs; brake output | [`hal::io::DigitalInputs`], [`hal::io::DigitalOutputs`] |
 //! | [`control`] | the body of the control interrupt (ADC end of conversion, P0) | — |
+//! | [`liveness`] | — (the decision behind each refresh of the independent watchdog) | — |
 //!
 //! # The PWM period and the sample
 //! TIM1 counts up and down (centre-aligned) with the phases in PWM mode 2, so every low-side
@@ -32,6 +33,7 @@
 pub mod control;
 pub mod inputs;
 pub mod inverter;
+pub mod liveness;
 pub mod quadrature;
 pub mod regs;
 pub mod sensing;

@@ -11,6 +11,7 @@
 //! | [`encoder`] | TIM2: incremental encoder with index capture |
 //! | [`axis_io`] | limit/home switches, thermal switch, probes, STO, brake, gate-driver enable |
 //! | [`control`] | the control interrupt (P0): one PWM period of the axis |
+//! | [`watchdog`] | the independent watchdog, refreshed while every context runs |
 //! | [`et1100_spi`] | the ET1100 SPI PDI driver (`hal::pdi::EscPdi`) |
 //! | [`irq`] | priorities, vectors, the cycle and ESC-event contexts, the shared Slave/PDI |
 //! | [`lock`] | the BASEPRI priority-ceiling lock |
@@ -39,6 +40,7 @@ mod servo;
 mod storage;
 mod tasks;
 mod time;
+mod watchdog;
 
 use defmt::{error, info, unwrap, warn};
 use embassy_executor::Spawner;
@@ -215,6 +217,7 @@ async fn main(spawner: Spawner) {
         sensing,
         encoder,
         axis_io,
+        iwdg,
     } = pins::split(p);
     let mut pdi = Et1100Spi::new(esc.spi, esc.sck, esc.miso, esc.mosi, esc.cs);
     info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
@@ -229,9 +232,14 @@ async fn main(spawner: Spawner) {
         ready,
     );
     // The control interrupt starts after the drive is installed: the axis is attached.
+    let with_control = control.is_some();
     if let Some(context) = control {
         control::start(context, irq::Irqs);
     }
+    let iwdg = watchdog::Iwdg::start(iwdg).unwrap_or_else(|iwdg| {
+        error!("IWDG did not take its setting: 512 ms reset timeout");
+        iwdg
+    });
 
     // Unmask the ESC lines only now that the drive is installed.
     let sync0 = irq::sync0_input(esc.sync0, esc.sync0_exti, irq::Irqs);
@@ -244,6 +252,7 @@ async fn main(spawner: Spawner) {
     spawner.spawn(unwrap!(tasks::esc_poll(started)));
     spawner.spawn(unwrap!(tasks::leds(leds::Leds::new(leds))));
     spawner.spawn(unwrap!(tasks::report()));
+    spawner.spawn(unwrap!(tasks::watchdog(iwdg, with_control)));
 
     // SYNC0's EXTI configuration belongs to `sync0`: keep it alive for ever.
     let _sync0 = sync0;

@@ -142,6 +142,8 @@ pub struct BoardPins {
     pub axis_io: AxisIoPins,
     /// Internal flash (the 1010h parameter pages, see `storage`).
     pub flash: Peri<'static, p::FLASH>,
+    /// The independent watchdog.
+    pub iwdg: Peri<'static, p::IWDG>,
 }
 
 /// Splits the peripheral set into the board's functional groups.
@@ -209,5 +211,6 @@ pub fn split(p: Peripherals) -> BoardPins {
             brake: p.PB9,
         },
         flash: p.FLASH,
+        iwdg: p.IWDG,
     }
 }

@@ -10,10 +10,16 @@ use hal::esc::{regs, DlStatus};
 use hal::io::StatusLeds;
 use hal::pdi::EscPdi;
 
+use firmware::slave::SyncMode;
+use hal::esc::AlState;
+use stm32g4_axis::liveness::Liveness;
+
 use crate::clocks::SYSCLK_HZ;
+use crate::control::CONTROL_STATS;
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
 use crate::irq::{self, ContextStats, CYCLE_STATS, ESC_IRQ, EVENT_STATS};
 use crate::leds::Leds;
+use crate::watchdog::{self, Iwdg};
 
 /// Wait before serving again while SPI_IRQ stays asserted after a service (an event the stack
 /// did not acknowledge yet): keeps a stuck event from monopolising the P2 context.
@@ -117,12 +123,42 @@ pub async fn leds(mut leds: Leds) {
     }
 }
 
+/// Thread mode: refreshes the independent watchdog every [`watchdog::CHECK_PERIOD_MS`] while
+/// the control interrupt runs (if the board has a motor: `with_control`) and, in SAFEOP/OP of a
+/// DC mode, the SYNC0 cycle does ([`Liveness`]). A refresh withheld a few times in a row resets
+/// the MCU.
+#[embassy_executor::task]
+pub async fn watchdog(iwdg: Iwdg, with_control: bool) {
+    let mut ticker = Ticker::every(Duration::from_millis(watchdog::CHECK_PERIOD_MS));
+    let mut liveness = Liveness::new();
+    loop {
+        ticker.next().await;
+        let control = with_control.then(|| CONTROL_STATS.runs.load(Ordering::Relaxed));
+        let cycle_expected = irq::with_drive(|d| {
+            let synchronous = matches!(d.core.sync_mode(), SyncMode::DcSync0 | SyncMode::DcSync1);
+            synchronous && matches!(d.core.al_state(), AlState::SafeOp | AlState::Op)
+        })
+        .unwrap_or(false);
+        let cycle = cycle_expected.then(|| CYCLE_STATS.runs.load(Ordering::Relaxed));
+        if liveness.check(control, cycle) {
+            iwdg.feed();
+        } else {
+            defmt::error!(
+                "watchdog: a context stopped (control runs {}, cycle runs {}): no refresh",
+                control,
+                cycle
+            );
+        }
+    }
+}
+
 /// Thread mode: logs the context statistics once per second.
 #[embassy_executor::task]
 pub async fn report() {
     let mut ticker = Ticker::every(REPORT_PERIOD);
     loop {
         ticker.next().await;
+        log_stats("control", &CONTROL_STATS);
         log_stats("cycle", &CYCLE_STATS);
         log_stats("esc-event", &EVENT_STATS);
     }
