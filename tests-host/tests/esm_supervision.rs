@@ -303,6 +303,38 @@ fn sm_parameters_report_measured_calc_and_copy_time() {
 }
 
 #[test]
+fn a_phase_lock_the_board_lost_is_a_pll_error_0x32_in_op_only() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md = &*m.maindevice;
+        // Before SAFEOP no lock is expected: a report is ignored.
+        m.shared.segment().drives_mut()[0]
+            .slave
+            .report_phase_lock_lost();
+        let group = into_op_with_dc(&m).await;
+        for _ in 0..10 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(al(md).await, (OP, 0));
+        // In OP the board's PWM cannot follow SYNC0 any more (its period trim is exhausted).
+        m.shared.segment().drives_mut()[0]
+            .slave
+            .report_phase_lock_lost();
+        for _ in 0..3 {
+            group.tx_rx_dc(md).await.expect("tx/rx");
+            m.shared.advance(CYCLE_NS);
+        }
+        assert_eq!(
+            al(md).await,
+            (SAFEOP | ERROR, 0x0032),
+            "SAFEOP + error, PLL error"
+        );
+    });
+}
+
+#[test]
 fn sync0_at_another_period_than_configured_is_a_pll_error_0x32() {
     block_on(async {
         let (m, transport) = master();

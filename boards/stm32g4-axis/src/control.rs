@@ -82,6 +82,7 @@ mod tests {
         fn auto_reload(&self) -> u16 {
             ARR
         }
+        fn set_auto_reload(&mut self, _: u16) {}
         fn set_compares(&mut self, compares: [u16; 3]) {
             self.compares = compares;
         }

@@ -30,6 +30,7 @@
 
 use hal::power::Inverter;
 
+use crate::phase_lock::{PeriodDither, PeriodTrim};
 use crate::regs::PwmTimer;
 
 /// The compare value of `duty` (0.0..=1.0, clamped; NaN is 0.5, no voltage) for a counter
@@ -78,6 +79,10 @@ pub struct Tim1Inverter<T> {
     trip_unreported: bool,
     /// The compare values written last (active from the next update event).
     compares: [u16; 3],
+    /// The period trim of the SYNC0 phase lock, if the PWM is locked to SYNC0.
+    trim: Option<&'static PeriodTrim>,
+    /// Each period's auto-reload for the trim.
+    dither: PeriodDither,
 }
 
 impl<T: PwmTimer> Tim1Inverter<T> {
@@ -90,18 +95,34 @@ impl<T: PwmTimer> Tim1Inverter<T> {
         timer.set_compares(compares);
         // A break flag from before (reset, configuration) is no trip of this run.
         let _ = timer.take_break();
+        let dither = PeriodDither::new(timer.auto_reload());
         Self {
             timer,
             pwm_hz,
             gates: GateState::Off,
             trip_unreported: false,
             compares,
+            trim: None,
+            dither,
         }
     }
 
+    /// Trims the PWM period from now on by what `trim` holds (the SYNC0 phase lock sets it):
+    /// [`Self::start_period`] sets each next period's auto-reload.
+    pub fn with_period_trim(mut self, trim: &'static PeriodTrim) -> Self {
+        self.trim = Some(trim);
+        self
+    }
+
     /// The start of a PWM period, right after its update event (first thing in the control
-    /// interrupt): takes the break flag, and sets MOE if the gates were armed.
+    /// interrupt): sets the next period's length (with a period trim), takes the break flag, and
+    /// sets MOE if the gates were armed. The compare values written after this are computed
+    /// against the new auto-reload; both take effect at the same update event.
     pub fn start_period(&mut self) {
+        if let Some(trim) = self.trim {
+            let arr = self.dither.next_arr(trim.get());
+            self.timer.set_auto_reload(arr);
+        }
         if self.timer.take_break() {
             // The hardware has cleared MOE already; clear it here too, so that nothing this
             // driver does later can set it before the firmware's disable/enable.
@@ -178,19 +199,35 @@ mod tests {
     use super::*;
 
     /// TIM1 at 40 kHz from 170 MHz (ARR 2125), as plain memory.
-    #[derive(Debug, Default)]
+    #[derive(Debug)]
     pub(crate) struct FakeTimer {
+        pub arr: u16,
         pub compares: [u16; 3],
         pub moe: bool,
         pub break_flag: bool,
         pub moe_writes: u32,
     }
 
+    impl Default for FakeTimer {
+        fn default() -> Self {
+            Self {
+                arr: ARR_40KHZ,
+                compares: [0; 3],
+                moe: false,
+                break_flag: false,
+                moe_writes: 0,
+            }
+        }
+    }
+
     pub(crate) const ARR_40KHZ: u16 = 2125;
 
     impl PwmTimer for FakeTimer {
         fn auto_reload(&self) -> u16 {
-            ARR_40KHZ
+            self.arr
+        }
+        fn set_auto_reload(&mut self, arr: u16) {
+            self.arr = arr;
         }
         fn set_compares(&mut self, compares: [u16; 3]) {
             self.compares = compares;
@@ -317,6 +354,28 @@ mod tests {
         inv.enable();
         inv.start_period();
         assert!(inv.timer().moe);
+    }
+
+    #[test]
+    fn a_period_trim_sets_each_next_period_and_the_compares_follow_it() {
+        static TRIM: PeriodTrim = PeriodTrim::new();
+        let mut inv = Tim1Inverter::new(FakeTimer::default(), 40_000).with_period_trim(&TRIM);
+        // No trim: the nominal period.
+        inv.start_period();
+        assert_eq!(inv.timer().arr, ARR_40KHZ);
+        // +2.5 ticks: periods of 2127 and 2128 that average 2127.5.
+        TRIM.set(2 * 256 + 128);
+        let mut sum = 0u32;
+        for _ in 0..4 {
+            inv.start_period();
+            let arr = inv.timer().arr;
+            assert!(arr == 2127 || arr == 2128, "{arr}");
+            sum += u32::from(arr);
+            // The duty is computed on the period it will act in.
+            inv.set_duties(0.5, 0.0, 1.0);
+            assert_eq!(inv.timer().compares, [arr / 2 + arr % 2, arr, 0]);
+        }
+        assert_eq!(sum, 4 * 2127 + 2);
     }
 
     #[test]

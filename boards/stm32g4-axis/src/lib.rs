@@ -17,6 +17,7 @@
 //! | [`inputs`] | GPIO levels of switches, enable and STO inputs; brake output | [`hal::io::DigitalInputs`], [`hal::io::DigitalOutputs`] |
 //! | [`control`] | the body of the control interrupt (ADC end of conversion, P0) | — |
 //! | [`liveness`] | — (the decision behind each refresh of the independent watchdog) | — |
+//! | [`phase_lock`] | — (the PWM period trim that phase-locks the control loop to SYNC0) | — |
 //!
 //! # The PWM period and the sample
 //! TIM1 counts up and down (centre-aligned) with the phases in PWM mode 2, so every low-side
@@ -27,13 +28,14 @@
 //! carry the phase currents and the ripple crosses its average. The end of the injected
 //! sequence raises the control interrupt, which runs [`control::AxisHardware::control_interrupt`].
 
-#![no_std]
+#![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
 pub mod control;
 pub mod inputs;
 pub mod inverter;
 pub mod liveness;
+pub mod phase_lock;
 pub mod quadrature;
 pub mod regs;
 pub mod sensing;

@@ -6,8 +6,11 @@
 /// TIM1 (advanced-control timer) as the inverter drives it: centre-aligned, phases in PWM
 /// mode 2 with preloaded compare registers (RM0440 §29.3.13, OCxPE = 1).
 pub trait PwmTimer {
-    /// TIMx_ARR: the counter's turning point; compare values run over `0..=ARR`.
+    /// TIMx_ARR: the counter's turning point; compare values run over `0..=ARR`. The value
+    /// written last (preloaded, ARPE = 1).
     fn auto_reload(&self) -> u16;
+    /// Writes TIMx_ARR. Preloaded: the period after the present one has it.
+    fn set_auto_reload(&mut self, arr: u16);
     /// TIMx_CCR1..CCR3 of phases a, b, c. Preloaded: they act from the next update event.
     fn set_compares(&mut self, compares: [u16; 3]);
     /// TIMx_BDTR.MOE, the main output enable. Cleared: every output at its idle level at once

@@ -15,6 +15,7 @@ use embassy_stm32::interrupt::{self as vector, InterruptExt};
 use firmware::motor::axis::{Axis, AxisLink};
 use static_cell::StaticCell;
 use stm32g4_axis::control::AxisHardware;
+use stm32g4_axis::phase_lock::PeriodTrim;
 
 use crate::adc::{self, Adc12};
 use crate::axis_io::{GateDriverEnable, GpioInputs};
@@ -43,6 +44,10 @@ pub struct ControlContext {
 // through the drive application the cycle context owns; `control_step` from the control
 // interrupt (P0) only, which preempts P1 and is never preempted by it.
 pub static LINK: AxisLink = unsafe { AxisLink::new() };
+
+/// The PWM period trim of the SYNC0 phase lock: set by the cycle context at each SYNC0, applied
+/// by the control interrupt to each next period.
+pub static PERIOD_TRIM: PeriodTrim = PeriodTrim::new();
 
 /// Storage of the context (in .bss).
 static CONTEXT_STORAGE: StaticCell<ControlContext> = StaticCell::new();

@@ -3,7 +3,7 @@
 //! | priority | vector | context | work |
 //! |---|---|---|---|
 //! | P0 | ADC1_2 (end of ADC1's injected sequence) | control | [`ControlHandler`](crate::control::ControlHandler): one PWM period of the axis; nothing else uses P0 and no lock masks it |
-//! | P1 | EXTI4 (SYNC0, PB4) | cycle | [`on_sync0`](firmware::sync0::on_sync0) in DC modes, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
+//! | P1 | TIM3 (SYNC0 captured on PB4 = TIM3_CH1, see `sync_capture`) | cycle | [`on_sync0`](firmware::sync0::on_sync0) in DC modes and the PWM phase lock, raw handler [`CycleHandler`]; also pended by software for free-run cycles |
 //! | P2 | EXTI2 (SPI_IRQ, PD2) | ESC event | raw handler [`EscIrqHandler`]: clears the line and signals the ESC-event task |
 //! | P2 | UART4 (spare, UART4 unused) | ESC event | `InterruptExecutor` running `tasks::esc_event` → [`service_esc_events`] (one ESC-event round; the core also runs SM-synchronous cycles on the SM2 event), and `tasks::free_run` |
 //! | P3 | TIM4 | embassy-time | alarm of the time driver (`time-driver-tim4`) |
@@ -16,10 +16,10 @@
 //! # Why raw handlers for SYNC0 and the IRQ line
 //! The SYNC0 work is synchronous (no `.await`), so a plain handler has the shortest, fixed
 //! latency (exception entry, ~12 cycles) where an `InterruptExecutor` would add a wake, a pend
-//! and a poll. The IRQ line is not served by embassy's `exti::InterruptHandler` either: that
-//! handler masks (IMR) *every* EXTI line 0–15 it finds pending, including SYNC0's, which would
-//! race with [`CycleHandler`] and could switch SYNC0 off for good. Each handler here clears only
-//! its own line. The ESC-event work itself runs in an `InterruptExecutor` (style.md E4) because
+//! and a poll. SYNC0 comes through TIM3's input capture rather than an EXTI line: the capture
+//! is its hardware time stamp against the PWM (`sync_capture`), whatever the latency. The IRQ
+//! line is not served by embassy's `exti::InterruptHandler` either: that handler masks (IMR)
+//! *every* EXTI line 0–15 it finds pending; [`EscIrqHandler`] clears only its own line. The ESC-event work itself runs in an `InterruptExecutor` (style.md E4) because
 //! it will grow async parts (mailbox services waiting on timers).
 //!
 //! # Sharing the slave and the PDI
@@ -56,18 +56,19 @@ use firmware::od::{NoDomains, WithDomains};
 use firmware::slave::MailboxSide;
 use firmware::slave::SyncMode;
 use firmware::DriveCore;
-use hal::esc::AlEvent;
+use hal::esc::{AlEvent, AlState};
 use hal::io::DigitalOutputs;
 use hal::pdi::EscPdi;
 use static_cell::StaticCell;
 use stm32g4_axis::inputs::BrakeOutput;
+use stm32g4_axis::phase_lock::Sync0Lock;
 
 use crate::axis_io::BrakePin;
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
 use crate::lock::BasepriRawMutex;
-use crate::pins::SYNC0_EXTI_LINE;
 use crate::profile::RAM_SIZE;
 use crate::storage::FlashStorage;
+use crate::sync_capture;
 use crate::time::now_ns;
 use firmware::params::ParamStore;
 
@@ -97,7 +98,7 @@ bind_interrupts!(
     pub struct Irqs {
         ADC1_2 => crate::control::ControlHandler;
         EXTI2 => EscIrqHandler;
-        EXTI4 => CycleHandler;
+        TIM3 => CycleHandler;
         UART4 => EscEventExecutor;
     }
 );
@@ -112,9 +113,26 @@ pub struct Drive {
     pub pdi: Et1100Spi<'static>,
     /// The holding brake, set from the axis' 60FEh:01 bit 0 after every cycle.
     pub brake: BrakeOutput<BrakePin>,
+    /// The PWM's phase lock to SYNC0 (`None` without a motor: no PWM to lock).
+    pub sync_lock: Option<Sync0Lock>,
 }
 
 impl Drive {
+    /// A SYNC0 edge `phase` ticks after the PWM valley: the phase lock's next trim for the
+    /// control interrupt, and a lost lock reported to the slave (AL status 0x0032).
+    fn follow_sync0(&mut self, phase: u16, now_ns: u64) {
+        let Some(lock) = self.sync_lock.as_mut() else {
+            return;
+        };
+        let synchronous = matches!(self.core.sync_mode(), SyncMode::DcSync0 | SyncMode::DcSync1)
+            && matches!(self.core.al_state(), AlState::SafeOp | AlState::Op);
+        let outcome = lock.on_sync0(synchronous.then(|| self.core.cycle_ns()), now_ns, phase);
+        crate::control::PERIOD_TRIM.set(outcome.trim_q8);
+        if outcome.report_lost {
+            self.core.report_phase_lock_lost();
+        }
+    }
+
     /// Sets the digital outputs to what the first axis asks (brake applied without an axis).
     pub fn drive_outputs(&mut self) {
         let (drive, _) = self.core.application();
@@ -318,14 +336,14 @@ pub fn free_run_period_ns() -> u32 {
 /// request applies.
 pub fn request_cycle(source: u8) {
     CYCLE_REQUESTS.fetch_or(source, Ordering::Release);
-    vector::EXTI4.pend();
+    vector::TIM3.pend();
 }
 
-/// The cycle context: SYNC0 edge on EXTI4, or a software pend of the same vector.
+/// The cycle context: SYNC0's capture on TIM3, or a software pend of the same vector.
 pub struct CycleHandler;
 
-impl Handler<typelevel::EXTI4> for CycleHandler {
-    /// ISR: ESC SYNC0, EXTI4 at P1.
+impl Handler<typelevel::TIM3> for CycleHandler {
+    /// ISR: ESC SYNC0 (TIM3 capture), TIM3 at P1.
     /// - Rate: the DC cycle, 31.25 µs – 10 ms (32 kHz – 100 Hz); free run at 1C32h:02.
     /// - Budget: `on_sync0` ≤ 2,000 instructions (DESIGN.md §6) ≈ 12 µs at 170 MHz, plus the
     ///   PDI bus time: (3 + n_out) + (2 + n_in) bytes × 376 ns, e.g. 2 × 32 B of PDO ≈ 26 µs,
@@ -337,11 +355,9 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
     ///   `on_sync0` come from the QEMU benchmark (DESIGN.md §5).
     unsafe fn on_interrupt() {
         let started = DWT::cycle_count();
-        // EXTI_PR1 is write-1-to-clear: this write touches line 4 only.
-        let edge = pac::EXTI.pr(0).read().line(SYNC0_EXTI_LINE);
-        if edge {
-            pac::EXTI.pr(0).write(|w| w.set_line(SYNC0_EXTI_LINE, true));
-        }
+        // SYNC0's phase in the PWM period, if this entry is a SYNC0 edge.
+        let capture = sync_capture::take_capture();
+        let edge = capture.is_some();
         let requests = CYCLE_REQUESTS.swap(0, Ordering::Acquire);
         let result = with_drive(|d| {
             let run = match d.core.sync_mode() {
@@ -357,15 +373,17 @@ impl Handler<typelevel::EXTI4> for CycleHandler {
                 // `on_esc_event` runs the cycle itself when it sees the SM2 event.
                 SyncMode::SmSynchronous => false,
             };
-            if run {
+            let result = run.then(|| {
                 let result = firmware::sync0::on_sync0(&mut d.core, &mut d.pdi, now_ns());
                 // The measured duration becomes 1C32h/1C33h:06 (calc and copy time).
                 d.core.cycle_finished(now_ns());
                 d.drive_outputs();
-                Some(result)
-            } else {
-                None
+                result
+            });
+            if let Some(phase) = capture {
+                d.follow_sync0(phase, now_ns());
             }
+            result
         })
         .flatten();
         CYCLE_STATS.record(started, result);
@@ -420,10 +438,18 @@ impl Handler<typelevel::UART4> for EscEventExecutor {
 /// `embassy_stm32::init` (which enables all EXTI vectors at P0 and the TIM4 vector at P0) and
 /// before any EXTI line is unmasked.
 pub fn set_priorities() {
-    vector::EXTI4.set_priority(prio::CYCLE);
+    vector::TIM3.set_priority(prio::CYCLE);
     vector::EXTI2.set_priority(prio::ESC_EVENT);
     vector::UART4.set_priority(prio::ESC_EVENT);
     vector::TIM4.set_priority(prio::TIME_DRIVER);
+}
+
+/// Unmasks the cycle context's vector (TIM3: SYNC0's capture and the software pends; priority
+/// set by [`set_priorities`]). `_irqs` proves that TIM3 runs [`CycleHandler`].
+pub fn start_cycle_vector(_irqs: impl Binding<typelevel::TIM3, CycleHandler>) {
+    // SAFETY: `CycleHandler` takes the drive lock for everything it touches; no critical
+    // section relies on TIM3 staying masked.
+    unsafe { vector::TIM3.enable() };
 }
 
 /// Starts the ESC-event executor (priority set by [`set_priorities`]). `_irqs` proves that
@@ -432,20 +458,6 @@ pub fn start_esc_event_executor(
     _irqs: impl Binding<typelevel::UART4, EscEventExecutor>,
 ) -> SendSpawner {
     ESC_EVENT_EXECUTOR.start(vector::UART4)
-}
-
-/// Configures SYNC0's EXTI line: rising edge (SYNC0 active high), pull-down. Only accepts a
-/// pin whose EXTI channel has the vector [`CycleHandler`] is bound to (EXTI4).
-pub fn sync0_input<T>(
-    pin: Peri<'static, T>,
-    channel: Peri<'static, T::ExtiChannel>,
-    _irqs: impl Binding<typelevel::EXTI4, CycleHandler>,
-) -> ExtiInput<'static, Blocking>
-where
-    T: GpioPin + ExtiPin,
-    T::ExtiChannel: exti::Channel<IRQ = typelevel::EXTI4>,
-{
-    ExtiInput::new_blocking(pin, channel, Pull::Down, exti::TriggerEdge::Rising)
 }
 
 /// Configures the ESC IRQ's EXTI line: falling edge (SPI_IRQ active low), pull-up. Only

@@ -11,6 +11,7 @@
 //! | [`encoder`] | TIM2: incremental encoder with index capture |
 //! | [`axis_io`] | limit/home switches, thermal switch, probes, STO, brake, gate-driver enable |
 //! | [`control`] | the control interrupt (P0): one PWM period of the axis |
+//! | [`sync_capture`] | TIM3: SYNC0's phase in the PWM period, captured in hardware |
 //! | [`watchdog`] | the independent watchdog, refreshed while every context runs |
 //! | [`et1100_spi`] | the ET1100 SPI PDI driver (`hal::pdi::EscPdi`) |
 //! | [`irq`] | priorities, vectors, the cycle and ESC-event contexts, the shared Slave/PDI |
@@ -38,6 +39,7 @@ mod profile;
 mod pwm;
 mod servo;
 mod storage;
+mod sync_capture;
 mod tasks;
 mod time;
 mod watchdog;
@@ -61,6 +63,7 @@ use crate::storage::FlashStorage;
 use stm32g4_axis::control::AxisHardware;
 use stm32g4_axis::inputs::{BoardInputs, BrakeOutput};
 use stm32g4_axis::inverter::Tim1Inverter;
+use stm32g4_axis::phase_lock::Sync0Lock;
 use stm32g4_axis::quadrature::QuadratureEncoder;
 
 /// Start-up probe: attempts and spacing. The ET1100 loads its SII EEPROM after reset (tens of
@@ -128,7 +131,7 @@ fn make_axis(
     };
     let (currents, bus) = stm32g4_axis::sensing::sensing(&servo::FRONT_END);
     let hardware = AxisHardware {
-        inverter: Tim1Inverter::new(tim1, servo::PWM_HZ),
+        inverter: Tim1Inverter::new(tim1, servo::PWM_HZ).with_period_trim(&control::PERIOD_TRIM),
         adcs,
         currents,
         bus,
@@ -189,7 +192,12 @@ fn install_drive(
         }
         let brake = BrakeOutput::new(brake);
         (
-            irq::Drive { core, pdi, brake },
+            irq::Drive {
+                core,
+                pdi,
+                brake,
+                sync_lock: with_axis.then(|| Sync0Lock::new(pwm::TIM1_HZ, pwm::PERIOD.auto_reload)),
+            },
             irq::EventSide { mailbox, params },
         )
     });
@@ -242,7 +250,8 @@ async fn main(spawner: Spawner) {
     });
 
     // Unmask the ESC lines only now that the drive is installed.
-    let sync0 = irq::sync0_input(esc.sync0, esc.sync0_exti, irq::Irqs);
+    let sync0 = sync_capture::configure(esc.sync0_timer, esc.sync0);
+    irq::start_cycle_vector(irq::Irqs);
     let esc_irq = irq::esc_irq_input(esc.irq, esc.irq_exti, irq::Irqs);
 
     let event_spawner = irq::start_esc_event_executor(irq::Irqs);
@@ -254,7 +263,7 @@ async fn main(spawner: Spawner) {
     spawner.spawn(unwrap!(tasks::report()));
     spawner.spawn(unwrap!(tasks::watchdog(iwdg, with_control)));
 
-    // SYNC0's EXTI configuration belongs to `sync0`: keep it alive for ever.
+    // SYNC0's pin configuration belongs to `sync0`: keep it alive for ever.
     let _sync0 = sync0;
     core::future::pending::<()>().await;
 }

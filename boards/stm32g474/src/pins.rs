@@ -8,7 +8,7 @@
 //! | ESC SPI MOSI | PC12 | SPI3_MOSI (AF6) | SPI_DI | |
 //! | ESC SPI select | PA15 | GPIO out, push-pull, idle high | SPI_SEL (active low) | JTDI pulls PA15 up from reset, so the ESC stays deselected until `main` |
 //! | ESC IRQ | PD2 | GPIO in + EXTI2 (own vector) | SPI_IRQ (active low, push-pull) | pull-up; level-sensitive use (`wait_for_low`) |
-//! | ESC SYNC0 | PB4 | GPIO in + EXTI4 (own vector) | SYNC0 (active high, push-pull) | pull-down; rising edge. PB4 is also TIM3_CH1 for a later hardware time stamp of SYNC0 |
+//! | ESC SYNC0 | PB4 | TIM3_CH1 (AF2), input capture | SYNC0 (active high, push-pull) | pull-down; rising edge captured against the PWM (see `sync_capture`); the capture interrupt is the cycle context |
 //! | PWM a high | PA8 | TIM1_CH1 (AF6) | gate driver INHA | active high; off (low) while MOE is cleared |
 //! | PWM b high | PA9 | TIM1_CH2 (AF6) | gate driver INHB | |
 //! | PWM c high | PA10 | TIM1_CH3 (AF6) | gate driver INHC | |
@@ -46,18 +46,14 @@
 //! - PB8 is BOOT0 on the G474 and stays unused; PA6 (the other TIM1_BKIN) is SPI1_MISO.
 //! - Every analog input sits on a channel that ADC1 or ADC2 can convert, so the injected
 //!   sequences are split between them and run at the same time (see `adc`).
-//! - IRQ and SYNC0 use EXTI lines 2 and 4, which have vectors of their own (EXTI2, EXTI4), so
-//!   each gets its own priority and no handler has to demultiplex a shared EXTIx_y vector.
+//! - The IRQ uses EXTI line 2, which has a vector of its own (EXTI2): its own priority, and no
+//!   handler has to demultiplex a shared EXTIx_y vector. SYNC0's vector is TIM3's.
 //! - The ESC side of these signals is set by the SII EEPROM (PDI control 0x0140 = 0x05 "SPI
 //!   slave"; PDI configuration 0x0150: SPI mode 3, SPI_IRQ push-pull active low, SPI_SEL
 //!   active low, normal data-out sample; 0x0151: SYNC0 push-pull active high, mapped to the
 //!   pin). od-gen's SII generator must produce exactly these values for this board.
 
 use embassy_stm32::{peripherals as p, Peri, Peripherals};
-
-/// EXTI line of ESC SYNC0 (PB4 → EXTI4). `irq` binds the matching vector, and
-/// `irq::Sync0Channel` checks at compile time that the channel's vector is EXTI4.
-pub const SYNC0_EXTI_LINE: usize = 4;
 
 /// The ET1100's PDI and interrupt pins.
 pub struct EscPins {
@@ -77,8 +73,8 @@ pub struct EscPins {
     pub irq_exti: Peri<'static, p::EXTI2>,
     /// SYNC0 (active high).
     pub sync0: Peri<'static, p::PB4>,
-    /// EXTI channel of `sync0`.
-    pub sync0_exti: Peri<'static, p::EXTI4>,
+    /// The timer that captures SYNC0.
+    pub sync0_timer: Peri<'static, p::TIM3>,
 }
 
 /// TIM1 and the gate driver.
@@ -158,7 +154,7 @@ pub fn split(p: Peripherals) -> BoardPins {
             irq: p.PD2,
             irq_exti: p.EXTI2,
             sync0: p.PB4,
-            sync0_exti: p.EXTI4,
+            sync0_timer: p.TIM3,
         },
         leds: LedPins {
             run: p.PB10,

@@ -14,6 +14,8 @@
 //! | lock | LOCK level 1: DTG, BKE/BKP, AOE, OISx frozen until reset | §29.6.20 |
 //! | update | RCR = 1, written before the counter starts: one update event per period, at the valley (every low-side switch on) | §29.3.5 |
 //! | ADC trigger | TRGO2 = update (MMS2 = 0010) → ADC1/ADC2 injected trigger `tim1_trgo2` | §29.6.2, §21 Table 167 |
+//! | SYNC0 phase | TRGO = update (MMS = 010) → TIM3's reset (`sync_capture`) | §29.6.2 |
+//! | period trim | ARR rewritten each period by the control interrupt for the SYNC0 phase lock (±1 %) | `stm32g4_axis::phase_lock` |
 
 use embassy_stm32::gpio::{AfType, Flex, OutputType, Speed};
 use embassy_stm32::pac::timer::{regs, vals};
@@ -28,7 +30,7 @@ use crate::clocks::PCLK2_HZ;
 use crate::servo;
 
 /// TIM1's kernel clock: PCLK2 (APB2 prescaler 1, so no ×2).
-const TIM1_HZ: u32 = PCLK2_HZ;
+pub const TIM1_HZ: u32 = PCLK2_HZ;
 /// Clock division of the dead-time generator and the digital filters.
 const CKD: ClockDivision = ClockDivision::Div1;
 
@@ -147,6 +149,8 @@ where
             w.set_oisn(ch, false);
         }
         w.set_mms2(vals::Mms2::UPDATE);
+        // TRGO resets TIM3 at every valley: SYNC0's capture is its phase (`sync_capture`).
+        w.set_mms(vals::Mms::UPDATE);
     });
     // The BKIN pin into the break, not inverted (its reset value is "enabled" already).
     t.af1().write(|w| {
@@ -208,6 +212,11 @@ impl PwmTimer for Tim1 {
     #[inline]
     fn auto_reload(&self) -> u16 {
         pac::TIM1.arr().read().arr()
+    }
+
+    #[inline]
+    fn set_auto_reload(&mut self, arr: u16) {
+        pac::TIM1.arr().write(|w| w.set_arr(arr));
     }
 
     #[inline]

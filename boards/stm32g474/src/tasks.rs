@@ -19,6 +19,7 @@ use crate::control::CONTROL_STATS;
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
 use crate::irq::{self, ContextStats, CYCLE_STATS, ESC_IRQ, EVENT_STATS};
 use crate::leds::Leds;
+use crate::pwm::TIM1_HZ;
 use crate::watchdog::{self, Iwdg};
 
 /// Wait before serving again while SPI_IRQ stays asserted after a service (an event the stack
@@ -159,8 +160,36 @@ pub async fn report() {
     loop {
         ticker.next().await;
         log_stats("control", &CONTROL_STATS);
+        log_phase_lock();
         log_stats("cycle", &CYCLE_STATS);
         log_stats("esc-event", &EVENT_STATS);
+    }
+}
+
+/// The PWM's phase lock to SYNC0: state, the phase error at the last SYNC0 and the largest
+/// since the lock was made, the period trim.
+fn log_phase_lock() {
+    let lock = irq::with_drive(|d| {
+        d.sync_lock.as_ref().and_then(|s| {
+            s.lock().map(|l| {
+                (
+                    l.state(),
+                    l.last_error_ns(TIM1_HZ),
+                    l.max_error_locked_ns(TIM1_HZ),
+                    l.trim(),
+                )
+            })
+        })
+    })
+    .flatten();
+    if let Some((state, last_ns, max_ns, trim)) = lock {
+        defmt::info!(
+            "phase lock: {}, error {} ns (max {} ns since locked), ARR trim {}/256",
+            state,
+            last_ns,
+            max_ns,
+            trim
+        );
     }
 }
 

@@ -297,6 +297,15 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         self.sync.cycle_ns
     }
 
+    /// The board reports that its control loop lost (or could not make) its phase lock to
+    /// SYNC0: in SAFEOP/OP of a DC mode the slave goes to SAFEOP with AL status 0x0032 "PLL
+    /// error" at its next check (ETG.1000.6 Table 11), as for a SYNC0 at another period. The
+    /// sync supervision looks at it only there, and forgets it whenever it starts anew (on
+    /// entering SAFEOP, on a new DC configuration), so a report outside has no effect.
+    pub fn report_phase_lock_lost(&mut self) {
+        self.sync_supervisor.report_phase_lock_lost();
+    }
+
     /// Process-data cycles run since power-on.
     pub fn cycles(&self) -> u32 {
         self.cycles

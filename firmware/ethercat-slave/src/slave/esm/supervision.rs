@@ -36,6 +36,8 @@ pub struct SyncSupervisor {
     off_period: u8,
     /// [`Self::missed_total`] when [`Self::missed_update`] last returned it.
     missed_published: u16,
+    /// The board reported that its control loop could not phase-lock to SYNC0.
+    phase_lock_lost: bool,
 }
 
 impl SyncSupervisor {
@@ -72,10 +74,18 @@ impl SyncSupervisor {
         self.last_sync0_ns = Some(now_ns);
     }
 
+    /// The board's phase lock of its control loop to SYNC0 was lost or never made (e.g. its
+    /// PWM cannot be trimmed far enough to follow the ESC's clock): a PLL loss like a SYNC0 at
+    /// another period. Forgotten at [`Self::reset`].
+    pub fn report_phase_lock_lost(&mut self) {
+        self.phase_lock_lost = true;
+    }
+
     /// Whether SYNC0 has come at a period other than the configured cycle
-    /// [`PLL_LOSS_COUNT`] times in a row: the control loop cannot phase-lock to it.
+    /// [`PLL_LOSS_COUNT`] times in a row, or the board reported its phase lock lost: the
+    /// control loop cannot phase-lock to it.
     pub fn pll_lost(&self) -> bool {
-        self.off_period >= PLL_LOSS_COUNT
+        self.off_period >= PLL_LOSS_COUNT || self.phase_lock_lost
     }
 
     /// Counts the SYNC0 events that should have arrived by `now_ns` but did not. Returns the
@@ -315,6 +325,21 @@ mod tests {
             s.on_sync0(t, CYCLE, None);
         }
         assert!(s.pll_lost());
+    }
+
+    #[test]
+    fn a_phase_lock_the_board_lost_is_a_pll_loss_until_reset() {
+        let mut s = SyncSupervisor::default();
+        for k in 0..5u64 {
+            s.on_sync0(k * 1_000_000, CYCLE, None);
+        }
+        assert!(!s.pll_lost());
+        s.report_phase_lock_lost();
+        assert!(s.pll_lost());
+        s.on_sync0(5_000_000, CYCLE, None);
+        assert!(s.pll_lost(), "good SYNC0 events do not clear it");
+        s.reset();
+        assert!(!s.pll_lost());
     }
 
     #[test]

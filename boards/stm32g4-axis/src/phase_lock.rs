@@ -1,0 +1,661 @@
+//! Phase lock of the PWM to the DC SYNC0 events: the PWM period is trimmed so that SYNC0
+//! always falls at the same point of the PWM period, and the control loop's ticks keep a fixed
+//! phase to the bus cycle (the interpolation between set-points depends on it).
+//!
+//! # Measurement
+//! A timer reset by TIM1's update event (the PWM valley) and captured by the SYNC0 edge gives,
+//! in hardware, the ticks from the last valley to SYNC0: the phase of SYNC0 in the PWM period.
+//!
+//! # Pattern
+//! A DC cycle need not be a whole number of PWM periods: 31.25 µs is 1.25 periods of 40 kHz.
+//! The lock then holds a repeating pattern: `k` cycles are exactly `m` periods (4 cycles = 5
+//! periods), and at the `j`-th SYNC0 the expected phase is `target + j × cycle (mod period)`.
+//! [`PhaseLock::new`] finds the smallest `k ≤` [`MAX_PATTERN`] and refuses a cycle without one.
+//!
+//! # Control
+//! With the auto-reload trimmed by `d` ticks, every PWM period lasts `2d` ticks longer, and the
+//! measured phase falls by `2d` per period, `2d × cycle/period` per cycle. A proportional term
+//! corrects a quarter of the phase error per cycle; an integral term takes up the constant frequency
+//! offset between the ESC's clock and the MCU's crystal (±100 ppm: up to 17 ticks per 1 ms
+//! cycle). The trim is limited to ±[`MAX_TRIM_PERMILLE`] ‰ of the period, so the loops' idea of
+//! the PWM frequency stays right within that.
+//!
+//! # Lock state
+//! Locked after [`LOCK_COUNT`] SYNC0 events in a row within [`LOCK_WINDOW_NS`] of the expected
+//! phase; lost (the drive reports AL status 0x0032) after [`LOSS_COUNT`] in a row further than
+//! [`LOSS_WINDOW_FACTOR`] windows once locked, or when no lock came within [`ACQUIRE_LIMIT`]
+//! cycles.
+
+use core::sync::atomic::{AtomicI32, Ordering};
+
+/// Largest number of DC cycles in the repeating pattern.
+pub const MAX_PATTERN: u32 = 16;
+/// Largest trim of the auto-reload, ‰ of its nominal value.
+pub const MAX_TRIM_PERMILLE: u32 = 10;
+/// Largest phase error of a locked SYNC0, ns.
+pub const LOCK_WINDOW_NS: u32 = 1_000;
+/// SYNC0 events in a row within the window that make the lock.
+pub const LOCK_COUNT: u32 = 8;
+/// A locked SYNC0 is lost further than this many lock windows from the expected phase
+/// (hysteresis: a lock made while the phase settles is not lost by its last overshoot).
+pub const LOSS_WINDOW_FACTOR: i64 = 5;
+/// SYNC0 events in a row outside the loss window that lose the lock.
+pub const LOSS_COUNT: u32 = 3;
+/// DC cycles allowed to acquire the lock.
+pub const ACQUIRE_LIMIT: u32 = 1_000;
+
+/// The integral gain: 1/N of the proportional one per cycle.
+const INTEGRAL_DIVISOR: i64 = 16;
+/// Fraction bits of the fixed-point tick values (1/256 tick).
+const FRAC_BITS: u32 = 8;
+const ONE: i64 = 1 << FRAC_BITS;
+const NS_PER_S: u64 = 1_000_000_000;
+
+/// The auto-reload of each PWM period for a trim in 1/256 ticks: a first-order sigma-delta,
+/// so that the periods average the trim exactly (a whole-tick trim would move the phase by
+/// 2 × periods-per-cycle ticks per cycle: 4.7 µs in a 10 ms cycle).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PeriodDither {
+    nominal_q8: i64,
+    residual: i64,
+}
+
+impl PeriodDither {
+    /// Periods of `nominal_arr`, no trim yet.
+    pub const fn new(nominal_arr: u16) -> Self {
+        Self {
+            nominal_q8: (nominal_arr as i64) << FRAC_BITS,
+            residual: 0,
+        }
+    }
+
+    /// The auto-reload of the next period at `trim_q8` (1/256 ticks, clamped to ±1/2 of the
+    /// nominal value).
+    pub fn next_arr(&mut self, trim_q8: i32) -> u16 {
+        let limit = self.nominal_q8 / 2;
+        let target = self.nominal_q8 + i64::from(trim_q8).clamp(-limit, limit);
+        let total = target + self.residual;
+        let arr = total >> FRAC_BITS;
+        self.residual = total - (arr << FRAC_BITS);
+        // Between 1/2 and 3/2 of a u16 nominal ARR... which can exceed u16 only for a
+        // nominal above 43,690: saturate there.
+        u16::try_from(arr).unwrap_or(u16::MAX)
+    }
+}
+
+/// The trim handed from the SYNC0 context (writer) to the control interrupt (reader, which
+/// sets each period's auto-reload with a [`PeriodDither`]), 1/256 ticks.
+#[derive(Debug, Default)]
+pub struct PeriodTrim(AtomicI32);
+
+impl PeriodTrim {
+    /// No trim.
+    pub const fn new() -> Self {
+        Self(AtomicI32::new(0))
+    }
+
+    /// Sets the trim (SYNC0 context).
+    pub fn set(&self, trim_q8: i32) {
+        self.0.store(trim_q8, Ordering::Relaxed);
+    }
+
+    /// The trim (control interrupt).
+    pub fn get(&self) -> i32 {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// Why a lock cannot be made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PhaseLockError {
+    /// A clock, the period or the cycle is zero.
+    Zero,
+    /// The cycle is no multiple of 1/256 timer tick.
+    CycleResolution,
+    /// No pattern of at most [`MAX_PATTERN`] cycles is a whole number of PWM periods.
+    NoPattern,
+}
+
+/// Where the lock stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum LockState {
+    /// Pulling in.
+    Acquiring,
+    /// Within the window.
+    Locked,
+    /// Lost, or never made in time: the drive cannot follow this SYNC0.
+    Lost,
+}
+
+/// The phase-lock loop (one per PWM timer).
+#[derive(Clone, Copy, Debug)]
+pub struct PhaseLock {
+    /// Nominal auto-reload.
+    nominal_arr: u16,
+    /// The nominal PWM period, 1/256 ticks.
+    period: i64,
+    /// The DC cycle, 1/256 ticks.
+    cycle: i64,
+    /// PWM periods per DC cycle × 256.
+    periods_per_cycle_q8: i64,
+    /// Cycles in the repeating pattern.
+    pattern: u32,
+    /// The expected phase of the next SYNC0, 1/256 ticks, in `0..period`.
+    expected: i64,
+    /// The window, 1/256 ticks.
+    window: i64,
+    /// Integral of the phase error, 1/256 ticks.
+    integral: i64,
+    /// Largest trim, ticks.
+    max_trim: i64,
+    state: LockState,
+    /// SYNC0 events in a row inside (acquiring) or outside (locked) the window.
+    run: u32,
+    /// Cycles since the lock started.
+    cycles: u32,
+    last_error: i64,
+    max_error_locked: i64,
+    trim: i32,
+}
+
+impl PhaseLock {
+    /// A lock of a centre-aligned PWM whose nominal auto-reload is `nominal_arr` (period
+    /// 2 × ARR ticks) on a timer clocked at `timer_hz`, to DC cycles of `cycle_ns`.
+    pub fn new(timer_hz: u32, nominal_arr: u16, cycle_ns: u32) -> Result<Self, PhaseLockError> {
+        if timer_hz == 0 || nominal_arr == 0 || cycle_ns == 0 {
+            return Err(PhaseLockError::Zero);
+        }
+        // The cycle in 1/256 ticks, exactly.
+        let cycle_scaled = u64::from(cycle_ns) * u64::from(timer_hz) * ONE as u64;
+        if cycle_scaled % NS_PER_S != 0 {
+            return Err(PhaseLockError::CycleResolution);
+        }
+        let cycle = (cycle_scaled / NS_PER_S) as i64;
+        let period = 2 * i64::from(nominal_arr) * ONE;
+        let pattern = (1..=MAX_PATTERN)
+            .find(|&k| (i64::from(k) * cycle) % period == 0)
+            .ok_or(PhaseLockError::NoPattern)?;
+        let window = (i64::from(LOCK_WINDOW_NS) * i64::from(timer_hz) / NS_PER_S as i64) * ONE;
+        let max_trim = (i64::from(nominal_arr) * i64::from(MAX_TRIM_PERMILLE) / 1000).max(1);
+        Ok(Self {
+            nominal_arr,
+            period,
+            cycle,
+            periods_per_cycle_q8: cycle * ONE / period,
+            pattern,
+            expected: period / 2,
+            window,
+            integral: 0,
+            max_trim,
+            state: LockState::Acquiring,
+            run: 0,
+            cycles: 0,
+            last_error: 0,
+            max_error_locked: 0,
+            trim: 0,
+        })
+    }
+
+    /// Cycles in the repeating pattern of SYNC0 phases.
+    pub fn pattern(&self) -> u32 {
+        self.pattern
+    }
+
+    /// One SYNC0: `phase_ticks` after the last PWM valley, `cycles` DC cycles after the previous
+    /// SYNC0 (1, or more when events were missed). Returns the trim of the auto-reload for the
+    /// next periods, 1/256 ticks ([`PeriodDither`] spreads its fraction over the periods).
+    pub fn update(&mut self, phase_ticks: u16, cycles: u32) -> i32 {
+        let cycles = cycles.max(1);
+        // Advance the expected phase by the cycles passed (mod the period, exactly).
+        let advance = (self.cycle % self.period) * i64::from(cycles % self.pattern.max(1));
+        self.expected = (self.expected + advance).rem_euclid(self.period);
+        let measured = i64::from(phase_ticks) * ONE;
+        // The error, wrapped into (−period/2, period/2]: positive = SYNC0 later in the period
+        // than expected = the PWM runs fast.
+        let mut error = (measured - self.expected).rem_euclid(self.period);
+        if error > self.period / 2 {
+            error -= self.period;
+        }
+        self.last_error = error;
+        self.cycles = self.cycles.saturating_add(cycles);
+        self.judge(error);
+        // A positive error (PWM fast) lengthens the period. Per cycle, a trim of d ticks moves
+        // the phase by 2·d·(periods per cycle): d = e / (8 · periods per cycle) corrects a
+        // quarter of the error, slow enough that SYNC0's jitter moves the PWM by a fraction of
+        // itself only.
+        let gain_den = 8 * self.periods_per_cycle_q8.max(1);
+        let limit = self.max_trim * ONE;
+        // Anti-windup: the integral grows only while the trim it would give is not at its
+        // limit (it would otherwise overshoot the phase after a long pull-in).
+        let integral = self.integral + error / INTEGRAL_DIVISOR;
+        let unclamped = (error + integral) * ONE / gain_den;
+        if unclamped.abs() <= limit {
+            self.integral = integral;
+        }
+        let trim = ((error + self.integral) * ONE / gain_den).clamp(-limit, limit);
+        // Within ±1 % of a u16 ARR, in 1/256: far inside i32.
+        self.trim = trim as i32;
+        self.trim
+    }
+
+    fn judge(&mut self, error: i64) {
+        match self.state {
+            LockState::Acquiring => {
+                let inside = error.abs() <= self.window;
+                self.run = if inside { self.run + 1 } else { 0 };
+                if self.run >= LOCK_COUNT {
+                    self.state = LockState::Locked;
+                    self.run = 0;
+                    self.max_error_locked = 0;
+                } else if self.cycles > ACQUIRE_LIMIT {
+                    self.state = LockState::Lost;
+                }
+            }
+            LockState::Locked => {
+                let outside = error.abs() > self.window * LOSS_WINDOW_FACTOR;
+                self.run = if outside { self.run + 1 } else { 0 };
+                self.max_error_locked = self.max_error_locked.max(error.abs());
+                if self.run >= LOSS_COUNT {
+                    self.state = LockState::Lost;
+                }
+            }
+            LockState::Lost => {}
+        }
+    }
+
+    /// The lock state.
+    pub fn state(&self) -> LockState {
+        self.state
+    }
+
+    /// The phase error at the last SYNC0, ns (positive: SYNC0 later than expected).
+    pub fn last_error_ns(&self, timer_hz: u32) -> i64 {
+        ticks_q8_to_ns(self.last_error, timer_hz)
+    }
+
+    /// The largest phase error since the lock was made, ns.
+    pub fn max_error_locked_ns(&self, timer_hz: u32) -> i64 {
+        ticks_q8_to_ns(self.max_error_locked, timer_hz)
+    }
+
+    /// The trim of the auto-reload last returned, 1/256 ticks.
+    pub fn trim(&self) -> i32 {
+        self.trim
+    }
+
+    /// The nominal auto-reload.
+    pub fn nominal_arr(&self) -> u16 {
+        self.nominal_arr
+    }
+}
+
+/// What the SYNC0 context does after a SYNC0 ([`Sync0Lock::on_sync0`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sync0Outcome {
+    /// The period trim for the control interrupt ([`PeriodTrim::set`]), 1/256 ticks.
+    pub trim_q8: i32,
+    /// Report the lock lost to the slave (AL status 0x0032).
+    pub report_lost: bool,
+}
+
+/// The phase lock over the slave's life: made when DC cycles start, made anew when the cycle
+/// changes or after a loss was reported, dropped outside SAFEOP/OP of a DC mode.
+#[derive(Clone, Copy, Debug)]
+pub struct Sync0Lock {
+    timer_hz: u32,
+    nominal_arr: u16,
+    lock: Option<PhaseLock>,
+    /// The DC cycle the lock (or the refusal) is for.
+    cycle_ns: u32,
+    /// Time of the previous SYNC0 in this lock, ns.
+    last_ns: Option<u64>,
+    /// The cycle cannot be locked to and that was reported.
+    refused: bool,
+}
+
+impl Sync0Lock {
+    /// No lock yet, for a PWM of `nominal_arr` on a timer clocked at `timer_hz`.
+    pub const fn new(timer_hz: u32, nominal_arr: u16) -> Self {
+        Self {
+            timer_hz,
+            nominal_arr,
+            lock: None,
+            cycle_ns: 0,
+            last_ns: None,
+            refused: false,
+        }
+    }
+
+    /// A SYNC0 edge at `now_ns`, `phase_ticks` after the last PWM valley. `cycle_ns`: the DC
+    /// cycle while the slave runs synchronous cycles (SAFEOP/OP of a DC mode), `None` otherwise.
+    pub fn on_sync0(
+        &mut self,
+        cycle_ns: Option<u32>,
+        now_ns: u64,
+        phase_ticks: u16,
+    ) -> Sync0Outcome {
+        let idle = Sync0Outcome {
+            trim_q8: 0,
+            report_lost: false,
+        };
+        let Some(cycle_ns) = cycle_ns.filter(|&c| c > 0) else {
+            self.lock = None;
+            self.refused = false;
+            self.last_ns = None;
+            return idle;
+        };
+        if cycle_ns != self.cycle_ns {
+            self.cycle_ns = cycle_ns;
+            self.lock = None;
+            self.refused = false;
+        }
+        if self.lock.is_none() {
+            if self.refused {
+                return idle;
+            }
+            match PhaseLock::new(self.timer_hz, self.nominal_arr, cycle_ns) {
+                Ok(lock) => {
+                    self.lock = Some(lock);
+                    self.last_ns = None;
+                }
+                Err(_) => {
+                    // Reported once for this cycle; the nominal PWM runs on unlocked.
+                    self.refused = true;
+                    return Sync0Outcome {
+                        trim_q8: 0,
+                        report_lost: true,
+                    };
+                }
+            }
+        }
+        // The cycles since the previous SYNC0, rounded (missed events count).
+        let cycles = self.last_ns.map_or(1, |last| {
+            let elapsed = now_ns.saturating_sub(last);
+            let cycle = u64::from(cycle_ns);
+            u32::try_from((elapsed + cycle / 2) / cycle).unwrap_or(u32::MAX)
+        });
+        self.last_ns = Some(now_ns);
+        let Some(lock) = self.lock.as_mut() else {
+            return idle;
+        };
+        let trim_q8 = lock.update(phase_ticks, cycles);
+        if lock.state() == LockState::Lost {
+            // Reported once; the next SYNC0 starts a new acquisition.
+            self.lock = None;
+            return Sync0Outcome {
+                trim_q8: 0,
+                report_lost: true,
+            };
+        }
+        Sync0Outcome {
+            trim_q8,
+            report_lost: false,
+        }
+    }
+
+    /// The lock in use, if any.
+    pub fn lock(&self) -> Option<&PhaseLock> {
+        self.lock.as_ref()
+    }
+}
+
+fn ticks_q8_to_ns(ticks_q8: i64, timer_hz: u32) -> i64 {
+    match timer_hz {
+        0 => 0,
+        hz => ticks_q8 * NS_PER_S as i64 / ONE / i64::from(hz),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TIMER_HZ: u32 = 170_000_000;
+    /// 40 kHz.
+    const ARR: u16 = 2125;
+
+    /// A PWM timer whose clock is off by `ppm` against the ESC's, with SYNC0 every `cycle_ns`
+    /// of the ESC's clock, starting at phase `start` ticks; jitter of ±`jitter` ticks.
+    struct Bench {
+        lock: PhaseLock,
+        /// PWM time of the next valley and the present ARR, in PWM ticks (f64).
+        next_valley: f64,
+        last_valley: f64,
+        dither: PeriodDither,
+        trim: i32,
+        tick_scale: f64,
+        cycle_ticks: f64,
+        sync0: f64,
+        jitter: f64,
+        seed: u64,
+    }
+
+    impl Bench {
+        fn new(cycle_ns: u32, ppm: f64, start: f64, jitter: f64) -> Self {
+            let lock = PhaseLock::new(TIMER_HZ, ARR, cycle_ns).unwrap();
+            Self {
+                lock,
+                last_valley: 0.0,
+                next_valley: 2.0 * f64::from(ARR),
+                dither: PeriodDither::new(ARR),
+                trim: 0,
+                tick_scale: 1.0 + ppm * 1e-6,
+                cycle_ticks: f64::from(cycle_ns) * 1e-9 * f64::from(TIMER_HZ),
+                sync0: start,
+                jitter,
+                seed: 0x1234_5678,
+            }
+        }
+
+        fn noise(&mut self) -> f64 {
+            self.seed = self
+                .seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.seed >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 2.0 * self.jitter
+        }
+
+        /// The next SYNC0 (after `skip` missed ones): the capture, then the lock's new trim,
+        /// which each following period's ARR takes (the control interrupt writes the ARR of
+        /// the period after the present one).
+        fn step(&mut self, skip: u32) -> i64 {
+            self.sync0 += self.cycle_ticks * f64::from(skip + 1);
+            let at = (self.sync0 + self.noise()) * self.tick_scale;
+            while self.next_valley <= at {
+                self.last_valley = self.next_valley;
+                let arr = self.dither.next_arr(self.trim);
+                self.next_valley += 2.0 * f64::from(arr);
+            }
+            let phase = (at - self.last_valley).floor() as u16;
+            self.trim = self.lock.update(phase, skip + 1);
+            self.lock.last_error_ns(TIMER_HZ)
+        }
+    }
+
+    #[test]
+    fn the_dither_averages_the_trim_exactly() {
+        let mut d = PeriodDither::new(ARR);
+        // +0.3 ticks per period: 256 periods gain exactly 76.8 × ... = 0.3 × 256 ticks.
+        let sum: u64 = (0..256).map(|_| u64::from(d.next_arr(77))).sum();
+        assert_eq!(sum, 256 * u64::from(ARR) + 77);
+        // Every period is within one tick of the target.
+        for _ in 0..100 {
+            let arr = d.next_arr(-3 * 256 - 128);
+            assert!(arr == ARR - 4 || arr == ARR - 3, "{arr}");
+        }
+        // Clamped to half the nominal value.
+        assert_eq!(PeriodDither::new(ARR).next_arr(i32::MAX), ARR + ARR / 2);
+        assert_eq!(PeriodDither::new(u16::MAX).next_arr(i32::MAX), u16::MAX);
+        let trim = PeriodTrim::new();
+        trim.set(-5);
+        assert_eq!(trim.get(), -5);
+    }
+
+    #[test]
+    fn cycles_find_their_pattern_or_are_refused() {
+        let pattern = |ns| PhaseLock::new(TIMER_HZ, ARR, ns).map(|l| l.pattern());
+        assert_eq!(pattern(1_000_000), Ok(1)); // 40 periods
+        assert_eq!(pattern(31_250), Ok(4)); // 4 cycles = 5 periods
+        assert_eq!(pattern(62_500), Ok(2)); // 2 cycles = 5 periods
+        assert_eq!(pattern(125_000), Ok(1));
+        assert_eq!(pattern(10_000_000), Ok(1));
+        // 33 µs = 5610 ticks: 1.32 periods, 25 cycles for a whole number of them.
+        assert_eq!(pattern(33_000), Err(PhaseLockError::NoPattern));
+        assert_eq!(
+            PhaseLock::new(0, ARR, 1_000).err(),
+            Some(PhaseLockError::Zero)
+        );
+        assert_eq!(
+            PhaseLock::new(TIMER_HZ, 0, 1_000).err(),
+            Some(PhaseLockError::Zero)
+        );
+        assert_eq!(
+            PhaseLock::new(TIMER_HZ, ARR, 0).err(),
+            Some(PhaseLockError::Zero)
+        );
+        // 1 ns at 3 Hz is 3e-9 ticks: not representable.
+        assert_eq!(
+            PhaseLock::new(3, 1, 1).err(),
+            Some(PhaseLockError::CycleResolution)
+        );
+    }
+
+    #[test]
+    fn the_lock_pulls_in_and_holds_against_clock_offset_and_jitter() {
+        // Jitter of SYNC0 against the PWM clock: none, and ±100 ns (17 ticks; an ET1100's
+        // SYNC0 output is specified far tighter, this covers the capture path too).
+        for (jitter, bound_ns) in [(0.0, 20), (17.0, 250)] {
+            pulls_in_and_holds(jitter, bound_ns);
+        }
+    }
+
+    fn pulls_in_and_holds(jitter: f64, bound_ns: i64) {
+        for cycle_ns in [31_250, 62_500, 125_000, 1_000_000, 10_000_000] {
+            for ppm in [-100.0, 0.0, 100.0] {
+                for start in [0.0, 1_000.0, 2_125.0, 4_000.0] {
+                    let mut bench = Bench::new(cycle_ns, ppm, start, jitter);
+                    let mut locked_at = None;
+                    // The error held once settled: over the second half of the run.
+                    let mut held = 0;
+                    for i in 0..ACQUIRE_LIMIT {
+                        let error = bench.step(0);
+                        if locked_at.is_none() && bench.lock.state() == LockState::Locked {
+                            locked_at = Some(i);
+                        }
+                        if i >= ACQUIRE_LIMIT / 2 {
+                            held = held.max(error.abs());
+                        }
+                    }
+                    let case = format!("{cycle_ns} ns, {ppm} ppm, start {start}, jitter {jitter}");
+                    let locked_at = locked_at.unwrap_or_else(|| panic!("no lock: {case}"));
+                    assert!(locked_at < 200, "{case}: locked at {locked_at}");
+                    assert_eq!(bench.lock.state(), LockState::Locked, "{case}");
+                    // The held error: the jitter plus the trim's quantisation.
+                    assert!(held <= bound_ns, "{case}: {held} ns");
+                    let since_lock = bench.lock.max_error_locked_ns(TIMER_HZ);
+                    assert!(
+                        since_lock <= 2 * i64::from(LOCK_WINDOW_NS),
+                        "{case}: {since_lock} ns"
+                    );
+                    assert!(bench.lock.trim().unsigned_abs() <= 21 * 256, "{case}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn missed_sync0_events_keep_the_pattern() {
+        let mut bench = Bench::new(31_250, 50.0, 500.0, 0.0);
+        for _ in 0..300 {
+            bench.step(0);
+        }
+        assert_eq!(bench.lock.state(), LockState::Locked);
+        // One, two and three events missed: the expected phase advances by as many cycles.
+        for skip in [1, 2, 3, 0, 0] {
+            let error = bench.step(skip);
+            assert!(error.abs() <= 100, "skip {skip}: {error} ns");
+        }
+        assert_eq!(bench.lock.state(), LockState::Locked);
+    }
+
+    #[test]
+    fn a_sync0_at_another_period_loses_the_lock() {
+        let mut bench = Bench::new(1_000_000, 0.0, 0.0, 0.0);
+        for _ in 0..100 {
+            bench.step(0);
+        }
+        assert_eq!(bench.lock.state(), LockState::Locked);
+        // The master's SYNC0 moves to 1.03 ms: beyond the ±1 % trim.
+        bench.cycle_ticks *= 1.03;
+        let mut lost_after = None;
+        for i in 0..50 {
+            bench.step(0);
+            if bench.lock.state() == LockState::Lost {
+                lost_after = Some(i);
+                break;
+            }
+        }
+        let lost_after = lost_after.expect("lost");
+        assert!(lost_after < 20, "{lost_after}");
+        // Lost stays lost (a new lock is a new `PhaseLock`, at the next SAFEOP).
+        bench.cycle_ticks /= 1.03;
+        for _ in 0..100 {
+            bench.step(0);
+        }
+        assert_eq!(bench.lock.state(), LockState::Lost);
+    }
+
+    #[test]
+    fn the_sync0_lock_follows_the_slave_and_reports_a_loss_once() {
+        const CYCLE: u32 = 1_000_000;
+        let mut s = Sync0Lock::new(TIMER_HZ, ARR);
+        // Not synchronous: no lock, no trim.
+        let idle = Sync0Outcome {
+            trim_q8: 0,
+            report_lost: false,
+        };
+        assert_eq!(s.on_sync0(None, 0, 17), idle);
+        assert!(s.lock().is_none());
+        // DC cycles: SYNC0 always at the target phase (the middle of the period).
+        let mut t = 0;
+        for _ in 0..20 {
+            t += u64::from(CYCLE);
+            let out = s.on_sync0(Some(CYCLE), t, ARR);
+            assert!(!out.report_lost);
+        }
+        assert_eq!(s.lock().map(PhaseLock::state), Some(LockState::Locked));
+        // A missed SYNC0 is one more cycle, not a phase jump (1 ms = 40 whole periods).
+        t += 2 * u64::from(CYCLE);
+        assert!(!s.on_sync0(Some(CYCLE), t, ARR).report_lost);
+        assert_eq!(s.lock().map(|l| l.last_error_ns(TIMER_HZ)), Some(0));
+        // SYNC0 jumps by a quarter period for good: lost after LOSS_COUNT, reported once.
+        let mut reports = 0;
+        for _ in 0..LOSS_COUNT + 2 {
+            t += u64::from(CYCLE);
+            reports += u32::from(s.on_sync0(Some(CYCLE), t, ARR / 2).report_lost);
+        }
+        assert_eq!(reports, 1);
+        // A cycle without a pattern is refused, reported once, and runs unlocked.
+        let outs: [Sync0Outcome; 3] =
+            core::array::from_fn(|i| s.on_sync0(Some(33_000), t + i as u64, 0));
+        assert_eq!(outs.map(|o| o.report_lost), [true, false, false]);
+        assert_eq!(outs.map(|o| o.trim_q8), [0; 3]);
+        // Back out of the synchronous states: dropped.
+        s.on_sync0(None, t, 0);
+        assert!(s.lock().is_none());
+    }
+
+    #[test]
+    fn no_lock_within_the_limit_is_lost() {
+        // SYNC0 phases all over the place (a free-running clock far off): never locked.
+        let mut lock = PhaseLock::new(TIMER_HZ, ARR, 1_000_000).unwrap();
+        let mut phase = 0u16;
+        for _ in 0..=ACQUIRE_LIMIT {
+            phase = (phase + 1_700) % 4_250;
+            lock.update(phase, 1);
+        }
+        assert_eq!(lock.state(), LockState::Lost);
+    }
+}
