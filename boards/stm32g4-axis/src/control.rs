@@ -61,11 +61,11 @@ impl<T: PwmTimer, A: InjectedAdcs, C: EncoderCounter, P: InputPins> AxisHardware
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::board::{COUNTS_PER_REV, FRONT_END, PWM_HZ, SERVO, TUNING};
     use crate::inputs::{InputLine, InputPolarity};
     use crate::regs::Conversions;
-    use crate::sensing::{AnalogFrontEnd, LinearScale, Shunts};
     use motor_control::axis::{AxisCommand, AxisState, ControlMode};
-    use motor_control::servo::{axis_config, EncoderSpec, ServoSpec, Tuning, SERVO_400W};
+    use motor_control::servo::axis_config;
     use motor_control::MotorFault;
 
     /// TIM1 at 40 kHz from 170 MHz.
@@ -125,26 +125,10 @@ mod tests {
         }
     }
 
-    const FRONT_END: AnalogFrontEnd = AnalogFrontEnd {
-        shunts: Shunts::Two,
-        current: LinearScale::current_amplifier(3.3, 12, 0.002, 16.0, 1.65),
-        bus: LinearScale::divider(3.3, 12, 300_000.0, 10_000.0),
-        temperature: LinearScale::linear_sensor(3.3, 12, 0.5, 0.010),
-    };
-
-    /// The reference servo with a 2500-line incremental encoder, as this board runs it: the
-    /// commutation is found by an alignment after every enable.
-    const SERVO: ServoSpec = ServoSpec {
-        encoder: EncoderSpec::Incremental {
-            counts_per_rev: 10_000,
-        },
-        ..SERVO_400W
-    };
-
     fn board() -> AxisHardware<Timer, Adcs, Counter, Pins> {
         let (currents, bus) = sensing::sensing(&FRONT_END);
         AxisHardware {
-            inverter: Tim1Inverter::new(Timer::default(), 40_000),
+            inverter: Tim1Inverter::new(Timer::default(), PWM_HZ),
             adcs: Adcs(Conversions {
                 phase: [2048; 3],
                 bus: 1922,
@@ -152,7 +136,7 @@ mod tests {
             }),
             currents,
             bus,
-            encoder: QuadratureEncoder::new(Counter(7), 10_000),
+            encoder: QuadratureEncoder::new(Counter(7), COUNTS_PER_REV),
             inputs: BoardInputs::new(
                 Pins(InputLine::SafeTorqueOff1.mask() | InputLine::SafeTorqueOff2.mask()),
                 InputPolarity { active_low: 0 },
@@ -162,7 +146,8 @@ mod tests {
 
     #[test]
     fn the_gates_switch_after_the_offset_calibration_and_a_break_latches_a_fault() {
-        let cfg = axis_config(&SERVO, &Tuning::DEFAULT);
+        // The board's servo: its incremental encoder is aligned after every enable.
+        let cfg = axis_config(&SERVO, &TUNING);
         let mut axis = Axis::new(cfg).unwrap();
         // SAFETY: one thread calls both sides, one after the other.
         let link = unsafe { AxisLink::new() };

@@ -11,6 +11,7 @@
 //! | module | drives | `hal` trait it provides |
 //! |---|---|---|
 //! | [`regs`] | — | the register-access traits a board implements |
+//! | [`board`] | — | the servo and analog front end of `boards/stm32g474` (motor, encoder, shunts, dividers) |
 //! | [`inverter`] | TIM1: centre-aligned complementary PWM, MOE, break flag | [`hal::power::Inverter`] |
 //! | [`sensing`] | ADC1/ADC2 injected conversions of the phase currents, bus voltage, temperature | [`hal::power::CurrentSense`], [`hal::power::BusSense`] |
 //! | [`quadrature`] | a 32-bit timer in encoder mode with the index captured | [`hal::encoder::Encoder`] |
@@ -31,6 +32,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod board;
 pub mod control;
 pub mod inputs;
 pub mod inverter;

@@ -29,7 +29,7 @@ use stm32g4_axis::regs::{Conversions, InjectedAdcs};
 use stm32g4_settings::adc::{SampleTime as SampleSetting, SynchronousClock};
 
 use crate::clocks::{HCLK_HZ, SYSCLK_HZ};
-use crate::servo;
+use stm32g4_axis::board as servo;
 
 /// The fastest ADC clock of the G474 (60 MHz: embassy's limit; the datasheet DS12288 was not
 /// available to confirm it, see `stm32g4-settings/FACTS.md`). The clock chosen is 42.5 MHz.

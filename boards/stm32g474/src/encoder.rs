@@ -20,7 +20,7 @@ use stm32g4_settings::dead_time::ClockDivision;
 use stm32g4_settings::input_filter::InputFilter;
 
 use crate::clocks::PCLK1_HZ;
-use crate::servo;
+use stm32g4_axis::board as servo;
 
 /// TIM2's kernel clock (APB1 prescaler 1).
 const TIM2_HZ: u32 = PCLK1_HZ;

@@ -5,7 +5,6 @@
 //! |---|---|
 //! | [`pins`] | the pin map (the only place that names pins) |
 //! | [`clocks`] | HSE 24 MHz → PLL → 170 MHz |
-//! | [`servo`] | the motor, encoder, power stage and analog front end this board drives |
 //! | [`pwm`] | TIM1: complementary centre-aligned PWM, dead time, break, ADC trigger |
 //! | [`adc`] | ADC1/ADC2: injected conversions of currents, bus voltage, temperature |
 //! | [`encoder`] | TIM2: incremental encoder with index capture |
@@ -37,7 +36,6 @@ mod lock;
 mod pins;
 mod profile;
 mod pwm;
-mod servo;
 mod storage;
 mod sync_capture;
 mod tasks;
@@ -54,6 +52,7 @@ use firmware::params::ParamStore;
 use firmware::DriveCore;
 use hal::esc::regs;
 use hal::pdi::EscPdi;
+use stm32g4_axis::board as servo;
 use {defmt_rtt as _, panic_probe as _};
 
 use crate::axis_io::{BrakePin, GateDriverEnable, GpioInputs};

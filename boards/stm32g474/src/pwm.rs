@@ -27,7 +27,7 @@ use stm32g4_settings::dead_time::{ClockDivision, DeadTime};
 use stm32g4_settings::pwm::{repetition_counter, CentreAligned};
 
 use crate::clocks::PCLK2_HZ;
-use crate::servo;
+use stm32g4_axis::board as servo;
 
 /// TIM1's kernel clock: PCLK2 (APB2 prescaler 1, so no ×2).
 pub const TIM1_HZ: u32 = PCLK2_HZ;

@@ -1,6 +1,7 @@
-//! The servo this board drives, and its analog front end: the one place that states motor,
-//! encoder, power-stage and sensing circuit values. The peripheral settings of `pwm`, `adc` and
-//! `encoder` are computed from these at compile time.
+//! The servo `boards/stm32g474` drives, and its analog front end: the one place that states
+//! motor, encoder, power-stage and sensing circuit values. The board's peripheral settings
+//! (its `pwm`, `adc` and `encoder` modules) are computed from these at compile time, and the
+//! QEMU benchmark board runs the control interrupt with the same values.
 //!
 //! | part | value |
 //! |---|---|
@@ -11,8 +12,9 @@
 //! | power-stage temperature | linear sensor on the heat sink, 0.5 V at 0 °C, 10 mV/°C |
 //! | ADC | 12 bit, VREF+ = 3.3 V |
 
-use firmware::motor::servo::{EncoderSpec, ServoSpec, Tuning, SERVO_400W};
-use stm32g4_axis::sensing::{AnalogFrontEnd, LinearScale, Shunts};
+use motor_control::servo::{EncoderSpec, ServoSpec, Tuning, SERVO_400W};
+
+use crate::sensing::{AnalogFrontEnd, LinearScale, Shunts};
 
 /// The servo: the reference servo with this board's incremental encoder.
 pub const SERVO: ServoSpec = ServoSpec {
