@@ -157,6 +157,12 @@ impl Harness {
         }
     }
 
+    /// Prints a `META` record: a fact of the measured code the report computes with (e.g. a
+    /// process-image size or a clock).
+    pub fn meta(&mut self, key: &str, value: u32) {
+        self.record(format_args!("META\t{key}\t{value}"));
+    }
+
     /// Reports a failed check of a benchmark (e.g. the operation did not give the expected
     /// result); the run then ends with a failure status.
     pub fn fail(&mut self, name: &str, reason: fmt::Arguments<'_>) {

@@ -11,10 +11,29 @@
 //! | bus voltage | 300 kΩ / 10 kΩ divider: 102 V full scale |
 //! | power-stage temperature | linear sensor on the heat sink, 0.5 V at 0 °C, 10 mV/°C |
 //! | ADC | 12 bit, VREF+ = 3.3 V |
+//! | CPU | STM32G474 at 170 MHz, APB1 and APB2 undivided |
+//! | PDI | ET1100 on SPI3: the fastest APB1 / 2^(BR+1) within the ET1100's 30 MHz, 21.25 MHz |
 
 use motor_control::servo::{EncoderSpec, ServoSpec, Tuning, SERVO_400W};
 
+use stm32g4_settings::spi::BaudRate;
+
 use crate::sensing::{AnalogFrontEnd, LinearScale, Shunts};
+
+/// Core clock (SYSCLK = HCLK = PCLK1 = PCLK2), Hz; `boards/stm32g474/src/clocks.rs` derives it
+/// from the crystal and checks it against this value.
+pub const CORE_CLOCK_HZ: u32 = 170_000_000;
+/// ET1100 maximum SPI clock (Section III, SPI timing characteristics).
+pub const ET1100_MAX_SPI_CLOCK_HZ: u32 = 30_000_000;
+/// SPI3's baud rate for the ET1100: the fastest APB1 / 2^(BR + 1) within its maximum (APB1 / 8
+/// at 170 MHz), computed at compile time (RM0440 §39.7.1).
+pub const PDI_SPI_BAUD_RATE: BaudRate =
+    match BaudRate::at_most(CORE_CLOCK_HZ, ET1100_MAX_SPI_CLOCK_HZ) {
+        Ok(baud) => baud,
+        Err(_) => panic!("no SPI prescaler keeps the clock within the ET1100's maximum"),
+    };
+/// The PDI's SPI clock, Hz.
+pub const PDI_SPI_CLOCK_HZ: u32 = PDI_SPI_BAUD_RATE.sck_hz;
 
 /// The servo: the reference servo with this board's incremental encoder.
 pub const SERVO: ServoSpec = ServoSpec {
@@ -64,6 +83,7 @@ pub const CURRENT_SAMPLE_NS: u32 = 100;
 pub const SLOW_SAMPLE_NS: u32 = 1_000;
 
 const _: () = {
+    assert!(PDI_SPI_CLOCK_HZ == 21_250_000);
     // 200 ns dead time, 40 kHz: the values the settings below were checked with.
     assert!(DEAD_TIME_NS == 200);
     assert!(PWM_HZ == 40_000);

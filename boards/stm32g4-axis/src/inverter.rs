@@ -35,16 +35,21 @@ use crate::regs::PwmTimer;
 
 /// The compare value of `duty` (0.0..=1.0, clamped; NaN is 0.5, no voltage) for a counter
 /// turning at `auto_reload`, in PWM mode 2 (see the module docs).
+#[inline]
 pub fn compare_for_duty(duty: f32, auto_reload: u16) -> u16 {
-    let duty = if duty.is_nan() {
-        0.5
-    } else {
-        duty.clamp(0.0, 1.0)
-    };
     let arr = f32::from(auto_reload);
-    // In 0.0..=ARR (duty is clamped), so the conversion neither saturates nor wraps.
-    let compare = arr - duty * arr + 0.5;
-    (compare as u16).min(auto_reload)
+    // The ticks with the high side off, rounded to the nearest.
+    let off = (1.0 - duty) * arr + 0.5;
+    // A duty above 1 gives less than half a tick: 0. NaN fails both comparisons: the centre.
+    let off = if off >= 0.5 {
+        off
+    } else if off < 0.5 {
+        0.0
+    } else {
+        0.5 * arr + 0.5
+    };
+    // `as` saturates (a duty below 0 gives more than ARR ticks); `min` keeps it in the period.
+    (off as u16).min(auto_reload)
 }
 
 /// The duty a compare value gives (the inverse of [`compare_for_duty`]).

@@ -49,6 +49,8 @@ const _: () = {
     let vco = pll_in * PLL_N;
     assert!(vco >= 96_000_000 && vco <= 344_000_000);
     assert!(SYSCLK_HZ == 170_000_000);
+    // The board description (servo, PDI clock, load model) assumes this clock.
+    assert!(SYSCLK_HZ == stm32g4_axis::board::CORE_CLOCK_HZ);
 };
 
 /// The embassy-stm32 configuration of this board.

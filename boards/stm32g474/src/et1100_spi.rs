@@ -70,6 +70,7 @@ use embassy_stm32::Peri;
 use hal::esc::AlEvent;
 use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
 
+use stm32g4_axis::board;
 use stm32g4_settings::spi::BaudRate;
 
 use crate::clocks::PCLK1_HZ;
@@ -105,16 +106,13 @@ const ADDRESS_SPACE: u32 = 0x1_0000;
 
 /// SPI mode of the PDI (must match the SII PDI configuration, register 0x0150).
 pub const SPI_MODE: spi::Mode = spi::MODE_3;
-/// ET1100 maximum SPI clock (Section III, SPI timing characteristics).
-const ET1100_MAX_SPI_CLOCK_HZ: u32 = 30_000_000;
-/// SPI3's baud rate: the fastest PCLK1 / 2^(BR + 1) within the ET1100's maximum (PCLK1 / 8 at
-/// 170 MHz), computed at compile time (RM0440 §39.7.1).
-const SPI_BAUD_RATE: BaudRate = match BaudRate::at_most(PCLK1_HZ, ET1100_MAX_SPI_CLOCK_HZ) {
-    Ok(baud) => baud,
-    Err(_) => panic!("no SPI3 prescaler keeps the clock within the ET1100's maximum"),
-};
+/// SPI3's baud rate (`stm32g4_axis::board`: the fastest PCLK1 / 2^(BR + 1) within the ET1100's
+/// maximum).
+const SPI_BAUD_RATE: BaudRate = board::PDI_SPI_BAUD_RATE;
 /// SPI clock.
 pub const SPI_CLOCK_HZ: u32 = SPI_BAUD_RATE.sck_hz;
+// The board description computed the rate from the core clock: APB1 runs at it.
+const _: () = assert!(PCLK1_HZ == board::CORE_CLOCK_HZ);
 
 /// Bytes that may be in flight (written to TXFIFO but not yet read from RXFIFO). The RXFIFO
 /// holds 4 bytes (RM0440 §39.5.9, 32-bit FIFOs), so at most 4 in flight can never overrun it.

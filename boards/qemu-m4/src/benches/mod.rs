@@ -6,6 +6,7 @@
 //! To add one, write a module with a `run(&mut Harness)` and list it in [`ALL`]; budgets come
 //! from DESIGN.md §6.
 
+mod board_control;
 mod motor;
 mod process_data;
 mod sdo;
@@ -28,6 +29,7 @@ pub const ALL: &[fn(&mut Harness)] = &[
     sync0_with_axis::run,
     sdo::run,
     motor::run,
+    board_control::run,
 ];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.

@@ -241,6 +241,9 @@ pub fn run(h: &mut Harness) {
         );
         return;
     }
+    // The process-data image sizes of the default mapping: the PDI bus time of a cycle.
+    h.meta("sm2_bytes", OUTPUTS_SIZE as u32);
+    h.meta("sm3_bytes", INPUTS_SIZE as u32);
     let Setup { core, esc, .. } = &mut s;
     let idle = h.bench(
         "sync0-handler",
