@@ -128,6 +128,13 @@ impl<P: OutputPins> BrakeOutput<P> {
     }
 }
 
+impl<P> BrakeOutput<P> {
+    /// The output pins.
+    pub fn pins(&self) -> &P {
+        &self.pins
+    }
+}
+
 impl<P: OutputPins> DigitalOutputs for BrakeOutput<P> {
     fn set_outputs(&mut self, levels: u32) {
         self.pins.set_brake_released(levels & BRAKE_APPLIED == 0);

@@ -17,6 +17,7 @@
 //! | [`quadrature`] | a 32-bit timer in encoder mode with the index captured | [`hal::encoder::Encoder`] |
 //! | [`inputs`] | GPIO levels of switches, enable and STO inputs; brake output | [`hal::io::DigitalInputs`], [`hal::io::DigitalOutputs`] |
 //! | [`control`] | the body of the control interrupt (ADC end of conversion, P0) | — |
+//! | [`cycle`] | the body of the cycle interrupt (SYNC0, P1): process data, outputs, phase lock | — |
 //! | [`liveness`] | — (the decision behind each refresh of the independent watchdog) | — |
 //! | [`phase_lock`] | — (the PWM period trim that phase-locks the control loop to SYNC0) | — |
 //!
@@ -34,6 +35,7 @@
 
 pub mod board;
 pub mod control;
+pub mod cycle;
 pub mod inputs;
 pub mod inverter;
 pub mod liveness;

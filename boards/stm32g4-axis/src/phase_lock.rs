@@ -38,14 +38,14 @@ pub const LOCK_WINDOW_NS: u32 = 1_000;
 pub const LOCK_COUNT: u32 = 8;
 /// A locked SYNC0 is lost further than this many lock windows from the expected phase
 /// (hysteresis: a lock made while the phase settles is not lost by its last overshoot).
-pub const LOSS_WINDOW_FACTOR: i64 = 5;
+pub const LOSS_WINDOW_FACTOR: i32 = 5;
 /// SYNC0 events in a row outside the loss window that lose the lock.
 pub const LOSS_COUNT: u32 = 3;
 /// DC cycles allowed to acquire the lock.
 pub const ACQUIRE_LIMIT: u32 = 1_000;
 
 /// The integral gain: 1/N of the proportional one per cycle.
-const INTEGRAL_DIVISOR: i64 = 16;
+const INTEGRAL_DIVISOR: i32 = 16;
 /// Fraction bits of the fixed-point tick values (1/256 tick).
 const FRAC_BITS: u32 = 8;
 const ONE: i64 = 1 << FRAC_BITS;
@@ -138,29 +138,29 @@ pub enum LockState {
 pub struct PhaseLock {
     /// Nominal auto-reload.
     nominal_arr: u16,
-    /// The nominal PWM period, 1/256 ticks.
-    period: i64,
-    /// The DC cycle, 1/256 ticks.
-    cycle: i64,
-    /// PWM periods per DC cycle × 256.
-    periods_per_cycle_q8: i64,
+    /// The nominal PWM period, 1/256 ticks (at most 2 × 65535 × 256 < 2^25).
+    period: i32,
+    /// The DC cycle modulo the period, 1/256 ticks.
+    cycle_mod: i32,
     /// Cycles in the repeating pattern.
     pattern: u32,
+    /// The proportional gain 1 / (8 × periods per cycle), × 2^24.
+    gain_q24: i32,
     /// The expected phase of the next SYNC0, 1/256 ticks, in `0..period`.
-    expected: i64,
+    expected: i32,
     /// The window, 1/256 ticks.
-    window: i64,
+    window: i32,
     /// Integral of the phase error, 1/256 ticks.
-    integral: i64,
-    /// Largest trim, ticks.
-    max_trim: i64,
+    integral: i32,
+    /// Largest trim, 1/256 ticks.
+    limit: i32,
     state: LockState,
     /// SYNC0 events in a row inside (acquiring) or outside (locked) the window.
     run: u32,
     /// Cycles since the lock started.
     cycles: u32,
-    last_error: i64,
-    max_error_locked: i64,
+    last_error: i32,
+    max_error_locked: i32,
     trim: i32,
 }
 
@@ -183,16 +183,21 @@ impl PhaseLock {
             .ok_or(PhaseLockError::NoPattern)?;
         let window = (i64::from(LOCK_WINDOW_NS) * i64::from(timer_hz) / NS_PER_S as i64) * ONE;
         let max_trim = (i64::from(nominal_arr) * i64::from(MAX_TRIM_PERMILLE) / 1000).max(1);
+        // A trim of d ticks moves the phase by 2·d·(periods per cycle) per cycle; the
+        // proportional trim e / (8 · periods per cycle) corrects a quarter of the error e.
+        let gain_den = 8 * (cycle * ONE / period).max(1);
+        let gain_q24 = ((1i64 << 32) / gain_den).max(1);
+        let narrow = |v: i64| i32::try_from(v).map_err(|_| PhaseLockError::NoPattern);
         Ok(Self {
             nominal_arr,
-            period,
-            cycle,
-            periods_per_cycle_q8: cycle * ONE / period,
+            period: narrow(period)?,
+            cycle_mod: narrow(cycle % period)?,
             pattern,
-            expected: period / 2,
-            window,
+            gain_q24: narrow(gain_q24)?,
+            expected: narrow(period / 2)?,
+            window: narrow(window)?,
             integral: 0,
-            max_trim,
+            limit: narrow(max_trim * ONE)?,
             state: LockState::Acquiring,
             run: 0,
             cycles: 0,
@@ -210,12 +215,17 @@ impl PhaseLock {
     /// One SYNC0: `phase_ticks` after the last PWM valley, `cycles` DC cycles after the previous
     /// SYNC0 (1, or more when events were missed). Returns the trim of the auto-reload for the
     /// next periods, 1/256 ticks ([`PeriodDither`] spreads its fraction over the periods).
+    ///
+    /// Timing: cycle context, at every SYNC0; 32-bit arithmetic (hardware divisions) but for
+    /// one 32 × 32 → 64-bit multiplication.
     pub fn update(&mut self, phase_ticks: u16, cycles: u32) -> i32 {
         let cycles = cycles.max(1);
-        // Advance the expected phase by the cycles passed (mod the period, exactly).
-        let advance = (self.cycle % self.period) * i64::from(cycles % self.pattern.max(1));
+        // Advance the expected phase by the cycles passed, exactly: the pattern repeats after
+        // `pattern` cycles (k < 16, cycle_mod < 2^25: no overflow).
+        let k = (cycles % self.pattern.max(1)) as i32;
+        let advance = self.cycle_mod * k;
         self.expected = (self.expected + advance).rem_euclid(self.period);
-        let measured = i64::from(phase_ticks) * ONE;
+        let measured = i32::from(phase_ticks) << FRAC_BITS;
         // The error, wrapped into (−period/2, period/2]: positive = SYNC0 later in the period
         // than expected = the PWM runs fast.
         let mut error = (measured - self.expected).rem_euclid(self.period);
@@ -225,26 +235,23 @@ impl PhaseLock {
         self.last_error = error;
         self.cycles = self.cycles.saturating_add(cycles);
         self.judge(error);
-        // A positive error (PWM fast) lengthens the period. Per cycle, a trim of d ticks moves
-        // the phase by 2·d·(periods per cycle): d = e / (8 · periods per cycle) corrects a
-        // quarter of the error, slow enough that SYNC0's jitter moves the PWM by a fraction of
-        // itself only.
-        let gain_den = 8 * self.periods_per_cycle_q8.max(1);
-        let limit = self.max_trim * ONE;
+        // A positive error (PWM fast) lengthens the period, by a quarter of the error per cycle
+        // (slow enough that SYNC0's jitter moves the PWM by a fraction of itself only).
         // Anti-windup: the integral grows only while the trim it would give is not at its
         // limit (it would otherwise overshoot the phase after a long pull-in).
-        let integral = self.integral + error / INTEGRAL_DIVISOR;
-        let unclamped = (error + integral) * ONE / gain_den;
-        if unclamped.abs() <= limit {
+        let integral = self.integral.saturating_add(error / INTEGRAL_DIVISOR);
+        let proportional = |sum: i32| (i64::from(sum) * i64::from(self.gain_q24)) >> 24;
+        if proportional(error.saturating_add(integral)).abs() <= i64::from(self.limit) {
             self.integral = integral;
         }
-        let trim = ((error + self.integral) * ONE / gain_den).clamp(-limit, limit);
-        // Within ±1 % of a u16 ARR, in 1/256: far inside i32.
+        let trim = proportional(error.saturating_add(self.integral))
+            .clamp(-i64::from(self.limit), i64::from(self.limit));
+        // Within ±limit, an i32.
         self.trim = trim as i32;
         self.trim
     }
 
-    fn judge(&mut self, error: i64) {
+    fn judge(&mut self, error: i32) {
         match self.state {
             LockState::Acquiring => {
                 let inside = error.abs() <= self.window;
@@ -258,7 +265,7 @@ impl PhaseLock {
                 }
             }
             LockState::Locked => {
-                let outside = error.abs() > self.window * LOSS_WINDOW_FACTOR;
+                let outside = error.abs() > self.window.saturating_mul(LOSS_WINDOW_FACTOR);
                 self.run = if outside { self.run + 1 } else { 0 };
                 self.max_error_locked = self.max_error_locked.max(error.abs());
                 if self.run >= LOSS_COUNT {
@@ -377,8 +384,17 @@ impl Sync0Lock {
         // The cycles since the previous SYNC0, rounded (missed events count).
         let cycles = self.last_ns.map_or(1, |last| {
             let elapsed = now_ns.saturating_sub(last);
-            let cycle = u64::from(cycle_ns);
-            u32::try_from((elapsed + cycle / 2) / cycle).unwrap_or(u32::MAX)
+            // Rounded; in 32 bits (a hardware division) unless SYNC0 was away for seconds.
+            match u32::try_from(elapsed)
+                .ok()
+                .and_then(|e| e.checked_add(cycle_ns / 2))
+            {
+                Some(e) => e / cycle_ns,
+                None => {
+                    let cycle = u64::from(cycle_ns);
+                    u32::try_from((elapsed + cycle / 2) / cycle).unwrap_or(u32::MAX)
+                }
+            }
         });
         self.last_ns = Some(now_ns);
         let Some(lock) = self.lock.as_mut() else {
@@ -405,10 +421,10 @@ impl Sync0Lock {
     }
 }
 
-fn ticks_q8_to_ns(ticks_q8: i64, timer_hz: u32) -> i64 {
+fn ticks_q8_to_ns(ticks_q8: i32, timer_hz: u32) -> i64 {
     match timer_hz {
         0 => 0,
-        hz => ticks_q8 * NS_PER_S as i64 / ONE / i64::from(hz),
+        hz => i64::from(ticks_q8) * NS_PER_S as i64 / ONE / i64::from(hz),
     }
 }
 

@@ -50,18 +50,13 @@ use embassy_stm32::{bind_interrupts, pac, Peri};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
-use firmware::cia402::outputs;
-use firmware::drive::DriveAxis;
 use firmware::od::{NoDomains, WithDomains};
 use firmware::slave::MailboxSide;
 use firmware::slave::SyncMode;
-use firmware::DriveCore;
-use hal::esc::{AlEvent, AlState};
-use hal::io::DigitalOutputs;
+use hal::esc::AlEvent;
 use hal::pdi::EscPdi;
 use static_cell::StaticCell;
-use stm32g4_axis::inputs::BrakeOutput;
-use stm32g4_axis::phase_lock::Sync0Lock;
+use stm32g4_axis::cycle::CycleSide;
 
 use crate::axis_io::BrakePin;
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
@@ -103,45 +98,11 @@ bind_interrupts!(
     }
 );
 
-/// What the cycle and the ESC-event contexts share: the slave's core and the ET1100. The
-/// ESC-event context holds the lock only for the core's short steps and for single PDI
-/// transfers of at most [`PDI_CHUNK`] bytes ([`SharedPdi`]), never for a whole mailbox round.
-pub struct Drive {
-    /// The EtherCAT slave's core (ESM, process data, CiA402 application, OD RAM).
-    pub core: DriveCore<RAM_SIZE>,
-    /// The ET1100.
-    pub pdi: Et1100Spi<'static>,
-    /// The holding brake, set from the axis' 60FEh:01 bit 0 after every cycle.
-    pub brake: BrakeOutput<BrakePin>,
-    /// The PWM's phase lock to SYNC0 (`None` without a motor: no PWM to lock).
-    pub sync_lock: Option<Sync0Lock>,
-}
-
-impl Drive {
-    /// A SYNC0 edge `phase` ticks after the PWM valley: the phase lock's next trim for the
-    /// control interrupt, and a lost lock reported to the slave (AL status 0x0032).
-    fn follow_sync0(&mut self, phase: u16, now_ns: u64) {
-        let Some(lock) = self.sync_lock.as_mut() else {
-            return;
-        };
-        let synchronous = matches!(self.core.sync_mode(), SyncMode::DcSync0 | SyncMode::DcSync1)
-            && matches!(self.core.al_state(), AlState::SafeOp | AlState::Op);
-        let outcome = lock.on_sync0(synchronous.then(|| self.core.cycle_ns()), now_ns, phase);
-        crate::control::PERIOD_TRIM.set(outcome.trim_q8);
-        if outcome.report_lost {
-            self.core.report_phase_lock_lost();
-        }
-    }
-
-    /// Sets the digital outputs to what the first axis asks (brake applied without an axis).
-    pub fn drive_outputs(&mut self) {
-        let (drive, _) = self.core.application();
-        let levels = drive
-            .axis(0)
-            .map_or(outputs::BRAKE, DriveAxis::digital_outputs);
-        self.brake.set_outputs(levels);
-    }
-}
+/// What the cycle and the ESC-event contexts share: the slave's core and the ET1100, with the
+/// brake output and the phase lock the cycle context drives ([`CycleSide`]). The ESC-event
+/// context holds the lock only for the core's short steps and for single PDI transfers of at
+/// most [`PDI_CHUNK`] bytes ([`SharedPdi`]), never for a whole mailbox round.
+pub type Drive = CycleSide<RAM_SIZE, Et1100Spi<'static>, BrakePin>;
 
 /// What only the ESC-event context (its executor and the thread-mode fallback poll) uses: the
 /// slave's mailbox side with its own copy of the OD RAM, and the parameter storage its SDO
@@ -357,33 +318,21 @@ impl Handler<typelevel::TIM3> for CycleHandler {
         let started = DWT::cycle_count();
         // SYNC0's phase in the PWM period, if this entry is a SYNC0 edge.
         let capture = sync_capture::take_capture();
-        let edge = capture.is_some();
         let requests = CYCLE_REQUESTS.swap(0, Ordering::Acquire);
         let result = with_drive(|d| {
-            let run = match d.core.sync_mode() {
-                SyncMode::DcSync0 | SyncMode::DcSync1 => edge,
-                SyncMode::FreeRun => {
-                    // In free run the slave's cycle is 1C32h:02 (0 below SAFEOP: keep the last).
-                    let cycle_ns = d.core.cycle_ns();
-                    if cycle_ns != 0 {
-                        FREE_RUN_PERIOD_NS.store(cycle_ns, Ordering::Relaxed);
-                    }
-                    requests & REQUEST_FREE_RUN != 0
+            if d.core.sync_mode() == SyncMode::FreeRun {
+                // In free run the slave's cycle is 1C32h:02 (0 below SAFEOP: keep the last).
+                let cycle_ns = d.core.cycle_ns();
+                if cycle_ns != 0 {
+                    FREE_RUN_PERIOD_NS.store(cycle_ns, Ordering::Relaxed);
                 }
-                // `on_esc_event` runs the cycle itself when it sees the SM2 event.
-                SyncMode::SmSynchronous => false,
-            };
-            let result = run.then(|| {
-                let result = firmware::sync0::on_sync0(&mut d.core, &mut d.pdi, now_ns());
-                // The measured duration becomes 1C32h/1C33h:06 (calc and copy time).
-                d.core.cycle_finished(now_ns());
-                d.drive_outputs();
-                result
-            });
-            if let Some(phase) = capture {
-                d.follow_sync0(phase, now_ns());
             }
-            result
+            d.on_cycle_interrupt(
+                capture,
+                requests & REQUEST_FREE_RUN != 0,
+                now_ns,
+                &crate::control::PERIOD_TRIM,
+            )
         })
         .flatten();
         CYCLE_STATS.record(started, result);

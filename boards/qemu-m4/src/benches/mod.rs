@@ -7,6 +7,7 @@
 //! from DESIGN.md §6.
 
 mod board_control;
+mod board_sync0;
 mod motor;
 mod process_data;
 mod sdo;
@@ -30,6 +31,7 @@ pub const ALL: &[fn(&mut Harness)] = &[
     sdo::run,
     motor::run,
     board_control::run,
+    board_sync0::run,
 ];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.

@@ -179,6 +179,21 @@ impl Setup {
         Some(s)
     }
 
+    /// [`Setup::new`], then the power-up sequence of controlwords, one cycle each, to operation
+    /// enabled (no motor attached). The reason if it did not get there.
+    pub(super) fn powered_up() -> Result<Self, &'static str> {
+        let mut s = Self::new().ok_or("the slave did not reach OP on the ESC image")?;
+        for cw in POWER_UP {
+            if s.set_outputs(cw).is_none() || on_sync0(&mut s.core, &mut s.esc, 0).is_err() {
+                return Err("a power-up cycle failed");
+            }
+        }
+        if s.core.app().pds_state() != PdsState::OperationEnabled {
+            return Err("the drive did not reach operation enabled");
+        }
+        Ok(s)
+    }
+
     /// Puts the master's outputs into SM2 ([`master_outputs`] packed by the Rx plan).
     fn set_outputs(&mut self, cw: u16) -> Option<()> {
         self.set_master(&master_outputs(cw)?);
@@ -221,26 +236,13 @@ impl Setup {
 
 /// Measures the SYNC0 handler with the mailbox idle and with a transfer pending.
 pub fn run(h: &mut Harness) {
-    let Some(mut s) = Setup::new() else {
-        h.fail(
-            "sync0-handler",
-            format_args!("the slave did not reach OP on the ESC image"),
-        );
-        return;
-    };
-    for cw in POWER_UP {
-        if s.set_outputs(cw).is_none() || on_sync0(&mut s.core, &mut s.esc, 0).is_err() {
-            h.fail("sync0-handler", format_args!("a power-up cycle failed"));
+    let mut s = match Setup::powered_up() {
+        Ok(s) => s,
+        Err(reason) => {
+            h.fail("sync0-handler", format_args!("{reason}"));
             return;
         }
-    }
-    if s.core.app().pds_state() != PdsState::OperationEnabled {
-        h.fail(
-            "sync0-handler",
-            format_args!("the drive did not reach operation enabled"),
-        );
-        return;
-    }
+    };
     // The process-data image sizes of the default mapping: the PDI bus time of a cycle.
     h.meta("sm2_bytes", OUTPUTS_SIZE as u32);
     h.meta("sm3_bytes", INPUTS_SIZE as u32);
