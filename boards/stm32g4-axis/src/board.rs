@@ -6,7 +6,7 @@
 //! | part | value |
 //! |---|---|
 //! | motor, power stage, protections | the firmware's 48 V / 400 W reference servo ([`SERVO_400W`]): 40 kHz PWM, 200 ns dead time |
-//! | encoder | incremental, 2500 lines (10,000 increments per revolution), A/B/Z on RS-422 receivers; commutation found by alignment at every enable |
+//! | encoder | incremental, 2500 lines (10,000 increments per revolution), A/B/Z on RS-422 receivers; commutation found by alignment at every enable. Built with `biss-encoder`: the reference servo's BiSS-C absolute encoder (20-bit single-turn, 16-bit multi-turn) on SPI1 instead |
 //! | phase currents | two low-side shunts of 2 mΩ (phases a, b), amplifier gain 16 biased at 1.65 V: 32 mV/A, ±51.6 A full scale (the simulated board's 25 mA/count) |
 //! | bus voltage | 300 kΩ / 10 kΩ divider: 102 V full scale |
 //! | power-stage temperature | linear sensor on the heat sink, 0.5 V at 0 °C, 10 mV/°C |
@@ -18,6 +18,7 @@ use motor_control::servo::{EncoderSpec, ServoSpec, Tuning, SERVO_400W};
 
 use stm32g4_settings::spi::BaudRate;
 
+use crate::biss::BissLayout;
 use crate::sensing::{AnalogFrontEnd, LinearScale, Shunts};
 
 /// Core clock (SYSCLK = HCLK = PCLK1 = PCLK2), Hz; `boards/stm32g474/src/clocks.rs` derives it
@@ -41,6 +42,24 @@ pub const SERVO: ServoSpec = ServoSpec {
         counts_per_rev: COUNTS_PER_REV,
     },
     ..SERVO_400W
+};
+
+/// The servo with a BiSS-C absolute encoder (the board built with `biss-encoder`): the
+/// reference servo as it is, 20-bit single-turn and 16-bit multi-turn. Its commutation offset
+/// (0 here) must be the commissioned one of the motor fitted.
+pub const SERVO_BISS: ServoSpec = SERVO_400W;
+
+/// The BiSS-C frame layout of [`SERVO_BISS`]'s encoder.
+pub const BISS_LAYOUT: BissLayout = match SERVO_BISS.encoder {
+    EncoderSpec::Absolute {
+        single_turn_bits,
+        multi_turn_bits,
+        ..
+    } => BissLayout {
+        multi_turn_bits,
+        single_turn_bits,
+    },
+    EncoderSpec::Incremental { .. } => panic!("the BiSS servo needs an absolute encoder"),
 };
 
 /// Encoder lines per revolution.

@@ -10,14 +10,16 @@
 
 use motor_control::axis::{Axis, AxisLink, Output, Sample};
 
+use hal::encoder::Encoder;
+
 use crate::inputs::BoardInputs;
 use crate::inverter::Tim1Inverter;
-use crate::quadrature::QuadratureEncoder;
-use crate::regs::{EncoderCounter, InjectedAdcs, InputPins, PwmTimer};
+use crate::regs::{InjectedAdcs, InputPins, PwmTimer};
 use crate::sensing::{self, BusAndTemperature, PhaseCurrentSense};
 
-/// The axis hardware of the board, each part behind its register trait.
-pub struct AxisHardware<T, A, C, P> {
+/// The axis hardware of the board, each part behind its register trait; `E` is the encoder
+/// driver ([`crate::quadrature::QuadratureEncoder`] or [`crate::biss::BissEncoder`]).
+pub struct AxisHardware<T, A, E, P> {
     /// TIM1.
     pub inverter: Tim1Inverter<T>,
     /// ADC1/ADC2.
@@ -27,12 +29,12 @@ pub struct AxisHardware<T, A, C, P> {
     /// Bus voltage and temperature.
     pub bus: BusAndTemperature,
     /// The position encoder.
-    pub encoder: QuadratureEncoder<C>,
+    pub encoder: E,
     /// The input pins.
     pub inputs: BoardInputs<P>,
 }
 
-impl<T: PwmTimer, A: InjectedAdcs, C: EncoderCounter, P: InputPins> AxisHardware<T, A, C, P> {
+impl<T: PwmTimer, A: InjectedAdcs, E: Encoder, P: InputPins> AxisHardware<T, A, E, P> {
     /// The body of the control interrupt (the ADC's end of the injected sequence, priority P0):
     /// one PWM period of `axis`, whose set-points and feedback go through `link`. Returns what
     /// was applied.
@@ -63,7 +65,8 @@ mod tests {
     use super::*;
     use crate::board::{COUNTS_PER_REV, FRONT_END, PWM_HZ, SERVO, TUNING};
     use crate::inputs::{InputLine, InputPolarity};
-    use crate::regs::Conversions;
+    use crate::quadrature::QuadratureEncoder;
+    use crate::regs::{Conversions, EncoderCounter};
     use motor_control::axis::{AxisCommand, AxisState, ControlMode};
     use motor_control::servo::axis_config;
     use motor_control::MotorFault;
@@ -125,7 +128,7 @@ mod tests {
         }
     }
 
-    fn board() -> AxisHardware<Timer, Adcs, Counter, Pins> {
+    fn board() -> AxisHardware<Timer, Adcs, QuadratureEncoder<Counter>, Pins> {
         let (currents, bus) = sensing::sensing(&FRONT_END);
         AxisHardware {
             inverter: Tim1Inverter::new(Timer::default(), PWM_HZ),

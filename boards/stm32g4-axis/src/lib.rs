@@ -15,6 +15,7 @@
 //! | [`inverter`] | TIM1: centre-aligned complementary PWM, MOE, break flag | [`hal::power::Inverter`] |
 //! | [`sensing`] | ADC1/ADC2 injected conversions of the phase currents, bus voltage, temperature | [`hal::power::CurrentSense`], [`hal::power::BusSense`] |
 //! | [`quadrature`] | a 32-bit timer in encoder mode with the index captured | [`hal::encoder::Encoder`] |
+//! | [`biss`] | a BiSS-C absolute encoder: frame decoding with CRC-6, one frame per period over a [`biss::FrameTransfer`] (SPI with DMA on the board) | [`hal::encoder::Encoder`] |
 //! | [`inputs`] | GPIO levels of switches, enable and STO inputs; brake output | [`hal::io::DigitalInputs`], [`hal::io::DigitalOutputs`] |
 //! | [`control`] | the body of the control interrupt (ADC end of conversion, P0) | — |
 //! | [`cycle`] | the body of the cycle interrupt (SYNC0, P1): process data, outputs, phase lock | — |
@@ -33,6 +34,7 @@
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
 
+pub mod biss;
 pub mod board;
 pub mod control;
 pub mod cycle;

@@ -19,12 +19,34 @@ use stm32g4_axis::phase_lock::PeriodTrim;
 
 use crate::adc::{self, Adc12};
 use crate::axis_io::{GateDriverEnable, GpioInputs};
+#[cfg(feature = "biss-encoder")]
+use crate::biss_spi::SpiFrames;
+#[cfg(not(feature = "biss-encoder"))]
 use crate::encoder::Tim2Encoder;
 use crate::irq::{prio, ContextStats};
 use crate::pwm::{PwmPins, Tim1};
+use firmware::motor::servo::ServoSpec;
+#[cfg(feature = "biss-encoder")]
+use stm32g4_axis::biss::BissEncoder;
+#[cfg(not(feature = "biss-encoder"))]
+use stm32g4_axis::quadrature::QuadratureEncoder;
+
+/// The board's encoder driver: the incremental encoder on TIM2.
+#[cfg(not(feature = "biss-encoder"))]
+pub type BoardEncoder = QuadratureEncoder<Tim2Encoder>;
+/// The board's encoder driver: the BiSS-C encoder on SPI1 with DMA.
+#[cfg(feature = "biss-encoder")]
+pub type BoardEncoder = BissEncoder<SpiFrames>;
+
+/// The servo this image drives (its encoder is the one [`BoardEncoder`] reads).
+#[cfg(not(feature = "biss-encoder"))]
+pub const SERVO: ServoSpec = stm32g4_axis::board::SERVO;
+/// The servo this image drives (its encoder is the one [`BoardEncoder`] reads).
+#[cfg(feature = "biss-encoder")]
+pub const SERVO: ServoSpec = stm32g4_axis::board::SERVO_BISS;
 
 /// The board's axis hardware.
-pub type BoardAxisHardware = AxisHardware<Tim1, Adc12, Tim2Encoder, GpioInputs>;
+pub type BoardAxisHardware = AxisHardware<Tim1, Adc12, BoardEncoder, GpioInputs>;
 
 /// What the control interrupt owns.
 pub struct ControlContext {

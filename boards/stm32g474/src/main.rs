@@ -7,7 +7,8 @@
 //! | [`clocks`] | HSE 24 MHz → PLL → 170 MHz |
 //! | [`pwm`] | TIM1: complementary centre-aligned PWM, dead time, break, ADC trigger |
 //! | [`adc`] | ADC1/ADC2: injected conversions of currents, bus voltage, temperature |
-//! | [`encoder`] | TIM2: incremental encoder with index capture |
+//! | `encoder` | TIM2: incremental encoder with index capture (default build) |
+//! | `biss_spi` | SPI1 + DMA: the BiSS-C encoder's frame each period (`biss-encoder` build) |
 //! | [`axis_io`] | limit/home switches, thermal switch, probes, STO, brake, gate-driver enable |
 //! | [`control`] | the control interrupt (P0): one PWM period of the axis |
 //! | [`sync_capture`] | TIM3: SYNC0's phase in the PWM period, captured in hardware |
@@ -26,8 +27,11 @@
 
 mod adc;
 mod axis_io;
+#[cfg(feature = "biss-encoder")]
+mod biss_spi;
 mod clocks;
 mod control;
+#[cfg(not(feature = "biss-encoder"))]
 mod encoder;
 mod et1100_spi;
 mod irq;
@@ -50,6 +54,7 @@ use firmware::motor::axis::Axis;
 use firmware::motor::servo::axis_config;
 use firmware::params::ParamStore;
 use firmware::DriveCore;
+use hal::encoder::Encoder;
 use hal::esc::regs;
 use hal::pdi::EscPdi;
 use stm32g4_axis::board as servo;
@@ -59,10 +64,13 @@ use crate::axis_io::{BrakePin, GateDriverEnable, GpioInputs};
 use crate::control::ControlContext;
 use crate::et1100_spi::Et1100Spi;
 use crate::storage::FlashStorage;
+#[cfg(feature = "biss-encoder")]
+use stm32g4_axis::biss::BissEncoder;
 use stm32g4_axis::control::AxisHardware;
 use stm32g4_axis::inputs::{BoardInputs, BrakeOutput};
 use stm32g4_axis::inverter::Tim1Inverter;
 use stm32g4_axis::phase_lock::Sync0Lock;
+#[cfg(not(feature = "biss-encoder"))]
 use stm32g4_axis::quadrature::QuadratureEncoder;
 
 /// Start-up probe: attempts and spacing. The ET1100 loads its SII EEPROM after reset (tens of
@@ -99,7 +107,33 @@ async fn probe_esc(pdi: &mut Et1100Spi<'_>) -> bool {
     false
 }
 
-/// Configures the axis hardware (TIM1, ADC1/ADC2, TIM2, the GPIOs) and creates the axis.
+/// The incremental encoder on TIM2.
+#[cfg(not(feature = "biss-encoder"))]
+fn board_encoder(pins: pins::EncoderPins) -> Option<control::BoardEncoder> {
+    let counter = encoder::configure(pins.tim, pins.lines);
+    info!(
+        "encoder: incremental on TIM2, input filter {}",
+        encoder::FILTER.code
+    );
+    Some(QuadratureEncoder::new(counter, servo::COUNTS_PER_REV))
+}
+
+/// The BiSS-C encoder on SPI1 with DMA; `None` (logged) if its layout is refused.
+#[cfg(feature = "biss-encoder")]
+fn board_encoder(pins: pins::EncoderPins) -> Option<control::BoardEncoder> {
+    match BissEncoder::new(biss_spi::configure(pins.biss), servo::BISS_LAYOUT) {
+        Ok(encoder) => {
+            info!("encoder: BiSS-C on SPI1");
+            Some(encoder)
+        }
+        Err(e) => {
+            error!("BiSS layout refused ({}): no motor control", e);
+            None
+        }
+    }
+}
+
+/// Configures the axis hardware (TIM1, ADC1/ADC2, the encoder, the GPIOs) and creates the axis.
 /// `None` (logged) if the ADCs do not start or the servo's configuration is refused: the drive
 /// then runs without a motor (no axis attached, gates off).
 fn make_axis(
@@ -120,8 +154,10 @@ fn make_axis(
             return (None, brake);
         }
     };
-    let counter = encoder::configure(encoder.tim, encoder.lines);
-    let axis = match Axis::new(axis_config(&servo::SERVO, &servo::TUNING)) {
+    let Some(encoder) = board_encoder(encoder) else {
+        return (None, brake);
+    };
+    let axis = match Axis::new(axis_config(&control::SERVO, &servo::TUNING)) {
         Ok(axis) => axis,
         Err(e) => {
             error!("axis configuration refused ({}): no motor control", e);
@@ -134,15 +170,15 @@ fn make_axis(
         adcs,
         currents,
         bus,
-        encoder: QuadratureEncoder::new(counter, servo::COUNTS_PER_REV),
+        encoder,
         inputs: BoardInputs::new(GpioInputs::new(axis_io.inputs), axis_io::POLARITY),
     };
     info!(
-        "axis: PWM {} Hz (ARR {}), dead time DTG {}, encoder filter {}",
+        "axis: PWM {} Hz (ARR {}), dead time DTG {}, encoder {} increments/rev",
         servo::PWM_HZ,
         pwm::PERIOD.auto_reload,
         pwm::DEAD_TIME.dtg,
-        encoder::FILTER.code
+        hardware.encoder.resolution()
     );
     let context = ControlContext {
         hardware,
@@ -177,7 +213,7 @@ fn install_drive(
         if with_axis {
             let (drive, ram) = core.application();
             if drive
-                .attach_axis(0, &control::LINK, servo::SERVO.encoder, ram)
+                .attach_axis(0, &control::LINK, control::SERVO.encoder, ram)
                 .is_err()
             {
                 error!("the profile has no axis: the motor stays off");

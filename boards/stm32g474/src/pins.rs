@@ -22,10 +22,12 @@
 //! | phase c current | PC2 | ADC1_IN8 (analog) | current amplifier c | three-shunt boards; rank 2 of ADC1 |
 //! | bus voltage | PC3 | ADC2_IN9 (analog) | 300 kΩ / 10 kΩ divider | rank 2 of ADC2 |
 //! | stage temperature | PB1 | ADC1_IN12 (analog) | linear sensor on the heat sink | rank 3 of ADC1 |
-//! | encoder A | PA0 | TIM2_CH1 (AF1) | RS-422 receiver | encoder mode 3 |
+//! | encoder A | PA0 | TIM2_CH1 (AF1) | RS-422 receiver | encoder mode 3 (default build) |
 //! | encoder B | PA1 | TIM2_CH2 (AF1) | RS-422 receiver | |
 //! | encoder Z | PA3 | TIM2_CH4 (AF1) | RS-422 receiver | captures the count on the rising edge |
 //! | encoder fault | PA2 | GPIO in, pull-up | receiver fault output (open drain) | low = cable broken or unpowered |
+//! | BiSS MA | PA5 | SPI1_SCK (AF5) | RS-422 driver to the encoder's MA | `biss-encoder` build (in place of A/B/Z) |
+//! | BiSS SLO | PA6 | SPI1_MISO (AF5) | RS-422 receiver from the encoder's SLO | pull-up: an open line reads no ack |
 //! | limit + | PC6 | GPIO in, pull-down | NC contact to 3.3 V | low = active (open or broken) |
 //! | limit − | PC7 | GPIO in, pull-down | NC contact to 3.3 V | low = active |
 //! | home | PC8 | GPIO in, pull-down | NO contact to 3.3 V | high = active |
@@ -98,11 +100,19 @@ pub struct SensingPins {
 }
 
 /// TIM2 and the encoder's lines.
+#[cfg(not(feature = "biss-encoder"))]
 pub struct EncoderPins {
     /// TIM2.
     pub tim: Peri<'static, p::TIM2>,
     /// A, B, Z and the receiver's fault output.
     pub lines: crate::encoder::EncoderPins<p::PA0, p::PA1, p::PA3, p::PA2>,
+}
+
+/// SPI1, its DMA channels and the BiSS-C lines.
+#[cfg(feature = "biss-encoder")]
+pub struct EncoderPins {
+    /// MA (SPI1_SCK), SLO (SPI1_MISO), SPI1, DMA1 channels 1 and 2.
+    pub biss: crate::biss_spi::BissPins<p::PA5, p::PA6>,
 }
 
 /// The axis' digital inputs and the brake.
@@ -132,7 +142,7 @@ pub struct BoardPins {
     pub inverter: InverterPins,
     /// Current, bus-voltage and temperature sensing.
     pub sensing: SensingPins,
-    /// The incremental encoder.
+    /// The encoder (incremental on TIM2, or BiSS-C on SPI1 with `biss-encoder`).
     pub encoder: EncoderPins,
     /// Digital inputs and the brake.
     pub axis_io: AxisIoPins,
@@ -184,6 +194,7 @@ pub fn split(p: Peripherals) -> BoardPins {
                 temperature: p.PB1,
             },
         },
+        #[cfg(not(feature = "biss-encoder"))]
         encoder: EncoderPins {
             tim: p.TIM2,
             lines: crate::encoder::EncoderPins {
@@ -191,6 +202,16 @@ pub fn split(p: Peripherals) -> BoardPins {
                 b: p.PA1,
                 z: p.PA3,
                 fault: p.PA2,
+            },
+        },
+        #[cfg(feature = "biss-encoder")]
+        encoder: EncoderPins {
+            biss: crate::biss_spi::BissPins {
+                spi: p.SPI1,
+                ma: p.PA5,
+                slo: p.PA6,
+                rx_dma: p.DMA1_CH1,
+                tx_dma: p.DMA1_CH2,
             },
         },
         axis_io: AxisIoPins {
