@@ -138,7 +138,7 @@ const COMMAND: AxisCommand = AxisCommand {
     torque_limits: None,
 };
 
-type Board = AxisHardware<Tim1, Adcs, Tim2, Pins>;
+type Board = AxisHardware<Tim1, Adcs, QuadratureEncoder<Tim2>, Pins>;
 
 /// The board's hardware in its power-on state.
 fn board() -> Board {
