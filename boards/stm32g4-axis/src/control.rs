@@ -14,12 +14,13 @@ use hal::encoder::Encoder;
 
 use crate::inputs::BoardInputs;
 use crate::inverter::Tim1Inverter;
-use crate::regs::{InjectedAdcs, InputPins, PwmTimer};
+use crate::regs::{InjectedAdcs, InputPins, ProbeTimer, PwmTimer};
 use crate::sensing::{self, BusAndTemperature, PhaseCurrentSense};
 
 /// The axis hardware of the board, each part behind its register trait; `E` is the encoder
-/// driver ([`crate::quadrature::QuadratureEncoder`] or [`crate::biss::BissEncoder`]).
-pub struct AxisHardware<T, A, E, P> {
+/// driver ([`crate::quadrature::QuadratureEncoder`] or [`crate::biss::BissEncoder`]), `R` the
+/// probe-edge timer.
+pub struct AxisHardware<T, A, E, P, R = crate::regs::NoProbeTimer> {
     /// TIM1.
     pub inverter: Tim1Inverter<T>,
     /// ADC1/ADC2.
@@ -31,10 +32,12 @@ pub struct AxisHardware<T, A, E, P> {
     /// The position encoder.
     pub encoder: E,
     /// The input pins.
-    pub inputs: BoardInputs<P>,
+    pub inputs: BoardInputs<P, R>,
 }
 
-impl<T: PwmTimer, A: InjectedAdcs, E: Encoder, P: InputPins> AxisHardware<T, A, E, P> {
+impl<T: PwmTimer, A: InjectedAdcs, E: Encoder, P: InputPins, R: ProbeTimer>
+    AxisHardware<T, A, E, P, R>
+{
     /// The body of the control interrupt (the ADC's end of the injected sequence, priority P0):
     /// one PWM period of `axis`, whose set-points and feedback go through `link`. Returns what
     /// was applied.
@@ -46,7 +49,7 @@ impl<T: PwmTimer, A: InjectedAdcs, E: Encoder, P: InputPins> AxisHardware<T, A, 
         self.inverter.start_period();
         let raw = self.adcs.take_conversions();
         sensing::latch(&mut self.currents, &mut self.bus, &raw);
-        self.inputs.latch();
+        self.inputs.latch(self.inverter.ended_period_ticks());
         let sample = Sample::read(
             &mut self.inverter,
             &mut self.currents,

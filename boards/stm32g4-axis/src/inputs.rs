@@ -9,7 +9,7 @@
 use cia402::outputs::BRAKE as BRAKE_APPLIED;
 use hal::io::{DigitalInputs, DigitalOutputs, ProbeCapture, TouchProbe};
 
-use crate::regs::{InputPins, OutputPins};
+use crate::regs::{InputPins, NoProbeTimer, OutputPins, ProbeTimer};
 
 /// The input lines, as bit numbers of [`InputPins::levels`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,27 +48,82 @@ pub struct InputPolarity {
     pub active_low: u32,
 }
 
-/// The inputs on `pins`.
-pub struct BoardInputs<P> {
+/// The inputs on `pins`, and the probe edges time-stamped by `T`.
+pub struct BoardInputs<P, T = NoProbeTimer> {
     pins: P,
     polarity: InputPolarity,
     /// Active lines at the last `latch`.
     active: u32,
+    /// The probe-edge timer, its clock, and the delay of its capture path (input filter).
+    edges: T,
+    timer_hz: u32,
+    capture_delay_ticks: u32,
+    /// Each probe's last edge at the last `latch`, ns before it.
+    edge_ns: [Option<i32>; 2],
 }
 
 impl<P: InputPins> BoardInputs<P> {
-    /// The inputs on `pins` with `polarity`, all inactive until the first [`Self::latch`].
+    /// The inputs on `pins` with `polarity`, all inactive until the first [`Self::latch`];
+    /// probe edges without a time until [`Self::with_probe_timer`].
     pub fn new(pins: P, polarity: InputPolarity) -> Self {
         Self {
             pins,
             polarity,
             active: 0,
+            edges: NoProbeTimer,
+            timer_hz: 0,
+            capture_delay_ticks: 0,
+            edge_ns: [None; 2],
         }
     }
 
-    /// Reads every line once, at the sample (what the trait methods then return).
-    pub fn latch(&mut self) {
+    /// Time-stamps the probe edges with `timer`, clocked at `timer_hz`, whose captures come
+    /// `capture_delay_ticks` after the edge at the pin (its input filter's delay, added back).
+    pub fn with_probe_timer<T: ProbeTimer>(
+        self,
+        timer: T,
+        timer_hz: u32,
+        capture_delay_ticks: u32,
+    ) -> BoardInputs<P, T> {
+        BoardInputs {
+            pins: self.pins,
+            polarity: self.polarity,
+            active: self.active,
+            edges: timer,
+            timer_hz,
+            capture_delay_ticks,
+            edge_ns: [None; 2],
+        }
+    }
+}
+
+impl<P: InputPins, T: ProbeTimer> BoardInputs<P, T> {
+    /// Reads every line once, at the sample (what the trait methods then return), and places
+    /// the probe edges since the last latch in time before now. `ended_period_ticks`: the
+    /// length of the PWM period that ended at the last valley (an edge captured before that
+    /// valley counts from the valley before).
+    pub fn latch(&mut self, ended_period_ticks: u32) {
         self.active = self.pins.levels() ^ self.polarity.active_low;
+        let now = u32::from(self.edges.count());
+        for (slot, probe) in self
+            .edge_ns
+            .iter_mut()
+            .zip([TouchProbe::One, TouchProbe::Two])
+        {
+            *slot = self.edges.take_edge(probe).map(|edge| {
+                let edge = u32::from(edge);
+                let before = if edge <= now {
+                    now - edge
+                } else {
+                    // In the period that ended: the counter was reset at the valley since.
+                    (now + ended_period_ticks).saturating_sub(edge)
+                };
+                ticks_to_ns(
+                    before.saturating_add(self.capture_delay_ticks),
+                    self.timer_hz,
+                )
+            });
+        }
     }
 
     /// Whether `line` was active at the last latch.
@@ -77,7 +132,15 @@ impl<P: InputPins> BoardInputs<P> {
     }
 }
 
-impl<P: InputPins> DigitalInputs for BoardInputs<P> {
+/// `ticks` of a timer at `timer_hz` in ns (0 without a clock), saturated to `i32`.
+fn ticks_to_ns(ticks: u32, timer_hz: u32) -> i32 {
+    match timer_hz {
+        0 => 0,
+        hz => i32::try_from(u64::from(ticks) * 1_000_000_000 / u64::from(hz)).unwrap_or(i32::MAX),
+    }
+}
+
+impl<P: InputPins, T: ProbeTimer> DigitalInputs for BoardInputs<P, T> {
     fn positive_limit(&mut self) -> bool {
         self.is_active(InputLine::PositiveLimit)
     }
@@ -94,16 +157,16 @@ impl<P: InputPins> DigitalInputs for BoardInputs<P> {
         self.is_active(InputLine::MotorOverTemperature)
     }
 
-    /// The level at the sample. The edge time needs the probe's timer capture, which this board
-    /// does not wire yet: edges are reported without a time (`None`), as a level change only.
+    /// The level at the sample, and the last edge since the previous sample with its time
+    /// before the latch (the position is read right after it, within the same interrupt).
     fn touch_probe(&mut self, probe: TouchProbe) -> ProbeCapture {
-        let line = match probe {
-            TouchProbe::One => InputLine::Probe1,
-            TouchProbe::Two => InputLine::Probe2,
+        let (line, edge) = match probe {
+            TouchProbe::One => (InputLine::Probe1, self.edge_ns[0]),
+            TouchProbe::Two => (InputLine::Probe2, self.edge_ns[1]),
         };
         ProbeCapture {
             active: self.is_active(line),
-            edge_ns_before_position: None,
+            edge_ns_before_position: edge,
         }
     }
 
@@ -169,7 +232,7 @@ mod tests {
         let mut inputs = BoardInputs::new(Pins(closed), POLARITY);
         // Nothing read before the first latch.
         assert!(!inputs.home_switch());
-        inputs.latch();
+        inputs.latch(0);
         assert!(!inputs.positive_limit() && !inputs.negative_limit());
         assert!(inputs.home_switch());
         assert_eq!(inputs.safe_torque_off_channels(), [true, true]);
@@ -178,11 +241,11 @@ mod tests {
         inputs.pins.0 =
             closed & !InputLine::PositiveLimit.mask() & !InputLine::SafeTorqueOff2.mask();
         assert!(!inputs.positive_limit(), "only after the next latch");
-        inputs.latch();
+        inputs.latch(0);
         assert!(inputs.positive_limit());
         assert_eq!(inputs.safe_torque_off_channels(), [true, false]);
         inputs.pins.0 |= InputLine::Probe2.mask();
-        inputs.latch();
+        inputs.latch(0);
         assert_eq!(
             inputs.touch_probe(TouchProbe::Two),
             ProbeCapture {
@@ -191,6 +254,63 @@ mod tests {
             }
         );
         assert!(!inputs.touch_probe(TouchProbe::One).active);
+    }
+
+    /// A probe timer as memory: the count now and an edge per probe.
+    struct Edges {
+        now: u16,
+        edges: [Option<u16>; 2],
+    }
+
+    impl ProbeTimer for Edges {
+        fn count(&self) -> u16 {
+            self.now
+        }
+        fn take_edge(&mut self, probe: TouchProbe) -> Option<u16> {
+            match probe {
+                TouchProbe::One => self.edges[0].take(),
+                TouchProbe::Two => self.edges[1].take(),
+            }
+        }
+    }
+
+    #[test]
+    fn probe_edges_are_timed_before_the_sample_across_the_valley() {
+        // 170 MHz: 17 ticks = 100 ns. The counter is at 425 (2.5 µs after the valley).
+        let probe1 = InputLine::Probe1.mask();
+        let mut inputs = BoardInputs::new(Pins(probe1), POLARITY).with_probe_timer(
+            Edges {
+                now: 425,
+                // Probe 1 rose 85 ticks after this valley; probe 2 fell 17 ticks before the
+                // valley, in the period that ended (4250 ticks long).
+                edges: [Some(85), Some(4250 - 17)],
+            },
+            170_000_000,
+            // A filter that delays every capture by 17 ticks (100 ns).
+            17,
+        );
+        inputs.latch(4250);
+        assert_eq!(
+            inputs.touch_probe(TouchProbe::One),
+            ProbeCapture {
+                active: true,
+                edge_ns_before_position: Some(2_100),
+            }
+        );
+        assert_eq!(
+            inputs.touch_probe(TouchProbe::Two),
+            ProbeCapture {
+                active: false,
+                edge_ns_before_position: Some(2_700),
+            }
+        );
+        // No edge since: no time; the level stays.
+        inputs.latch(4250);
+        assert_eq!(
+            inputs.touch_probe(TouchProbe::One).edge_ns_before_position,
+            None
+        );
+        assert!(inputs.touch_probe(TouchProbe::One).active);
     }
 
     struct Brake(Option<bool>);

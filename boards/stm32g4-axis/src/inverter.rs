@@ -88,6 +88,9 @@ pub struct Tim1Inverter<T> {
     trim: Option<&'static PeriodTrim>,
     /// Each period's auto-reload for the trim.
     dither: PeriodDither,
+    /// The auto-reload written last (the next period's), the present period's, and the one of
+    /// the period that ended at the last valley.
+    arr: [u16; 3],
 }
 
 impl<T: PwmTimer> Tim1Inverter<T> {
@@ -100,7 +103,8 @@ impl<T: PwmTimer> Tim1Inverter<T> {
         timer.set_compares(compares);
         // A break flag from before (reset, configuration) is no trip of this run.
         let _ = timer.take_break();
-        let dither = PeriodDither::new(timer.auto_reload());
+        let nominal = timer.auto_reload();
+        let dither = PeriodDither::new(nominal);
         Self {
             timer,
             pwm_hz,
@@ -109,6 +113,7 @@ impl<T: PwmTimer> Tim1Inverter<T> {
             compares,
             trim: None,
             dither,
+            arr: [nominal; 3],
         }
     }
 
@@ -124,9 +129,12 @@ impl<T: PwmTimer> Tim1Inverter<T> {
     /// sets MOE if the gates were armed. The compare values written after this are computed
     /// against the new auto-reload; both take effect at the same update event.
     pub fn start_period(&mut self) {
+        // The preload written last is the present period's now.
+        self.arr = [self.arr[0], self.arr[0], self.arr[1]];
         if let Some(trim) = self.trim {
             let arr = self.dither.next_arr(trim.get());
             self.timer.set_auto_reload(arr);
+            self.arr[0] = arr;
         }
         if self.timer.take_break() {
             // The hardware has cleared MOE already; clear it here too, so that nothing this
@@ -140,6 +148,12 @@ impl<T: PwmTimer> Tim1Inverter<T> {
             self.timer.set_main_output(true);
             self.gates = GateState::On;
         }
+    }
+
+    /// Timer ticks of the PWM period that ended at the last valley (2 × its auto-reload), as
+    /// of the last [`Self::start_period`].
+    pub fn ended_period_ticks(&self) -> u32 {
+        2 * u32::from(self.arr[2])
     }
 
     /// Where the gates are.
@@ -381,6 +395,13 @@ mod tests {
             assert_eq!(inv.timer().compares, [arr / 2 + arr % 2, arr, 0]);
         }
         assert_eq!(sum, 4 * 2127 + 2);
+        // The ARR written at a period start governs the next period: two starts later it is
+        // the period that ended.
+        let written = inv.timer().arr;
+        inv.start_period();
+        assert_ne!(inv.ended_period_ticks(), 0);
+        inv.start_period();
+        assert_eq!(inv.ended_period_ticks(), 2 * u32::from(written));
     }
 
     #[test]

@@ -3,6 +3,8 @@
 //! tests on plain memory. Configuration (clocks, modes, dead time, trigger routing) is done
 //! once by the board and is not part of these traits.
 
+use hal::io::TouchProbe;
+
 /// TIM1 (advanced-control timer) as the inverter drives it: centre-aligned, phases in PWM
 /// mode 2 with preloaded compare registers (RM0440 §29.3.13, OCxPE = 1).
 pub trait PwmTimer {
@@ -56,6 +58,29 @@ pub trait EncoderCounter {
 pub trait InputPins {
     /// Levels of every input line.
     fn levels(&self) -> u32;
+}
+
+/// The timer that time-stamps the touch-probe edges: reset at every PWM valley (TIM1's update
+/// event), capturing its count at both edges of each probe input (TIM3 CH3/CH2 on the board).
+pub trait ProbeTimer {
+    /// The count now: ticks since the last PWM valley.
+    fn count(&self) -> u16;
+    /// The count captured at the last edge of `probe` since the last call, if one came (the
+    /// capture flag read and cleared; of several edges, the last).
+    fn take_edge(&mut self, probe: TouchProbe) -> Option<u16>;
+}
+
+/// No probe timer: edges are not time-stamped (levels only).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoProbeTimer;
+
+impl ProbeTimer for NoProbeTimer {
+    fn count(&self) -> u16 {
+        0
+    }
+    fn take_edge(&mut self, _: TouchProbe) -> Option<u16> {
+        None
+    }
 }
 
 /// The board's digital output pins.

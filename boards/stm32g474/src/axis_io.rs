@@ -7,7 +7,9 @@
 //! high when closed (torque allowed) and low when open or broken; home, probes and the motor's
 //! thermal switch are active high.
 
-use embassy_stm32::gpio::{Input, Level, Output, Pin, Pull, Speed};
+use embassy_stm32::gpio::{AfType, Flex, Level, Output, Pin, Pull, Speed};
+use embassy_stm32::peripherals::TIM3;
+use embassy_stm32::timer::{Ch2, Ch3, TimerPin};
 use embassy_stm32::Peri;
 use stm32g4_axis::inputs::{InputLine, InputPolarity};
 use stm32g4_axis::regs::{InputPins, OutputPins};
@@ -37,41 +39,68 @@ pub struct InputPinSet<L1: Pin, L2: Pin, H: Pin, T: Pin, P1: Pin, P2: Pin, S1: P
     pub safe_torque_off2: Peri<'static, S2>,
 }
 
-/// The inputs, each with the pull that makes an open wire read inactive-safe.
+/// The inputs, each with the pull that makes an open wire read inactive-safe. The probe pins
+/// are in their TIM3 alternate function (the edges are captured, `sync_capture`); their levels
+/// are read from the port like the others.
 pub struct GpioInputs {
-    lines: [(InputLine, Input<'static>); 8],
+    lines: [(InputLine, Flex<'static>); 8],
+}
+
+/// A pin as an input with `pull`.
+fn input(pin: Peri<'static, impl Pin>, pull: Pull) -> Flex<'static> {
+    let mut flex = Flex::new(pin);
+    flex.set_as_input(pull);
+    flex
+}
+
+/// A pin in its TIM3 capture function `af`, pulled down.
+fn capture_input(pin: Peri<'static, impl Pin>, af: u8) -> Flex<'static> {
+    let mut flex = Flex::new(pin);
+    flex.set_as_af_unchecked(af, AfType::input(Pull::Down));
+    flex
 }
 
 impl GpioInputs {
     /// Configures the input pins.
-    pub fn new<L1: Pin, L2: Pin, H: Pin, T: Pin, P1: Pin, P2: Pin, S1: Pin, S2: Pin>(
+    pub fn new<L1, L2, H, T, P1, P2, S1, S2>(
         pins: InputPinSet<L1, L2, H, T, P1, P2, S1, S2>,
-    ) -> Self {
+    ) -> Self
+    where
+        L1: Pin,
+        L2: Pin,
+        H: Pin,
+        T: Pin,
+        P1: TimerPin<TIM3, Ch3>,
+        P2: TimerPin<TIM3, Ch2>,
+        S1: Pin,
+        S2: Pin,
+    {
+        let (probe1_af, probe2_af) = (pins.probe1.af_num(), pins.probe2.af_num());
         Self {
             lines: [
                 (
                     InputLine::PositiveLimit,
-                    Input::new(pins.positive_limit, Pull::Down),
+                    input(pins.positive_limit, Pull::Down),
                 ),
                 (
                     InputLine::NegativeLimit,
-                    Input::new(pins.negative_limit, Pull::Down),
+                    input(pins.negative_limit, Pull::Down),
                 ),
-                (InputLine::Home, Input::new(pins.home, Pull::Down)),
+                (InputLine::Home, input(pins.home, Pull::Down)),
                 // The thermal switch closes to ground while cool: open (pulled up) = too hot.
                 (
                     InputLine::MotorOverTemperature,
-                    Input::new(pins.motor_over_temperature, Pull::Up),
+                    input(pins.motor_over_temperature, Pull::Up),
                 ),
-                (InputLine::Probe1, Input::new(pins.probe1, Pull::Down)),
-                (InputLine::Probe2, Input::new(pins.probe2, Pull::Down)),
+                (InputLine::Probe1, capture_input(pins.probe1, probe1_af)),
+                (InputLine::Probe2, capture_input(pins.probe2, probe2_af)),
                 (
                     InputLine::SafeTorqueOff1,
-                    Input::new(pins.safe_torque_off1, Pull::Down),
+                    input(pins.safe_torque_off1, Pull::Down),
                 ),
                 (
                     InputLine::SafeTorqueOff2,
-                    Input::new(pins.safe_torque_off2, Pull::Down),
+                    input(pins.safe_torque_off2, Pull::Down),
                 ),
             ],
         }

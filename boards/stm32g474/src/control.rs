@@ -25,6 +25,7 @@ use crate::biss_spi::SpiFrames;
 use crate::encoder::Tim2Encoder;
 use crate::irq::{prio, ContextStats};
 use crate::pwm::{PwmPins, Tim1};
+use crate::sync_capture::Tim3Probes;
 use firmware::motor::servo::ServoSpec;
 #[cfg(feature = "biss-encoder")]
 use stm32g4_axis::biss::BissEncoder;
@@ -46,7 +47,7 @@ pub const SERVO: ServoSpec = stm32g4_axis::board::SERVO;
 pub const SERVO: ServoSpec = stm32g4_axis::board::SERVO_BISS;
 
 /// The board's axis hardware.
-pub type BoardAxisHardware = AxisHardware<Tim1, Adc12, BoardEncoder, GpioInputs>;
+pub type BoardAxisHardware = AxisHardware<Tim1, Adc12, BoardEncoder, GpioInputs, Tim3Probes>;
 
 /// What the control interrupt owns.
 pub struct ControlContext {

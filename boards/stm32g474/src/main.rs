@@ -141,6 +141,7 @@ fn make_axis(
     sensing: pins::SensingPins,
     encoder: pins::EncoderPins,
     axis_io: pins::AxisIoPins,
+    sync0: &sync_capture::Sync0Capture,
 ) -> (Option<ControlContext>, BrakePin) {
     let brake = BrakePin::new(axis_io.brake);
     let mut gate_driver = GateDriverEnable::new(inverter.gate_enable);
@@ -171,7 +172,13 @@ fn make_axis(
         currents,
         bus,
         encoder,
-        inputs: BoardInputs::new(GpioInputs::new(axis_io.inputs), axis_io::POLARITY),
+        inputs: BoardInputs::new(GpioInputs::new(axis_io.inputs), axis_io::POLARITY)
+            .with_probe_timer(
+                sync_capture::Tim3Probes::new(sync0),
+                sync_capture::TIM3_HZ,
+                // The filter's delay, in TIM3 ticks (÷1 clock division).
+                sync_capture::PROBE_FILTER.delay_ticks as u32,
+            ),
     };
     info!(
         "axis: PWM {} Hz (ARR {}), dead time DTG {}, encoder {} increments/rev",
@@ -266,7 +273,10 @@ async fn main(spawner: Spawner) {
     info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
     let ready = probe_esc(&mut pdi).await;
 
-    let (control, brake) = make_axis(inverter, sensing, encoder, axis_io);
+    // TIM3 time-stamps SYNC0 and the probe edges against the PWM; its vector stays masked
+    // until the drive is installed.
+    let sync0 = sync_capture::configure(esc.sync0_timer, esc.sync0);
+    let (control, brake) = make_axis(inverter, sensing, encoder, axis_io, &sync0);
     let started = install_drive(
         pdi,
         Flash::new_blocking(flash),
@@ -285,7 +295,6 @@ async fn main(spawner: Spawner) {
     });
 
     // Unmask the ESC lines only now that the drive is installed.
-    let sync0 = sync_capture::configure(esc.sync0_timer, esc.sync0);
     irq::start_cycle_vector(irq::Irqs);
     let esc_irq = irq::esc_irq_input(esc.irq, esc.irq_exti, irq::Irqs);
 

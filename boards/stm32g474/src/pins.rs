@@ -32,8 +32,8 @@
 //! | limit − | PC7 | GPIO in, pull-down | NC contact to 3.3 V | low = active |
 //! | home | PC8 | GPIO in, pull-down | NO contact to 3.3 V | high = active |
 //! | motor thermal switch | PA4 | GPIO in, pull-up | NC bimetal to GND | high (open) = motor too hot |
-//! | touch probe 1 | PB0 | GPIO in, pull-down | 24 V input stage | high = active |
-//! | touch probe 2 | PB5 | GPIO in, pull-down | 24 V input stage | high = active |
+//! | touch probe 1 | PB0 | TIM3_CH3 (AF2), capture both edges | 24 V input stage | high = active; edge time against the PWM (see `sync_capture`) |
+//! | touch probe 2 | PB5 | TIM3_CH2 (AF2), capture both edges | 24 V input stage | high = active |
 //! | STO 1 | PB6 | GPIO in, pull-down | safe-torque-off channel 1 monitor | high = closed (torque allowed); the channel cuts the gate supply in hardware |
 //! | STO 2 | PB7 | GPIO in, pull-down | safe-torque-off channel 2 monitor | |
 //! | brake | PB9 | GPIO out, push-pull | brake driver input | high = coil energised = brake released |
