@@ -11,6 +11,7 @@
 //! | bus voltage | 300 kΩ / 10 kΩ divider: 102 V full scale |
 //! | power-stage temperature | linear sensor on the heat sink, 0.5 V at 0 °C, 10 mV/°C |
 //! | ADC | 12 bit, VREF+ = 3.3 V |
+//! | gate driver | bootstrap high sides: 100 µs of pre-charge (low sides on) after each enable |
 //! | CPU | STM32G474 at 170 MHz, APB1 and APB2 undivided |
 //! | PDI | ET1100 on SPI3: the fastest APB1 / 2^(BR+1) within the ET1100's 30 MHz, 21.25 MHz |
 
@@ -75,6 +76,14 @@ pub const PWM_HZ: u32 = SERVO.inverter.pwm_hz as u32;
 /// Dead time of every leg, ns (the gate driver's and switches' need, rounded up by `pwm`).
 pub const DEAD_TIME_NS: u32 = (SERVO.inverter.dead_time_s * 1e9 + 0.5) as u32;
 
+/// The gate driver's bootstrap pre-charge after each enable, ns: every low side on long enough
+/// to charge the high sides' bootstrap capacitors from empty (a few µF through the low side and
+/// the driver's bootstrap diode).
+pub const BOOTSTRAP_PRECHARGE_NS: u32 = 100_000;
+/// [`BOOTSTRAP_PRECHARGE_NS`] in PWM periods (rounded up).
+pub const BOOTSTRAP_PRECHARGE_PERIODS: u16 =
+    (BOOTSTRAP_PRECHARGE_NS as u64 * PWM_HZ as u64).div_ceil(1_000_000_000) as u16;
+
 /// The fastest the encoder turns before the over-speed trip, increments per second.
 const MAX_COUNTS_PER_S: u32 = (SERVO.protection.over_speed_rpm / 60.0) as u32 * COUNTS_PER_REV;
 /// The shortest time between two encoder edges the input filter must pass, ns: half the edge
@@ -106,6 +115,8 @@ const _: () = {
     // 200 ns dead time, 40 kHz: the values the settings below were checked with.
     assert!(DEAD_TIME_NS == 200);
     assert!(PWM_HZ == 40_000);
+    // 100 µs at 40 kHz: four periods.
+    assert!(BOOTSTRAP_PRECHARGE_PERIODS == 4);
     // 5400 rpm × 10,000 / 60 = 900,000 increments/s: 1.11 µs between edges.
     assert!(ENCODER_SHORTEST_PULSE_NS == 555);
 };

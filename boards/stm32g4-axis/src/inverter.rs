@@ -27,6 +27,14 @@
 //!   switch again until [`Inverter::disable`] and then [`Inverter::enable`] are called: the
 //!   firmware latches an over-current fault, and only its fault reset brings the gates back
 //!   (automatic output enable, AOE, stays off for that reason).
+//!
+//! # Bootstrap pre-charge
+//! A gate driver whose high sides run from bootstrap capacitors cannot switch a high side on
+//! before its capacitor has charged through the low side. With a pre-charge of `n` periods
+//! ([`Tim1Inverter::with_bootstrap_precharge`]) the first `n` switched periods after an enable
+//! keep every high side off and every low side on (duty 0 on all phases: the zero voltage
+//! vector, the voltage the loop asks at its start anyway); the loop's duties follow from the
+//! next period on.
 
 use hal::power::Inverter;
 
@@ -88,6 +96,9 @@ pub struct Tim1Inverter<T> {
     trim: Option<&'static PeriodTrim>,
     /// Each period's auto-reload for the trim.
     dither: PeriodDither,
+    /// Switched periods of bootstrap pre-charge after each enable, and those left.
+    precharge_periods: u16,
+    precharge_left: u16,
     /// The auto-reload written last (the next period's), the present period's, and the one of
     /// the period that ended at the last valley.
     arr: [u16; 3],
@@ -113,8 +124,17 @@ impl<T: PwmTimer> Tim1Inverter<T> {
             compares,
             trim: None,
             dither,
+            precharge_periods: 0,
+            precharge_left: 0,
             arr: [nominal; 3],
         }
+    }
+
+    /// Pre-charges the bootstrap capacitors for `periods` switched periods after each enable
+    /// (see the module docs).
+    pub fn with_bootstrap_precharge(mut self, periods: u16) -> Self {
+        self.precharge_periods = periods;
+        self
     }
 
     /// Trims the PWM period from now on by what `trim` holds (the SYNC0 phase lock sets it):
@@ -147,6 +167,10 @@ impl<T: PwmTimer> Tim1Inverter<T> {
         if self.gates == GateState::Armed {
             self.timer.set_main_output(true);
             self.gates = GateState::On;
+        }
+        // A pre-charge period starts now (its compares were written in the last period).
+        if self.gates == GateState::On {
+            self.precharge_left = self.precharge_left.saturating_sub(1);
         }
     }
 
@@ -184,11 +208,16 @@ impl<T: PwmTimer> Inverter for Tim1Inverter<T> {
 
     fn set_duties(&mut self, a: f32, b: f32, c: f32) {
         let arr = self.timer.auto_reload();
-        self.compares = [
-            compare_for_duty(a, arr),
-            compare_for_duty(b, arr),
-            compare_for_duty(c, arr),
-        ];
+        self.compares = if self.precharge_left > 0 {
+            // Duty 0: every low side on for the whole next period.
+            [arr; 3]
+        } else {
+            [
+                compare_for_duty(a, arr),
+                compare_for_duty(b, arr),
+                compare_for_duty(c, arr),
+            ]
+        };
         self.timer.set_compares(self.compares);
     }
 
@@ -196,12 +225,20 @@ impl<T: PwmTimer> Inverter for Tim1Inverter<T> {
         // A trip holds until `disable`; from `Armed` or `On` there is nothing to do.
         if self.gates == GateState::Off {
             self.gates = GateState::Armed;
+            if self.precharge_periods > 0 {
+                // The first switched period is a pre-charge period: duty 0 from now.
+                self.precharge_left = self.precharge_periods;
+                let arr = self.timer.auto_reload();
+                self.compares = [arr; 3];
+                self.timer.set_compares(self.compares);
+            }
         }
     }
 
     fn disable(&mut self) {
         self.timer.set_main_output(false);
         self.gates = GateState::Off;
+        self.precharge_left = 0;
     }
 
     fn is_enabled(&self) -> bool {
@@ -331,6 +368,38 @@ mod tests {
         inv.enable();
         inv.start_period();
         assert_eq!(inv.timer().moe_writes, writes);
+    }
+
+    #[test]
+    fn a_bootstrap_precharge_keeps_the_high_sides_off_for_its_periods() {
+        let mut inv = Tim1Inverter::new(FakeTimer::default(), 40_000).with_bootstrap_precharge(2);
+        // The control interrupt's order: duties, then enable (Output::apply).
+        inv.set_duties(0.7, 0.2, 0.5);
+        inv.enable();
+        assert_eq!(
+            inv.timer().compares,
+            [ARR_40KHZ; 3],
+            "duty 0 for the first period"
+        );
+        // Period 1 (pre-charge) starts; its interrupt writes period 2: still pre-charge.
+        inv.start_period();
+        assert!(inv.timer().moe);
+        inv.set_duties(0.7, 0.2, 0.5);
+        assert_eq!(inv.timer().compares, [ARR_40KHZ; 3]);
+        // Period 2 starts; period 3 has the loop's duties.
+        inv.start_period();
+        inv.set_duties(0.7, 0.2, 0.5);
+        assert_eq!(inv.timer().compares, [638, 1700, 1063]);
+        // A new enable after a disable pre-charges again.
+        inv.disable();
+        inv.set_duties(0.7, 0.2, 0.5);
+        inv.enable();
+        assert_eq!(inv.timer().compares, [ARR_40KHZ; 3]);
+        // Without a pre-charge the loop's duties go out from the first period.
+        let mut plain = Tim1Inverter::new(FakeTimer::default(), 40_000);
+        plain.set_duties(0.7, 0.2, 0.5);
+        plain.enable();
+        assert_eq!(plain.timer().compares, [638, 1700, 1063]);
     }
 
     #[test]

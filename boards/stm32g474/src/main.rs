@@ -167,7 +167,9 @@ fn make_axis(
     };
     let (currents, bus) = stm32g4_axis::sensing::sensing(&servo::FRONT_END);
     let hardware = AxisHardware {
-        inverter: Tim1Inverter::new(tim1, servo::PWM_HZ).with_period_trim(&control::PERIOD_TRIM),
+        inverter: Tim1Inverter::new(tim1, servo::PWM_HZ)
+            .with_period_trim(&control::PERIOD_TRIM)
+            .with_bootstrap_precharge(servo::BOOTSTRAP_PRECHARGE_PERIODS),
         adcs,
         currents,
         bus,

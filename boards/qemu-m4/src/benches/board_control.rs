@@ -16,7 +16,8 @@ use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
 use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode};
 use firmware::motor::servo::{axis_config, Tuning};
 use stm32g4_axis::board::{
-    CORE_CLOCK_HZ, COUNTS_PER_REV, FRONT_END, PDI_SPI_CLOCK_HZ, PWM_HZ, SERVO, TUNING,
+    BOOTSTRAP_PRECHARGE_PERIODS, CORE_CLOCK_HZ, COUNTS_PER_REV, FRONT_END, PDI_SPI_CLOCK_HZ,
+    PWM_HZ, SERVO, TUNING,
 };
 use stm32g4_axis::control::AxisHardware;
 use stm32g4_axis::inputs::{BoardInputs, InputLine, InputPolarity};
@@ -153,7 +154,8 @@ fn board() -> Board {
             },
             PWM_HZ,
         )
-        .with_period_trim(&TRIM),
+        .with_period_trim(&TRIM)
+        .with_bootstrap_precharge(BOOTSTRAP_PRECHARGE_PERIODS),
         adcs: Adcs(AT_REST),
         currents,
         bus,
