@@ -36,6 +36,14 @@ async fn al(md: &MainDevice<'_>) -> (u16, u16) {
 }
 
 /// INIT → OP with DC SYNC0 at 1 ms, cycling until OP.
+/// `n` DC cycles of the master: process data exchanged, simulated time advanced one cycle.
+async fn dc_cycles(m: &InProcess, group: &DcGroup, n: usize) {
+    for _ in 0..n {
+        group.tx_rx_dc(&m.maindevice).await.expect("tx/rx");
+        m.shared.advance(CYCLE_NS);
+    }
+}
+
 async fn into_op_with_dc(m: &InProcess) -> DcGroup {
     let md = &*m.maindevice;
     let mut group = md
@@ -76,10 +84,7 @@ fn sm_watchdog_expiry_in_op_drops_to_safeop_with_0x1b() {
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
         let group = into_op_with_dc(&m).await;
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         assert_eq!(al(md).await, (OP, 0));
         // The master stops writing outputs. The ESC's default process-data watchdog is
         // 1000 × 100 µs = 100 ms (ET1100 0x0400/0x0420 reset values).
@@ -101,10 +106,7 @@ fn sync_unit_switched_off_in_op_is_a_fatal_sync_error_0x2c() {
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
         let group = into_op_with_dc(&m).await;
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         let sd = group.iter(md).next().expect("drive");
         assert_eq!(
             sd.sdo_read::<u8>(0x1C32, 0x20).await.expect("1C32:20"),
@@ -161,10 +163,7 @@ fn missed_sync0_pulses_give_sync_error_0x1a() {
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
         let group = into_op_with_dc(&m).await;
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         // SYNC0 keeps running but only every second cycle: every other pulse is missed
         // (+3 per miss, -1 per pulse: 3, 2, 5 > 4 trips within a few cycles).
         const SYNC0_CYCLE: u16 = 0x09A0;
@@ -172,10 +171,7 @@ fn missed_sync0_pulses_give_sync_error_0x1a() {
             .send(md, 2 * CYCLE_NS as u32)
             .await
             .expect("0x09A0");
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         assert_eq!(
             al(md).await,
             (SAFEOP | ERROR, 0x001A),
@@ -268,10 +264,7 @@ fn sm_parameters_report_measured_calc_and_copy_time() {
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
         let group = into_op_with_dc(&m).await;
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         let sd = group.iter(md).next().expect("drive");
         let out_calc: u32 = sd.sdo_read(0x1C32, 0x06).await.expect("1C32:06");
         let in_calc: u32 = sd.sdo_read(0x1C33, 0x06).await.expect("1C33:06");
@@ -313,19 +306,13 @@ fn a_phase_lock_the_board_lost_is_a_pll_error_0x32_in_op_only() {
             .slave
             .report_phase_lock_lost();
         let group = into_op_with_dc(&m).await;
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         assert_eq!(al(md).await, (OP, 0));
         // In OP the board's PWM cannot follow SYNC0 any more (its period trim is exhausted).
         m.shared.segment().drives_mut()[0]
             .slave
             .report_phase_lock_lost();
-        for _ in 0..3 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 3).await;
         assert_eq!(
             al(md).await,
             (SAFEOP | ERROR, 0x0032),
@@ -341,10 +328,7 @@ fn sync0_at_another_period_than_configured_is_a_pll_error_0x32() {
         tokio::task::spawn_local(transport);
         let md = &*m.maindevice;
         let group = into_op_with_dc(&m).await;
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         assert_eq!(al(md).await, (OP, 0));
         // SYNC0 now comes every 1.4 ms while the drive was configured for 1 ms: its control
         // loop cannot phase-lock (3 intervals off the period in a row).
@@ -353,10 +337,7 @@ fn sync0_at_another_period_than_configured_is_a_pll_error_0x32() {
             .send(md, 1_400_000u32)
             .await
             .expect("0x09A0");
-        for _ in 0..10 {
-            group.tx_rx_dc(md).await.expect("tx/rx");
-            m.shared.advance(CYCLE_NS);
-        }
+        dc_cycles(&m, &group, 10).await;
         assert_eq!(
             al(md).await,
             (SAFEOP | ERROR, 0x0032),

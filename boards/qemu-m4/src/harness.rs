@@ -134,6 +134,30 @@ impl Harness {
         cost
     }
 
+    /// Measures `base` and `with_base` (an operation that runs `base` first, e.g. the SYNC0
+    /// side's set-point publish before a control interrupt) and returns
+    /// `(with_base − base, with_base, base)`: the cost of what `with_base` adds. `None` after
+    /// reporting a failure as benchmark `name`.
+    pub fn measure_net(
+        &mut self,
+        name: &str,
+        base: &mut dyn FnMut(),
+        with_base: &mut dyn FnMut(),
+    ) -> Option<(u32, u32, u32)> {
+        let base_cost = self.measure(name, base)?;
+        let with_cost = self.measure(name, with_base)?;
+        match with_cost.checked_sub(base_cost) {
+            Some(net) => Some((net, with_cost, base_cost)),
+            None => {
+                self.fail(
+                    name,
+                    format_args!("the base operation costs more than with it"),
+                );
+                None
+            }
+        }
+    }
+
     /// Prints benchmark `name` with its cost `instructions` (measured by [`bench`](Self::bench)
     /// or derived from [`measure`](Self::measure)d costs) and checks its `budget`.
     pub fn report(

@@ -1525,15 +1525,10 @@ mod tests {
         }
     }
 
-    /// The 400 W servo's axis at rest on `position`, gates off, `ticks` loop ticks with
-    /// `command`; the feedback at the end.
-    fn at_rest(position: i64, command: AxisCommand, ticks: u32) -> (Axis, AxisFeedback) {
-        use crate::servo::{axis_config, Tuning, SERVO_400W};
-        let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
-        let mut axis = Axis::new(cfg).unwrap();
-        // SAFETY: one thread calls both sides, one after the other.
-        let link = unsafe { AxisLink::new() };
-        let sample = Sample {
+    /// A sample of the 400 W servo at rest on `position`: no current, 48 V, 25 °C, no switch,
+    /// both STO channels closed.
+    fn quiet_sample(position: i64) -> Sample {
+        Sample {
             currents: PhaseCurrents::default(),
             bus_voltage: 48.0,
             temperature: 25.0,
@@ -1544,7 +1539,18 @@ mod tests {
             probes: [ProbeCapture::default(); 2],
             safe_torque_off_channels: [true; 2],
             power_stage_trip: false,
-        };
+        }
+    }
+
+    /// The 400 W servo's axis at rest on `position`, gates off, `ticks` loop ticks with
+    /// `command`; the feedback at the end.
+    fn at_rest(position: i64, command: AxisCommand, ticks: u32) -> (Axis, AxisFeedback) {
+        use crate::servo::{axis_config, Tuning, SERVO_400W};
+        let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
+        let mut axis = Axis::new(cfg).unwrap();
+        // SAFETY: one thread calls both sides, one after the other.
+        let link = unsafe { AxisLink::new() };
+        let sample = quiet_sample(position);
         for _ in 0..ticks {
             link.publish(command);
             for _ in 0..cfg.loop_divider {
@@ -1580,18 +1586,7 @@ mod tests {
     fn a_hardware_trip_latches_an_over_current_in_every_state() {
         use crate::servo::{axis_config, Tuning, SERVO_400W};
         let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
-        let quiet = Sample {
-            currents: PhaseCurrents::default(),
-            bus_voltage: 48.0,
-            temperature: 25.0,
-            motor_overtemp: false,
-            position: Ok(1_000),
-            switches: Switches::default(),
-            index: None,
-            probes: [ProbeCapture::default(); 2],
-            safe_torque_off_channels: [true; 2],
-            power_stage_trip: false,
-        };
+        let quiet = quiet_sample(1_000);
         let tripped = Sample {
             power_stage_trip: true,
             ..quiet
@@ -1636,18 +1631,7 @@ mod tests {
         let mut axis = Axis::new(cfg).unwrap();
         // SAFETY: one thread calls both sides, one after the other.
         let link = unsafe { AxisLink::new() };
-        let closed = Sample {
-            currents: PhaseCurrents::default(),
-            bus_voltage: 48.0,
-            temperature: 25.0,
-            motor_overtemp: false,
-            position: Ok(1_000),
-            switches: Switches::default(),
-            index: None,
-            probes: [ProbeCapture::default(); 2],
-            safe_torque_off_channels: [true; 2],
-            power_stage_trip: false,
-        };
+        let closed = quiet_sample(1_000);
         let open = Sample {
             safe_torque_off_channels: [true, false],
             ..closed
