@@ -134,6 +134,18 @@ impl Harness {
         cost
     }
 
+    /// The state a benchmark `name` needs, or `None` after reporting why it could not be
+    /// reached (the benchmark then stops).
+    pub fn ready<T>(&mut self, name: &str, setup: Result<T, &str>) -> Option<T> {
+        match setup {
+            Ok(state) => Some(state),
+            Err(reason) => {
+                self.fail(name, format_args!("{reason}"));
+                None
+            }
+        }
+    }
+
     /// Measures `base` and `with_base` (an operation that runs `base` first, e.g. the SYNC0
     /// side's set-point publish before a control interrupt) and returns
     /// `(with_base − base, with_base, base)`: the cost of what `with_base` adds. `None` after

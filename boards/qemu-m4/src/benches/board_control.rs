@@ -211,12 +211,8 @@ pub fn run(h: &mut Harness) {
     // SAFETY: the benchmark runs in one context only.
     let link = unsafe { AxisLink::new() };
     let mut hw = board();
-    let mut axis = match running(&mut hw, &link) {
-        Ok(axis) => axis,
-        Err(reason) => {
-            h.fail(NAME, format_args!("{reason}"));
-            return;
-        }
+    let Some(mut axis) = h.ready(NAME, running(&mut hw, &link)) else {
+        return;
     };
     let measured = h.measure_net(NAME, &mut || link.publish(black_box(COMMAND)), &mut || {
         link.publish(black_box(COMMAND));

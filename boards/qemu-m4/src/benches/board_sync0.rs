@@ -43,12 +43,8 @@ static TRIM: PeriodTrim = PeriodTrim::new();
 /// The benchmark.
 pub fn run(h: &mut Harness) {
     const OVERHEAD: &str = "board-sync0-overhead";
-    let setup = match Setup::powered_up() {
-        Ok(s) => s,
-        Err(reason) => {
-            h.fail(OVERHEAD, format_args!("{reason}"));
-            return;
-        }
+    let Some(setup) = h.ready(OVERHEAD, Setup::powered_up()) else {
+        return;
     };
     let Setup { core, esc, .. } = setup;
     let mut side = CycleSide {

@@ -326,12 +326,8 @@ fn control_interrupt(h: &mut Harness) {
     // SAFETY: everything here runs in one context (the benchmark's main), so the publishing and
     // the reading side never preempt each other: the single-writer/priority contract holds.
     let link = unsafe { AxisLink::new() };
-    let mut axis = match running_axis(&tuning(1, 1.0 / PWM_HZ), &link) {
-        Ok(axis) => axis,
-        Err(reason) => {
-            h.fail(NAME, format_args!("{reason}"));
-            return;
-        }
+    let Some(mut axis) = h.ready(NAME, running_axis(&tuning(1, 1.0 / PWM_HZ), &link)) else {
+        return;
     };
 
     let publish = h.bench(
@@ -386,12 +382,11 @@ fn control_cycle_average(h: &mut Harness) {
     // SAFETY: as in `control_interrupt`: one context only.
     let link = unsafe { AxisLink::new() };
     let loop_hz = PWM_HZ / LOOP_DIVIDER as f32;
-    let mut axis = match running_axis(&tuning(LOOP_DIVIDER, 1.0 / loop_hz), &link) {
-        Ok(axis) => axis,
-        Err(reason) => {
-            h.fail(NAME, format_args!("{reason}"));
-            return;
-        }
+    let Some(mut axis) = h.ready(
+        NAME,
+        running_axis(&tuning(LOOP_DIVIDER, 1.0 / loop_hz), &link),
+    ) else {
+        return;
     };
     let measured = h.measure_net(NAME, &mut || link.publish(black_box(COMMAND)), &mut || {
         link.publish(black_box(COMMAND));

@@ -236,12 +236,8 @@ impl Setup {
 
 /// Measures the SYNC0 handler with the mailbox idle and with a transfer pending.
 pub fn run(h: &mut Harness) {
-    let mut s = match Setup::powered_up() {
-        Ok(s) => s,
-        Err(reason) => {
-            h.fail("sync0-handler", format_args!("{reason}"));
-            return;
-        }
+    let Some(mut s) = h.ready("sync0-handler", Setup::powered_up()) else {
+        return;
     };
     // The process-data image sizes of the default mapping: the PDI bus time of a cycle.
     h.meta("sm2_bytes", OUTPUTS_SIZE as u32);

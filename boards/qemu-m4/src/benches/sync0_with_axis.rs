@@ -176,12 +176,11 @@ fn cost_from(
 
 /// Measures both modes.
 pub fn run(h: &mut Harness) {
-    let mut bench = match Bench::new().and_then(|mut b| b.enable().map(|()| b)) {
-        Ok(bench) => bench,
-        Err(reason) => {
-            h.fail("sync0-handler-csp", format_args!("{reason}"));
-            return;
-        }
+    let Some(mut bench) = h.ready(
+        "sync0-handler-csp",
+        Bench::new().and_then(|mut b| b.enable().map(|()| b)),
+    ) else {
+        return;
     };
     csp_at_rest(h, &mut bench);
     if let Err(reason) = profile_position_move(h, &mut bench) {
