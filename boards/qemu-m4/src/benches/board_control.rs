@@ -13,7 +13,7 @@
 use core::hint::black_box;
 use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
 
-use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode};
+use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState};
 use firmware::motor::servo::{axis_config, Tuning};
 use stm32g4_axis::board::{
     BOOTSTRAP_PRECHARGE_PERIODS, CORE_CLOCK_HZ, COUNTS_PER_REV, FRONT_END, PDI_SPI_CLOCK_HZ,
@@ -122,21 +122,11 @@ impl InputPins for Pins {
 /// The SYNC0 period trim (zero: the measurement runs without SYNC0).
 static TRIM: PeriodTrim = PeriodTrim::new();
 
-/// The command: enabled, CSP, target = the actual position (the quadrature counter's first
-/// reading is position 0).
+/// The command of the `motor` benchmarks (enabled, CSP) with the target on the actual position:
+/// the quadrature counter's first reading is position 0.
 const COMMAND: AxisCommand = AxisCommand {
-    enable: true,
-    fault_reset: false,
-    identify: false,
-    calibrate_offsets: false,
-    mode: ControlMode::Position,
     position: 0,
-    velocity: 0.0,
-    torque: 0.0,
-    deceleration: 0.0,
-    bus_cycle_ns: 0,
-    following_error_limits: Some((262_144, 20)),
-    torque_limits: None,
+    ..super::motor::COMMAND
 };
 
 type Board = AxisHardware<Tim1, Adcs, QuadratureEncoder<Tim2>, Pins>;

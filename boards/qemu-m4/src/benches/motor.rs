@@ -218,7 +218,7 @@ fn foc_step(h: &mut Harness) {
 }
 
 /// The command of the measurement: enabled, CSP, target = the actual position.
-const COMMAND: AxisCommand = AxisCommand {
+pub(super) const COMMAND: AxisCommand = AxisCommand {
     enable: true,
     fault_reset: false,
     identify: false,
