@@ -449,7 +449,13 @@ pub fn service_esc_events() {
         if let Err(e) = served {
             return Some(Err(e));
         }
-        with_drive(|d| d.core.event_end(&mut d.pdi, job, now))
+        with_drive(|d| {
+            let ended = d.core.event_end(&mut d.pdi, job, now);
+            // An AL transition (leaving OP: the drive's safe outputs, brake applied) takes
+            // effect at the pins now, not at a next cycle that may never come.
+            d.drive_outputs();
+            ended
+        })
     })
     .flatten();
     EVENT_STATS.record(started, result);

@@ -107,15 +107,21 @@ pub async fn esc_poll(mut started: bool) {
 }
 
 /// Thread mode: RUN/ERR LEDs with the ETG.1300 patterns the firmware computes
-/// ([`firmware::slave::Slave::leds`]); ERR also lights while PDI accesses keep failing.
+/// ([`firmware::slave::Slave::leds`]); ERR also lights while PDI accesses keep failing. Also
+/// sets the digital outputs (brake) every 10 ms as a backstop.
 #[embassy_executor::task]
 pub async fn leds(mut leds: Leds) {
     let mut ticker = Ticker::every(LED_PERIOD);
     let mut seen_errors = 0u32;
     loop {
         ticker.next().await;
-        let (run, err) =
-            irq::with_drive(|d| d.core.leds(crate::time::now_ns())).unwrap_or((false, false));
+        let (run, err) = irq::with_drive(|d| {
+            // The backstop of the outputs: every 10 ms whatever the contexts did (the cycle
+            // and the ESC-event round set them as they change).
+            d.drive_outputs();
+            d.core.leds(crate::time::now_ns())
+        })
+        .unwrap_or((false, false));
         let errors =
             CYCLE_STATS.errors.load(Ordering::Relaxed) + EVENT_STATS.errors.load(Ordering::Relaxed);
         leds.set_run(run);
