@@ -19,6 +19,7 @@
 //! | [`inputs`] | GPIO levels of switches, enable and STO inputs; brake output | [`hal::io::DigitalInputs`], [`hal::io::DigitalOutputs`] |
 //! | [`control`] | the body of the control interrupt (ADC end of conversion, P0) | — |
 //! | [`cycle`] | the body of the cycle interrupt (SYNC0, P1): process data, outputs, phase lock | — |
+//! | [`event`] | the ESC-event round (P2): AL control, SM checks and the mailbox beside the cycle, the PDI shared in 32-byte transfers | — |
 //! | [`liveness`] | — (the decision behind each refresh of the independent watchdog) | — |
 //! | [`phase_lock`] | — (the PWM period trim that phase-locks the control loop to SYNC0) | — |
 //!
@@ -38,6 +39,7 @@ pub mod biss;
 pub mod board;
 pub mod control;
 pub mod cycle;
+pub mod event;
 pub mod inputs;
 pub mod inverter;
 pub mod liveness;

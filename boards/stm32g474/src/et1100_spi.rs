@@ -163,11 +163,6 @@ pub enum Error {
         /// Address of the access.
         addr: u16,
     },
-    /// The PDI is not installed yet (a shared handle used before `irq::install`).
-    Unavailable {
-        /// Address of the access.
-        addr: u16,
-    },
     /// The range leaves the 64 KiB ESC address space.
     OutOfRange {
         /// First address.
@@ -184,12 +179,6 @@ impl fmt::Display for Error {
                 write!(f, "ET1100 SPI timeout in {phase:?} phase at 0x{addr:04X}")
             }
             Error::Bus { fault, addr } => write!(f, "ET1100 SPI {fault:?} at 0x{addr:04X}"),
-            Error::Unavailable { addr } => {
-                write!(
-                    f,
-                    "ET1100 access at 0x{addr:04X} before the PDI was installed"
-                )
-            }
             Error::OutOfRange { addr, len } => {
                 write!(f, "ESC range 0x{addr:04X}+{len} outside 0x0000..=0xFFFF")
             }
@@ -203,7 +192,6 @@ impl PdiError for Error {
             Error::Timeout { .. } => PdiErrorKind::Timeout,
             Error::Bus { .. } => PdiErrorKind::Bus,
             Error::OutOfRange { .. } => PdiErrorKind::OutOfRange,
-            Error::Unavailable { .. } => PdiErrorKind::Other,
         }
     }
 }

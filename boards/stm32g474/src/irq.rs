@@ -29,7 +29,7 @@
 //! with its own copy of the OD RAM, parameter storage) is used by the ESC-event context alone.
 //! An ESC-event round ([`service_esc_events`]) takes the drive lock only for the core's short
 //! steps (AL control and SM checks, copying the OD RAM to and from the mailbox side) and, through
-//! [`SharedPdi`], for one SPI frame of at most [`PDI_CHUNK`] bytes at a time. The FOC interrupt
+//! `stm32g4_axis::event::DrivePdi`, for one SPI frame of at most 32 bytes at a time. The FOC interrupt
 //! (P0) is never masked.
 //!
 //! Latency impact: SYNC0 waits at most for one of those steps (bounded by the OD RAM size or one
@@ -50,13 +50,10 @@ use embassy_stm32::{bind_interrupts, pac, Peri};
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
-use firmware::od::{NoDomains, WithDomains};
-use firmware::slave::MailboxSide;
 use firmware::slave::SyncMode;
-use hal::esc::AlEvent;
-use hal::pdi::EscPdi;
 use static_cell::StaticCell;
 use stm32g4_axis::cycle::CycleSide;
+use stm32g4_axis::event::{self, SharedDrive};
 
 use crate::axis_io::BrakePin;
 use crate::et1100_spi::{Error as PdiError, Et1100Spi};
@@ -65,7 +62,6 @@ use crate::profile::RAM_SIZE;
 use crate::storage::FlashStorage;
 use crate::sync_capture;
 use crate::time::now_ns;
-use firmware::params::ParamStore;
 
 /// Interrupt priorities (see the module table).
 pub mod prio {
@@ -101,22 +97,13 @@ bind_interrupts!(
 /// What the cycle and the ESC-event contexts share: the slave's core and the ET1100, with the
 /// brake output and the phase lock the cycle context drives ([`CycleSide`]). The ESC-event
 /// context holds the lock only for the core's short steps and for single PDI transfers of at
-/// most [`PDI_CHUNK`] bytes ([`SharedPdi`]), never for a whole mailbox round.
+/// most 32 bytes (`stm32g4_axis::event::DrivePdi`), never for a whole mailbox round.
 pub type Drive = CycleSide<RAM_SIZE, Et1100Spi<'static>, BrakePin>;
 
 /// What only the ESC-event context (its executor and the thread-mode fallback poll) uses: the
-/// slave's mailbox side with its own copy of the OD RAM, and the parameter storage its SDO
-/// services write.
-pub struct EventSide {
-    /// Mailbox, CoE server, OD RAM copy.
-    pub mailbox: MailboxSide<RAM_SIZE>,
-    /// 1010h/1011h parameter storage in flash bank 2.
-    pub params: ParamStore<FlashStorage, { crate::storage::SLOT_CAPACITY }>,
-}
-
-/// Longest single PDI transfer the ESC-event context makes while SYNC0 may wait for the lock:
-/// (3 + 32) bytes × 376 ns ≈ 13 µs at 21.25 MHz, against ≈ 49 µs for a whole 128-byte mailbox.
-pub const PDI_CHUNK: usize = 32;
+/// slave's mailbox side with its own copy of the OD RAM, and the 1010h/1011h parameter storage
+/// in flash bank 2 its SDO services write.
+pub type EventSide = event::EventSide<RAM_SIZE, FlashStorage, { crate::storage::SLOT_CAPACITY }>;
 
 /// Storage of the [`Drive`] (in .bss: `StaticCell` is uninitialised memory, where a
 /// `RefCell<Option<Drive>>` initialised to `None` would be copied from flash into .data).
@@ -171,58 +158,12 @@ fn with_event_side<R>(f: impl FnOnce(&mut EventSide) -> R) -> Option<R> {
     })
 }
 
-/// The ET1100 as the ESC-event context reaches it outside the drive lock: every access takes the
-/// lock for one SPI frame of at most [`PDI_CHUNK`] bytes, so a SYNC0 that arrives meanwhile
-/// waits for at most one such frame. (The ESC treats a mailbox buffer as read or written when
-/// its last byte is, whatever the frames.)
-pub struct SharedPdi;
+/// The drive as the ESC-event context reaches it: through [`DRIVE`]'s lock, per step.
+struct LockedDrive;
 
-impl SharedPdi {
-    fn chunked(
-        addr: u16,
-        len: usize,
-        mut access: impl FnMut(
-            &mut Et1100Spi<'static>,
-            u16,
-            core::ops::Range<usize>,
-        ) -> Result<AlEvent, PdiError>,
-    ) -> Result<AlEvent, PdiError> {
-        let mut start = 0;
-        loop {
-            let end = len.min(start + PDI_CHUNK);
-            let at = u16::try_from(start)
-                .ok()
-                .and_then(|o| addr.checked_add(o))
-                .ok_or(PdiError::OutOfRange { addr, len })?;
-            let events = with_drive(|d| access(&mut d.pdi, at, start..end))
-                .ok_or(PdiError::Unavailable { addr })??;
-            if end >= len {
-                return Ok(events);
-            }
-            start = end;
-        }
-    }
-}
-
-impl EscPdi for SharedPdi {
-    type Error = PdiError;
-
-    fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<AlEvent, PdiError> {
-        let len = buf.len();
-        Self::chunked(addr, len, |pdi, at, range| match buf.get_mut(range) {
-            Some(part) => pdi.read(at, part),
-            None => Err(PdiError::OutOfRange { addr, len }),
-        })
-    }
-
-    fn write(&mut self, addr: u16, data: &[u8]) -> Result<AlEvent, PdiError> {
-        Self::chunked(addr, data.len(), |pdi, at, range| match data.get(range) {
-            Some(part) => pdi.write(at, part),
-            None => Err(PdiError::OutOfRange {
-                addr,
-                len: data.len(),
-            }),
-        })
+impl SharedDrive<RAM_SIZE, Et1100Spi<'static>, BrakePin> for LockedDrive {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Drive) -> R) -> Option<R> {
+        with_drive(f)
     }
 }
 
@@ -251,10 +192,10 @@ impl ContextStats {
 
     /// Records a run without errors that started at DWT count `started`.
     pub fn record_run(&self, started: u32) {
-        self.record(started, Some(Ok(())));
+        self.record::<PdiError>(started, Some(Ok(())));
     }
 
-    fn record(&self, started: u32, result: Option<Result<(), PdiError>>) {
+    fn record<E: hal::pdi::PdiError>(&self, started: u32, result: Option<Result<(), E>>) {
         let cycles = DWT::cycle_count().wrapping_sub(started);
         self.max_cycles.fetch_max(cycles, Ordering::Relaxed);
         match result {
@@ -425,38 +366,11 @@ where
 
 /// Serves pending AL events once: one ESC-event round of the slave (see
 /// `ethercat_slave::slave::MailboxSide`): the core's short steps under the drive lock, the
-/// mailbox round on the event side with the PDI taken frame by frame ([`SharedPdi`]), so
+/// mailbox round on the event side with the PDI taken frame by frame (`DrivePdi`), so
 /// SYNC0 never waits for a mailbox transfer or an SDO service. Called from the ESC-event
 /// context and from the thread-mode fallback poll.
 pub fn service_esc_events() {
     let started = DWT::cycle_count();
-    let result = with_event_side(|ev| {
-        let now = now_ns();
-        let job = match with_drive(|d| d.core.event_begin(&mut d.pdi, now))? {
-            Ok(job) => job,
-            Err(e) => return Some(Err(e)),
-        };
-        with_drive(|d| ev.mailbox.load(&mut d.core));
-        let served = ev.mailbox.serve(
-            &mut SharedPdi,
-            job,
-            &mut WithDomains {
-                hook: &mut ev.params,
-                domains: &mut NoDomains,
-            },
-        );
-        with_drive(|d| ev.mailbox.store(&mut d.core));
-        if let Err(e) = served {
-            return Some(Err(e));
-        }
-        with_drive(|d| {
-            let ended = d.core.event_end(&mut d.pdi, job, now);
-            // An AL transition (leaving OP: the drive's safe outputs, brake applied) takes
-            // effect at the pins now, not at a next cycle that may never come.
-            d.drive_outputs();
-            ended
-        })
-    })
-    .flatten();
+    let result = with_event_side(|ev| ev.esc_event_round(&mut LockedDrive, now_ns())).flatten();
     EVENT_STATS.record(started, result);
 }

@@ -7,6 +7,7 @@
 //! from DESIGN.md §6.
 
 mod board_control;
+mod board_esc_event;
 mod board_sync0;
 mod motor;
 mod process_data;
@@ -32,6 +33,7 @@ pub const ALL: &[fn(&mut Harness)] = &[
     motor::run,
     board_control::run,
     board_sync0::run,
+    board_esc_event::run,
 ];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.

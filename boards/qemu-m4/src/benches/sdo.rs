@@ -22,15 +22,15 @@ use crate::harness::Harness;
 const STATE: AlState = AlState::Op;
 /// Statusword 6041h (CiA402) and the user parameter 2F00h (UDINT, not PDO-mapped), subindex 0.
 const STATUSWORD: (u16, u8) = (0x6041, 0);
-const USER_PARAMETER: (u16, u8) = (0x2F00, 0);
+pub(super) const USER_PARAMETER: (u16, u8) = (0x2F00, 0);
 /// The value the download writes; any value other than the default 0.
-const USER_PARAMETER_VALUE: u32 = 0x1234_5678;
+pub(super) const USER_PARAMETER_VALUE: u32 = 0x1234_5678;
 /// Largest response buffer the benchmark provides (the standard profile's mailbox is 256 bytes).
 const RESPONSE_CAPACITY: usize = 512;
 
 /// SDO command bytes (ETG.1000.6 §5.6.2.1, §5.6.2.4): command specifier in bits 5..=7, then
 /// for expedited init frames the unused-byte count `n` in bits 2..=3, `e` bit 1, `s` bit 0.
-mod command {
+pub(super) mod command {
     const SPECIFIER_SHIFT: u8 = 5;
     const UNUSED_SHIFT: u8 = 2;
     const EXPEDITED: u8 = 1 << 1;
@@ -53,12 +53,12 @@ mod command {
 }
 
 /// Length of an expedited request or response: CoE header + SDO frame.
-const FRAME_LEN: usize = COE_HEADER_LEN + SDO_FRAME_LEN;
+pub(super) const FRAME_LEN: usize = COE_HEADER_LEN + SDO_FRAME_LEN;
 /// Offset of the expedited data in a frame (CoE header, command, index, subindex).
 const DATA_OFFSET: usize = COE_HEADER_LEN + 4;
 
 /// An expedited init frame: CoE header (SDO request), command, index, subindex, 4 data bytes.
-fn request(command: u8, (index, subindex): (u16, u8), data: [u8; 4]) -> [u8; FRAME_LEN] {
+pub(super) fn request(command: u8, (index, subindex): (u16, u8), data: [u8; 4]) -> [u8; FRAME_LEN] {
     let mut frame = [0; FRAME_LEN];
     let [header_lo, header_hi] = CoeService::SdoRequest.header();
     let [index_lo, index_hi] = index.to_le_bytes();

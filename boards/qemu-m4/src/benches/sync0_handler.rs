@@ -33,7 +33,7 @@ const SWITCH_ON: u16 = SHUTDOWN | controlword::SWITCH_ON;
 const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
 const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
 /// Mailbox header (ETG.1000.4): length, address, channel/priority, type (CoE = 3) / counter.
-const MBX_TYPE_COE: u8 = 0x03;
+pub(super) const MBX_TYPE_COE: u8 = 0x03;
 /// CoE header with service 2 (SDO request), ETG.1000.6.
 const COE_SDO_REQUEST: [u8; 2] = [0x00, 0x20];
 /// SDO download init, normal (not expedited), size indicated (ccs 1, s = 1).
@@ -65,7 +65,12 @@ impl RamEsc {
         AlEvent(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 
-    fn set(&mut self, addr: u16, bytes: &[u8]) {
+    /// The byte at `at`, if inside the image.
+    pub(super) fn byte(&self, at: usize) -> Option<u8> {
+        self.mem.get(at).copied()
+    }
+
+    pub(super) fn set(&mut self, addr: u16, bytes: &[u8]) {
         let at = usize::from(addr);
         self.mem[at..at + bytes.len()].copy_from_slice(bytes);
     }
@@ -127,7 +132,7 @@ fn transfer(from: &[u8], to: &mut [u8]) {
 /// The drive's core, its mailbox side and the ESC image.
 pub(super) struct Setup {
     pub(super) core: DriveCore<RAM_SIZE>,
-    mailbox: MailboxSide<RAM_SIZE>,
+    pub(super) mailbox: MailboxSide<RAM_SIZE>,
     pub(super) esc: RamEsc,
     rx: PdoPlan,
 }

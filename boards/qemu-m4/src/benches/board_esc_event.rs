@@ -1,0 +1,136 @@
+//! The STM32G474 board's ESC-event round as the board runs it: `stm32g4_axis`'s
+//! [`EventSide::esc_event_round`] (the core's event steps, the mailbox loaded, served and stored
+//! back, the digital outputs) on the slave in OP, the ESC an image in memory reached through
+//! the drive lock in 32-byte transfers ([`stm32g4_axis::event::DrivePdi`]), serving the most
+//! expensive mailbox request measured: an expedited SDO download of 2F00h.
+//!
+//! Each call puts the request into the image (SM0 full, the SM0 event) and runs the round; the
+//! request's setup alone is measured and subtracted. The image does not model the SM status
+//! changes of the transfer, so every call serves the request the same way.
+
+use core::cell::RefCell;
+use core::hint::black_box;
+
+use firmware::mailbox::coe::COE_HEADER_LEN;
+use firmware::mailbox::header::HEADER_LEN as MAILBOX_HEADER_LEN;
+use firmware::params::{NoStorage, ParamStore};
+use firmware::profiles::standard::{PROFILE, RAM_SIZE};
+use hal::esc::{regs, AlEvent, SmStatus};
+use stm32g4_axis::cycle::CycleSide;
+use stm32g4_axis::event::{EventSide, SharedDrive};
+use stm32g4_axis::inputs::BrakeOutput;
+use stm32g4_axis::regs::OutputPins;
+
+use super::sdo::{command, request, FRAME_LEN, USER_PARAMETER, USER_PARAMETER_VALUE};
+use super::sync0_handler::{RamEsc, Setup, MBX_TYPE_COE};
+use crate::harness::Harness;
+
+const NAME: &str = "board-esc-event";
+/// Parameter-store record capacity (no storage here: 1010h is not used).
+const RECORD_CAPACITY: usize = 64;
+
+/// No brake pin.
+struct NoPins;
+
+impl OutputPins for NoPins {
+    fn set_brake_released(&mut self, _: bool) {}
+}
+
+type Side = CycleSide<RAM_SIZE, RamEsc, NoPins>;
+
+/// The drive lock of a single context: always available.
+struct Direct(Side);
+
+impl SharedDrive<RAM_SIZE, RamEsc, NoPins> for Direct {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Side) -> R) -> Option<R> {
+        Some(f(&mut self.0))
+    }
+}
+
+/// The mailbox frame of the request: the mailbox header (length, address 0, CoE, counter 0)
+/// and the CoE frame.
+fn frame() -> [u8; MAILBOX_HEADER_LEN + FRAME_LEN] {
+    let coe = request(
+        command::DOWNLOAD_REQUEST_U32,
+        USER_PARAMETER,
+        USER_PARAMETER_VALUE.to_le_bytes(),
+    );
+    let mut frame = [0; MAILBOX_HEADER_LEN + FRAME_LEN];
+    let [len_lo, len_hi] = (FRAME_LEN as u16).to_le_bytes();
+    frame[0] = len_lo;
+    frame[1] = len_hi;
+    frame[5] = MBX_TYPE_COE;
+    frame[MAILBOX_HEADER_LEN..].copy_from_slice(&coe);
+    frame
+}
+
+/// Puts the request into SM0 and raises its event, as the master's frame leaves them.
+fn post(esc: &mut RamEsc, frame: &[u8]) {
+    let device = &PROFILE.od.device;
+    esc.set(device.mailbox_out.start, frame);
+    esc.set(
+        regs::sm(0).addr + regs::sm_offset::STATUS,
+        &[SmStatus::MAILBOX_FULL],
+    );
+    esc.set(regs::sm(1).addr + regs::sm_offset::STATUS, &[0]);
+    esc.set(regs::AL_EVENT_REQUEST.addr, &AlEvent::sm(0).to_le_bytes());
+}
+
+/// The benchmark.
+pub fn run(h: &mut Harness) {
+    let Some(setup) = h.ready(NAME, Setup::powered_up()) else {
+        return;
+    };
+    let Setup {
+        core, esc, mailbox, ..
+    } = setup;
+    let mut drive = Direct(CycleSide {
+        core,
+        pdi: esc,
+        brake: BrakeOutput::new(NoPins),
+        sync_lock: None,
+    });
+    let mut event = EventSide::<RAM_SIZE, _, RECORD_CAPACITY> {
+        mailbox,
+        params: ParamStore::new(NoStorage),
+    };
+    let frame = frame();
+    // The round answers the download in SM1 and the value reaches the core.
+    post(&mut drive.0.pdi, &frame);
+    let served = event.esc_event_round(&mut drive, 0);
+    let response_at = usize::from(PROFILE.od.device.mailbox_in.start) + MAILBOX_HEADER_LEN;
+    let answered = matches!(served, Some(Ok(())))
+        && drive.0.pdi.byte(response_at + COE_HEADER_LEN) == Some(command::DOWNLOAD_RESPONSE);
+    if !answered {
+        h.fail(
+            NAME,
+            format_args!("the SDO download was not answered in SM1"),
+        );
+        return;
+    }
+    // Both operations reach the drive through the cell (the same borrow cost in each).
+    let drive = RefCell::new(drive);
+    let Some((cost, with_setup, setup_cost)) = h.measure_net(
+        NAME,
+        &mut || post(&mut drive.borrow_mut().0.pdi, black_box(&frame)),
+        &mut || {
+            let mut drive = drive.borrow_mut();
+            post(&mut drive.0.pdi, black_box(&frame));
+            let _ = event.esc_event_round(&mut *drive, black_box(0));
+        },
+    ) else {
+        return;
+    };
+    h.report(
+        NAME,
+        cost,
+        None,
+        format_args!(
+            "the STM32G474 board's ESC-event round (stm32g4_axis EventSide::esc_event_round: \
+             event begin, mailbox load/serve/store, event end, outputs; the PDI through the \
+             drive lock in 32-byte transfers, ESC as a RAM image: bus time excluded) serving an \
+             expedited SDO download of 2F00h in OP ({with_setup} with the request's setup − \
+             {setup_cost} setup)"
+        ),
+    );
+}
