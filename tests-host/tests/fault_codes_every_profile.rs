@@ -11,7 +11,9 @@
 //! machine: the power stage or the motor over temperature, the DC link over or under its
 //! limits, a serial encoder whose frames fail their CRC, an incremental encoder that loses its
 //! signal, an encoder reading that jumps, a locked rotor drawing the peak current until the motor's or the drive's
-//! I²t model trips, a phase current beyond the power stage's trip level, the motor turning
+//! I²t model trips, a phase current beyond the power stage's trip level, the power stage's
+//! hardware protection switching the bridge off by itself (a gate-driver fault or comparator
+//! on the timer's break input: reported as the over-current it is), the motor turning
 //! faster than the trip speed, a current sensor whose offset is out of range at enable, a rotor
 //! that does not follow the commutation alignment, and an open winding during identification.
 //! Where the reference board cannot reach a fault (its trip levels sit above what its loops
@@ -70,10 +72,13 @@ enum Injection {
     CurrentOffset,
     Alignment,
     Identification,
+    /// The power stage's hardware protection (a gate-driver fault or the over-current
+    /// comparator on the timer's break input) switches the bridge off by itself.
+    PowerStageTrip,
 }
 
 impl Injection {
-    const ALL: [Injection; 14] = [
+    const ALL: [Injection; 15] = [
         Injection::DriveOverTemperature,
         Injection::MotorOverTemperature,
         Injection::BusOverVoltage,
@@ -88,6 +93,7 @@ impl Injection {
         Injection::CurrentOffset,
         Injection::Alignment,
         Injection::Identification,
+        Injection::PowerStageTrip,
     ];
 
     /// The `[motor_faults]` key of the fault it raises.
@@ -107,6 +113,8 @@ impl Injection {
             Injection::CurrentOffset => "current_offset",
             Injection::Alignment => "alignment",
             Injection::Identification => "identification",
+            // The firmware reports it as the over-current it is.
+            Injection::PowerStageTrip => "over_current",
         }
     }
 
@@ -217,6 +225,14 @@ impl Injection {
             Injection::Identification => plant.set_phase_resistance_scale(OPEN_WINDING),
             // The board's levels do it: the command or the enable trips.
             Injection::OverSpeed | Injection::CurrentOffset => {}
+            Injection::PowerStageTrip => {
+                servo.io_mut().power.set_break_input(true);
+                // The hardware, not the firmware: the bridge is off before any interrupt.
+                assert!(
+                    !servo.io().power.active().gates,
+                    "the break switches the bridge off"
+                );
+            }
         }
     }
 }
@@ -250,6 +266,7 @@ use Report::{Alarm, Code, CodeAsFf00};
 /// The report the manual of profile `name` gives for the fault `injection` raises.
 fn manual(name: &str, injection: Injection) -> Report {
     use Injection as I;
+    // A hardware trip of the power stage is reported as the over-current it is.
     match name {
         // GHA-E §6.2 alarm table (codes stated); no commutation or identification alarm.
         "gha-e" => match injection {
@@ -258,7 +275,7 @@ fn manual(name: &str, injection: Injection) -> Report {
             I::BusOverVoltage => Alarm("HU", Some(0x3110)),
             I::BusUnderVoltage => Alarm("LU", Some(0x3120)),
             I::EncoderCrc | I::EncoderJump | I::EncoderSignalLoss => Alarm("EC", Some(0x7305)),
-            I::OverCurrent => Alarm("OC1", Some(0x2221)),
+            I::OverCurrent | I::PowerStageTrip => Alarm("OC1", Some(0x2221)),
             I::MotorOverload | I::DriveOverload => Alarm("OL", Some(0x3230)),
             I::OverSpeed => Alarm("OS", Some(0x8400)),
             I::CurrentOffset => Alarm("EH", Some(0x5210)),
@@ -275,7 +292,7 @@ fn manual(name: &str, injection: Injection) -> Report {
             I::EncoderCrc => Alarm("AL.123", None),
             I::EncoderJump => Alarm("AL.120", None),
             I::EncoderSignalLoss => Alarm("AL.121", None),
-            I::OverCurrent => Alarm("AL.111", None),
+            I::OverCurrent | I::PowerStageTrip => Alarm("AL.111", None),
             I::MotorOverload => Alarm("AL.245", None),
             I::DriveOverload => Alarm("AL.244", None),
             I::OverSpeed => Alarm("AL.230", None),
@@ -292,7 +309,7 @@ fn manual(name: &str, injection: Injection) -> Report {
             I::BusUnderVoltage => Alarm("LuP", Some(0x3220)),
             I::EncoderCrc | I::EncoderSignalLoss => Alarm("EC", Some(0x7305)),
             I::EncoderJump => Alarm("ET1", Some(0x7305)),
-            I::OverCurrent => Alarm("OC1", Some(0x2311)),
+            I::OverCurrent | I::PowerStageTrip => Alarm("OC1", Some(0x2311)),
             I::MotorOverload => Alarm("OL1", Some(0x3230)),
             I::DriveOverload => Alarm("OL2", Some(0x3230)),
             I::OverSpeed => Alarm("OS", Some(0x8400)),
@@ -315,7 +332,7 @@ fn manual(name: &str, injection: Injection) -> Report {
             I::EncoderCrc => 0x7300,
             I::EncoderJump => 0x7320,
             I::EncoderSignalLoss => 0x7305,
-            I::OverCurrent => 0x2320,
+            I::OverCurrent | I::PowerStageTrip => 0x2320,
             I::MotorOverload => 0x2350,
             I::DriveOverload => 0x2310,
             I::OverSpeed => 0x8400,
@@ -511,7 +528,7 @@ fn every_fault(name: &str) {
                 continue;
             }
             if let Err(e) = fault(name, &profile, injection).await {
-                failures.push(format!("{}: {e}", injection.key()));
+                failures.push(format!("{} ({injection:?}): {e}", injection.key()));
             }
         }
     });

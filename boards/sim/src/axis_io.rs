@@ -44,12 +44,20 @@ impl PwmRegisters {
 }
 
 /// The PWM timer and gate drivers: duties and enable go to shadow registers that become active
-/// at the next period boundary; a disable acts on the present period at once.
+/// at the next period boundary; a disable acts on the present period at once. The break input
+/// (a gate-driver fault or an over-current comparator, [`SimPowerStage::set_break_input`])
+/// switches the gates off in hardware at once and holds them off while it is active, as an
+/// STM32 advanced timer's BKIN does (MOE cleared, and not settable while the break is there);
+/// the firmware learns of it through [`Inverter::take_hardware_trip`].
 #[derive(Clone, Copy, Debug)]
 pub struct SimPowerStage {
     pwm_hz: u32,
     active: PwmRegisters,
     shadow: PwmRegisters,
+    /// The break input is active.
+    break_input: bool,
+    /// A break not yet reported through `take_hardware_trip`.
+    trip_unreported: bool,
 }
 
 impl SimPowerStage {
@@ -59,13 +67,29 @@ impl SimPowerStage {
             pwm_hz: pwm_hz.round() as u32,
             active: PwmRegisters::OFF,
             shadow: PwmRegisters::OFF,
+            break_input: false,
+            trip_unreported: false,
         }
     }
 
-    /// Back to the power-on state (a reset of the board).
+    /// Back to the power-on state (a reset of the board; the break input keeps its level).
     pub fn reset(&mut self) {
         self.active = PwmRegisters::OFF;
         self.shadow = PwmRegisters::OFF;
+        self.trip_unreported = false;
+    }
+
+    /// Drives the break input (`true` = active): the gates go off at once and stay off while
+    /// it is active.
+    pub fn set_break_input(&mut self, active: bool) {
+        if active && !self.break_input {
+            self.trip_unreported = true;
+        }
+        self.break_input = active;
+        if active {
+            self.active.gates = false;
+            self.shadow.gates = false;
+        }
     }
 
     /// The registers acting during the present period.
@@ -83,6 +107,11 @@ impl SimPowerStage {
     pub fn run_period(&mut self, plant: &mut Plant) {
         plant.run_period(self.active.duties, self.active.gates);
         self.active = self.shadow;
+        if self.break_input {
+            // MOE cannot be set while the break is active.
+            self.active.gates = false;
+            self.shadow.gates = false;
+        }
     }
 }
 
@@ -106,6 +135,10 @@ impl Inverter for SimPowerStage {
 
     fn is_enabled(&self) -> bool {
         self.shadow.gates
+    }
+
+    fn take_hardware_trip(&mut self) -> bool {
+        core::mem::take(&mut self.trip_unreported)
     }
 }
 
