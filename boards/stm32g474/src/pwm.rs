@@ -226,6 +226,10 @@ impl PwmTimer for Tim1 {
         }
     }
 
+    /// A read-modify-write of BDTR: the locked fields are written back unchanged (LOCK 1
+    /// ignores them). A break that clears MOE between the read and the write cannot be undone
+    /// by it while the break is active (MOE is not settable then); a break shorter than those
+    /// few cycles leaves BIF set, which the next period start reports.
     #[inline]
     fn set_main_output(&mut self, enabled: bool) {
         pac::TIM1.bdtr().modify(|w| w.set_moe(enabled));
