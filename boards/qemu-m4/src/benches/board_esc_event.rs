@@ -21,8 +21,10 @@ use stm32g4_axis::event::{EventSide, SharedDrive};
 use stm32g4_axis::inputs::BrakeOutput;
 use stm32g4_axis::regs::OutputPins;
 
-use super::sdo::{command, request, FRAME_LEN, USER_PARAMETER, USER_PARAMETER_VALUE};
-use super::sync0_handler::{RamEsc, Setup, MBX_TYPE_COE};
+use super::sdo::{
+    command, mailbox_frame, request, FRAME_LEN, USER_PARAMETER, USER_PARAMETER_VALUE,
+};
+use super::sync0_handler::{RamEsc, Setup};
 use crate::harness::Harness;
 
 const NAME: &str = "board-esc-event";
@@ -47,21 +49,13 @@ impl SharedDrive<RAM_SIZE, RamEsc, NoPins> for Direct {
     }
 }
 
-/// The mailbox frame of the request: the mailbox header (length, address 0, CoE, counter 0)
-/// and the CoE frame.
+/// The mailbox frame of the request.
 fn frame() -> [u8; MAILBOX_HEADER_LEN + FRAME_LEN] {
-    let coe = request(
+    mailbox_frame(&request(
         command::DOWNLOAD_REQUEST_U32,
         USER_PARAMETER,
         USER_PARAMETER_VALUE.to_le_bytes(),
-    );
-    let mut frame = [0; MAILBOX_HEADER_LEN + FRAME_LEN];
-    let [len_lo, len_hi] = (FRAME_LEN as u16).to_le_bytes();
-    frame[0] = len_lo;
-    frame[1] = len_hi;
-    frame[5] = MBX_TYPE_COE;
-    frame[MAILBOX_HEADER_LEN..].copy_from_slice(&coe);
-    frame
+    ))
 }
 
 /// Puts the request into SM0 and raises its event, as the master's frame leaves them.

@@ -16,6 +16,7 @@ use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 use hal::esc::AlState;
 
 use super::read;
+use super::sync0_handler::MBX_TYPE_COE;
 use crate::harness::Harness;
 
 /// The EtherCAT state the requests are served in.
@@ -48,6 +49,8 @@ pub(super) mod command {
     pub const UPLOAD_RESPONSE_U16: u8 = (2 << SPECIFIER_SHIFT) | EXPEDITED_U16;
     /// Initiate download request (ccs 1), expedited, 4 bytes.
     pub const DOWNLOAD_REQUEST_U32: u8 = (1 << SPECIFIER_SHIFT) | EXPEDITED_U32;
+    /// Initiate download request (ccs 1), normal (segmented), the size in the data bytes.
+    pub const DOWNLOAD_REQUEST_SIZED: u8 = (1 << SPECIFIER_SHIFT) | SIZE_INDICATED;
     /// Initiate download response (scs 3).
     pub const DOWNLOAD_RESPONSE: u8 = 3 << SPECIFIER_SHIFT;
 }
@@ -66,6 +69,18 @@ pub(super) fn request(command: u8, (index, subindex): (u16, u8), data: [u8; 4]) 
     frame.copy_from_slice(&[
         header_lo, header_hi, command, index_lo, index_hi, subindex, d0, d1, d2, d3,
     ]);
+    frame
+}
+
+/// `coe` as a mailbox frame (ETG.1000.4): the header (length, address 0, channel and priority
+/// 0, type CoE with counter 0) and the CoE frame.
+pub(super) fn mailbox_frame(coe: &[u8; FRAME_LEN]) -> [u8; MAILBOX_HEADER_LEN + FRAME_LEN] {
+    let mut frame = [0; MAILBOX_HEADER_LEN + FRAME_LEN];
+    let [len_lo, len_hi] = (FRAME_LEN as u16).to_le_bytes();
+    frame[0] = len_lo;
+    frame[1] = len_hi;
+    frame[5] = MBX_TYPE_COE;
+    frame[MAILBOX_HEADER_LEN..].copy_from_slice(coe);
     frame
 }
 

@@ -21,6 +21,7 @@ use hal::esc::{regs, AlEvent, AlState, SmActivate, SmConfig, SmControl, SmPdiCon
 use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
 
 use super::master_outputs;
+use super::sdo::{command, mailbox_frame, request, USER_PARAMETER};
 use crate::harness::Harness;
 
 /// DESIGN.md §6: SYNC0 handler (PDO unpack, CiA402, PDO pack; PDI bus time excluded).
@@ -34,13 +35,6 @@ const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
 const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
 /// Mailbox header (ETG.1000.4): length, address, channel/priority, type (CoE = 3) / counter.
 pub(super) const MBX_TYPE_COE: u8 = 0x03;
-/// CoE header with service 2 (SDO request), ETG.1000.6.
-const COE_SDO_REQUEST: [u8; 2] = [0x00, 0x20];
-/// SDO download init, normal (not expedited), size indicated (ccs 1, s = 1).
-const SDO_DOWNLOAD_INIT_SIZED: u8 = (1 << 5) | 1;
-/// A manufacturer parameter of the standard profile (UDINT, rw, not PDO-mapped), as the SDO
-/// download benchmark uses.
-const PARAMETER: u16 = 0x2F00;
 
 /// A PDI access outside the image.
 #[derive(Debug)]
@@ -218,13 +212,14 @@ impl Setup {
     /// the mailbox side waits for a segment.
     fn start_segmented_download(&mut self) -> Option<()> {
         let device = &PROFILE.od.device;
-        let [i0, i1] = PARAMETER.to_le_bytes();
-        let mut frame = [0u8; 16];
-        frame[0] = 10; // CoE header + 8 SDO bytes
-        frame[5] = MBX_TYPE_COE;
-        frame[6..8].copy_from_slice(&COE_SDO_REQUEST);
-        frame[8..16].copy_from_slice(&[SDO_DOWNLOAD_INIT_SIZED, i0, i1, 0, 4, 0, 0, 0]);
-        self.esc.set(device.mailbox_out.start, &frame);
+        // The 4 bytes of 2F00h (UDINT), announced, none sent.
+        let init = request(
+            command::DOWNLOAD_REQUEST_SIZED,
+            USER_PARAMETER,
+            [4, 0, 0, 0],
+        );
+        self.esc
+            .set(device.mailbox_out.start, &mailbox_frame(&init));
         let sm0_status = regs::sm(0).addr + regs::sm_offset::STATUS;
         self.esc.set(sm0_status, &[SmStatus::MAILBOX_FULL]);
         let job = EventJob {
