@@ -17,6 +17,7 @@
 
 use motor_control::servo::{EncoderSpec, ServoSpec, Tuning, SERVO_400W};
 
+use stm32g4_settings::pwm::CentreAligned;
 use stm32g4_settings::spi::BaudRate;
 
 use crate::biss::BissLayout;
@@ -73,6 +74,11 @@ pub const TUNING: Tuning = Tuning::DEFAULT;
 
 /// PWM frequency, Hz.
 pub const PWM_HZ: u32 = SERVO.inverter.pwm_hz as u32;
+/// TIM1's PSC and ARR for [`PWM_HZ`] (TIM1 on APB2, undivided: the core clock).
+pub const PWM_PERIOD: CentreAligned = match CentreAligned::new(CORE_CLOCK_HZ, PWM_HZ) {
+    Ok(p) => p,
+    Err(_) => panic!("PWM frequency out of TIM1's range"),
+};
 /// Dead time of every leg, ns (the gate driver's and switches' need, rounded up by `pwm`).
 pub const DEAD_TIME_NS: u32 = (SERVO.inverter.dead_time_s * 1e9 + 0.5) as u32;
 
@@ -115,6 +121,8 @@ const _: () = {
     // 200 ns dead time, 40 kHz: the values the settings below were checked with.
     assert!(DEAD_TIME_NS == 200);
     assert!(PWM_HZ == 40_000);
+    // The worked example of stm32g4-settings: 40 kHz from 170 MHz.
+    assert!(PWM_PERIOD.prescaler == 0 && PWM_PERIOD.auto_reload == 2125);
     // 100 µs at 40 kHz: four periods.
     assert!(BOOTSTRAP_PRECHARGE_PERIODS == 4);
     // 5400 rpm × 10,000 / 60 = 900,000 increments/s: 1.11 µs between edges.

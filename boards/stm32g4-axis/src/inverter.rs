@@ -207,7 +207,8 @@ impl<T: PwmTimer> Inverter for Tim1Inverter<T> {
     }
 
     fn set_duties(&mut self, a: f32, b: f32, c: f32) {
-        let arr = self.timer.auto_reload();
+        // The ARR written last: the next period's, which these compares act in.
+        let arr = self.arr[0];
         self.compares = if self.precharge_left > 0 {
             // Duty 0: every low side on for the whole next period.
             [arr; 3]
@@ -228,8 +229,7 @@ impl<T: PwmTimer> Inverter for Tim1Inverter<T> {
             if self.precharge_periods > 0 {
                 // The first switched period is a pre-charge period: duty 0 from now.
                 self.precharge_left = self.precharge_periods;
-                let arr = self.timer.auto_reload();
-                self.compares = [arr; 3];
+                self.compares = [self.arr[0]; 3];
                 self.timer.set_compares(self.compares);
             }
         }

@@ -14,6 +14,8 @@ use embassy_stm32::Peri;
 use stm32g4_axis::inputs::{InputLine, InputPolarity};
 use stm32g4_axis::regs::{InputPins, OutputPins};
 
+use crate::pins::alternate;
+
 /// Which lines are active low.
 pub const POLARITY: InputPolarity = InputPolarity {
     active_low: InputLine::PositiveLimit.mask() | InputLine::NegativeLimit.mask(),
@@ -55,9 +57,7 @@ fn input(pin: Peri<'static, impl Pin>, pull: Pull) -> Flex<'static> {
 
 /// A pin in its TIM3 capture function `af`, pulled down.
 fn capture_input(pin: Peri<'static, impl Pin>, af: u8) -> Flex<'static> {
-    let mut flex = Flex::new(pin);
-    flex.set_as_af_unchecked(af, AfType::input(Pull::Down));
-    flex
+    alternate(pin, af, AfType::input(Pull::Down))
 }
 
 impl GpioInputs {

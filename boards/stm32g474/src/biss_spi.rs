@@ -29,6 +29,7 @@ use stm32g4_axis::biss::FrameTransfer;
 use stm32g4_settings::spi::BaudRate;
 
 use crate::clocks::PCLK2_HZ;
+use crate::pins::alternate;
 
 /// The fastest MA clock: BiSS-C encoders take up to 10 MHz, but the line delay (cable and
 /// transceivers, ≈ 10 ns/m) must stay below half a bit, as the SPI samples without delay
@@ -128,13 +129,14 @@ pub fn configure<MA: SckPin<SPI1>, SLO: MisoPin<SPI1>>(pins: BissPins<MA, SLO>) 
         ch.mar().write_value(memory);
     }
     let (ma_af, slo_af) = (pins.ma.af_num(), pins.slo.af_num());
-    let mut ma = Flex::new(pins.ma);
-    ma.set_high();
-    ma.set_as_af_unchecked(ma_af, AfType::output(OutputType::PushPull, Speed::VeryHigh));
-    let mut slo = Flex::new(pins.slo);
+    let ma = alternate(
+        pins.ma,
+        ma_af,
+        AfType::output(OutputType::PushPull, Speed::VeryHigh),
+    );
     // The receiver's fail-safe output is high on an open line; the pull-up keeps it so
     // without a receiver: a missing encoder reads as no ack (signal loss).
-    slo.set_as_af_unchecked(slo_af, AfType::input(Pull::Up));
+    let slo = alternate(pins.slo, slo_af, AfType::input(Pull::Up));
     let _ = (pins.spi, pins.rx_dma, pins.tx_dma);
     SpiFrames {
         _pins: [ma, slo],

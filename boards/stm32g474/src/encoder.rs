@@ -20,6 +20,7 @@ use stm32g4_settings::dead_time::ClockDivision;
 use stm32g4_settings::input_filter::InputFilter;
 
 use crate::clocks::PCLK1_HZ;
+use crate::pins::alternate;
 use stm32g4_axis::board as servo;
 
 /// TIM2's kernel clock (APB1 prescaler 1).
@@ -41,6 +42,8 @@ const _: () = {
 
 /// CCxS = 01: the channel is an input, ICx mapped on TIx (the PAC calls this value `TI4`).
 const IC_ON_OWN_INPUT: vals::CcmrInputCcs = vals::CcmrInputCcs::TI4;
+/// A, B and Z: plain inputs (the RS-422 receivers drive them).
+const INPUT: AfType = AfType::input(Pull::None);
 /// Channel indices (0-based) of A, B and Z.
 const CH_A: usize = 0;
 const CH_B: usize = 1;
@@ -61,12 +64,6 @@ pub struct EncoderPins<
     pub z: Peri<'static, Z>,
     /// The line receiver's fault output (active low, open drain).
     pub fault: Peri<'static, F>,
-}
-
-fn af_input(pin: Peri<'static, impl embassy_stm32::gpio::Pin>, af: u8) -> Flex<'static> {
-    let mut flex = Flex::new(pin);
-    flex.set_as_af_unchecked(af, AfType::input(Pull::None));
-    flex
 }
 
 /// Configures TIM2 (see the module table) and starts it counting from 0.
@@ -109,9 +106,9 @@ where
     let (a_af, b_af, z_af) = (pins.a.af_num(), pins.b.af_num(), pins.z.af_num());
     Tim2Encoder {
         _inputs: [
-            af_input(pins.a, a_af),
-            af_input(pins.b, b_af),
-            af_input(pins.z, z_af),
+            alternate(pins.a, a_af, INPUT),
+            alternate(pins.b, b_af, INPUT),
+            alternate(pins.z, z_af, INPUT),
         ],
         fault: Input::new(pins.fault, Pull::Up),
     }

@@ -55,7 +55,16 @@
 //!   active low, normal data-out sample; 0x0151: SYNC0 push-pull active high, mapped to the
 //!   pin). od-gen's SII generator must produce exactly these values for this board.
 
+use embassy_stm32::gpio::{AfType, Flex, Pin};
 use embassy_stm32::{peripherals as p, Peri, Peripherals};
+
+/// `pin` in its alternate function `af` (checked by the caller's pin-trait bound) as `af_type`,
+/// kept configured as long as the returned `Flex` lives (a dropped one goes to analog).
+pub fn alternate(pin: Peri<'static, impl Pin>, af: u8, af_type: AfType) -> Flex<'static> {
+    let mut flex = Flex::new(pin);
+    flex.set_as_af_unchecked(af, af_type);
+    flex
+}
 
 /// The ET1100's PDI and interrupt pins.
 pub struct EscPins {

@@ -17,7 +17,7 @@
 //! | SYNC0 phase | TRGO = update (MMS = 010) → TIM3's reset (`sync_capture`) | §29.6.2 |
 //! | period trim | ARR rewritten each period by the control interrupt for the SYNC0 phase lock (±1 %) | `stm32g4_axis::phase_lock` |
 
-use embassy_stm32::gpio::{AfType, Flex, OutputType, Speed};
+use embassy_stm32::gpio::{AfType, Flex, OutputType, Pull, Speed};
 use embassy_stm32::pac::timer::{regs, vals};
 use embassy_stm32::peripherals::TIM1;
 use embassy_stm32::timer::{BkIn1, BreakInputPin, Ch1, Ch2, Ch3, TimerComplementaryPin, TimerPin};
@@ -27,6 +27,7 @@ use stm32g4_settings::dead_time::{ClockDivision, DeadTime};
 use stm32g4_settings::pwm::{repetition_counter, CentreAligned};
 
 use crate::clocks::PCLK2_HZ;
+use crate::pins::alternate;
 use stm32g4_axis::board as servo;
 
 /// TIM1's kernel clock: PCLK2 (APB2 prescaler 1, so no ×2).
@@ -34,11 +35,8 @@ pub const TIM1_HZ: u32 = PCLK2_HZ;
 /// Clock division of the dead-time generator and the digital filters.
 const CKD: ClockDivision = ClockDivision::Div1;
 
-/// PSC and ARR.
-pub const PERIOD: CentreAligned = match CentreAligned::new(TIM1_HZ, servo::PWM_HZ) {
-    Ok(p) => p,
-    Err(_) => panic!("PWM frequency out of TIM1's range"),
-};
+/// PSC and ARR (`stm32g4_axis::board`, computed for the core clock: TIM1's).
+pub const PERIOD: CentreAligned = servo::PWM_PERIOD;
 /// The dead time.
 pub const DEAD_TIME: DeadTime = match DeadTime::at_least(TIM1_HZ, CKD, servo::DEAD_TIME_NS) {
     Ok(d) => d,
@@ -51,8 +49,9 @@ const REPETITION: u16 = match repetition_counter(1) {
 };
 
 const _: () = {
-    // The worked example of stm32g4-settings: 40 kHz from 170 MHz, 200 ns → 34 ticks.
-    assert!(PERIOD.prescaler == 0 && PERIOD.auto_reload == 2125);
+    // The board description computed the period for TIM1's clock.
+    assert!(TIM1_HZ == servo::CORE_CLOCK_HZ);
+    // The worked example of stm32g4-settings: 200 ns → 34 ticks at 170 MHz.
     assert!(DEAD_TIME.dtg == 34);
 };
 
@@ -66,13 +65,8 @@ pub struct PwmPins {
     _break_input: Flex<'static>,
 }
 
-/// A pin in its alternate function `af`, as a push-pull output driven low meanwhile.
-fn af_output(pin: Peri<'static, impl embassy_stm32::gpio::Pin>, af: u8) -> Flex<'static> {
-    let mut flex = Flex::new(pin);
-    flex.set_low();
-    flex.set_as_af_unchecked(af, AfType::output(OutputType::PushPull, Speed::VeryHigh));
-    flex
-}
+/// TIM1's outputs: push-pull, fastest edges.
+const OUTPUT: AfType = AfType::output(OutputType::PushPull, Speed::VeryHigh);
 
 /// The pins of [`configure`], each checked at compile time to carry its TIM1 signal.
 pub struct Tim1Pins<
@@ -184,16 +178,15 @@ where
     );
     let bk_af = pins.break_input.af_num();
     let outputs = [
-        af_output(pins.a, a_af),
-        af_output(pins.b, b_af),
-        af_output(pins.c, c_af),
-        af_output(pins.a_low, an_af),
-        af_output(pins.b_low, bn_af),
-        af_output(pins.c_low, cn_af),
+        alternate(pins.a, a_af, OUTPUT),
+        alternate(pins.b, b_af, OUTPUT),
+        alternate(pins.c, c_af, OUTPUT),
+        alternate(pins.a_low, an_af, OUTPUT),
+        alternate(pins.b_low, bn_af, OUTPUT),
+        alternate(pins.c_low, cn_af, OUTPUT),
     ];
     // BKIN: open-drain sources with the board's pull-up; the MCU's pull-up as a second one.
-    let mut break_input = Flex::new(pins.break_input);
-    break_input.set_as_af_unchecked(bk_af, AfType::input(embassy_stm32::gpio::Pull::Up));
+    let break_input = alternate(pins.break_input, bk_af, AfType::input(Pull::Up));
     (
         Tim1 { _private: () },
         PwmPins {

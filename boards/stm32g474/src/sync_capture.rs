@@ -25,6 +25,7 @@ use stm32g4_settings::dead_time::ClockDivision;
 use stm32g4_settings::input_filter::InputFilter;
 
 use crate::clocks::{PCLK1_HZ, PCLK2_HZ};
+use crate::pins::alternate;
 
 /// TIM3's kernel clock.
 pub const TIM3_HZ: u32 = PCLK1_HZ;
@@ -114,9 +115,8 @@ pub fn configure<P: TimerPin<TIM3, Ch1>>(
     t.sr().write_value(regs::SrGp16(0));
     t.cr1().modify(|w| w.set_cen(true));
     let af = sync0.af_num();
-    let mut pin = Flex::new(sync0);
     // SYNC0 is push-pull from the ET1100; the pull-down holds it low while the ESC is absent.
-    pin.set_as_af_unchecked(af, AfType::input(Pull::Down));
+    let pin = alternate(sync0, af, AfType::input(Pull::Down));
     Sync0Capture { _pin: pin }
 }
 

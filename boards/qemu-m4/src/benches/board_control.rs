@@ -17,7 +17,7 @@ use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState};
 use firmware::motor::servo::{axis_config, Tuning};
 use stm32g4_axis::board::{
     BOOTSTRAP_PRECHARGE_PERIODS, CORE_CLOCK_HZ, COUNTS_PER_REV, FRONT_END, PDI_SPI_CLOCK_HZ,
-    PWM_HZ, SERVO, TUNING,
+    PWM_HZ, PWM_PERIOD, SERVO, TUNING,
 };
 use stm32g4_axis::control::AxisHardware;
 use stm32g4_axis::inputs::{BoardInputs, InputLine, InputPolarity};
@@ -29,8 +29,8 @@ use stm32g4_axis::sensing;
 
 use crate::harness::Harness;
 
-/// TIM1's auto-reload at 40 kHz from 170 MHz (`boards/stm32g474/src/pwm.rs`).
-const ARR: u16 = 2_125;
+/// TIM1's auto-reload on the board.
+const ARR: u16 = PWM_PERIOD.auto_reload;
 /// The ADC counts of zero current (the amplifiers' bias), 48 V and 25 °C on the board's front
 /// end (`stm32g4_axis::board::FRONT_END`).
 const AT_REST: Conversions = Conversions {

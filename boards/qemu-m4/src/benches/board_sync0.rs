@@ -13,7 +13,7 @@ use core::hint::black_box;
 use core::ptr::{addr_of_mut, write_volatile};
 
 use firmware::sync0::on_sync0;
-use stm32g4_axis::board::CORE_CLOCK_HZ;
+use stm32g4_axis::board::{CORE_CLOCK_HZ, PWM_PERIOD};
 use stm32g4_axis::cycle::CycleSide;
 use stm32g4_axis::inputs::BrakeOutput;
 use stm32g4_axis::phase_lock::{LockState, PeriodTrim, Sync0Lock};
@@ -22,8 +22,8 @@ use stm32g4_axis::regs::OutputPins;
 use super::sync0_handler::Setup;
 use crate::harness::Harness;
 
-/// TIM1's nominal auto-reload at 40 kHz from 170 MHz.
-const ARR: u16 = 2_125;
+/// TIM1's nominal auto-reload on the board.
+const ARR: u16 = PWM_PERIOD.auto_reload;
 /// The DC cycle of the phase-lock row, ns.
 const CYCLE_NS: u32 = 1_000_000;
 
