@@ -542,6 +542,10 @@ pub struct Cia402Rules {
     pub following_error_fault: bool,
     /// 60FDh bit 0 is the positive and bit 1 the negative limit switch (the RSE).
     pub digital_inputs_limits_swapped: bool,
+    /// 60FDh bit 3 (interlock, the enable input withholding operation) is not supported and
+    /// stays 0 (every vendor profile: their manuals mark it "does not support", NA or
+    /// reserved).
+    pub digital_inputs_without_interlock: bool,
     /// 6065h = 0 switches the following-error check off (the GHA-E).
     pub following_error_zero_window_off: bool,
     /// The home offset 607Ch is added to every position object, not only set at the home

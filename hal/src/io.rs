@@ -25,6 +25,14 @@ pub trait DigitalInputs {
     fn safe_torque_off_channels(&mut self) -> [bool; 2] {
         [true; 2]
     }
+    /// The drive's enable input, `true` = operation permitted: a functional, single-channel
+    /// permission from the machine (a PLC output, a door switch), not a safety function. While
+    /// it is withheld the firmware keeps the power stage off; it never restarts the motor by
+    /// itself when the permission returns. Default: a board without the input, always
+    /// permitted.
+    fn enable_input(&mut self) -> bool {
+        true
+    }
 }
 
 /// The two touch-probe inputs (CiA402 60B8h probe 1 and 2).

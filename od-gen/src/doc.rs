@@ -1282,6 +1282,9 @@ fn cia402_rules(out: &mut String, p: &Profile) {
     if r.digital_inputs_limits_swapped {
         out.push_str("- 60FDh bit 0 is the positive and bit 1 the negative limit switch (CiA402: the reverse).\n");
     }
+    if r.digital_inputs_without_interlock {
+        out.push_str("- 60FDh bit 3 (interlock) is not supported: it stays 0.\n");
+    }
     if r.home_offset_added {
         out.push_str("- The home offset 607Ch is added to every position object (6064h = the position from the home + 607Ch), not only set at the home.\n");
     }

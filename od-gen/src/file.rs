@@ -892,6 +892,7 @@ impl Default for Cia402File {
             touch_probe2_off_while_homing: false,
             following_error_fault: true,
             digital_inputs_limits_swapped: false,
+            digital_inputs_without_interlock: false,
             following_error_zero_window_off: false,
             home_offset_added: false,
             home_offset_added_absolute: false,
@@ -1174,6 +1175,10 @@ pub struct Cia402File {
     /// 60FDh bit 0 is the positive and bit 1 the negative limit switch (CiA402: the reverse).
     #[serde(default)]
     pub digital_inputs_limits_swapped: bool,
+    /// 60FDh bit 3 (interlock: the drive's enable input withholds operation) is not supported
+    /// and stays 0 (CiA402 defines it).
+    #[serde(default)]
+    pub digital_inputs_without_interlock: bool,
     /// 6065h = 0 switches the following-error check off (CiA402: only FFFF FFFFh does).
     #[serde(default)]
     pub following_error_zero_window_off: bool,

@@ -2112,6 +2112,8 @@ pub struct Cia402Rules {
     pub following_error_fault: bool,
     /// 60FDh bits 0/1 are the positive/negative limit switch.
     pub digital_inputs_limits_swapped: bool,
+    /// 60FDh bit 3 (interlock) stays 0.
+    pub digital_inputs_without_interlock: bool,
     /// 6065h = 0 switches the following-error check off.
     pub following_error_zero_window_off: bool,
     /// 607Ch is added to every position object.
@@ -2470,6 +2472,7 @@ impl Default for Cia402Rules {
             touch_probe2_off_while_homing: false,
             following_error_fault: true,
             digital_inputs_limits_swapped: false,
+            digital_inputs_without_interlock: false,
             following_error_zero_window_off: false,
             home_offset_added: false,
             home_offset_added_absolute: false,

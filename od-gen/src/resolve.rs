@@ -578,6 +578,7 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
         touch_probe2_off_while_homing: f.cia402.touch_probe2_off_while_homing,
         following_error_fault: f.cia402.following_error_fault,
         digital_inputs_limits_swapped: f.cia402.digital_inputs_limits_swapped,
+        digital_inputs_without_interlock: f.cia402.digital_inputs_without_interlock,
         following_error_zero_window_off: f.cia402.following_error_zero_window_off,
         home_offset_added: f.cia402.home_offset_added,
         home_offset_added_absolute: f.cia402.home_offset_added_absolute,

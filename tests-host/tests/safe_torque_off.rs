@@ -11,6 +11,13 @@
 //!
 //! The standard profile reacts alike (a drive whose power stage is cut is not enabled) and has
 //! no display of its own for it.
+//!
+//! The drive's enable input (`hal::io::DigitalInputs::enable_input`, a functional permission,
+//! not a safety function) withheld the same way: nothing in the power stage follows it, so the
+//! firmware must cut the bridge itself; the PDS reacts as to safe torque off and nothing
+//! restarts when the permission returns. The standard profile shows it in 60FDh bit 3
+//! "interlock" (CiA402); the Σ-V-SD has that bit reserved (§6.11) and shows nothing, and its
+//! HWBB display stays "not activated".
 
 use board_sim::Segment;
 use ethercrab::MainDevice;
@@ -27,6 +34,8 @@ const FAULT: u16 = 1 << 3;
 const HWBB_NOT_ACTIVE: u16 = 1 << 15;
 const HWBB1_CLOSED: u32 = 1 << 24;
 const HWBB2_CLOSED: u32 = 1 << 25;
+/// CiA402 60FDh bit 3: interlock.
+const INTERLOCK: u32 = 1 << 3;
 /// 6060h: profile velocity.
 const PV: i8 = 3;
 /// Image layouts (byte offsets).
@@ -41,13 +50,36 @@ struct Inputs {
     digital_inputs: u32,
 }
 
-fn set_channels(m: &board_sim::inproc::InProcess, closed: [bool; 2]) {
-    m.shared.segment().drives_mut()[0].servos[0]
-        .plant
-        .set_safe_torque_off_channels(closed);
+/// The input that withholds the drive's permission to run.
+#[derive(Clone, Copy, PartialEq)]
+enum Withheld {
+    /// Safe-torque-off channel 1 opens.
+    SafeTorqueOff,
+    /// The enable input opens.
+    EnableInput,
 }
 
-fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
+/// Opens (`open`) or closes the `input` on the simulated board.
+fn set_input(m: &board_sim::inproc::InProcess, input: Withheld, open: bool) {
+    let mut segment = m.shared.segment();
+    let plant = &mut segment.drives_mut()[0].servos[0].plant;
+    match input {
+        Withheld::SafeTorqueOff => plant.set_safe_torque_off_channels([!open, true]),
+        Withheld::EnableInput => plant.set_enable_input(!open),
+    }
+}
+
+/// `input` opens while the motor turns in profile velocity on `profile`. `hwbb_display`: the
+/// profile shows safe torque off (the Σ-V-SD); `interlock_display`: the profile shows the
+/// enable input in 60FDh bit 3.
+fn withheld_in_profile_velocity(
+    profile: &str,
+    input: Withheld,
+    hwbb_display: bool,
+    interlock_display: bool,
+) {
+    let hwbb_shown = hwbb_display && input == Withheld::SafeTorqueOff;
+    let interlock_shown = interlock_display && input == Withheld::EnableInput;
     block_on(async {
         let (m, transport) = master_for(Segment::new(profile, 1).expect("profile"));
         tokio::task::spawn_local(transport);
@@ -86,14 +118,25 @@ fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
         let turning = rpm();
         assert!((turning - 300.0).abs() < 10.0, "at speed: {turning:.1} rpm");
 
-        // HWBB1 opens: Switch On Disabled at once, no fault, the motor coasts.
-        set_channels(&m, [false, true]);
+        assert_eq!(s.digital_inputs & INTERLOCK, 0, "60FDh: no interlock");
+
+        // The input opens: Switch On Disabled at once, no fault, the motor coasts.
+        set_input(&m, input, true);
         for _ in 0..3 {
             s = cycle(ENABLE_OPERATION, VELOCITY).await;
         }
         assert_eq!(s.sw & STATE_MASK, SWITCH_ON_DISABLED, "{:#06x}", s.sw);
         assert_eq!(s.sw & FAULT, 0, "not a fault");
-        if hwbb_display {
+        assert_eq!(
+            s.digital_inputs & INTERLOCK != 0,
+            interlock_shown,
+            "60FDh bit 3: {:#010x}",
+            s.digital_inputs
+        );
+        if hwbb_display && !hwbb_shown {
+            assert_ne!(s.sw & HWBB_NOT_ACTIVE, 0, "bit 15: not HWBB");
+        }
+        if hwbb_shown {
             assert_eq!(s.sw & HWBB_NOT_ACTIVE, 0, "bit 15: HWBB activated");
             assert_eq!(
                 s.digital_inputs & (HWBB1_CLOSED | HWBB2_CLOSED),
@@ -116,12 +159,13 @@ fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
         assert!(coasting < turning, "{turning:.1} -> {coasting:.1} rpm");
 
         // Closed again, the master still asking for enable operation: nothing restarts.
-        set_channels(&m, [true, true]);
+        set_input(&m, input, false);
         for _ in 0..200 {
             s = cycle(ENABLE_OPERATION, VELOCITY).await;
             assert_eq!(s.sw & STATE_MASK, SWITCH_ON_DISABLED, "{:#06x}", s.sw);
         }
         assert!(rpm() <= coasting + 1.0, "not driven: {:.1} rpm", rpm());
+        assert_eq!(s.digital_inputs & INTERLOCK, 0, "60FDh: interlock gone");
         if hwbb_display {
             assert_ne!(s.sw & HWBB_NOT_ACTIVE, 0, "bit 15 back to 1");
             assert_eq!(
@@ -144,10 +188,20 @@ fn safe_torque_off_in_profile_velocity(profile: &str, hwbb_display: bool) {
 
 #[test]
 fn sigma_v_sd_hwbb_switches_off_and_shows_in_statusword_bit_15_and_60fdh() {
-    safe_torque_off_in_profile_velocity("sigma-v-sd", true);
+    withheld_in_profile_velocity("sigma-v-sd", Withheld::SafeTorqueOff, true, false);
 }
 
 #[test]
 fn standard_safe_torque_off_switches_off_without_restart() {
-    safe_torque_off_in_profile_velocity("standard", false);
+    withheld_in_profile_velocity("standard", Withheld::SafeTorqueOff, false, true);
+}
+
+#[test]
+fn standard_enable_input_switches_the_bridge_off_shows_interlock_and_never_restarts() {
+    withheld_in_profile_velocity("standard", Withheld::EnableInput, false, true);
+}
+
+#[test]
+fn sigma_v_sd_enable_input_switches_off_without_hwbb_or_interlock_display() {
+    withheld_in_profile_velocity("sigma-v-sd", Withheld::EnableInput, true, false);
 }

@@ -388,6 +388,8 @@ pub struct SimInputs {
     probes: [ProbeCapture; 2],
     /// The safe-torque-off channels that are open (`false`, the default: closed).
     safe_torque_off_open: [bool; 2],
+    /// The enable input withholds operation (`false`, the default: permitted).
+    enable_withheld: bool,
 }
 
 impl SimInputs {
@@ -399,6 +401,7 @@ impl SimInputs {
         self.home = sample.home;
         self.motor_over_temperature = sample.motor_overtemp_input;
         self.safe_torque_off_open = sample.safe_torque_off_channels.map(|closed| !closed);
+        self.enable_withheld = !sample.enable_input;
         self.probes = sample.probes.map(|p| ProbeCapture {
             active: p.active,
             edge_ns_before_position: p.last_edge_s.map(|t| {
@@ -444,6 +447,10 @@ impl DigitalInputs for SimInputs {
 
     fn safe_torque_off_channels(&mut self) -> [bool; 2] {
         self.safe_torque_off_open.map(|open| !open)
+    }
+
+    fn enable_input(&mut self) -> bool {
+        !self.enable_withheld
     }
 }
 

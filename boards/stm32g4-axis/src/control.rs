@@ -144,7 +144,11 @@ mod tests {
             bus,
             encoder: QuadratureEncoder::new(Counter(7), COUNTS_PER_REV),
             inputs: BoardInputs::new(
-                Pins(InputLine::SafeTorqueOff1.mask() | InputLine::SafeTorqueOff2.mask()),
+                Pins(
+                    InputLine::SafeTorqueOff1.mask()
+                        | InputLine::SafeTorqueOff2.mask()
+                        | InputLine::Enable.mask(),
+                ),
                 InputPolarity { active_low: 0 },
             ),
         }

@@ -4,7 +4,9 @@
 //! Every input line is one bit of [`InputPins::levels`]; whether a line is active high or
 //! active low is board wiring, stated once in an [`InputPolarity`]. Inputs of safety functions
 //! (limit switches, safe torque off) are wired so that a broken wire reads as the safe state:
-//! normally-closed contacts, active (open) when the pin reads low.
+//! normally-closed contacts, active (open) when the pin reads low. The lines that permit
+//! something (safe torque off closed, the enable input) are active when given, so that a
+//! broken wire withholds the permission.
 
 use cia402::outputs::BRAKE as BRAKE_APPLIED;
 use hal::io::{DigitalInputs, DigitalOutputs, ProbeCapture, TouchProbe};
@@ -32,6 +34,8 @@ pub enum InputLine {
     SafeTorqueOff1 = 6,
     /// Safe-torque-off channel 2.
     SafeTorqueOff2 = 7,
+    /// The drive's enable input (active = operation permitted).
+    Enable = 8,
 }
 
 impl InputLine {
@@ -176,6 +180,10 @@ impl<P: InputPins, T: ProbeTimer> DigitalInputs for BoardInputs<P, T> {
             self.is_active(InputLine::SafeTorqueOff2),
         ]
     }
+
+    fn enable_input(&mut self) -> bool {
+        self.is_active(InputLine::Enable)
+    }
 }
 
 /// The holding-brake output on `pins`.
@@ -228,7 +236,8 @@ mod tests {
             | InputLine::NegativeLimit.mask()
             | InputLine::Home.mask()
             | InputLine::SafeTorqueOff1.mask()
-            | InputLine::SafeTorqueOff2.mask();
+            | InputLine::SafeTorqueOff2.mask()
+            | InputLine::Enable.mask();
         let mut inputs = BoardInputs::new(Pins(closed), POLARITY);
         // Nothing read before the first latch.
         assert!(!inputs.home_switch());
@@ -236,14 +245,19 @@ mod tests {
         assert!(!inputs.positive_limit() && !inputs.negative_limit());
         assert!(inputs.home_switch());
         assert_eq!(inputs.safe_torque_off_channels(), [true, true]);
+        assert!(inputs.enable_input());
         assert!(!inputs.motor_over_temperature());
-        // A broken wire on the positive limit and on STO channel 2 reads as their safe state.
-        inputs.pins.0 =
-            closed & !InputLine::PositiveLimit.mask() & !InputLine::SafeTorqueOff2.mask();
+        // A broken wire on the positive limit, on STO channel 2 and on the enable input reads
+        // as their safe state.
+        inputs.pins.0 = closed
+            & !InputLine::PositiveLimit.mask()
+            & !InputLine::SafeTorqueOff2.mask()
+            & !InputLine::Enable.mask();
         assert!(!inputs.positive_limit(), "only after the next latch");
         inputs.latch(0);
         assert!(inputs.positive_limit());
         assert_eq!(inputs.safe_torque_off_channels(), [true, false]);
+        assert!(!inputs.enable_input(), "withheld");
         inputs.pins.0 |= InputLine::Probe2.mask();
         inputs.latch(0);
         assert_eq!(

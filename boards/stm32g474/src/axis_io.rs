@@ -1,11 +1,12 @@
 //! The axis' digital inputs and outputs on GPIOs: switches, thermal switch, touch probes, the
-//! two safe-torque-off channels (the [`stm32g4_axis::regs::InputPins`] implementation
+//! two safe-torque-off channels, the enable input (the [`stm32g4_axis::regs::InputPins`] implementation
 //! [`GpioInputs`]), the holding brake ([`BrakePin`]) and the gate driver's enable.
 //!
 //! Polarity ([`POLARITY`]): the limit switches are normally-closed contacts to 3.3 V with a
 //! pull-down, active (open) when low, so a broken wire stops the axis; the STO channels read
-//! high when closed (torque allowed) and low when open or broken; home, probes and the motor's
-//! thermal switch are active high.
+//! high when closed (torque allowed) and low when open or broken, and so does the enable input
+//! (high = operation permitted, pull-down: a broken wire withholds it); home, probes and the
+//! motor's thermal switch are active high.
 
 use embassy_stm32::gpio::{AfType, Flex, Level, Output, Pin, Pull, Speed};
 use embassy_stm32::peripherals::TIM3;
@@ -22,7 +23,8 @@ pub const POLARITY: InputPolarity = InputPolarity {
 };
 
 /// The input pins, in [`InputLine`] order.
-pub struct InputPinSet<L1: Pin, L2: Pin, H: Pin, T: Pin, P1: Pin, P2: Pin, S1: Pin, S2: Pin> {
+pub struct InputPinSet<L1: Pin, L2: Pin, H: Pin, T: Pin, P1: Pin, P2: Pin, S1: Pin, S2: Pin, E: Pin>
+{
     /// Positive limit switch.
     pub positive_limit: Peri<'static, L1>,
     /// Negative limit switch.
@@ -39,13 +41,15 @@ pub struct InputPinSet<L1: Pin, L2: Pin, H: Pin, T: Pin, P1: Pin, P2: Pin, S1: P
     pub safe_torque_off1: Peri<'static, S1>,
     /// Safe-torque-off channel 2.
     pub safe_torque_off2: Peri<'static, S2>,
+    /// The enable input.
+    pub enable: Peri<'static, E>,
 }
 
 /// The inputs, each with the pull that makes an open wire read inactive-safe. The probe pins
 /// are in their TIM3 alternate function (the edges are captured, `sync_capture`); their levels
 /// are read from the port like the others.
 pub struct GpioInputs {
-    lines: [(InputLine, Flex<'static>); 8],
+    lines: [(InputLine, Flex<'static>); 9],
 }
 
 /// A pin as an input with `pull`.
@@ -62,8 +66,8 @@ fn capture_input(pin: Peri<'static, impl Pin>, af: u8) -> Flex<'static> {
 
 impl GpioInputs {
     /// Configures the input pins.
-    pub fn new<L1, L2, H, T, P1, P2, S1, S2>(
-        pins: InputPinSet<L1, L2, H, T, P1, P2, S1, S2>,
+    pub fn new<L1, L2, H, T, P1, P2, S1, S2, E>(
+        pins: InputPinSet<L1, L2, H, T, P1, P2, S1, S2, E>,
     ) -> Self
     where
         L1: Pin,
@@ -74,6 +78,7 @@ impl GpioInputs {
         P2: TimerPin<TIM3, Ch2>,
         S1: Pin,
         S2: Pin,
+        E: Pin,
     {
         let (probe1_af, probe2_af) = (pins.probe1.af_num(), pins.probe2.af_num());
         Self {
@@ -102,6 +107,7 @@ impl GpioInputs {
                     InputLine::SafeTorqueOff2,
                     input(pins.safe_torque_off2, Pull::Down),
                 ),
+                (InputLine::Enable, input(pins.enable, Pull::Down)),
             ],
         }
     }

@@ -36,6 +36,7 @@
 //! | touch probe 2 | PB5 | TIM3_CH2 (AF2), capture both edges | 24 V input stage | high = active |
 //! | STO 1 | PB6 | GPIO in, pull-down | safe-torque-off channel 1 monitor | high = closed (torque allowed); the channel cuts the gate supply in hardware |
 //! | STO 2 | PB7 | GPIO in, pull-down | safe-torque-off channel 2 monitor | |
+//! | enable | PC9 | GPIO in, pull-down | drive-enable input, 24 V input stage | high = operation permitted; low or broken: bridge off in firmware, no restart by itself |
 //! | brake | PB9 | GPIO out, push-pull | brake driver input | high = coil energised = brake released |
 //! | RUN LED | PB10 | GPIO out, push-pull | green LED to GND | ETG.1300 RUN indicator |
 //! | ERR LED | PB11 | GPIO out, push-pull | red LED to GND | ETG.1300 ERR indicator |
@@ -126,9 +127,18 @@ pub struct EncoderPins {
 
 /// The axis' digital inputs and the brake.
 pub struct AxisIoPins {
-    /// Switches, thermal switch, probes, STO channels.
-    pub inputs:
-        crate::axis_io::InputPinSet<p::PC6, p::PC7, p::PC8, p::PA4, p::PB0, p::PB5, p::PB6, p::PB7>,
+    /// Switches, thermal switch, probes, STO channels, enable input.
+    pub inputs: crate::axis_io::InputPinSet<
+        p::PC6,
+        p::PC7,
+        p::PC8,
+        p::PA4,
+        p::PB0,
+        p::PB5,
+        p::PB6,
+        p::PB7,
+        p::PC9,
+    >,
     /// The brake driver's input.
     pub brake: Peri<'static, p::PB9>,
 }
@@ -233,6 +243,7 @@ pub fn split(p: Peripherals) -> BoardPins {
                 probe2: p.PB5,
                 safe_torque_off1: p.PB6,
                 safe_torque_off2: p.PB7,
+                enable: p.PC9,
             },
             brake: p.PB9,
         },

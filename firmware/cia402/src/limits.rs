@@ -13,6 +13,9 @@ pub const DI_NEGATIVE_LIMIT: u32 = 1 << 0;
 pub const DI_POSITIVE_LIMIT: u32 = 1 << 1;
 /// 60FDh bit 2: home switch.
 pub const DI_HOME_SWITCH: u32 = 1 << 2;
+/// 60FDh bit 3: interlock, set while the drive's enable input withholds operation (like the
+/// limit-switch bits, 1 = the input blocks the drive).
+pub const DI_INTERLOCK: u32 = 1 << 3;
 
 /// Enabled software position limits, in drive increments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,22 +71,40 @@ impl Blocked {
     }
 }
 
-/// 60FDh from the switch levels (`swapped`: the profile has the positive limit in bit 0).
-pub fn digital_inputs(
-    negative_limit: bool,
-    positive_limit: bool,
-    home: bool,
-    swapped: bool,
-) -> u32 {
-    let (bit_negative, bit_positive) = if swapped {
+/// The inputs that 60FDh bits 0–3 show (`true` = active).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct InputLevels {
+    /// The negative limit switch is actuated.
+    pub negative_limit: bool,
+    /// The positive limit switch is actuated.
+    pub positive_limit: bool,
+    /// The home switch is actuated.
+    pub home: bool,
+    /// The enable input withholds operation.
+    pub interlock: bool,
+}
+
+/// How a profile lays out 60FDh bits 0–3.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct InputLayout {
+    /// Bit 0 is the positive and bit 1 the negative limit switch (CiA402: the reverse).
+    pub limits_swapped: bool,
+    /// Bit 3 (interlock) is not supported: it stays 0.
+    pub without_interlock: bool,
+}
+
+/// 60FDh bits 0–3 from the input levels, in the profile's layout.
+pub fn digital_inputs(levels: InputLevels, layout: InputLayout) -> u32 {
+    let (bit_negative, bit_positive) = if layout.limits_swapped {
         (DI_POSITIVE_LIMIT, DI_NEGATIVE_LIMIT)
     } else {
         (DI_NEGATIVE_LIMIT, DI_POSITIVE_LIMIT)
     };
     let bit = |on: bool, b: u32| if on { b } else { 0 };
-    bit(negative_limit, bit_negative)
-        | bit(positive_limit, bit_positive)
-        | bit(home, DI_HOME_SWITCH)
+    bit(levels.negative_limit, bit_negative)
+        | bit(levels.positive_limit, bit_positive)
+        | bit(levels.home, DI_HOME_SWITCH)
+        | bit(levels.interlock && !layout.without_interlock, DI_INTERLOCK)
 }
 
 #[cfg(test)]
@@ -113,14 +134,44 @@ mod tests {
     }
 
     #[test]
-    fn digital_inputs_follow_cia402_or_the_profiles_swap() {
-        assert_eq!(digital_inputs(true, false, true, false), 0b101);
-        assert_eq!(digital_inputs(false, true, false, false), 0b010);
+    fn digital_inputs_follow_cia402_or_the_profiles_layout() {
+        let cia402 = InputLayout::default();
+        let levels = |negative_limit, positive_limit, home, interlock| InputLevels {
+            negative_limit,
+            positive_limit,
+            home,
+            interlock,
+        };
         assert_eq!(
-            digital_inputs(true, false, false, true),
+            digital_inputs(levels(true, false, true, false), cia402),
+            0b101
+        );
+        assert_eq!(
+            digital_inputs(levels(false, true, false, false), cia402),
+            0b010
+        );
+        assert_eq!(
+            digital_inputs(levels(false, false, false, true), cia402),
+            0b1000,
+            "bit 3: interlock"
+        );
+        let rse = InputLayout {
+            limits_swapped: true,
+            without_interlock: true,
+        };
+        assert_eq!(
+            digital_inputs(levels(true, false, false, false), rse),
             0b010,
             "RSE: negative in bit 1"
         );
-        assert_eq!(digital_inputs(false, true, false, true), 0b001);
+        assert_eq!(
+            digital_inputs(levels(false, true, false, false), rse),
+            0b001
+        );
+        assert_eq!(
+            digital_inputs(levels(false, false, false, true), rse),
+            0,
+            "no interlock bit"
+        );
     }
 }

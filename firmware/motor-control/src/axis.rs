@@ -242,6 +242,9 @@ pub struct AxisFeedback {
     /// Safe torque off holds: a channel is open, or was since the enable was last taken back
     /// (the axis drives nothing, as if disabled, until then).
     pub safe_torque_off: bool,
+    /// The enable input withholds operation: it is open, or was since the enable was last
+    /// taken back (the axis drives nothing until then, as with safe torque off).
+    pub interlocked: bool,
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
@@ -301,6 +304,8 @@ pub struct Sample {
     pub probes: [ProbeCapture; 2],
     /// The safe-torque-off channels, `true` = closed (torque allowed; both must be).
     pub safe_torque_off_channels: [bool; 2],
+    /// The enable input, `true` = operation permitted ([`DigitalInputs::enable_input`]).
+    pub enable_input: bool,
     /// The power stage's hardware protection switched the gates off since the last sample
     /// ([`Inverter::take_hardware_trip`]).
     pub power_stage_trip: bool,
@@ -344,6 +349,7 @@ impl Sample {
                 inputs.touch_probe(TouchProbe::Two),
             ],
             safe_torque_off_channels: inputs.safe_torque_off_channels(),
+            enable_input: inputs.enable_input(),
             power_stage_trip: power.take_hardware_trip(),
         }
     }
@@ -434,6 +440,7 @@ impl AxisLink {
                     },
                     safe_torque_off_channels: [true; 2],
                     safe_torque_off: false,
+                    interlocked: false,
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -527,6 +534,8 @@ pub struct Axis {
     safe_torque_off_channels: [bool; 2],
     /// Safe torque off holds: a channel is open, or was since the enable was last taken back.
     safe_torque_off: bool,
+    /// The enable input is open, or was since the enable was last taken back.
+    interlocked: bool,
     /// A sample has set the switch levels.
     captures_started: bool,
     /// 1 / the PWM period in ns (touch-probe edge interpolation).
@@ -651,6 +660,7 @@ impl Axis {
             identification_changed: false,
             safe_torque_off_channels: [true; 2],
             safe_torque_off: false,
+            interlocked: false,
             captures_started: false,
             inv_period_ns: cfg.pwm_hz * 1e-9,
             omega_e: 0.0,
@@ -818,7 +828,15 @@ impl Axis {
         } else if !self.command.enable {
             self.safe_torque_off = false;
         }
-        let torque_allowed = !self.safe_torque_off;
+        // The enable input is a functional permission, not a safety function: nothing cuts the
+        // gates in hardware, so this is what does. It latches like safe torque off: the permission
+        // returning never restarts the motor by itself.
+        if !sample.enable_input {
+            self.interlocked = true;
+        } else if !self.command.enable {
+            self.interlocked = false;
+        }
+        let torque_allowed = !self.safe_torque_off && !self.interlocked;
         let loop_tick = self.tick == 0;
         self.tick += 1;
         if self.tick >= self.cfg.loop_divider {
@@ -999,6 +1017,7 @@ impl Axis {
             },
             safe_torque_off_channels: self.safe_torque_off_channels,
             safe_torque_off: self.safe_torque_off,
+            interlocked: self.interlocked,
         });
         if self.identification_changed {
             link.identification.write(self.identified);
@@ -1498,6 +1517,10 @@ mod tests {
         fn touch_probe(&mut self, _: TouchProbe) -> ProbeCapture {
             ProbeCapture::default()
         }
+        fn enable_input(&mut self) -> bool {
+            // Withheld on this board, so that the sample shows the input was read.
+            false
+        }
     }
 
     impl Inverter for Board {
@@ -1538,6 +1561,7 @@ mod tests {
             index: None,
             probes: [ProbeCapture::default(); 2],
             safe_torque_off_channels: [true; 2],
+            enable_input: true,
             power_stage_trip: false,
         }
     }
@@ -1626,16 +1650,45 @@ mod tests {
 
     #[test]
     fn safe_torque_off_cuts_the_output_at_once_and_never_restarts_by_itself() {
+        let closed = quiet_sample(1_000);
+        let open = Sample {
+            safe_torque_off_channels: [true, false],
+            ..closed
+        };
+        let fb =
+            withheld_permission_cuts_the_output_and_never_restarts(open, |fb| fb.safe_torque_off);
+        assert!(!fb.interlocked, "safe torque off is not the enable input");
+        assert_eq!(fb.safe_torque_off_channels, [true, false]);
+    }
+
+    #[test]
+    fn an_open_enable_input_cuts_the_output_at_once_and_never_restarts_by_itself() {
+        let open = Sample {
+            enable_input: false,
+            ..quiet_sample(1_000)
+        };
+        let fb = withheld_permission_cuts_the_output_and_never_restarts(open, |fb| fb.interlocked);
+        assert!(
+            !fb.safe_torque_off,
+            "the enable input is not safe torque off"
+        );
+    }
+
+    /// Runs the 400 W servo in position control and withholds its permission to run with
+    /// `open` (a sample at rest on 1,000 apart from the open input); `held` reads the feedback
+    /// flag that shows it. Asserts: the gates go off in that very period, as a disable, not a
+    /// fault; they stay off after the input closes again while the enable is still given; the
+    /// enable taken back and given again runs the axis. Returns the feedback while open.
+    fn withheld_permission_cuts_the_output_and_never_restarts(
+        open: Sample,
+        held: fn(&AxisFeedback) -> bool,
+    ) -> AxisFeedback {
         use crate::servo::{axis_config, Tuning, SERVO_400W};
         let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
         let mut axis = Axis::new(cfg).unwrap();
         // SAFETY: one thread calls both sides, one after the other.
         let link = unsafe { AxisLink::new() };
         let closed = quiet_sample(1_000);
-        let open = Sample {
-            safe_torque_off_channels: [true, false],
-            ..closed
-        };
         let enable = AxisCommand {
             enable: true,
             mode: ControlMode::Position,
@@ -1654,16 +1707,15 @@ mod tests {
         for _ in 0..100 {
             assert!(!axis.control_step(&open, &link).gates);
         }
-        let fb = link.feedback();
-        assert!(fb.safe_torque_off && fb.fault.is_none());
-        assert_eq!(fb.safe_torque_off_channels, [true, false]);
+        let while_open = link.feedback();
+        assert!(held(&while_open) && while_open.fault.is_none());
         // Closed again with the enable still given: the motor stays off.
         for _ in 0..2_000 * cfg.loop_divider {
             assert!(!axis.control_step(&closed, &link).gates);
         }
         assert_eq!(axis.state(), AxisState::Disabled);
         assert!(
-            link.feedback().safe_torque_off,
+            held(&link.feedback()),
             "held until the enable is taken back"
         );
         // The enable taken back, then given again: it runs.
@@ -1671,12 +1723,13 @@ mod tests {
         for _ in 0..10 * cfg.loop_divider {
             axis.control_step(&closed, &link);
         }
-        assert!(!link.feedback().safe_torque_off);
+        assert!(!held(&link.feedback()));
         link.publish(enable);
         for _ in 0..2_000 * cfg.loop_divider {
             axis.control_step(&closed, &link);
         }
         assert_eq!(axis.state(), AxisState::Running);
+        while_open
     }
 
     #[test]
@@ -1708,6 +1761,7 @@ mod tests {
                 index: None,
                 probes: [ProbeCapture::default(); 2],
                 safe_torque_off_channels: [true; 2],
+                enable_input: false,
                 power_stage_trip: true,
             }
         );

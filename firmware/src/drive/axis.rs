@@ -792,7 +792,11 @@ impl DriveAxis {
         if let Some(f) = &feedback {
             self.device.set_main_power(f.main_power);
             self.device.set_fault_cause_present(f.fault_cause_present);
-            self.device.set_safe_torque_off(f.safe_torque_off);
+            // The enable input withholding operation cuts the power stage as safe torque off
+            // does (in firmware rather than hardware), so the PDS follows it alike; only the
+            // profile's safe-torque-off display (`self.safe_torque_off`) is STO's alone.
+            self.device
+                .set_safe_torque_off(f.safe_torque_off || f.interlocked);
             self.safe_torque_off = f.safe_torque_off;
             self.torque_limited = f.current_limited;
         }
@@ -1364,10 +1368,16 @@ impl DriveAxis {
             ram,
             vars.digital_inputs,
             (limits::digital_inputs(
-                switches.negative_limit,
-                switches.positive_limit,
-                switches.home,
-                self.rules.digital_inputs_limits_swapped,
+                limits::InputLevels {
+                    negative_limit: switches.negative_limit,
+                    positive_limit: switches.positive_limit,
+                    home: switches.home,
+                    interlock: feedback.interlocked,
+                },
+                limits::InputLayout {
+                    limits_swapped: self.rules.digital_inputs_limits_swapped,
+                    without_interlock: self.rules.digital_inputs_without_interlock,
+                },
             ) | self
                 .rules
                 .safe_torque_off

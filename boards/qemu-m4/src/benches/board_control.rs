@@ -157,7 +157,11 @@ fn board() -> Board {
             COUNTS_PER_REV,
         ),
         inputs: BoardInputs::new(
-            Pins(InputLine::SafeTorqueOff1.mask() | InputLine::SafeTorqueOff2.mask()),
+            Pins(
+                InputLine::SafeTorqueOff1.mask()
+                    | InputLine::SafeTorqueOff2.mask()
+                    | InputLine::Enable.mask(),
+            ),
             InputPolarity { active_low: 0 },
         ),
     }

@@ -257,6 +257,7 @@ pub(super) const SAMPLE: Sample = Sample {
         edge_ns_before_position: None,
     }; 2],
     safe_torque_off_channels: [true; 2],
+    enable_input: true,
     power_stage_trip: false,
 };
 

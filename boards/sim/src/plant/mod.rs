@@ -326,6 +326,8 @@ pub struct Sample {
     pub motor_overtemp_input: bool,
     /// The safe-torque-off channels (`true` = closed).
     pub safe_torque_off_channels: [bool; 2],
+    /// The drive's enable input (`true` = operation permitted).
+    pub enable_input: bool,
     /// Encoder reading.
     pub encoder: EncoderSample,
     /// Negative limit switch actuated.
@@ -393,6 +395,7 @@ pub struct Plant {
     drive_temperature_c: f64,
     motor_overtemp: bool,
     safe_torque_off_channels: [bool; 2],
+    enable_input: bool,
     resistance_scale: f64,
     /// Touch-probe inputs as of the last substep, with their edges since the last sample.
     probes: [ProbeReading; 2],
@@ -422,6 +425,7 @@ impl Plant {
             drive_temperature_c: DEFAULT_DRIVE_TEMPERATURE_C,
             motor_overtemp: false,
             safe_torque_off_channels: [true; 2],
+            enable_input: true,
             resistance_scale: 1.0,
             probes: [ProbeReading::default(); 2],
             cfg,
@@ -709,6 +713,7 @@ impl Plant {
             drive_temperature_c: self.drive_temperature_c as f32,
             motor_overtemp_input: self.motor_overtemp,
             safe_torque_off_channels: self.safe_torque_off_channels,
+            enable_input: self.enable_input,
             encoder: self
                 .encoder
                 .sample(self.time_s(), self.mech.theta_rad, self.mech.omega_rad_s),
@@ -759,6 +764,12 @@ impl Plant {
     /// firmware commands (the bridge is off, the motor coasts).
     pub fn set_safe_torque_off_channels(&mut self, closed: [bool; 2]) {
         self.safe_torque_off_channels = closed;
+    }
+
+    /// The drive's enable input (`true` = operation permitted; the default). A functional
+    /// input: unlike safe torque off nothing in the power stage follows it, the firmware does.
+    pub fn set_enable_input(&mut self, permitted: bool) {
+        self.enable_input = permitted;
     }
 
     /// Whether safe torque off cuts the gate drive (a channel is open).
