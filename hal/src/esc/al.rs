@@ -248,7 +248,7 @@ impl AlEvent {
     pub const MASK_RESET: u32 = 0x00FF_FF0F;
     /// SyncManager `n` event (buffer written/read by the master).
     pub const fn sm(n: u8) -> u32 {
-        1 << (8 + n as u32)
+        bit_u32(8, n)
     }
     /// Whether any of `bits` is set.
     pub const fn any(self, bits: u32) -> bool {
@@ -270,7 +270,7 @@ impl EcatEvent {
     pub const AL_STATUS: u16 = 1 << 3;
     /// Mirror of SyncManager `n`'s status (n = 0..7): bit 4 + n.
     pub const fn sm(n: u8) -> u16 {
-        1 << (4 + n as u16)
+        bit_u16(4, n)
     }
 }
 
@@ -307,15 +307,15 @@ impl DlStatus {
     pub const ENHANCED_LINK: u16 = 1 << 2;
     /// Physical link on port `n` (n = 0..3).
     pub const fn link(n: u8) -> u16 {
-        1 << (4 + n as u16)
+        bit_u16(4, n)
     }
     /// Loop closed on port `n`.
     pub const fn loop_closed(n: u8) -> u16 {
-        1 << (8 + 2 * n as u16)
+        bit_u16(8, n.saturating_mul(2))
     }
     /// Stable communication on port `n`.
     pub const fn communication(n: u8) -> u16 {
-        1 << (9 + 2 * n as u16)
+        bit_u16(9, n.saturating_mul(2))
     }
 }
 
@@ -346,6 +346,29 @@ impl EscFeatures {
     pub const RW_NOT_SUPPORTED: u16 = 1 << 10;
     /// Fixed FMMU/SM configuration.
     pub const FIXED_FMMU_SM: u16 = 1 << 11;
+}
+
+/// Bit `base + n` of a 32-bit register; 0 for an `n` past its top (a SyncManager or port that
+/// does not exist has no bit).
+const fn bit_u32(base: u8, n: u8) -> u32 {
+    match base.checked_add(n) {
+        Some(pos) => match 1u32.checked_shl(pos as u32) {
+            Some(bit) => bit,
+            None => 0,
+        },
+        None => 0,
+    }
+}
+
+/// Bit `base + n` of a 16-bit register; 0 for an `n` past its top.
+const fn bit_u16(base: u8, n: u8) -> u16 {
+    match base.checked_add(n) {
+        Some(pos) => match 1u16.checked_shl(pos as u32) {
+            Some(bit) => bit,
+            None => 0,
+        },
+        None => 0,
+    }
 }
 
 #[cfg(test)]
@@ -395,5 +418,11 @@ mod tests {
     fn al_event_sm_bits_start_at_bit_8() {
         assert_eq!(AlEvent::sm(0), 0x100);
         assert_eq!(AlEvent::sm(3), 0x800);
+        assert_eq!(AlEvent::sm(23), 1 << 31);
+        assert_eq!(AlEvent::sm(24), 0, "no SM 24: no bit");
+        assert_eq!(AlEvent::sm(u8::MAX), 0);
+        assert_eq!(EcatEvent::sm(12), 0, "no bit beyond 15");
+        assert_eq!(DlStatus::communication(3), 1 << 15);
+        assert_eq!(DlStatus::communication(4), 0);
     }
 }

@@ -18,12 +18,12 @@ impl PortDescriptor {
 
     /// The descriptor with port `n` (0..3) set to `code` (one of the port codes above).
     pub const fn with(self, n: u8, code: u8) -> Self {
-        let shift = 2 * (n & 0x03);
+        let shift = (n & 0x03) << 1;
         Self((self.0 & !(0b11 << shift)) | ((code & 0b11) << shift))
     }
     /// The code of port `n` (0..3).
     pub const fn port(self, n: u8) -> u8 {
-        (self.0 >> (2 * (n & 0x03))) & 0b11
+        (self.0 >> ((n & 0x03) << 1)) & 0b11
     }
 }
 

@@ -19,13 +19,15 @@ impl Reg {
     pub const fn new(addr: u16, len: u16) -> Self {
         Self { addr, len }
     }
-    /// First address after the register.
+    /// First address after the register (saturated at the top of the 64 KiB address space,
+    /// where no register lies).
     pub const fn end(self) -> u16 {
-        self.addr + self.len
+        self.addr.saturating_add(self.len)
     }
-    /// Whether `addr` falls inside the register.
+    /// Whether `addr` falls inside the register (below `addr` the distance wraps to beyond
+    /// `len`).
     pub const fn contains(self, addr: u16) -> bool {
-        addr >= self.addr && addr < self.addr + self.len
+        addr.wrapping_sub(self.addr) < self.len
     }
 }
 
@@ -178,11 +180,15 @@ pub const SM_BASE: u16 = 0x0800;
 pub const SM_LEN: u16 = 8;
 
 /// Register block of FMMU `n`.
+// Cannot overflow: at most 0x0600 + 16 × 255 = 0x15F0.
+#[allow(clippy::arithmetic_side_effects)]
 pub const fn fmmu(n: u8) -> Reg {
     Reg::new(FMMU_BASE + FMMU_LEN * n as u16, FMMU_LEN)
 }
 
 /// Register block of SyncManager `n`.
+// Cannot overflow: at most 0x0800 + 8 × 255 = 0x0FF8.
+#[allow(clippy::arithmetic_side_effects)]
 pub const fn sm(n: u8) -> Reg {
     Reg::new(SM_BASE + SM_LEN * n as u16, SM_LEN)
 }

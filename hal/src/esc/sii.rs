@@ -29,11 +29,13 @@ pub mod word {
 /// CRC-8 of the SII configuration area: polynomial 0x07, initial value 0xFF, no reflection, no
 /// final XOR, over `data` (bytes 0..13 of the image; the result belongs in byte 14). Check value
 /// of `"123456789"`: 0xFB.
+// The bit counter runs 0..8.
+#[allow(clippy::arithmetic_side_effects)]
 pub const fn crc8(data: &[u8]) -> u8 {
     let mut crc = CRC_INIT;
-    let mut i = 0;
-    while i < data.len() {
-        crc ^= data[i];
+    let mut rest = data;
+    while let [byte, tail @ ..] = rest {
+        crc ^= *byte;
         let mut bit = 0;
         while bit < 8 {
             crc = if crc & 0x80 != 0 {
@@ -43,7 +45,7 @@ pub const fn crc8(data: &[u8]) -> u8 {
             };
             bit += 1;
         }
-        i += 1;
+        rest = tail;
     }
     crc
 }

@@ -17,6 +17,8 @@ pub const CLOCK_NS: u64 = 40;
 pub const DIVIDER_EXTRA: u64 = 2;
 
 /// Length of one watchdog tick in ns for the divider value `divider` (0x0400).
+// Cannot overflow: at most (65535 + 2) × 40.
+#[allow(clippy::arithmetic_side_effects)]
 pub const fn tick_ns(divider: u16) -> u64 {
     (divider as u64 + DIVIDER_EXTRA) * CLOCK_NS
 }
