@@ -40,6 +40,12 @@ pub const HOMING_ERROR: u16 = 1 << 13;
 /// A direction of motion: +1 positive, −1 negative.
 pub type Direction = i8;
 
+/// The opposite of `direction` (saturating only so that no value can overflow; directions are
+/// ±1).
+const fn reverse(direction: Direction) -> Direction {
+    direction.saturating_neg()
+}
+
 /// The switch a method refers to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Switch {
@@ -445,7 +451,7 @@ impl Homing {
                 reversed: false,
             };
         }
-        if active == -approach {
+        if active == reverse(approach) {
             // The approach leaves the active region through the edge.
             Phase::Approach {
                 direction: approach,
@@ -454,7 +460,7 @@ impl Homing {
             }
         } else {
             Phase::Leave {
-                direction: -approach,
+                direction: reverse(approach),
                 falling: signal.falling.count,
             }
         }
@@ -487,7 +493,7 @@ impl Homing {
                         Phase::Error
                     } else {
                         Phase::Search {
-                            direction: -direction,
+                            direction: reverse(direction),
                             reversed: true,
                         }
                     };
@@ -499,7 +505,7 @@ impl Homing {
                     self.phase = Phase::Error;
                 } else if signal.falling.count != falling || !signal.level {
                     self.phase = Phase::Approach {
-                        direction: -direction,
+                        direction: reverse(direction),
                         level: true,
                         count: signal.rising.count,
                     };
@@ -535,7 +541,8 @@ impl Homing {
                 count,
             } => {
                 let index = signals.index;
-                let past = index.position.saturating_sub(edge).signum() != -i64::from(direction);
+                let past =
+                    index.position.saturating_sub(edge).signum() != i64::from(reverse(direction));
                 if index.count != count && past {
                     self.phase = Phase::Settle {
                         home: index.position,

@@ -25,8 +25,12 @@ pub fn period_ns(value: u8, index: i8) -> Option<u32> {
     if value == 0 || !(NS_INDEX..=S_INDEX).contains(&index) {
         return None;
     }
-    let scale = 10u64.pow(u32::from(index.abs_diff(NS_INDEX)));
-    u32::try_from(u64::from(value) * scale).ok()
+    u32::try_from(u64::from(value).checked_mul(ns_per_unit(index)?)?).ok()
+}
+
+/// ns per unit of 60C2h:01 at 60C2h:02 = `index` (10^(index + 9)); `None` beyond u64.
+fn ns_per_unit(index: i8) -> Option<u64> {
+    10u64.checked_pow(u32::from(index.abs_diff(NS_INDEX)))
 }
 
 /// 60C2h for a period of `cycle_ns`: the finest index whose value fits sub 1 exactly, else the
@@ -37,18 +41,21 @@ pub fn period_object(cycle_ns: u32) -> Option<(u8, i8)> {
         return None;
     }
     let fits = |index: i8| {
-        let scale = 10u64.pow(u32::from(index.abs_diff(NS_INDEX)));
+        let scale = ns_per_unit(index)?;
         let ns = u64::from(cycle_ns);
-        (ns % scale == 0)
-            .then(|| u8::try_from(ns / scale).ok())
+        (ns.checked_rem(scale)? == 0)
+            .then(|| u8::try_from(ns.checked_div(scale)?).ok())
             .flatten()
     };
     if let Some(exact) = (NS_INDEX..=S_INDEX).find_map(|i| fits(i).map(|v| (v, i))) {
         return Some(exact);
     }
     (NS_INDEX..=S_INDEX).find_map(|index| {
-        let scale = 10u64.pow(u32::from(index.abs_diff(NS_INDEX)));
-        let rounded = (u64::from(cycle_ns) + scale / 2) / scale;
+        let scale = ns_per_unit(index)?;
+        // cycle_ns < 2^32 and scale ≤ 10^9: the sum fits; scale ≥ 1.
+        let rounded = u64::from(cycle_ns)
+            .checked_add(scale / 2)?
+            .checked_div(scale)?;
         u8::try_from(rounded)
             .ok()
             .filter(|v| *v > 0)

@@ -223,17 +223,16 @@ pub fn can_show(mode: i8, c: Shows) -> bool {
 /// Whether any of `overrides` shows `c` (a const fn: a drive decides at build time what it
 /// must watch).
 pub const fn shown_in(overrides: &[Override], c: Shows) -> bool {
-    let mut i = 0;
-    while i < overrides.len() {
-        let bits = &overrides[i].layout.bits;
-        let mut b = 0;
-        while b < bits.len() {
-            if bits[b] as u8 == c as u8 {
+    let mut rest = overrides;
+    while let [first, tail @ ..] = rest {
+        let mut bits: &[Shows] = &first.layout.bits;
+        while let [bit, more @ ..] = bits {
+            if *bit as u8 == c as u8 {
                 return true;
             }
-            b += 1;
+            bits = more;
         }
-        i += 1;
+        rest = tail;
     }
     false
 }

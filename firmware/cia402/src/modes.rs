@@ -84,7 +84,11 @@ pub fn is_supported(mode: i8, supported: u32) -> bool {
     match mode {
         0 => true,
         IDENTIFICATION => supported & SUPPORTED_IDENTIFICATION != 0,
-        1..=32 => supported & (1 << (mode - 1)) != 0,
+        1..=32 => mode
+            .unsigned_abs()
+            .checked_sub(1)
+            .and_then(|bit| supported.checked_shr(u32::from(bit)))
+            .is_some_and(|s| s & 1 != 0),
         _ => false,
     }
 }

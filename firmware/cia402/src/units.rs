@@ -188,21 +188,27 @@ fn scale(value: i64, multiplier: u64, divisor: u64) -> i64 {
         .zip(i64::try_from(divisor).ok())
         .and_then(|(m, d)| {
             let product = value.checked_mul(m)?;
-            let (quotient, remainder) = (product / d, product % d);
+            let (quotient, remainder) = (product.checked_div(d)?, product.checked_rem(d)?);
             // |remainder| < d ≤ i64::MAX: twice it fits a u64.
             let twice = remainder.unsigned_abs().checked_mul(2)?;
             Some(if twice >= d.unsigned_abs() {
-                quotient + product.signum()
+                // d ≥ 2 here (d = 1 leaves no remainder): |quotient| ≤ i64::MAX / 2.
+                quotient.saturating_add(product.signum())
             } else {
                 quotient
             })
         });
     narrow.unwrap_or_else(|| {
         let (m, d) = (i128::from(multiplier), i128::from(divisor));
-        let product = i128::from(value) * m;
-        let (quotient, remainder) = (product / d, product % d);
-        let wide = if remainder.unsigned_abs() * 2 >= d.unsigned_abs() {
-            quotient + product.signum()
+        // |value| ≤ 2^63 and multiplier < 2^64: the product fits an i128.
+        let product = i128::from(value).saturating_mul(m);
+        // A divisor of 0 (the callers never pass one) gives 0.
+        let (Some(quotient), Some(remainder)) = (product.checked_div(d), product.checked_rem(d))
+        else {
+            return 0;
+        };
+        let wide = if remainder.unsigned_abs().saturating_mul(2) >= d.unsigned_abs() {
+            quotient.saturating_add(product.signum())
         } else {
             quotient
         };
@@ -303,9 +309,11 @@ impl RatioRange {
         if denominator == 0 {
             return false;
         }
-        // n/d against a/b: n·b against a·d (u32 × u32 fits u64).
+        // n/d against a/b: n·b against a·d (u32 × u32 fits u64, so the widening multiply
+        // never wraps).
         let against = |(a, b): (u32, u32)| {
-            (u64::from(numerator) * u64::from(b)).cmp(&(u64::from(a) * u64::from(denominator)))
+            (u64::from(numerator).wrapping_mul(u64::from(b)))
+                .cmp(&(u64::from(a).wrapping_mul(u64::from(denominator))))
         };
         let (low, high) = (against(self.min), against(self.max));
         if self.inclusive {
@@ -319,6 +327,21 @@ impl RatioRange {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scaling_rounds_saturates_and_refuses_a_zero_divisor_without_panicking() {
+        assert_eq!(scale(7, 1, 2), 4, "3.5 rounds away from zero");
+        assert_eq!(scale(-7, 1, 2), -4);
+        assert_eq!(scale(i64::MAX, u64::MAX, 1), i64::MAX, "saturated");
+        assert_eq!(scale(i64::MIN, u64::MAX, 3), i64::MIN);
+        assert_eq!(
+            scale(i64::MAX, u64::MAX, u64::MAX),
+            i64::MAX,
+            "through 128 bits"
+        );
+        assert_eq!(scale(5, 1, 0), 0);
+        assert_eq!(scale(5, u64::MAX, 0), 0, "the wide path");
+    }
 
     #[test]
     fn ratios_scale_positions_and_velocities_both_ways() {

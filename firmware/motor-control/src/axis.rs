@@ -838,7 +838,8 @@ impl Axis {
         }
         let torque_allowed = !self.safe_torque_off && !self.interlocked;
         let loop_tick = self.tick == 0;
-        self.tick += 1;
+        // Below `loop_divider`: reset to 0 right here.
+        self.tick = self.tick.wrapping_add(1);
         if self.tick >= self.cfg.loop_divider {
             self.tick = 0;
         }

@@ -66,7 +66,8 @@ impl OffsetCalibration {
         self.sum.a += raw.a;
         self.sum.b += raw.b;
         self.sum.c += raw.c;
-        self.collected += 1;
+        // Stops at `samples`: the result returns early from then on.
+        self.collected = self.collected.saturating_add(1);
         if self.collected < self.samples {
             return None;
         }
@@ -129,6 +130,9 @@ impl Commutation {
     /// Commutation for an encoder with `counts_per_rev` counts per mechanical revolution, a motor
     /// with `pole_pairs` pole pairs, and the encoder position `offset_counts` at which the
     /// electrical angle is 0 (d axis on phase a).
+    // Overflow-free: pole_pairs and counts_per_rev are u32 (products in u64, the shift in 96
+    // of 128 bits) and counts_per_rev ≥ 16 is checked before it divides.
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn new(
         counts_per_rev: u32,
         pole_pairs: u32,
@@ -176,6 +180,8 @@ impl Commutation {
 
     /// (position − offset) mod CPR by a true modulo (in 128 bits, so no position overflows):
     /// the slow path, for construction, offset changes and position jumps of a turn or more.
+    // Overflow-free: the difference of two i64 fits an i128; counts_per_rev ≥ 16 (`new`).
+    #[allow(clippy::arithmetic_side_effects)]
     fn turn_count_of(&self, position: i64) -> i64 {
         // `counts_per_rev` ≥ 16, so the remainder cannot panic; it is < CPR ≤ u32::MAX.
         ((position as i128 - self.offset_counts as i128).rem_euclid(self.counts_per_rev as i128))
@@ -189,6 +195,10 @@ impl Commutation {
     /// since the last call (only the very first call or an encoder fault) takes the slow path,
     /// a 128-bit modulo library call (some hundred instructions, once).
     #[inline]
+    // Overflow-free: |delta| < CPR ≤ u32::MAX and 0 ≤ turn_count < CPR (the guard below), so
+    // every sum stays within ±2·CPR; the fast-path multiply wraps by design (mod 2^64 is the
+    // angle's modulo, see `scale`).
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn angle(&mut self, position: i64) -> ElectricalAngle {
         let cpr = self.counts_per_rev;
         self.turn_count = match position.checked_sub(self.last_position) {
@@ -326,6 +336,8 @@ impl Alignment {
     /// Validates `cfg` and converts its durations to periods of `sample_time_s` (the interval
     /// between two calls of [`Alignment::step`], the PWM period), for an encoder with
     /// `counts_per_rev` counts per revolution on a motor with `pole_pairs` pole pairs.
+    // Overflow-free: `periods` returns at least 1, so the angle increment's divisor is not 0.
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn new(
         cfg: &AlignmentConfig,
         counts_per_rev: u32,
@@ -378,6 +390,9 @@ impl Alignment {
     ///
     /// Timing: about 20 instructions (a stage match, a counter, one multiply for the ramp or
     /// the angle); the final check adds some 64-bit compares. No division.
+    // Overflow-free: the period counter stops at the stage lengths (u32 from `new`), and
+    // n < rotate_periods keeps angle_increment · n below a quarter turn · 2^32.
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn step(&mut self, position: i64) -> AlignStep {
         self.count = self.count.saturating_add(1);
         let n = self.count;
@@ -447,7 +462,7 @@ impl Alignment {
             return Err(MotorFault::Alignment);
         }
         // Mean of p0 and p1 − expected = p0 + error/2 (a shift: no library division).
-        Ok(self.p0 + error / 2)
+        Ok(self.p0.saturating_add(error / 2))
     }
 }
 

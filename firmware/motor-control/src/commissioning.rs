@@ -194,7 +194,7 @@ impl ElectricalIdentification {
         if !(m.id.is_finite() && m.iq.is_finite()) {
             return IdentCommand::Done(Err(MotorFault::Identification));
         }
-        self.steps += 1;
+        self.steps = self.steps.saturating_add(1);
         match self.stage {
             ElectricalStage::Resistance { point } => self.resistance_step(point, m),
             ElectricalStage::Inductance { q_axis } => self.inductance_step(q_axis, m),
@@ -214,7 +214,7 @@ impl ElectricalIdentification {
             self.sum_v += self.v_bias;
             self.sum_i += m.id;
         }
-        if self.steps >= self.settle_steps + self.average_steps {
+        if self.steps >= self.settle_steps.saturating_add(self.average_steps) {
             let n = self.average_steps as f32;
             let (v_mean, i_mean) = (self.sum_v / n, self.sum_i / n);
             (self.sum_v, self.sum_i) = (0.0, 0.0);
@@ -252,7 +252,7 @@ impl ElectricalIdentification {
         let cause = self.issued[1];
         if cause != 0.0 {
             self.sum_signed_delta += cause * delta;
-            self.deltas += 1;
+            self.deltas = self.deltas.saturating_add(1);
         }
         let sign = if self.steps % 2 == 0 { 1.0 } else { -1.0 };
         self.issued = [sign, self.issued[0]];
@@ -374,7 +374,7 @@ impl InertiaIdentification {
         if self.v_start.is_nan() {
             self.v_start = m.velocity;
         }
-        self.steps += 1;
+        self.steps = self.steps.saturating_add(1);
         let i = self.cfg.current_a;
         match self.phase {
             InertiaPhase::Accelerating => {

@@ -358,7 +358,8 @@ impl TorqueFilters {
         for section in sections.into_iter().flatten() {
             if let Some(stage) = chain.stages.get_mut(chain.active) {
                 *stage = section;
-                chain.active += 1;
+                // Below the stage count: `get_mut` found the stage.
+                chain.active = chain.active.saturating_add(1);
             }
         }
         Ok(chain)

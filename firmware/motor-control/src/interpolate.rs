@@ -158,6 +158,9 @@ fn finite_or_zero(x: f32) -> f32 {
 impl Interpolator {
     /// An interpolator for set-points every `cycle_s` seconds and ticks at `loop_hz`, holding
     /// position 0.
+    // Overflow-free: cycle_units ≤ MAX_TICKS_PER_CYCLE · TICK_UNITS ≈ 2^30 (checked first), so
+    // phase_cap = 2 · cycle_units + TICK_UNITS < 2^31 − TICK_UNITS.
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn new(cycle_s: f32, loop_hz: f32) -> Result<Self, InterpolateError> {
         if !(cycle_s.is_finite() && cycle_s > 0.0 && loop_hz.is_finite() && loop_hz > 0.0) {
             return Err(InterpolateError::InvalidTiming);
@@ -262,6 +265,8 @@ impl Interpolator {
     ///
     /// Timing: about 10 instructions.
     #[inline]
+    // Overflow-free: 0 ≤ phase ≤ phase_cap and 0 < cycle_units (see `new`).
+    #[allow(clippy::arithmetic_side_effects)]
     fn next_segment(&mut self, mode: InterpolationMode) -> bool {
         let new_phase = self.phase - self.cycle_units;
         let continuous = self.mode == mode && (-TICK_UNITS..=2 * TICK_UNITS).contains(&new_phase);
@@ -365,6 +370,8 @@ impl Interpolator {
     /// Horner polynomials 9, floor and i64 add 12, rounding 6, stores and the copy-out 20, phase
     /// update 5), about 35 in CSV/CST. No library calls.
     #[inline]
+    // Overflow-free: phase ≤ phase_cap, and phase_cap + TICK_UNITS fits an i32 (see `new`).
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn tick(&mut self) -> Interpolated {
         let phase = self.phase;
         let s = phase as f32 * self.inv_cycle_units;

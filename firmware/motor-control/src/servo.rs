@@ -180,7 +180,7 @@ pub struct ProtectionSpec {
     /// Time an over-speed must persist, s.
     pub over_speed_confirm_s: f32,
     /// The following-error window is `counts_per_rev / following_error_window_div`
-    /// increments (4: a quarter turn).
+    /// increments (4: a quarter turn; 0 counts as 1, a whole turn).
     pub following_error_window_div: u32,
     /// Time the following error may stay outside its window, ms.
     pub following_error_timeout_ms: u16,
@@ -357,7 +357,9 @@ pub fn axis_config(spec: &ServoSpec, tuning: &Tuning) -> AxisConfig {
             bus_confirm_s: prot.bus_confirm_s,
             over_speed: counts_per_s_at_rpm(prot.over_speed_rpm),
             over_speed_confirm_s: prot.over_speed_confirm_s,
-            following_error_window: cpr / prot.following_error_window_div,
+            following_error_window: cpr
+                .checked_div(prot.following_error_window_div)
+                .unwrap_or(cpr),
             following_error_timeout_ms: prot.following_error_timeout_ms,
             ..ProtectionConfig::default()
         },
