@@ -17,6 +17,7 @@ use std::time::Duration;
 
 use ethercrab::subdevice_group::DcConfiguration;
 use ethercrab::{Command, DcSync, MainDevice, MainDeviceConfig, Timeouts};
+use firmware::slave::esm::sync::{SyncConfig, SyncMode};
 use hal::esc::regs;
 
 use crate::inproc::{InProcess, Shared};
@@ -61,6 +62,55 @@ impl Scenario {
     pub fn line(&self) -> Vec<String> {
         vec![self.profile.clone(); self.drives]
     }
+}
+
+/// Checks a master cycle of `cycle_ns` against what the built-in `profile` accepts (the
+/// firmware's own rule, [`SyncConfig::check`]): with `dc` the SYNC0 range, its step and its
+/// fixed set of cycles; in free run the free-run range. The error says what is accepted.
+pub fn check_cycle(profile: &str, cycle_ns: u64, dc: bool) -> Result<u32, String> {
+    let p = firmware::profiles::by_name(profile)
+        .ok_or_else(|| format!("unknown profile {profile:?}"))?;
+    let sync = &p.od.device.sync;
+    let given = cycle_ns;
+    let cycle_ns = u32::try_from(cycle_ns).ok().filter(|&ns| ns > 0);
+    let mode = if dc {
+        SyncMode::DcSync0
+    } else {
+        SyncMode::FreeRun
+    };
+    let accepted = cycle_ns.filter(|&cycle_ns| SyncConfig { mode, cycle_ns }.check(sync).is_ok());
+    accepted.ok_or_else(|| {
+        let us = |ns: u32| f64::from(ns) / 1e3;
+        let what = if !dc {
+            format!(
+                "free-run cycles of {} to {} µs",
+                us(sync.free_run_min_cycle_ns),
+                us(sync.free_run_max_cycle_ns)
+            )
+        } else if !sync.allowed_cycles_ns.is_empty() {
+            let list: Vec<String> = sync
+                .allowed_cycles_ns
+                .iter()
+                .map(|&c| us(c).to_string())
+                .collect();
+            format!("DC SYNC0 cycles of {} µs only", list.join(", "))
+        } else if sync.cycle_step_ns > 1 {
+            format!(
+                "DC SYNC0 cycles of {} to {} µs in steps of {} µs",
+                us(sync.min_cycle_ns),
+                us(sync.max_cycle_ns),
+                us(sync.cycle_step_ns)
+            )
+        } else {
+            format!(
+                "DC SYNC0 cycles of {} to {} µs",
+                us(sync.min_cycle_ns),
+                us(sync.max_cycle_ns)
+            )
+        };
+        let given = given as f64 / 1e3;
+        format!("--cycle-us {given}: the {profile} profile accepts {what}")
+    })
 }
 
 impl Default for Scenario {
@@ -397,6 +447,10 @@ pub async fn run_line<S: AsRef<str>>(
     let profiles: Vec<String> = profiles.iter().map(|p| p.as_ref().to_string()).collect();
     let segment = Segment::line(&profiles)?;
     check_sync_modes(&profiles, s.dc)?;
+    let cycle_ns = u64::try_from(s.cycle.as_nanos()).unwrap_or(u64::MAX);
+    for p in &profiles {
+        check_cycle(p, cycle_ns, s.dc)?;
+    }
     let (master, transport) = InProcess::connect(
         segment,
         // Wall-clock timeouts: the simulated drives answer at once, but a loaded host may not

@@ -8,7 +8,9 @@
 //!     speed and current (default target/sim-drive/tour.svg)
 //! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
-//!     exchange, back to INIT, and print what happened
+//!     exchange, back to INIT, and print what happened; US may have up to three decimals
+//!     (31.25) and must be a cycle every drive of the line accepts (its profile's DC or
+//!     free-run range, step and fixed cycles: the error says which)
 //! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K] [MACHINE]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
@@ -58,7 +60,8 @@ struct Args {
     command: String,
     /// Profile of every drive, in ring order (canonical names, as `list-profiles` prints them).
     line: Vec<String>,
-    cycle_us: u64,
+    /// `--cycle-us` in ns.
+    cycle_ns: u64,
     cycles: u32,
     iface: Option<String>,
     seconds: Option<u64>,
@@ -78,7 +81,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let mut a = Args {
         command: "tour".into(),
         line: Vec::new(),
-        cycle_us: 1000,
+        cycle_ns: 1_000_000,
         cycles: 1000,
         iface: None,
         seconds: None,
@@ -105,7 +108,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--profile" => profile = Some(value("--profile")?),
             "--drives" => drives = Some(number(&value("--drives")?, "--drives")?),
             "--drive" => line.push(value("--drive")?),
-            "--cycle-us" => a.cycle_us = number(&value("--cycle-us")?, "--cycle-us")?,
+            "--cycle-us" => a.cycle_ns = microseconds(&value("--cycle-us")?, "--cycle-us")?,
             "--cycles" => a.cycles = number(&value("--cycles")?, "--cycles")?,
             "--iface" => a.iface = Some(value("--iface")?),
             "--free-run" => a.free_run = true,
@@ -155,6 +158,25 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     for name in &mut a.line {
         *name = canonical_profile(name)?;
     }
+    if a.command == "demo" {
+        // Every drive must accept the cycle before anything starts.
+        for name in &a.line {
+            demo::check_cycle(name, a.cycle_ns, !a.free_run)?;
+        }
+        if a.cycles == 0 {
+            return Err("--cycles must be at least 1".into());
+        }
+    }
+    if a.command == "attach" {
+        match a.iface.as_deref() {
+            None => return Err("attach needs --iface IFNAME".into()),
+            // Linux interface names: 1..=15 bytes, no '/' or white space (IFNAMSIZ).
+            Some(i) if i.is_empty() || i.len() > 15 || i.contains(['/', ' ', '\t', '\n']) => {
+                return Err(format!("--iface {i:?} is not a network interface name"))
+            }
+            Some(_) => {}
+        }
+    }
     if a.command != "attach" && a.machine().is_some() {
         return Err("--home-switch-rev and --limit-switches-rev are options of `attach`".into());
     }
@@ -178,6 +200,27 @@ fn canonical_profile(name: &str) -> Result<String, String> {
             names.join(", ")
         )),
     }
+}
+
+/// A duration in µs with up to three decimals (`31.25`), in ns.
+fn microseconds(s: &str, name: &str) -> Result<u64, String> {
+    let bad = || format!("{name}: {s:?} is not a number of µs (up to three decimals, e.g. 31.25)");
+    let (whole, fraction) = s.split_once('.').unwrap_or((s, ""));
+    if whole.is_empty()
+        || fraction.len() > 3
+        || !whole
+            .bytes()
+            .chain(fraction.bytes())
+            .all(|b| b.is_ascii_digit())
+    {
+        return Err(bad());
+    }
+    let whole: u64 = whole.parse().map_err(|_| bad())?;
+    let fraction: u64 = format!("{fraction:0<3}").parse().map_err(|_| bad())?;
+    whole
+        .checked_mul(1_000)
+        .and_then(|ns| ns.checked_add(fraction))
+        .ok_or_else(|| format!("{name}: {s} µs is out of range"))
 }
 
 fn number<T: std::str::FromStr>(s: &str, name: &str) -> Result<T, String> {
@@ -300,7 +343,8 @@ fn plots(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
-    let iface = args.iface.as_deref().ok_or("attach needs --iface IFNAME")?;
+    // `parse` made sure it is there.
+    let iface = args.iface.as_deref().unwrap_or_default();
     let mut segment = Segment::line(&args.line)?;
     if let Some(switches) = args.machine() {
         for servo in segment
@@ -323,7 +367,7 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let scenario = Scenario {
         profile: args.line[0].clone(),
         drives: args.line.len(),
-        cycle: Duration::from_micros(args.cycle_us),
+        cycle: Duration::from_nanos(args.cycle_ns),
         cycles: args.cycles,
         dc: !args.free_run,
     };
@@ -332,7 +376,7 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         args.line.len(),
         args.line.join(", "),
         if scenario.dc { "DC SYNC0" } else { "free-run" },
-        args.cycle_us
+        args.cycle_ns as f64 / 1e3
     );
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_time()
@@ -359,6 +403,76 @@ mod tests {
 
     fn args(s: &str) -> Result<Args, String> {
         parse(s.split_whitespace().map(String::from))
+    }
+
+    /// The error of `s`, which must be refused.
+    fn refused(s: &str) -> String {
+        match args(s) {
+            Ok(_) => panic!("{s:?} was accepted"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn demo_cycles_outside_the_profiles_dc_range_or_step_are_refused_before_anything_starts() {
+        // The standard profile: DC SYNC0 31.25 µs .. 10 ms in steps of 31.25 µs (its [sync]).
+        for bad in ["0", "1", "40", "31.2", "10031.25", "18446744073709551"] {
+            let e = refused(&format!("demo --cycle-us {bad}"));
+            assert!(
+                e.contains("standard profile accepts DC SYNC0 cycles of 31.25 to 10000 µs in steps of 31.25 µs"),
+                "{bad}: {e}"
+            );
+        }
+        for good in ["31.25", "62.5", "1000", "10000"] {
+            args(&format!("demo --cycle-us {good}")).unwrap_or_else(|e| panic!("{good}: {e}"));
+        }
+        assert_eq!(
+            args("demo --cycle-us 31.25").expect("31.25").cycle_ns,
+            31_250
+        );
+        let e = refused("demo --cycle-us 18446744073709551615");
+        assert!(e.contains("out of range"), "{e}");
+        // The GHA-E accepts five cycles only (§3.3); every drive of a mixed line is checked.
+        let e = refused("demo --drive standard --drive gha-e --cycle-us 312.5");
+        assert!(
+            e.contains(
+                "gha-e profile accepts DC SYNC0 cycles of 125, 250, 500, 1000, 2000 µs only"
+            ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn free_run_cycles_are_checked_against_the_free_run_range() {
+        let e = refused("demo --free-run --cycle-us 0");
+        assert!(e.contains("free-run cycles of 31.25 to 10000 µs"), "{e}");
+        // The SDV3-E runs free only at 1 ms .. 10 ms (its [sync] free-run range).
+        let e = refused("demo --profile sdv3-e --free-run --cycle-us 500");
+        assert!(
+            e.contains("sdv3-e profile accepts free-run cycles of 1000 to 10000 µs"),
+            "{e}"
+        );
+        args("demo --profile sdv3-e --free-run --cycle-us 2000").expect("2 ms");
+    }
+
+    #[test]
+    fn malformed_numbers_zero_cycles_and_a_missing_interface_are_usage_errors() {
+        for bad in ["1e3", "-5", "31.2500", ".5", "0x10", ""] {
+            let e = microseconds(bad, "--cycle-us").err();
+            assert!(
+                e.is_some_and(|e| e.contains("is not a number of µs")),
+                "{bad:?}"
+            );
+        }
+        assert_eq!(
+            microseconds("5.", "x"),
+            Ok(5_000),
+            "a trailing point is a whole number"
+        );
+        assert!(refused("demo --cycles 0").contains("--cycles must be at least 1"));
+        assert!(refused("attach").contains("attach needs --iface"));
+        assert!(refused("attach --iface a/b").contains("not a network interface name"));
+        assert!(refused("attach --iface 0123456789abcdef").contains("not a network interface name"));
     }
 
     #[test]

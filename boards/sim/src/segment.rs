@@ -197,7 +197,8 @@ impl<D: SimDevice> Segment<D> {
 
     /// Advances simulated time by `dt_ns`, running every SYNC0, timer and IRQ on the way.
     pub fn advance(&mut self, dt_ns: u64) {
-        self.advance_to(self.now_ns + dt_ns);
+        // Saturating: simulated time ends at u64::MAX ns (584 years), it does not wrap.
+        self.advance_to(self.now_ns.saturating_add(dt_ns));
     }
 
     /// Advances simulated time to `t_ns` (no-op if it is in the past), event by event.
@@ -212,7 +213,7 @@ impl<D: SimDevice> Segment<D> {
                     }
                     // Guard against an event source that does not move on.
                     if self.drives.iter().filter_map(|d| d.next_event_ns()).min() == Some(e) {
-                        self.now_ns = e + 1;
+                        self.now_ns = e.saturating_add(1);
                     }
                 }
                 _ => break,
