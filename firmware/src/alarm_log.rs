@@ -34,7 +34,8 @@ impl Slot {
         let bytes = value.to_le_bytes();
         let len = usize::from(self.len).min(bytes.len());
         let at = usize::from(self.at);
-        if let (Some(dst), Some(src)) = (ram.get_mut(at..at + len), bytes.get(..len)) {
+        if let (Some(dst), Some(src)) = (ram.get_mut(at..at.saturating_add(len)), bytes.get(..len))
+        {
             dst.copy_from_slice(src);
         }
     }
@@ -44,7 +45,8 @@ impl Slot {
         let len = usize::from(self.len).min(4);
         let at = usize::from(self.at);
         let mut bytes = [0u8; 4];
-        if let (Some(dst), Some(src)) = (bytes.get_mut(..len), ram.get(at..at + len)) {
+        if let (Some(dst), Some(src)) = (bytes.get_mut(..len), ram.get(at..at.saturating_add(len)))
+        {
             dst.copy_from_slice(src);
         }
         u32::from_le_bytes(bytes)
@@ -356,7 +358,11 @@ impl AlarmLog {
         if n >= self.len {
             return None;
         }
-        let i = (self.newest + MAX_RECORDS - n) % MAX_RECORDS;
+        // n < len ≤ MAX_RECORDS: n places back from the newest, around the ring.
+        let i = self
+            .newest
+            .checked_sub(n)
+            .unwrap_or_else(|| MAX_RECORDS.saturating_sub(n.saturating_sub(self.newest)));
         self.records.get(i)
     }
 
@@ -381,12 +387,12 @@ impl AlarmLog {
             }
         }
         if self.len > 0 {
-            self.newest = (self.newest + 1) % MAX_RECORDS;
+            self.newest = next_in_ring(self.newest, MAX_RECORDS);
         }
         if let Some(slot) = self.records.get_mut(self.newest) {
             *slot = record;
         }
-        self.len = (self.len + 1).min(MAX_RECORDS);
+        self.len = self.len.saturating_add(1).min(MAX_RECORDS);
         self.show(table, ram);
     }
 
@@ -443,6 +449,14 @@ impl AlarmLog {
                 slot.write(ram, v);
             }
         }
+    }
+}
+
+/// The slot after `i` in a ring of `len` slots (0 after the last).
+pub(crate) fn next_in_ring(i: usize, len: usize) -> usize {
+    match i.checked_add(1) {
+        Some(next) if next < len => next,
+        _ => 0,
     }
 }
 

@@ -332,9 +332,13 @@ impl Operand {
     pub fn write(self, ram: &mut [u8], value: u32) {
         if let Self::Ram { at, len } = self {
             let len = len.min(4);
-            let max = u32::MAX.checked_shr(8 * (4 - u32::from(len))).unwrap_or(0);
+            // len ≤ 4: the shift is 0..=32 bits (32: checked_shr gives None, a 0-byte entry).
+            let max = 4u32
+                .checked_sub(u32::from(len))
+                .and_then(|short| u32::MAX.checked_shr(short.saturating_mul(8)))
+                .unwrap_or(0);
             let start = usize::from(at);
-            if let Some(dst) = ram.get_mut(start..start + usize::from(len)) {
+            if let Some(dst) = ram.get_mut(start..start.saturating_add(usize::from(len))) {
                 for (d, s) in dst.iter_mut().zip(value.min(max).to_le_bytes()) {
                     *d = s;
                 }
@@ -350,7 +354,7 @@ impl Operand {
             Self::CountsPerRev => counts_per_rev,
             Self::Ram { at, len } => {
                 let start = usize::from(at);
-                let bytes = ram.get(start..start + usize::from(len.min(4)));
+                let bytes = ram.get(start..start.saturating_add(usize::from(len.min(4))));
                 bytes.map_or(0, |b| {
                     b.iter()
                         .rev()
@@ -710,7 +714,12 @@ impl SplitValue {
         match seen {
             None => from_parts,
             Some([seen_whole, _, _]) if whole != seen_whole => {
-                [whole, whole / radix, whole % radix]
+                // radix ≥ 2.
+                [
+                    whole,
+                    whole.checked_div(radix).unwrap_or(0),
+                    whole.checked_rem(radix).unwrap_or(0),
+                ]
             }
             Some([_, seen_high, seen_low]) if high != seen_high || low != seen_low => from_parts,
             Some(_) => now,

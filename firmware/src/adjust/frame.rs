@@ -102,7 +102,7 @@ impl Request {
         let size = frame[CSIZE];
         let mut data = [0u8; 4];
         match usize::from(size) {
-            n @ (1 | 2 | 4) => data[..n].copy_from_slice(&frame[CDATA..CDATA + n]),
+            n @ (1 | 2 | 4) => copy_prefix(&mut data, frame.get(CDATA..).unwrap_or_default(), n),
             _ => return Err(FrameError::Size(size)),
         }
         let address = u32::from_le_bytes([
@@ -125,7 +125,9 @@ impl Request {
         f[CSIZE] = size;
         f[CADDRESS..CDATA].copy_from_slice(&self.address.to_le_bytes());
         let n = usize::from(size).min(4);
-        f[CDATA..CDATA + n].copy_from_slice(&self.data.to_le_bytes()[..n]);
+        if let Some(dst) = f.get_mut(CDATA..) {
+            copy_prefix(dst, &self.data.to_le_bytes(), n);
+        }
         f
     }
 }
@@ -141,9 +143,18 @@ pub fn reply(status: u8, echo: Option<&Request>, data: &[u8]) -> [u8; FRAME_LEN]
         // n ≤ MAX_DATA = 8: fits a byte.
         f[CSIZE] = n as u8;
         f[CADDRESS..CDATA].copy_from_slice(&r.address.to_le_bytes());
-        f[CDATA..CDATA + n].copy_from_slice(&data[..n]);
+        if let Some(dst) = f.get_mut(CDATA..) {
+            copy_prefix(dst, data, n);
+        }
     }
     f
+}
+
+/// Copies the first `n` bytes of `src` to the start of `dst` (fewer if either is shorter).
+fn copy_prefix(dst: &mut [u8], src: &[u8], n: usize) {
+    for (d, s) in dst.iter_mut().zip(src).take(n) {
+        *d = *s;
+    }
 }
 
 #[cfg(test)]

@@ -34,7 +34,7 @@ use super::ram::{ram_offset, read_bytes, read_i32, read_u16, read_u32, write_byt
 use super::settings::{live_groups, Groups, Settings, FOLLOWING_ERROR_OFF};
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
-use crate::alarm_log::{self, AlarmTable, Conditions, Warning, WarningInputs};
+use crate::alarm_log::{self, next_in_ring, AlarmTable, Conditions, Warning, WarningInputs};
 use crate::motion::{self, HomingInputs, ProfileModes};
 use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
 use crate::motor::capture::{Captures, Latch, SwitchCapture};
@@ -483,7 +483,7 @@ impl DriveAxis {
     pub(super) fn alarm_conditions(&self, power_on_hours: u32) -> Conditions {
         let r = &self.recent;
         // The sample 5 ms back: the oldest of the ring.
-        let oldest = (r.newest + 1) % SPEED_SAMPLES;
+        let oldest = next_in_ring(r.newest, SPEED_SAMPLES);
         let rpm_per_count_s = self
             .port
             .as_ref()
@@ -1466,7 +1466,7 @@ impl DriveAxis {
         r.since_sample_ns = r.since_sample_ns.saturating_add(cycle_ns);
         if r.since_sample_ns >= SPEED_SAMPLE_NS {
             r.since_sample_ns = 0;
-            r.newest = (r.newest + 1) % SPEED_SAMPLES;
+            r.newest = next_in_ring(r.newest, SPEED_SAMPLES);
             if let Some(s) = r.speeds.get_mut(r.newest) {
                 *s = r.velocity;
             }
@@ -1527,8 +1527,9 @@ impl DriveAxis {
         };
         let (window, time_ms) = self.settings.position_window;
         // In position units, as profile position compares.
+        // Two i32 positions: their difference fits an i64.
         let deviation = i64::from(units::actual_position(set_point, ratio))
-            - i64::from(units::actual_position(feedback.position, ratio));
+            .wrapping_sub(i64::from(units::actual_position(feedback.position, ratio)));
         let settled =
             self.ip_last_set_point == Some(set_point) && window::inside(deviation, window);
         self.ip_last_set_point = Some(set_point);
@@ -1751,7 +1752,8 @@ fn torque_reached_levels(ram: &[u8], [a, b, c]: [Operand; 3], rated_nm: f32) -> 
 fn interpolation_too_fast(step: u64, limit_per_ms: u32, period_ns: u32) -> bool {
     const NS_PER_MS: u64 = 1_000_000;
     period_ns != 0
-        && step.saturating_mul(NS_PER_MS) >= u64::from(limit_per_ms) * u64::from(period_ns)
+        && step.saturating_mul(NS_PER_MS)
+            >= u64::from(limit_per_ms).saturating_mul(u64::from(period_ns))
 }
 
 /// Whether 60B8h `function` enables a probe on its input (source 0 with an edge) while no

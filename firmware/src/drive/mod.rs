@@ -88,6 +88,9 @@ pub const MAX_SPLIT_VALUES: usize = 4;
 
 impl Drive {
     /// The application of `profile` at power-on, without motors.
+    // Build-time only (the board's statics): both loops are bounded by the array lengths they
+    // index, so nothing here can go out of range or overflow.
+    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
     pub const fn new(profile: &'static DriveProfile) -> Self {
         let mut adjusting = [None; MAX_ADJUSTING_SERVICES];
         let mut i = 0;
@@ -208,7 +211,8 @@ impl Drive {
             if !numbers.get(..n).is_some_and(|seen| seen.contains(&number)) {
                 if let Some(slot) = numbers.get_mut(n) {
                     *slot = number;
-                    n += 1;
+                    // Below the array's length: `get_mut` found the slot.
+                    n = n.saturating_add(1);
                 }
             }
         }

@@ -7,23 +7,21 @@ use ethercat_slave::od::{Profile, Value};
 /// The OD RAM offset of entry `index:subindex` of `od`, `None` when it is not a RAM variable
 /// (a const fn: the drive finds the communication-area entries it reads once, at build time).
 pub(super) const fn ram_offset(od: &Profile, index: u16, subindex: u8) -> Option<u16> {
-    let mut i = 0;
-    while i < od.objects.len() {
-        let o = &od.objects[i];
+    let mut objects = od.objects;
+    while let [o, more_objects @ ..] = objects {
         if o.index == index {
-            let mut j = 0;
-            while j < o.entries.len() {
-                let e = &o.entries[j];
+            let mut entries = o.entries;
+            while let [e, more_entries @ ..] = entries {
                 if e.subindex == subindex {
                     return match e.value {
                         Value::Ram(at) => Some(at),
                         _ => None,
                     };
                 }
-                j += 1;
+                entries = more_entries;
             }
         }
-        i += 1;
+        objects = more_objects;
     }
     None
 }
@@ -31,12 +29,12 @@ pub(super) const fn ram_offset(od: &Profile, index: u16, subindex: u8) -> Option
 // Offsets are u16 (from the generated profile) and N ≤ 4: `at + N` cannot overflow a usize.
 pub(super) fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
     let at = usize::from(at?);
-    ram.get(at..at + N)?.try_into().ok()
+    ram.get(at..at.checked_add(N)?)?.try_into().ok()
 }
 
 pub(super) fn write_bytes<const N: usize>(ram: &mut [u8], at: Option<u16>, v: [u8; N]) {
     if let Some(at) = at.map(usize::from) {
-        if let Some(dst) = ram.get_mut(at..at + N) {
+        if let Some(dst) = at.checked_add(N).and_then(|end| ram.get_mut(at..end)) {
             dst.copy_from_slice(&v);
         }
     }
