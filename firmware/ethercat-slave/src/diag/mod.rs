@@ -88,6 +88,8 @@ pub const DIAG_CODE_EMCY: u16 = 0xE800;
 pub const MSG_FLAG_LOCAL_TIME: u16 = 1 << 4;
 /// Message flags: shift of the number of parameters.
 const MSG_PARAM_COUNT_SHIFT: u16 = 8;
+/// Bytes of a parameter's flags word (before its value).
+const PARAM_FLAGS_LEN: usize = 2;
 
 /// The diag code of a message about emergency error code `code` (SSC `DIAG_CODE_EMCY`).
 pub const fn diag_code_for_emcy(code: u16) -> u32 {
@@ -147,19 +149,18 @@ impl DiagParam {
     /// 0..=11) and the value to `out`; returns the length, 0 if `out` is too short.
     fn encode(self, out: &mut [u8]) -> usize {
         let (ty, value, n) = self.parts();
-        let [f0, f1] = ty.code().to_le_bytes();
-        match (out.get_mut(..2 + n), value.get(..n)) {
-            (Some(dst), Some(src)) => {
-                if let Some(h) = dst.get_mut(..2) {
-                    h.copy_from_slice(&[f0, f1]);
-                }
-                if let Some(v) = dst.get_mut(2..) {
-                    v.copy_from_slice(src);
-                }
-                2 + n
-            }
-            _ => 0,
-        }
+        let (Some(len), Some(src)) = (PARAM_FLAGS_LEN.checked_add(n), value.get(..n)) else {
+            return 0;
+        };
+        let Some((flags, dst)) = out
+            .get_mut(..len)
+            .and_then(|d| d.split_first_chunk_mut::<PARAM_FLAGS_LEN>())
+        else {
+            return 0;
+        };
+        *flags = ty.code().to_le_bytes();
+        dst.copy_from_slice(src);
+        len
     }
 }
 
@@ -197,15 +198,16 @@ impl DiagMessage {
     /// are zeroed, parameters that do not fit are left out and not counted).
     pub fn encode(&self, now_ns: u64, out: &mut [u8]) {
         out.fill(0);
-        let mut at = MESSAGE_HEADER_LEN;
+        let (header_out, mut rest) = out.split_at_mut(MESSAGE_HEADER_LEN.min(out.len()));
         let mut count: u16 = 0;
         for p in &self.params {
-            let n = out.get_mut(at..).map_or(0, |rest| p.encode(rest));
+            let n = p.encode(rest);
             if n == 0 {
                 break;
             }
-            at += n;
-            count += 1;
+            rest = core::mem::take(&mut rest).get_mut(n..).unwrap_or_default();
+            // At most MAX_PARAMS: never saturates.
+            count = count.saturating_add(1);
         }
         let msg_flags = (self.kind as u16) | MSG_FLAG_LOCAL_TIME | (count << MSG_PARAM_COUNT_SHIFT);
         let c = self.code.to_le_bytes();
@@ -216,8 +218,8 @@ impl DiagMessage {
             c[0], c[1], c[2], c[3], f[0], f[1], t[0], t[1], s[0], s[1], s[2], s[3], s[4], s[5],
             s[6], s[7],
         ];
-        if let Some(h) = out.get_mut(..MESSAGE_HEADER_LEN) {
-            h.copy_from_slice(&header);
+        if let Some(h) = header_out.first_chunk_mut::<MESSAGE_HEADER_LEN>() {
+            *h = header;
         }
     }
 
@@ -233,14 +235,17 @@ impl DiagMessage {
             return None;
         };
         let mut data = [0u8; 5];
-        let mut at = 0;
+        let mut rest = data.as_mut_slice();
         for p in &self.params {
             let (_, bytes, n) = p.parts();
-            match (data.get_mut(at..at + n), bytes.get(..n)) {
-                (Some(dst), Some(src)) => dst.copy_from_slice(src),
-                _ => break,
-            }
-            at += n;
+            let (Some((dst, tail)), Some(src)) = (
+                core::mem::take(&mut rest).split_at_mut_checked(n),
+                bytes.get(..n),
+            ) else {
+                break;
+            };
+            dst.copy_from_slice(src);
+            rest = tail;
         }
         Some(Emergency::new(code, register, data))
     }
@@ -309,8 +314,8 @@ impl Diagnosis {
     pub fn flags(od: &Dictionary<'_>) -> u16 {
         od.entry(DIAG_HISTORY, sub::FLAGS)
             .and_then(|e| od.value(e).ok())
-            .and_then(|v| v.get(..2))
-            .map_or(0, |b| u16::from_le_bytes([b[0], b[1]]))
+            .and_then(|v| v.first_chunk::<2>())
+            .map_or(0, |b| u16::from_le_bytes(*b))
     }
 
     /// Stores `msg` with time stamp `now_ns`; returns the emergency to send if 10F3h:05 bit 0
@@ -341,10 +346,11 @@ impl Diagnosis {
         let slot = if self.stored == 0 {
             0
         } else {
-            (self.newest + 1) % slots
+            next_slot(self.newest, slots)
         };
+        let subindex = message_subindex(slot).ok_or(DiagError::NoHistory)?;
         let entry = od
-            .entry(DIAG_HISTORY, sub::FIRST_MESSAGE + slot)
+            .entry(DIAG_HISTORY, subindex)
             .ok_or(DiagError::NoHistory)?;
         let mut buf = [0u8; 256];
         let len = entry.byte_len().min(buf.len());
@@ -352,15 +358,16 @@ impl Diagnosis {
         msg.encode(now_ns, bytes);
         od.set_value(entry, bytes)?;
         self.newest = slot;
-        self.stored = (self.stored + 1).min(slots);
-        self.unacknowledged = (self.unacknowledged + 1).min(slots);
+        // Both stay ≤ slots (≤ MAX_MESSAGES): the saturation never takes effect.
+        self.stored = self.stored.saturating_add(1).min(slots);
+        self.unacknowledged = self.unacknowledged.saturating_add(1).min(slots);
         // An acknowledged message that was just overwritten can no longer be the newest
         // acknowledged one.
         if self.unacknowledged >= slots && self.ack_subindex != 0 {
             self.ack_subindex = 0;
             write_u8(od, sub::NEWEST_ACKNOWLEDGED, 0)?;
         }
-        write_u8(od, sub::NEWEST, sub::FIRST_MESSAGE + slot)?;
+        write_u8(od, sub::NEWEST, subindex)?;
         write_u8(od, sub::NEW_MESSAGES, 1)?;
         self.set_flags(od, fl)?;
         Ok(if fl & flags::SEND_AS_EMERGENCY != 0 {
@@ -389,14 +396,13 @@ impl Diagnosis {
         if value == 0 {
             return self.clear(od);
         }
-        let first = sub::FIRST_MESSAGE;
-        let stored = value >= first && (value - first) < self.stored && slots > 0;
-        if !stored {
+        let stored = value
+            .checked_sub(sub::FIRST_MESSAGE)
+            .filter(|&slot| slot < self.stored && slots > 0);
+        let Some(acked) = stored else {
             return write_u8(od, sub::NEWEST_ACKNOWLEDGED, self.ack_subindex);
-        }
-        let acked = value - first;
-        // Messages newer than `acked` in ring order.
-        self.unacknowledged = (self.newest + slots - acked) % slots;
+        };
+        self.unacknowledged = newer_than(self.newest, acked, slots);
         self.ack_subindex = value;
         write_u8(od, sub::NEWEST_ACKNOWLEDGED, value)?;
         write_u8(od, sub::NEW_MESSAGES, u8::from(self.unacknowledged > 0))?;
@@ -407,8 +413,8 @@ impl Diagnosis {
     /// Deletes every message.
     pub fn clear(&mut self, od: &mut Dictionary<'_>) -> Result<(), DiagError> {
         let slots = Self::slots(od);
-        for i in 0..slots {
-            if let Some(e) = od.entry(DIAG_HISTORY, sub::FIRST_MESSAGE + i) {
+        for subindex in (sub::FIRST_MESSAGE..=u8::MAX).take(usize::from(slots)) {
+            if let Some(e) = od.entry(DIAG_HISTORY, subindex) {
                 let mut buf = [0u8; 256];
                 if let Some(z) = buf.get_mut(..e.byte_len().min(256)) {
                     od.set_value(e, z)?;
@@ -433,6 +439,32 @@ impl Diagnosis {
             od.set_value(e, &value.to_le_bytes())?;
         }
         Ok(())
+    }
+}
+
+/// The subindex of the message in ring slot `slot` (`None` beyond subindex 255, where no
+/// slot lies: [`MAX_MESSAGES`] = 256 − [`sub::FIRST_MESSAGE`]).
+fn message_subindex(slot: u8) -> Option<u8> {
+    sub::FIRST_MESSAGE.checked_add(slot)
+}
+
+/// The ring slot after `slot` in a ring of `slots` slots (wraps to 0 after the last one).
+fn next_slot(slot: u8, slots: u8) -> u8 {
+    match slot.checked_add(1) {
+        Some(next) if next < slots => next,
+        _ => 0,
+    }
+}
+
+/// Messages newer than the one in ring slot `acked` when the newest is in ring slot `newest`
+/// (both below `slots`): `(newest − acked) mod slots`, computed without the `u8` overflow of
+/// `newest + slots − acked` for rings of more than 128 slots.
+fn newer_than(newest: u8, acked: u8, slots: u8) -> u8 {
+    match newest.checked_sub(acked) {
+        Some(newer) => newer,
+        // The ring wrapped between them: `slots − (acked − newest)`, with 0 < acked − newest
+        // < slots.
+        None => slots.saturating_sub(acked.abs_diff(newest)),
     }
 }
 

@@ -206,3 +206,115 @@ fn flag_bit0_sends_the_message_as_emergency() {
         assert_eq!(d.report(od, &m, 0, 0x01), Ok(None));
     });
 }
+
+/// A dictionary whose 10F3h has the most slots the ring handles ([`MAX_MESSAGES`] = 250
+/// messages of 16 bytes), the rest of the profile as the standard one.
+mod full_ring {
+    use super::*;
+    use crate::od::{Access, Entry, Object, ObjectCode, PdoMappable, Profile, Value};
+
+    pub const SLOTS: u8 = MAX_MESSAGES as u8;
+    const MESSAGE_BYTES: u16 = MESSAGE_HEADER_LEN as u16;
+    /// RAM: 10F3h:02, :03, :04 at 0..3, :05 at 4..6, the messages from 6 on.
+    const FIRST_MESSAGE_RAM: u16 = 6;
+    pub const RAM_SIZE: usize = FIRST_MESSAGE_RAM as usize + MAX_MESSAGES * MESSAGE_HEADER_LEN;
+
+    const fn entry(subindex: u8, data_type: DataType, bit_len: u16, value: Value) -> Entry {
+        Entry {
+            subindex,
+            name: "",
+            data_type,
+            bit_len,
+            access: Access::RO,
+            pdo: PdoMappable::No,
+            value,
+            default: &[],
+            min: &[],
+            max: &[],
+        }
+    }
+
+    const fn entries() -> [Entry; 256] {
+        let mut e = [entry(0, DataType::Unsigned8, 8, Value::Const(&[255])); 256];
+        e[1] = entry(1, DataType::Unsigned8, 8, Value::Const(&[SLOTS]));
+        e[2] = entry(2, DataType::Unsigned8, 8, Value::Ram(0));
+        e[3] = entry(3, DataType::Unsigned8, 8, Value::Ram(1));
+        e[3].access = Access::RW;
+        e[4] = entry(4, DataType::Boolean, 1, Value::Ram(2));
+        e[5] = entry(5, DataType::Unsigned16, 16, Value::Ram(4));
+        e[5].access = Access::RW;
+        let mut i = 0;
+        while i < MAX_MESSAGES {
+            let ram = FIRST_MESSAGE_RAM + i as u16 * MESSAGE_BYTES;
+            let s = sub::FIRST_MESSAGE + i as u8;
+            e[s as usize] = entry(s, DataType::OctetString, MESSAGE_BYTES * 8, Value::Ram(ram));
+            i += 1;
+        }
+        e
+    }
+
+    static ENTRIES: [Entry; 256] = entries();
+    static OBJECTS: [Object; 1] = [Object {
+        index: DIAG_HISTORY,
+        code: ObjectCode::Record,
+        name: "Diagnosis history",
+        entries: &ENTRIES,
+    }];
+    static DEFAULTS: [u8; RAM_SIZE] = [0; RAM_SIZE];
+    pub static PROFILE: Profile = Profile {
+        objects: &OBJECTS,
+        defaults: &DEFAULTS,
+        value_lists: &[],
+        ..standard::PROFILE
+    };
+}
+
+#[test]
+fn ring_arithmetic_holds_for_250_slots() {
+    let slots = MAX_MESSAGES as u8;
+    assert_eq!(newer_than(200, 100, slots), 100);
+    assert_eq!(newer_than(249, 0, slots), 249);
+    assert_eq!(
+        newer_than(0, 249, slots),
+        1,
+        "wrapped: only slot 0 is newer"
+    );
+    assert_eq!(newer_than(100, 200, slots), 150);
+    assert_eq!(newer_than(7, 7, slots), 0);
+    assert_eq!(newer_than(3, 5, 8), 6);
+    assert_eq!(next_slot(248, slots), 249);
+    assert_eq!(next_slot(249, slots), 0);
+    assert_eq!(next_slot(7, 8), 0);
+    assert_eq!(message_subindex(slots - 1), Some(255));
+    assert_eq!(message_subindex(slots), None);
+}
+
+#[test]
+fn a_full_ring_of_250_messages_wraps_and_acknowledges() {
+    let mut ram = [0u8; full_ring::RAM_SIZE];
+    let mut od = Dictionary::new(&full_ring::PROFILE, &mut ram);
+    od.load_defaults();
+    let od = &mut od;
+    assert_eq!(Diagnosis::slots(od), full_ring::SLOTS);
+    let mut d = Diagnosis::new();
+    for i in 0..u16::from(full_ring::SLOTS) {
+        d.report(od, &msg(i), 0, 0).expect("stored");
+    }
+    assert_eq!(d.stored(), full_ring::SLOTS);
+    assert_eq!(sub_u8(od, sub::NEWEST), 255, "the last slot");
+    // Acknowledging the first message leaves the 249 after it new.
+    d.acknowledge(od, sub::FIRST_MESSAGE).expect("ack");
+    assert_eq!(d.unacknowledged, 249);
+    assert_eq!(sub_u8(od, sub::NEW_MESSAGES), 1);
+    // Two more wrap to slots 0 and 1 (subindexes 6 and 7).
+    d.report(od, &msg(300), 0, 0).expect("stored");
+    d.report(od, &msg(301), 0, 0).expect("stored");
+    assert_eq!(sub_u8(od, sub::NEWEST), 7);
+    assert_eq!(d.stored(), full_ring::SLOTS, "never more than the slots");
+    // Acknowledging slot 200 (subindex 206) across the wrap: slots 201..=249, 0, 1 are newer.
+    d.acknowledge(od, 206).expect("ack");
+    assert_eq!(d.unacknowledged, 51);
+    d.acknowledge(od, 7).expect("ack the newest");
+    assert_eq!(d.unacknowledged, 0);
+    assert_eq!(sub_u8(od, sub::NEW_MESSAGES), 0);
+}

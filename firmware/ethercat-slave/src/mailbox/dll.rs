@@ -38,6 +38,14 @@ use crate::od::{DeviceInfo, Dictionary, SmLayout};
 const SM_MAILBOX_OUT: u8 = 0;
 /// SyncManager channel of the slave → master mailbox.
 const SM_MAILBOX_IN: u8 = 1;
+/// Status register of SM0.
+const SM0_STATUS: u16 = regs::sm(SM_MAILBOX_OUT).addr + regs::sm_offset::STATUS;
+/// Status register of SM1.
+const SM1_STATUS: u16 = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::STATUS;
+/// Activate register of SM1.
+const SM1_ACTIVATE: u16 = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::ACTIVATE;
+/// PDI control register of SM1.
+const SM1_PDI_CONTROL: u16 = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::PDI_CONTROL;
 
 /// The mailbox state of one slave.
 pub struct Mailbox {
@@ -141,8 +149,7 @@ impl Mailbox {
             return Ok(()); // SM1 still full: keep the request waiting in SM0
         }
         self.post_fragment(pdi, inp)?;
-        let sm0_status =
-            SmStatus(pdi.read_u8(regs::sm(SM_MAILBOX_OUT).addr + regs::sm_offset::STATUS)?);
+        let sm0_status = SmStatus(pdi.read_u8(SM0_STATUS)?);
         if !sm0_status.mailbox_full() {
             // Idle: no request, no response waiting. Time for an emergency.
             return self.send_emcy(pdi, inp);
@@ -173,10 +180,12 @@ impl Mailbox {
         let Some(header) = MailboxHeader::parse(&self.inbox) else {
             return self.error_reply(MailboxErrorCode::Syntax, capacity);
         };
-        let payload_end = HEADER_LEN + header.length as usize;
-        if payload_end > len {
+        let payload_end = HEADER_LEN
+            .checked_add(usize::from(header.length))
+            .filter(|&end| end <= len);
+        let Some(payload_end) = payload_end else {
             return self.error_reply(MailboxErrorCode::InvalidSize, capacity);
-        }
+        };
         if header.counter != 0 {
             if header.counter == self.last_rx_counter {
                 return false; // retry of a request already served
@@ -225,6 +234,10 @@ impl Mailbox {
 
     /// Writes the header of a `payload_len` response of type `kind` into `outbox`.
     fn frame(&mut self, kind: MailboxType, payload_len: usize) -> bool {
+        // The payload was written into `outbox` after the header: the sum always fits.
+        let Some(out_len) = HEADER_LEN.checked_add(payload_len) else {
+            return false;
+        };
         self.tx_counter = next_counter(self.tx_counter);
         let header = MailboxHeader {
             length: payload_len as u16,
@@ -237,7 +250,7 @@ impl Mailbox {
         if let Some(h) = self.outbox.get_mut(..HEADER_LEN) {
             h.copy_from_slice(&header.to_bytes());
         }
-        self.out_len = HEADER_LEN + payload_len;
+        self.out_len = out_len;
         self.out_posted = false;
         true
     }
@@ -321,9 +334,8 @@ impl Mailbox {
 
     /// Empties SM1 from the PDI side: deactivate and re-activate the SM (SM PDI control bit 0).
     fn flush_sm1<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
-        let control = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::PDI_CONTROL;
-        pdi.write_u8(control, self.pdi_control(SmPdiControl::DEACTIVATE))?;
-        pdi.write_u8(control, self.pdi_control(0))
+        pdi.write_u8(SM1_PDI_CONTROL, self.pdi_control(SmPdiControl::DEACTIVATE))?;
+        pdi.write_u8(SM1_PDI_CONTROL, self.pdi_control(0))
     }
 
     /// Writes the frame and, if it is shorter than the SM, the SM's last byte: the ESC marks the
@@ -335,16 +347,23 @@ impl Mailbox {
             pdi.write(sm1.start, frame)?;
         }
         if len < sm_len {
-            pdi.write(sm1.start + sm_len as u16 - 1, &[0])?;
+            // The SM's last byte; an SM the profile places past the top of the 64 KiB address
+            // space has none to write.
+            let last = sm_len
+                .checked_sub(1)
+                .and_then(|offset| u16::try_from(offset).ok())
+                .and_then(|offset| sm1.start.checked_add(offset));
+            if let Some(last) = last {
+                pdi.write(last, &[0])?;
+            }
         }
         Ok(())
     }
 
     /// Re-posts the backup if the master toggled the repeat request, then acknowledges it.
     fn serve_repeat<P: EscPdi>(&mut self, pdi: &mut P, sm1: &SmLayout) -> Result<(), P::Error> {
-        let sm1_regs = regs::sm(SM_MAILBOX_IN).addr;
         // Reading the activate byte also acknowledges the SM-activation event.
-        let activate = SmActivate(pdi.read_u8(sm1_regs + regs::sm_offset::ACTIVATE)?);
+        let activate = SmActivate(pdi.read_u8(SM1_ACTIVATE)?);
         let requested = activate.repeat_request();
         if requested == self.repeat_ack {
             return Ok(());
@@ -357,7 +376,7 @@ impl Mailbox {
             self.write_outbox(pdi, sm1)?;
         }
         self.repeat_ack = requested;
-        pdi.write_u8(sm1_regs + regs::sm_offset::PDI_CONTROL, self.pdi_control(0))
+        pdi.write_u8(SM1_PDI_CONTROL, self.pdi_control(0))
     }
 
     fn pdi_control(&self, extra: u8) -> u8 {
@@ -372,7 +391,7 @@ impl Mailbox {
 
 /// Whether SM1 (slave → master) holds a frame the master has not read yet.
 fn sm1_full<P: EscPdi>(pdi: &mut P) -> Result<bool, P::Error> {
-    let status = SmStatus(pdi.read_u8(regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::STATUS)?);
+    let status = SmStatus(pdi.read_u8(SM1_STATUS)?);
     Ok(status.mailbox_full())
 }
 

@@ -98,10 +98,9 @@ impl MailboxHeader {
 
 /// Next mailbox counter after `c`: 1, 2, ..., 7, 1, ... (0 is reserved for "no counter").
 pub const fn next_counter(c: u8) -> u8 {
-    if c >= 7 {
-        1
-    } else {
-        c + 1
+    match c.checked_add(1) {
+        Some(next) if next <= 7 => next,
+        _ => 1,
     }
 }
 

@@ -51,18 +51,22 @@ impl DirtyMap {
     /// [`MAX_TRACKED_RAM`] (writes never mark bytes beyond the RAM they went to); marked bytes
     /// outside `to` are skipped.
     pub fn copy_marked(&mut self, from: &[u8], to: &mut [u8]) {
-        let used = from.len().div_ceil(BITS);
-        for (i, word) in self.words.iter_mut().take(used).enumerate() {
-            let mut w = *word;
+        // Word i covers the chunk i of BITS bytes on both sides.
+        let mut to_chunks = to.chunks_mut(BITS);
+        for (word, src) in self.words.iter_mut().zip(from.chunks(BITS)) {
+            let mut w = core::mem::take(word);
+            let Some(dst) = to_chunks.next() else {
+                continue; // beyond `to`: only the marks are cleared
+            };
             while w != 0 {
-                let bit = w.trailing_zeros() as usize;
-                w &= w - 1;
-                let at = i * BITS + bit;
-                if let (Some(&v), Some(dst)) = (from.get(at), to.get_mut(at)) {
-                    *dst = v;
+                let bit = w.trailing_zeros();
+                // Clears the bit just found (below 32, as `w` is not 0).
+                w ^= 1 << bit;
+                let at = bit as usize;
+                if let (Some(&v), Some(d)) = (src.get(at), dst.get_mut(at)) {
+                    *d = v;
                 }
             }
-            *word = 0;
         }
     }
 }

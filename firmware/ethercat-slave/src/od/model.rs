@@ -306,7 +306,7 @@ impl SyncSupport {
     /// Whether `shift_ns` is a value the master may write to the input shift time 1C33h:03: a
     /// whole multiple of [`Self::input_shift_step_ns`] (the range is the entry's).
     pub fn input_shift_on_step(&self, shift_ns: u32) -> bool {
-        self.input_shift_step_ns != 0 && shift_ns % self.input_shift_step_ns == 0
+        shift_ns.checked_rem(self.input_shift_step_ns) == Some(0)
     }
 }
 
@@ -446,7 +446,8 @@ impl ErrorReport {
 impl EsmRules {
     /// [`Self::safeop_op_timeout_ms`] in ns.
     pub const fn safeop_op_timeout_ns(&self) -> u64 {
-        self.safeop_op_timeout_ms as u64 * 1_000_000
+        // A u32 of ms is below 2^52 ns: never saturates.
+        (self.safeop_op_timeout_ms as u64).saturating_mul(1_000_000)
     }
 
     /// [`Self::sync_lock_timeout_ms`] in ns.

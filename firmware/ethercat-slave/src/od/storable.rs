@@ -83,28 +83,28 @@ impl EntryRange {
 
 /// Whether one of `ranges` holds `index:subindex`.
 pub const fn any_contains(ranges: &[EntryRange], index: u16, subindex: u8) -> bool {
-    let mut i = 0;
-    while i < ranges.len() {
-        if ranges[i].contains(index, subindex) {
+    let mut rest = ranges;
+    while let [range, tail @ ..] = rest {
+        if range.contains(index, subindex) {
             return true;
         }
-        i += 1;
+        rest = tail;
     }
     false
 }
 
 /// Whether a range of `a` overlaps a range of `b`.
 pub const fn any_overlaps(a: &[EntryRange], b: &[EntryRange]) -> bool {
-    let mut i = 0;
-    while i < a.len() {
-        let mut j = 0;
-        while j < b.len() {
-            if a[i].overlaps(&b[j]) {
+    let mut rest_a = a;
+    while let [x, tail_a @ ..] = rest_a {
+        let mut rest_b = b;
+        while let [y, tail_b @ ..] = rest_b {
+            if x.overlaps(y) {
                 return true;
             }
-            j += 1;
+            rest_b = tail_b;
         }
-        i += 1;
+        rest_a = tail_a;
     }
     false
 }
@@ -211,12 +211,12 @@ impl StorageRules {
 
     /// Whether one of the auto-store rules names an entry of `ranges`.
     pub const fn auto_stores_in(&self, ranges: &[EntryRange]) -> bool {
-        let mut i = 0;
-        while i < self.auto_store.len() {
-            if any_overlaps(self.auto_store[i].entries, ranges) {
+        let mut rest = self.auto_store;
+        while let [rule, tail @ ..] = rest {
+            if any_overlaps(rule.entries, ranges) {
                 return true;
             }
-            i += 1;
+            rest = tail;
         }
         false
     }
@@ -254,12 +254,12 @@ const fn is_stored_sm_parameter(index: u16, subindex: u8) -> bool {
 
 /// Whether `index` is one of [`NOT_STORED`].
 const fn is_not_stored(index: u16) -> bool {
-    let mut i = 0;
-    while i < NOT_STORED.len() {
-        if NOT_STORED[i] == index {
+    let mut rest: &[u16] = &NOT_STORED;
+    while let [first, tail @ ..] = rest {
+        if *first == index {
             return true;
         }
-        i += 1;
+        rest = tail;
     }
     false
 }

@@ -78,9 +78,10 @@ impl<'r> Dictionary<'r> {
             Value::Const(bytes) => Ok(bytes),
             Value::Domain(_) => Err(StoreError::Domain),
             Value::Ram(offset) => {
-                let start = offset as usize;
+                let start = usize::from(offset);
                 self.ram
-                    .get(start..start + entry.byte_len())
+                    .get(start..)
+                    .and_then(|r| r.get(..entry.byte_len()))
                     .ok_or(StoreError::Layout)
             }
         }
@@ -94,11 +95,11 @@ impl<'r> Dictionary<'r> {
             Value::Const(_) => return Err(StoreError::ReadOnly),
             Value::Domain(_) => return Err(StoreError::Domain),
         };
-        let start = offset as usize;
-        let dst = self
-            .ram
-            .get_mut(start..start + entry.byte_len())
+        let start = usize::from(offset);
+        let end = start
+            .checked_add(entry.byte_len())
             .ok_or(StoreError::Layout)?;
+        let dst = self.ram.get_mut(start..end).ok_or(StoreError::Layout)?;
         if data.len() > dst.len() {
             return Err(StoreError::Length);
         }
@@ -107,7 +108,7 @@ impl<'r> Dictionary<'r> {
         tail.fill(0);
         if let Some(dirty) = self.dirty.as_deref_mut() {
             // The whole entry: it goes back as one value.
-            dirty.mark(start..start + entry.byte_len());
+            dirty.mark(start..end);
         }
         Ok(())
     }

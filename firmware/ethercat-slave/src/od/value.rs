@@ -85,7 +85,10 @@ fn unsigned(bytes: &[u8]) -> Option<u64> {
 /// Little-endian two's-complement integer of 1..=8 bytes, sign-extended.
 fn signed(bytes: &[u8]) -> Option<i64> {
     let raw = unsigned(bytes)?;
-    let unused_bits = (MAX_INT_BYTES - bytes.len()) * BITS_PER_BYTE;
+    // 0..=56: `unsigned` accepts 1..=8 bytes.
+    let unused_bits = MAX_INT_BYTES
+        .checked_sub(bytes.len())?
+        .checked_mul(BITS_PER_BYTE)?;
     // Shift the sign bit to bit 63, then arithmetic-shift back.
     Some(((raw << unused_bits) as i64) >> unused_bits)
 }

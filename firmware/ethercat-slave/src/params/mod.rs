@@ -146,14 +146,13 @@ pub const fn store_capabilities(rules: &StorageRules, subindex: u8) -> u32 {
     let autonomous = if subindex == ALL_PARAMETERS {
         !rules.auto_store.is_empty()
     } else {
-        let mut i = 0;
+        let mut rest = rules.groups;
         let mut found = false;
-        while i < rules.groups.len() {
-            if rules.groups[i].subindex == subindex && rules.auto_stores_in(rules.groups[i].ranges)
-            {
+        while let [group, tail @ ..] = rest {
+            if group.subindex == subindex && rules.auto_stores_in(group.ranges) {
                 found = true;
             }
-            i += 1;
+            rest = tail;
         }
         found
     };
@@ -426,7 +425,8 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
         let identity = identity(profile);
         let newest = self.newest(&identity)?;
         let (target, sequence) = match newest {
-            Some((slot, seq)) => (1 - slot, seq.wrapping_add(1)),
+            // The other slot; sequence numbers wrap (serial-number arithmetic, `is_newer`).
+            Some((slot, seq)) => (usize::from(slot == 0), seq.wrapping_add(1)),
             None => (0, FIRST_SEQUENCE),
         };
         let [b0, b1] = &mut self.bufs;
@@ -496,16 +496,15 @@ fn build(
 }
 
 /// Length of the record that stores every storable entry of `profile` (the largest record the
-/// profile can produce).
+/// profile can produce; saturated at `usize::MAX`, which no storage holds).
 pub fn max_record_len(profile: &Profile) -> usize {
-    let payload: usize = profile
+    profile
         .objects
         .iter()
         .flat_map(|o| o.entries.iter().map(move |e| (o, e)))
         .filter(|(o, e)| is_storable(&profile.storage, o, e))
-        .map(|(_, e)| record::ENTRY_HEAD_LEN + e.byte_len())
-        .sum();
-    record::HEADER_LEN + payload + record::CRC_LEN
+        .map(|(_, e)| record::ENTRY_HEAD_LEN.saturating_add(e.byte_len()))
+        .fold(record::HEADER_LEN + record::CRC_LEN, usize::saturating_add)
 }
 
 /// The identity a profile's records carry (1018h:01..03).

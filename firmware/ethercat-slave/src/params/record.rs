@@ -88,14 +88,14 @@ pub fn crc32(data: &[u8]) -> u32 {
 const CRC_INIT: u32 = 0xFFFF_FFFF;
 /// CRC-32 polynomial, reflected.
 const CRC_POLY_REFLECTED: u32 = 0xEDB8_8320;
-/// Byte-wise lookup table of the reflected CRC-32 (1 KiB of flash).
-const CRC_TABLE: [u32; 256] = crc_table();
-
-const fn crc_table() -> [u32; 256] {
+/// Byte-wise lookup table of the reflected CRC-32 (1 KiB of flash), computed by the compiler (a
+/// counter overflowing here fails the build).
+const CRC_TABLE: [u32; 256] = {
     let mut table = [0u32; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u32;
+    let mut rest: &mut [u32] = &mut table;
+    let mut byte: u32 = 0;
+    while let [slot, tail @ ..] = rest {
+        let mut c = byte;
         let mut bit = 0;
         while bit < 8 {
             c = if c & 1 != 0 {
@@ -105,29 +105,30 @@ const fn crc_table() -> [u32; 256] {
             };
             bit += 1;
         }
-        table[i] = c;
-        i += 1;
+        *slot = c;
+        byte += 1;
+        rest = tail;
     }
     table
-}
+};
 
 /// Little-endian u16 at `at` (0 if out of range; callers check lengths first).
 fn u16_at(b: &[u8], at: usize) -> u16 {
-    b.get(at..at + 2)
-        .and_then(|s| s.try_into().ok())
-        .map_or(0, u16::from_le_bytes)
+    b.get(at..)
+        .and_then(|s| s.first_chunk::<2>())
+        .map_or(0, |s| u16::from_le_bytes(*s))
 }
 
 /// Little-endian u32 at `at` (0 if out of range; callers check lengths first).
 fn u32_at(b: &[u8], at: usize) -> u32 {
-    b.get(at..at + 4)
-        .and_then(|s| s.try_into().ok())
-        .map_or(0, u32::from_le_bytes)
+    b.get(at..)
+        .and_then(|s| s.first_chunk::<4>())
+        .map_or(0, |s| u32::from_le_bytes(*s))
 }
 
 /// Writes `v` little-endian at `at` (ignored if out of range; callers check lengths first).
 fn put(b: &mut [u8], at: usize, v: &[u8]) {
-    if let Some(dst) = b.get_mut(at..at + v.len()) {
+    if let Some(dst) = b.get_mut(at..).and_then(|d| d.get_mut(..v.len())) {
         dst.copy_from_slice(v);
     }
 }
@@ -173,9 +174,9 @@ impl<'a> Record<'a> {
         let total = announced_len(bytes, identity)?;
         let record = bytes.get(..total).ok_or(RecordError::Truncated)?;
         let (body, crc) = record
-            .split_at_checked(total - CRC_LEN)
+            .split_last_chunk::<CRC_LEN>()
             .ok_or(RecordError::Truncated)?;
-        if crc32(body) != u32_at(crc, 0) {
+        if crc32(body) != u32::from_le_bytes(*crc) {
             return Err(RecordError::Crc);
         }
         let parsed = Self {
@@ -249,19 +250,25 @@ impl<'a> Iterator for Entries<'a> {
         if self.rest.is_empty() || self.malformed {
             return None;
         }
-        let head = self.rest.get(..ENTRY_HEAD_LEN);
-        let len = usize::from(u16_at(self.rest, 3));
-        let value = self.rest.get(ENTRY_HEAD_LEN..ENTRY_HEAD_LEN + len);
-        let (Some(head), Some(value)) = (head, value) else {
+        let entry = self.rest.split_first_chunk::<ENTRY_HEAD_LEN>().and_then(
+            |(&[i0, i1, subindex, l0, l1], tail)| {
+                let (value, rest) =
+                    tail.split_at_checked(usize::from(u16::from_le_bytes([l0, l1])))?;
+                Some((
+                    StoredEntry {
+                        index: u16::from_le_bytes([i0, i1]),
+                        subindex,
+                        value,
+                    },
+                    rest,
+                ))
+            },
+        );
+        let Some((entry, rest)) = entry else {
             self.malformed = true;
             return None;
         };
-        let entry = StoredEntry {
-            index: u16_at(head, 0),
-            subindex: head.get(2).copied().unwrap_or(0),
-            value,
-        };
-        self.rest = self.rest.get(ENTRY_HEAD_LEN + len..).unwrap_or_default();
+        self.rest = rest;
         Some(entry)
     }
 }
@@ -290,15 +297,22 @@ impl<'b> Writer<'b> {
     /// Appends one entry.
     pub fn push(&mut self, index: u16, subindex: u8, value: &[u8]) -> Result<(), RecordError> {
         let len = u16::try_from(value.len()).map_err(|_| RecordError::Capacity)?;
-        let end = self.len + ENTRY_HEAD_LEN + value.len();
+        let value_at = self
+            .len
+            .checked_add(ENTRY_HEAD_LEN)
+            .ok_or(RecordError::Capacity)?;
+        let end = value_at
+            .checked_add(value.len())
+            .ok_or(RecordError::Capacity)?;
         let count = self.count.checked_add(1).ok_or(RecordError::Capacity)?;
-        if end + CRC_LEN > self.buf.len() {
+        // `new` made sure the buffer holds at least a header and the CRC.
+        if end > self.buf.len().saturating_sub(CRC_LEN) {
             return Err(RecordError::Capacity);
         }
         let [i0, i1] = index.to_le_bytes();
         let [l0, l1] = len.to_le_bytes();
         put(self.buf, self.len, &[i0, i1, subindex, l0, l1]);
-        put(self.buf, self.len + ENTRY_HEAD_LEN, value);
+        put(self.buf, value_at, value);
         self.len = end;
         self.count = count;
         Ok(())
@@ -306,7 +320,8 @@ impl<'b> Writer<'b> {
 
     /// Writes header and CRC; returns the record length (the record is `buf[..len]`).
     pub fn finish(self, identity: &Identity, sequence: u32) -> usize {
-        let payload_len = (self.len - HEADER_LEN) as u32;
+        // `len` starts at HEADER_LEN and only grows: never saturates.
+        let payload_len = self.len.saturating_sub(HEADER_LEN) as u32;
         let b = self.buf;
         put(b, offset::MAGIC, &MAGIC.to_le_bytes());
         put(b, offset::VERSION, &FORMAT_VERSION.to_le_bytes());
@@ -318,7 +333,8 @@ impl<'b> Writer<'b> {
         put(b, offset::PAYLOAD_LEN, &payload_len.to_le_bytes());
         let crc = crc32(b.get(..self.len).unwrap_or_default());
         put(b, self.len, &crc.to_le_bytes());
-        self.len + CRC_LEN
+        // `new` and `push` keep room for the CRC after `len`: never saturates.
+        self.len.saturating_add(CRC_LEN)
     }
 }
 

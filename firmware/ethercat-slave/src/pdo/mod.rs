@@ -126,7 +126,7 @@ impl PdoPlan {
         }
         // The profile's limit on the image of one direction (e.g. 32 bytes on the SDV3-E).
         let max_bytes = usize::from(od.profile().device.max_process_bytes).min(MAX_IMAGE);
-        if usize::from(plan.bits) > max_bytes * 8 {
+        if plan.byte_len() > max_bytes {
             return Err(bad);
         }
         Ok(plan)
@@ -167,10 +167,11 @@ impl PdoPlan {
                 (Value::Const(bytes), Direction::Tx) => Slot::Const(bytes),
                 (Value::Const(_), Direction::Rx) | (Value::Domain(_), _) => return Err(bad),
             };
-            if self.entries >= MAX_MAPPED_ENTRIES {
-                return Err(bad);
-            }
-            self.entries += 1;
+            self.entries = self
+                .entries
+                .checked_add(1)
+                .filter(|&n| n <= MAX_MAPPED_ENTRIES)
+                .ok_or(bad)?;
             let step = CopyStep {
                 slot,
                 image_bit: self.bits,
@@ -197,8 +198,8 @@ impl PdoPlan {
     /// runs are full, which the entry count prevents).
     fn add_run(&mut self, ram: u16, image: u16, len: u16) -> Result<(), ByteRun> {
         if let Some(last) = self.runs.last_mut() {
-            let continues = u32::from(last.ram) + u32::from(last.len) == u32::from(ram)
-                && u32::from(last.image) + u32::from(last.len) == u32::from(image);
+            let continues = last.ram.checked_add(last.len) == Some(ram)
+                && last.image.checked_add(last.len) == Some(image);
             if let (true, Some(merged)) = (continues, last.len.checked_add(len)) {
                 last.len = merged;
                 return Ok(());
@@ -212,9 +213,11 @@ impl PdoPlan {
         if len == 0 {
             return false;
         }
-        let (at, end) = (u32::from(at), u32::from(at) + u32::from(len));
-        let overlaps =
-            |from: u16, bytes: u32| u32::from(from) < end && at < u32::from(from) + bytes;
+        // u16 + u16 in u32: never saturates.
+        let (at, end) = (u32::from(at), u32::from(at).saturating_add(u32::from(len)));
+        let overlaps = |from: u16, bytes: u32| {
+            u32::from(from) < end && at < u32::from(from).saturating_add(bytes)
+        };
         self.runs
             .iter()
             .any(|run| overlaps(run.ram, u32::from(run.len)))
@@ -232,7 +235,8 @@ impl PdoPlan {
     /// Copies the plan makes per cycle: the byte runs (adjacent entries merged) and the other
     /// entries.
     pub fn copies(&self) -> usize {
-        self.runs.len() + self.steps.len()
+        // Two lists of at most MAX_MAPPED_ENTRIES: never saturates.
+        self.runs.len().saturating_add(self.steps.len())
     }
 
     /// Size of the process-data image in bytes (the SM length the master must configure).
@@ -244,19 +248,22 @@ impl PdoPlan {
     pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
         for run in &self.runs {
             let (i, r, n) = run.span();
-            if let (Some(from), Some(to)) = (image.get(i..i + n), ram.get_mut(r..r + n)) {
+            if let (Some(from), Some(to)) = (span(image, i, n), span_mut(ram, r, n)) {
                 copy_bytes(from, to);
             }
         }
         for step in &self.steps {
+            // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
             if let Slot::Ram(offset) = step.slot {
-                copy_bits(
-                    image,
-                    step.image_bit as usize,
-                    ram,
-                    offset as usize * 8,
-                    step.bits as usize,
-                );
+                if let Some(to) = ram.get_mut(usize::from(offset)..) {
+                    copy_bits(
+                        image,
+                        usize::from(step.image_bit),
+                        to,
+                        0,
+                        usize::from(step.bits),
+                    );
+                }
             }
         }
     }
@@ -265,22 +272,25 @@ impl PdoPlan {
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
         for run in &self.runs {
             let (i, r, n) = run.span();
-            if let (Some(from), Some(to)) = (ram.get(r..r + n), image.get_mut(i..i + n)) {
+            if let (Some(from), Some(to)) = (span(ram, r, n), span_mut(image, i, n)) {
                 copy_bytes(from, to);
             }
         }
         for step in &self.steps {
-            let (src, at) = match step.slot {
-                Slot::Ram(offset) => (ram, usize::from(offset)),
-                Slot::Const(bytes) => (bytes, 0),
+            // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
+            let src = match step.slot {
+                Slot::Ram(offset) => ram.get(usize::from(offset)..),
+                Slot::Const(bytes) => Some(bytes),
             };
-            copy_bits(
-                src,
-                at * 8,
-                image,
-                usize::from(step.image_bit),
-                usize::from(step.bits),
-            );
+            if let Some(src) = src {
+                copy_bits(
+                    src,
+                    0,
+                    image,
+                    usize::from(step.image_bit),
+                    usize::from(step.bits),
+                );
+            }
         }
     }
 }
@@ -297,6 +307,18 @@ impl ByteRun {
     }
 }
 
+/// The `n` bytes of `buf` from `at` (`None` if they are not all in it).
+#[inline(always)]
+fn span(buf: &[u8], at: usize, n: usize) -> Option<&[u8]> {
+    buf.get(at..).and_then(|b| b.get(..n))
+}
+
+/// [`span`], mutable.
+#[inline(always)]
+fn span_mut(buf: &mut [u8], at: usize, n: usize) -> Option<&mut [u8]> {
+    buf.get_mut(at..).and_then(|b| b.get_mut(..n))
+}
+
 /// Copies `from` into `to` (equal lengths). The common object sizes are copied by whole
 /// words, not through the library `memcpy` call a slice copy of unknown length becomes (its
 /// call and size dispatch cost more than the copy of a few bytes): 4 to 8 bytes as two words
@@ -308,23 +330,21 @@ fn copy_bytes(from: &[u8], to: &mut [u8]) {
     /// Copies `N` bytes at `at` (nothing if out of range).
     #[inline(always)]
     fn part<const N: usize>(from: &[u8], to: &mut [u8], at: usize) {
-        let src = from
-            .get(at..at + N)
-            .and_then(|s| <&[u8; N]>::try_from(s).ok());
-        let dst = to
-            .get_mut(at..at + N)
-            .and_then(|d| <&mut [u8; N]>::try_from(d).ok());
+        let src = from.get(at..).and_then(|s| s.first_chunk::<N>());
+        let dst = to.get_mut(at..).and_then(|d| d.first_chunk_mut::<N>());
         if let (Some(src), Some(dst)) = (src, dst) {
             *dst = *src;
         }
     }
     let n = from.len();
-    if n.wrapping_sub(4) <= 4 {
+    // n − 4 and n − 2 wrap for the shorter lengths, which then fail the range test.
+    let (last4, last2) = (n.wrapping_sub(4), n.wrapping_sub(2));
+    if last4 <= 4 {
         part::<4>(from, to, 0);
-        part::<4>(from, to, n - 4);
-    } else if n.wrapping_sub(2) <= 1 {
+        part::<4>(from, to, last4);
+    } else if last2 <= 1 {
         part::<2>(from, to, 0);
-        part::<2>(from, to, n - 2);
+        part::<2>(from, to, last2);
     } else if n == 1 {
         part::<1>(from, to, 0);
     } else {
@@ -337,13 +357,17 @@ fn copy_bytes(from: &[u8], to: &mut [u8]) {
 fn copy_bits(src: &[u8], src_bit: usize, dst: &mut [u8], dst_bit: usize, bits: usize) {
     if src_bit % 8 == 0 && dst_bit % 8 == 0 && bits % 8 == 0 {
         let (s, d, n) = (src_bit / 8, dst_bit / 8, bits / 8);
-        if let (Some(from), Some(to)) = (src.get(s..s + n), dst.get_mut(d..d + n)) {
+        if let (Some(from), Some(to)) = (span(src, s, n), span_mut(dst, d, n)) {
             copy_bytes(from, to);
         }
         return;
     }
-    for i in 0..bits {
-        let (sb, db) = (src_bit + i, dst_bit + i);
+    // Bits whose position does not fit a usize lie out of range on either side.
+    let (Some(src_end), Some(dst_end)) = (src_bit.checked_add(bits), dst_bit.checked_add(bits))
+    else {
+        return;
+    };
+    for (sb, db) in (src_bit..src_end).zip(dst_bit..dst_end) {
         let Some(&byte) = src.get(sb / 8) else { return };
         let Some(out) = dst.get_mut(db / 8) else {
             return;

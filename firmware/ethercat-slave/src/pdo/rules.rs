@@ -150,10 +150,11 @@ fn check_mapping(
     let mut total_bits = 0usize;
     for si in 1..=count {
         let value = od.read_u32(index, si).ok_or(AbortCode::ValueTooHigh)?;
-        total_bits += usize::from(check_mapping_entry(od, dir, value)?);
+        // At most 255 entries of at most 255 bits: never saturates.
+        total_bits = total_bits.saturating_add(usize::from(check_mapping_entry(od, dir, value)?));
     }
     let max_bytes = usize::from(od.profile().device.max_pdo_bytes).min(MAX_PDO_BYTES);
-    if total_bits > max_bytes * BITS_PER_BYTE {
+    if total_bits.div_ceil(BITS_PER_BYTE) > max_bytes {
         return Err(AbortCode::PdoLengthExceeded);
     }
     Ok(())

@@ -95,7 +95,10 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
 
     /// Emergencies waiting to be sent: raised but not yet taken by the mailbox, and queued in it.
     pub fn pending_emcys(&self) -> usize {
-        self.core.pending_emcys() + self.mailbox.pending_emcys()
+        // Two bounded queues: never saturates.
+        self.core
+            .pending_emcys()
+            .saturating_add(self.mailbox.pending_emcys())
     }
 }
 

@@ -79,13 +79,19 @@ struct Slot {
 }
 
 impl Slot {
+    /// The bit after the slot (saturated: such a slot lies beyond any stream).
     fn end(&self) -> usize {
-        self.bit + self.bits
+        self.bit.saturating_add(self.bits)
+    }
+    /// Whether `data` holds the whole slot.
+    fn within(&self, data: &[u8]) -> bool {
+        self.end().div_ceil(BITS_PER_BYTE) <= data.len()
     }
 }
 
 /// Walks the slots of the stream of `object` from `start` up to subindex `last`, calling `f` for
-/// each; returns the stream length in bits.
+/// each; returns the stream length in bits (0x08000000 for an object whose stream length
+/// would not fit a `usize`).
 fn walk(
     object: &'static Object,
     start: Start,
@@ -105,10 +111,12 @@ fn walk(
             _ => usize::from(entry.bit_len),
         };
         if bits % BITS_PER_BYTE == 0 {
-            bit = bit.div_ceil(BITS_PER_BYTE) * BITS_PER_BYTE;
+            bit = bit
+                .checked_next_multiple_of(BITS_PER_BYTE)
+                .ok_or(AbortCode::General)?;
         }
         f(Slot { entry, bit, bits })?;
-        bit += bits;
+        bit = bit.checked_add(bits).ok_or(AbortCode::General)?;
     }
     Ok(bit)
 }
@@ -151,16 +159,16 @@ fn put_bits(out: &mut [u8], slot: Slot, value: &[u8]) {
     if slot.bit % BITS_PER_BYTE == 0 && slot.bits % BITS_PER_BYTE == 0 {
         let at = slot.bit / BITS_PER_BYTE;
         let n = value.len().min(slot.bits / BITS_PER_BYTE);
-        if let (Some(dst), Some(src)) = (out.get_mut(at..at + n), value.get(..n)) {
+        let dst = out.get_mut(at..).and_then(|o| o.get_mut(..n));
+        if let (Some(dst), Some(src)) = (dst, value.get(..n)) {
             dst.copy_from_slice(src);
         }
         return;
     }
-    for i in 0..slot.bits {
+    for (i, pos) in (slot.bit..slot.end()).enumerate() {
         let set = value
             .get(i / BITS_PER_BYTE)
             .is_some_and(|b| b >> (i % BITS_PER_BYTE) & 1 != 0);
-        let pos = slot.bit + i;
         if let Some(b) = out.get_mut(pos / BITS_PER_BYTE) {
             if set {
                 *b |= 1 << (pos % BITS_PER_BYTE);
@@ -176,12 +184,14 @@ fn get_bits(data: &[u8], slot: Slot, buf: &mut [u8]) -> Result<usize, AbortCode>
     dst.fill(0);
     if slot.bit % BITS_PER_BYTE == 0 && slot.bits % BITS_PER_BYTE == 0 {
         let at = slot.bit / BITS_PER_BYTE;
-        let src = data.get(at..at + len).ok_or(AbortCode::LengthTooLow)?;
+        let src = data
+            .get(at..)
+            .and_then(|d| d.get(..len))
+            .ok_or(AbortCode::LengthTooLow)?;
         dst.copy_from_slice(src);
         return Ok(len);
     }
-    for i in 0..slot.bits {
-        let pos = slot.bit + i;
+    for (i, pos) in (slot.bit..slot.end()).enumerate() {
         let byte = data
             .get(pos / BITS_PER_BYTE)
             .ok_or(AbortCode::LengthTooLow)?;
@@ -218,11 +228,10 @@ pub(super) fn download(
         }
         _ => current_count(od, object),
     };
-    let data_bits = data.len() * BITS_PER_BYTE;
     check_stream_length(object, start, count, highest, data.len())?;
     // Access of every covered entry before anything is written.
     walk(object, start, highest, |slot| {
-        if slot.end() <= data_bits {
+        if slot.within(data) {
             check_writable(od, state, slot, data)?;
         }
         Ok(())
@@ -300,10 +309,8 @@ fn write_all(
             od.set_value(e, &[0]).map_err(|_| AbortCode::General)?;
         }
     }
-    let data_bits = data.len() * BITS_PER_BYTE;
     walk(object, start, u8::MAX, |slot| {
-        let skip =
-            slot.entry.subindex == 0 || slot.end() > data_bits || !slot.entry.access.writable();
+        let skip = slot.entry.subindex == 0 || !slot.within(data) || !slot.entry.access.writable();
         if skip {
             return Ok(());
         }
@@ -322,32 +329,33 @@ fn write_all(
 /// Copies the RAM values of `object` into `undo`; returns the bytes used (0x05040005 if the
 /// object does not fit).
 fn snapshot(od: &Dictionary<'_>, object: &Object, undo: &mut [u8]) -> Result<usize, AbortCode> {
-    let mut at = 0;
+    let mut at = 0usize;
     for e in object.entries.iter() {
         if !matches!(e.value, Value::Ram(_)) {
             continue;
         }
         let value = od.value(e).map_err(|_| AbortCode::General)?;
-        let dst = undo
-            .get_mut(at..at + value.len())
-            .ok_or(AbortCode::OutOfMemory)?;
+        let end = at.checked_add(value.len()).ok_or(AbortCode::OutOfMemory)?;
+        let dst = undo.get_mut(at..end).ok_or(AbortCode::OutOfMemory)?;
         dst.copy_from_slice(value);
-        at += value.len();
+        at = end;
     }
     Ok(at)
 }
 
 /// Writes back what [`snapshot`] saved.
 fn restore(od: &mut Dictionary<'_>, object: &Object, undo: &[u8]) {
-    let mut at = 0;
+    let mut at = 0usize;
     for e in object.entries.iter() {
         if !matches!(e.value, Value::Ram(_)) {
             continue;
         }
-        let len = e.byte_len();
-        if let Some(value) = undo.get(at..at + len) {
+        let Some(end) = at.checked_add(e.byte_len()) else {
+            return; // snapshot saved no more than fits
+        };
+        if let Some(value) = undo.get(at..end) {
             let _ = od.set_value(e, value);
         }
-        at += len;
+        at = end;
     }
 }

@@ -221,7 +221,7 @@ impl CoeServer {
             CoeService::SdoResponse
         };
         *resp_header = service.header();
-        Ok(COE_HEADER_LEN + n)
+        with_header(n)
     }
 
     /// [`Self::handle`], then, if the request committed a download, lets `hook` act on the
@@ -268,7 +268,7 @@ impl CoeServer {
         };
         let n = self.info.handle(od.profile(), request, info_response)?;
         *resp_header = CoeService::SdoInformation.header();
-        Ok(COE_HEADER_LEN + n)
+        with_header(n)
     }
 
     /// Whether an SDO transfer spans mailbox rounds right now: a segmented up- or download, or
@@ -290,7 +290,7 @@ impl CoeServer {
         let (resp_header, info_response) = response.split_first_chunk_mut::<COE_HEADER_LEN>()?;
         let n = self.info.next_fragment(info_response)?;
         *resp_header = CoeService::SdoInformation.header();
-        Some(COE_HEADER_LEN + n)
+        with_header(n).ok()
     }
 
     /// Drops any segmented transfer or fragmented response in progress (call on a state change
@@ -313,6 +313,13 @@ impl Default for CoeServer {
     fn default() -> Self {
         Self::new()
     }
+}
+
+/// The length of a response with `n` bytes after the CoE header. The inner layer wrote them
+/// into the same buffer behind the header, so the sum always fits; 0x07 (no more memory)
+/// stands for the case that cannot occur.
+fn with_header(n: usize) -> Result<usize, CoeError> {
+    COE_HEADER_LEN.checked_add(n).ok_or(CoeError::NoMoreMemory)
 }
 
 /// Writes a CoE "Abort SDO Transfer" (CoE header service SDO request, ETG.1000.6 §5.6.2.7) for

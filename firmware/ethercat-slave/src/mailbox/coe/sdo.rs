@@ -130,7 +130,8 @@ impl Command {
     /// Data bytes of an expedited init frame with the size indicated.
     fn expedited_len(self) -> usize {
         let unused = (self.0 >> command::EXPEDITED_UNUSED_SHIFT) & command::EXPEDITED_UNUSED_MASK;
-        EXPEDITED_DATA_LEN - usize::from(unused)
+        // The 2-bit count is at most 3: never saturates.
+        EXPEDITED_DATA_LEN.saturating_sub(usize::from(unused))
     }
     /// Unused (padding) bytes of a segment.
     fn segment_unused(self) -> usize {
@@ -347,7 +348,8 @@ impl SdoServer {
                 entry.byte_len().min(EXPEDITED_DATA_LEN)
             };
             let data = req
-                .get(INIT_DATA_OFFSET..INIT_DATA_OFFSET + len)
+                .get(INIT_DATA_OFFSET..)
+                .and_then(|d| d.get(..len))
                 .unwrap_or_default();
             self.commit_found(od, entry, index, subindex, data)
                 .map_err(abort)?;
@@ -488,10 +490,10 @@ impl SdoServer {
             return Err(abort(AbortCode::ToggleBit));
         }
         let data = segment_data(cmd, req);
-        let end = received + data.len();
-        if end > size {
-            return Err(abort(AbortCode::LengthTooHigh));
-        }
+        let end = received
+            .checked_add(data.len())
+            .filter(|&end| end <= size)
+            .ok_or(abort(AbortCode::LengthTooHigh))?;
         let dst = self
             .buffer
             .get_mut(received..end)
@@ -550,10 +552,10 @@ impl SdoServer {
             return Err(abort(AbortCode::ToggleBit));
         }
         let data = segment_data(cmd, req);
-        let end = received + data.len();
-        if end > size {
-            return Err(abort(AbortCode::LengthTooHigh));
-        }
+        let end = received
+            .checked_add(data.len())
+            .filter(|&end| end <= size)
+            .ok_or(abort(AbortCode::LengthTooHigh))?;
         let offset = u32::try_from(received).map_err(|_| abort(AbortCode::LengthTooHigh))?;
         domains.write(id, offset, data).map_err(abort)?;
         if cmd.has(command::LAST_SEGMENT) {
@@ -660,10 +662,16 @@ impl SdoServer {
         let frame = init_frame(cmd, index, subindex, size);
         let first = data.get(..room.min(data.len())).unwrap_or_default();
         write_frame(resp, frame);
-        if let Some(dst) = resp.get_mut(NORMAL_DATA_OFFSET..NORMAL_DATA_OFFSET + first.len()) {
+        let dst = resp
+            .get_mut(NORMAL_DATA_OFFSET..)
+            .and_then(|r| r.get_mut(..first.len()));
+        if let Some(dst) = dst {
             dst.copy_from_slice(first);
         }
-        Ok(NORMAL_DATA_OFFSET + first.len())
+        // `first` fits the response after the frame: the sum fits too.
+        NORMAL_DATA_OFFSET
+            .checked_add(first.len())
+            .ok_or(abort(AbortCode::General))
     }
 
     /// A normal upload response from `source` (buffer or domain): complete size and as much
@@ -698,7 +706,8 @@ impl SdoServer {
                 toggle: false,
             };
         }
-        NORMAL_DATA_OFFSET + first.min(room)
+        // `room` is what the response holds after the frame: never saturates.
+        NORMAL_DATA_OFFSET.saturating_add(first.min(room))
     }
 
     /// Copies bytes of `source` from `offset` into `dst`; returns how many.
@@ -808,7 +817,13 @@ impl SdoServer {
                 code,
             })?;
         let chunk = chunk.get(..n).unwrap_or_default();
-        let last = sent + n >= total;
+        // `n` ≤ total − sent: the sum fits.
+        let sent = sent.checked_add(n).ok_or(Abort {
+            index,
+            subindex,
+            code: AbortCode::General,
+        })?;
+        let last = sent >= total;
         let n = write_upload_segment(resp, toggle, last, chunk);
         self.transfer = if last {
             Transfer::Idle
@@ -817,7 +832,7 @@ impl SdoServer {
                 index,
                 subindex,
                 source,
-                sent: sent + chunk.len(),
+                sent,
                 toggle: !toggle,
             }
         };
@@ -834,7 +849,7 @@ fn init_data<'a>(rq: &Request<'a>) -> (usize, &'a [u8]) {
         } else {
             EXPEDITED_DATA_LEN
         };
-        let data = rq.frame.get(INIT_DATA_OFFSET..INIT_DATA_OFFSET + len);
+        let data = rq.frame.get(INIT_DATA_OFFSET..).and_then(|d| d.get(..len));
         (len, data.unwrap_or_default())
     } else {
         let data = rq.frame.get(NORMAL_DATA_OFFSET..).unwrap_or_default();
@@ -917,7 +932,8 @@ fn write_upload_segment(resp: &mut [u8], toggle: bool, last: bool, chunk: &[u8])
     if last {
         flags |= command::LAST_SEGMENT;
     }
-    let len = SEGMENT_DATA_OFFSET + chunk.len().max(SEGMENT_MIN_DATA_LEN);
+    // `chunk` is at most SEGMENT_BUFFER_CAPACITY bytes: never saturates.
+    let len = SEGMENT_DATA_OFFSET.saturating_add(chunk.len().max(SEGMENT_MIN_DATA_LEN));
     if let Some(frame) = resp.get_mut(..len) {
         frame.fill(0);
         if let Some((cmd, data)) = frame.split_first_mut() {

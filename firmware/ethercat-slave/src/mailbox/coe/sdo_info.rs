@@ -215,7 +215,8 @@ impl InfoServer {
         let mut sink = Sink::new(body, pending.sent);
         payload(pending.profile, pending.reply, &mut sink);
         let chunk = sink.written();
-        let sent = pending.sent + chunk;
+        // Both count bytes of one payload of at most `total` bytes: never saturates.
+        let sent = pending.sent.saturating_add(chunk);
         let left = total.saturating_sub(sent).div_ceil(room);
         let left = u16::try_from(left).unwrap_or(u16::MAX);
         let mut op = pending.reply.opcode();
@@ -227,7 +228,8 @@ impl InfoServer {
         if let Some(h) = header.first_chunk_mut::<INFO_HEADER_LEN>() {
             *h = [op, 0, l0, l1];
         }
-        INFO_HEADER_LEN + chunk
+        // `chunk` bytes were written after the header in `resp`: never saturates.
+        INFO_HEADER_LEN.saturating_add(chunk)
     }
 }
 
@@ -239,9 +241,9 @@ fn parse(
     data: &[u8],
 ) -> Result<Result<Reply, AbortCode>, CoeError> {
     let u16_at = |at: usize| {
-        data.get(at..at + 2)
-            .and_then(|b| b.try_into().ok())
-            .map(u16::from_le_bytes)
+        data.get(at..)
+            .and_then(|b| b.first_chunk::<2>())
+            .map(|b| u16::from_le_bytes(*b))
             .ok_or(CoeError::SizeTooShort)
     };
     Ok(match op {
@@ -327,7 +329,8 @@ impl<'a> Sink<'a> {
             {
                 *slot = b;
             }
-            self.pos += 1;
+            // Counts the bytes of one payload built from the profile: never saturates.
+            self.pos = self.pos.saturating_add(1);
         }
     }
     fn u16(&mut self, v: u16) {

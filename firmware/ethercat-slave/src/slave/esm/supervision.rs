@@ -6,6 +6,8 @@
 //! adds [`MISSED_WEIGHT`] to the counter, each SYNC0 subtracts 1; above the limit the slave
 //! leaves OP/SAFEOP with AL status code 0x001A (ETG.1020 "Sync Error Counter Limit").
 
+use core::num::NonZeroU64;
+
 /// Counter increment per missed sync event (ETG.1020: "+3 for every missed event").
 pub const MISSED_WEIGHT: u16 = 3;
 /// Counter decrement per good sync event (ETG.1020: "−1 for every correct cycle").
@@ -91,17 +93,18 @@ impl SyncSupervisor {
     /// Counts the SYNC0 events that should have arrived by `now_ns` but did not. Returns the
     /// number newly counted. Nothing is counted before the first SYNC0.
     pub fn check(&mut self, now_ns: u64, cycle_ns: u32) -> u16 {
-        let (Some(due), true) = (self.next_due_ns, cycle_ns > 0) else {
+        let (Some(due), Some(cycle)) = (self.next_due_ns, NonZeroU64::new(u64::from(cycle_ns)))
+        else {
             return 0;
         };
-        let cycle = u64::from(cycle_ns);
-        let late_after = due.saturating_add(cycle / 2);
-        if now_ns <= late_after {
+        let late_after = due.saturating_add(cycle.get() / 2);
+        let Some(late_by) = now_ns.checked_sub(late_after).filter(|&d| d > 0) else {
             return 0;
-        }
-        let missed = (now_ns - late_after) / cycle + 1;
+        };
+        // The late event and every whole cycle since; counts and times clamp at their top.
+        let missed = (late_by / cycle).saturating_add(1);
         let missed = u16::try_from(missed).unwrap_or(u16::MAX);
-        self.next_due_ns = Some(due.saturating_add(u64::from(missed) * cycle));
+        self.next_due_ns = Some(due.saturating_add(u64::from(missed).saturating_mul(cycle.get())));
         self.counter = self
             .counter
             .saturating_add(missed.saturating_mul(MISSED_WEIGHT));
@@ -182,11 +185,13 @@ impl LostOutputsCounter {
 /// Whether `interval` is a whole number (≥ 1) of `cycle`s within the PLL tolerance (missed
 /// pulses are the sync error counter's business, not a period change).
 fn on_period(interval: u64, cycle: u64) -> bool {
-    if cycle == 0 {
+    let Some(divisor) = NonZeroU64::new(cycle) else {
         return true;
-    }
-    let k = ((interval + cycle / 2) / cycle).max(1);
-    interval.abs_diff(k * cycle) <= cycle / PLL_TOLERANCE_DIVISOR
+    };
+    // The nearest whole number of cycles; saturation only for intervals near 2^64 ns, far
+    // off any period anyway.
+    let k = (interval.saturating_add(cycle / 2) / divisor).max(1);
+    interval.abs_diff(k.saturating_mul(cycle)) <= cycle / PLL_TOLERANCE_DIVISOR
 }
 
 #[cfg(test)]

@@ -82,7 +82,8 @@ impl SyncConfig {
                 Err(AlStatusCode::DcInvalidSyncCycleTime)
             }
             SyncMode::DcSync0 | SyncMode::DcSync1
-                if support.cycle_step_ns > 1 && self.cycle_ns % support.cycle_step_ns != 0 =>
+                if support.cycle_step_ns > 1
+                    && self.cycle_ns.checked_rem(support.cycle_step_ns) != Some(0) =>
             {
                 Err(AlStatusCode::DcSync0CycleTime)
             }

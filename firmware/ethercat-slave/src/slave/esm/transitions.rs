@@ -259,15 +259,15 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let mut od = Dictionary::new(self.profile, &mut self.ram);
         for index in [SM_OUTPUT_PARAMETER, SM_INPUT_PARAMETER] {
             if let Some(e) = od.entry(index, SUB_SYNC_TYPE) {
-                let _ = od.set_value(e, &mode.to_le_bytes()[..e.byte_len().min(2)]);
+                let _ = od.set_value(e, le_prefix(&mode.to_le_bytes(), e.byte_len()));
             }
             if cycle != 0 {
                 if let Some(e) = od.entry(index, SUB_CYCLE_TIME) {
-                    let _ = od.set_value(e, &cycle.to_le_bytes()[..e.byte_len().min(4)]);
+                    let _ = od.set_value(e, le_prefix(&cycle.to_le_bytes(), e.byte_len()));
                 }
             }
             if let Some(e) = od.entry(index, SUB_SYNC0_CYCLE_TIME) {
-                let _ = od.set_value(e, &sync0_cycle.to_le_bytes()[..e.byte_len().min(4)]);
+                let _ = od.set_value(e, le_prefix(&sync0_cycle.to_le_bytes(), e.byte_len()));
             }
         }
     }
@@ -288,4 +288,10 @@ pub(in crate::slave) fn read_sm<P: EscPdi>(pdi: &mut P, n: u8) -> Result<SmConfi
     let mut b = [0u8; SmConfig::LEN];
     pdi.read(regs::sm(n).addr, &mut b)?;
     Ok(SmConfig::from_bytes(b))
+}
+
+/// The first `len` bytes of a little-endian value (all of them if the entry is longer): what an
+/// entry of `len` bytes holds of it.
+fn le_prefix(bytes: &[u8], len: usize) -> &[u8] {
+    bytes.get(..len).unwrap_or(bytes)
 }
