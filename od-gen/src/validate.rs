@@ -113,6 +113,16 @@ fn sms(p: &Profile) -> Result<(), Fault> {
                 Invalid::Value("a mailbox needs at least 16 bytes".into()),
             ));
         }
+        if sm.length > hal::esc::MAX_FIRMWARE_MAILBOX {
+            return Err(fault(
+                &format!("sm.{name}.size"),
+                Invalid::Value(format!(
+                    "at most {} bytes: the firmware's mailbox buffers are that long, it refuses \
+                     a longer mailbox at INIT -> PREOP (AL status code 0x0016)",
+                    hal::esc::MAX_FIRMWARE_MAILBOX
+                )),
+            ));
+        }
     }
     // Memory used by each SM: mailboxes one buffer, process data three buffers (3-buffer mode),
     // sized for the larger of the default assignment and all PDOs of that direction.
@@ -147,12 +157,18 @@ fn sms(p: &Profile) -> Result<(), Fault> {
         .into_iter()
         .filter_map(|(n, b)| b.map(|b| (n, u32::from(b.start), u32::from(b.length))))
         .collect();
+    // The ET1100's process RAM: 8 KiB from 0x1000 (ET1100 datasheet Sec. I, address space).
+    let ram = hal::esc::regs::ET1100_PROCESS_RAM;
     for &(name, start, len) in areas.iter().chain(&boot) {
-        // The ESC process RAM starts at 0x1000 (ET1100 datasheet Sec. I, address space).
-        if start < 0x1000 || start + len > 0x1_0000 {
+        if start < u32::from(ram.addr) || start + len > u32::from(ram.end()) {
             return Err(fault(
                 &format!("sm.{name}.start"),
-                Invalid::Value("outside the ESC process RAM (0x1000..)".into()),
+                Invalid::Value(format!(
+                    "{len} bytes from {start:#06x} (three buffers for process data) do not fit \
+                     the ET1100 process RAM {:#06x}..{:#06x}",
+                    ram.addr,
+                    ram.end()
+                )),
             ));
         }
     }

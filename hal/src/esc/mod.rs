@@ -29,7 +29,10 @@ pub use dc::{
 };
 pub use eeprom::{EepromCommand, EepromConfig, EepromControl, EepromPdiAccess};
 pub use fmmu::{FmmuConfig, FmmuType};
-pub use sm::{SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus};
+pub use sm::{
+    SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus,
+    MAX_FIRMWARE_MAILBOX,
+};
 
 /// Mailbox protocol bits of SII word 0x1C (ETG.1000.6 Table 18 / ETG.2010).
 pub mod mailbox_protocols {

@@ -1,5 +1,11 @@
 //! SyncManager channel registers (0x0800 + 8·n).
 
+/// The longest mailbox SyncManager the firmware serves, bytes: the slave stack's mailbox
+/// buffers are this long (`ethercat_slave::mailbox::MAX_MAILBOX`), a longer SM0/SM1 is
+/// refused at INIT → PREOP with AL status code 0x0016, and od-gen refuses a profile that
+/// declares one. Defined here because both depend on `hal`.
+pub const MAX_FIRMWARE_MAILBOX: u16 = 512;
+
 /// Operation mode, control bits 0..1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

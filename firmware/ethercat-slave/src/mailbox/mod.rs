@@ -9,5 +9,6 @@ pub mod header;
 pub use dll::Mailbox;
 
 /// Largest mailbox the stack buffers (bytes). A profile with a larger mailbox is refused at
-/// INIT → PREOP with 0x0016 (`slave::esm::sm_check`) rather than overflowing a buffer.
-pub const MAX_MAILBOX: usize = 512;
+/// INIT → PREOP with 0x0016 (`slave::esm::sm_check`) rather than overflowing a buffer; od-gen
+/// refuses to generate one ([`hal::esc::MAX_FIRMWARE_MAILBOX`], the one definition).
+pub const MAX_MAILBOX: usize = hal::esc::MAX_FIRMWARE_MAILBOX as usize;
