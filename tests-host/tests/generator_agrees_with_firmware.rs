@@ -24,9 +24,7 @@ fn standard_with_mailboxes(size: u16) -> String {
         )
         .replacen(
             MAILBOX_IN,
-            &format!(
-                "mailbox_in = {{ start = {inputs_at:#06x}, size = {size}, control = 0x22 }}"
-            ),
+            &format!("mailbox_in = {{ start = {inputs_at:#06x}, size = {size}, control = 0x22 }}"),
             1,
         )
         .replacen(
