@@ -45,6 +45,8 @@ pub struct BissLayout {
 
 impl BissLayout {
     /// Position bits (multi-turn + single-turn), at most 56.
+    // Overflow-free: two u8 add up to at most 510.
+    #[allow(clippy::arithmetic_side_effects)]
     const fn position_bits(&self) -> u32 {
         self.multi_turn_bits as u32 + self.single_turn_bits as u32
     }
@@ -111,7 +113,18 @@ struct Bits<'a> {
     at: usize,
 }
 
-impl Bits<'_> {
+impl<'a> Bits<'a> {
+    /// The bits of `bytes`, up to its first `usize::MAX / 8` bytes (far beyond any frame), so
+    /// that every bit's index fits a usize.
+    fn new(bytes: &'a [u8]) -> Self {
+        Self {
+            bytes: bytes.get(..usize::MAX / 8).unwrap_or(bytes),
+            at: 0,
+        }
+    }
+
+    // Overflow-free: the byte at at / 8 was there, so at < 8 × len ≤ usize::MAX − 7 (`new`).
+    #[allow(clippy::arithmetic_side_effects)]
     fn next(&mut self) -> Option<bool> {
         let byte = self.bytes.get(self.at / 8)?;
         let bit = (byte >> (7 - self.at % 8)) & 1 == 1;
@@ -136,10 +149,7 @@ pub fn decode(frame: &[u8], layout: BissLayout) -> Result<BissReading, BissError
     if position_bits == 0 || position_bits > 56 {
         return Err(BissError::Layout);
     }
-    let mut bits = Bits {
-        bytes: frame,
-        at: 0,
-    };
+    let mut bits = Bits::new(frame);
     // Idle high until the slave answers; then the ack (low) until the start bit.
     let mut acked = false;
     loop {
@@ -152,6 +162,8 @@ pub fn decode(frame: &[u8], layout: BissLayout) -> Result<BissReading, BissError
     }
     // CDS, then the data.
     bits.take(1).ok_or(BissError::NoFrame)?;
+    // Overflow-free: position_bits ≤ 56 (checked above).
+    #[allow(clippy::arithmetic_side_effects)]
     let data_bits = position_bits + 2;
     let data = bits.take(data_bits).ok_or(BissError::NoFrame)?;
     let sent_crc = bits.take(CRC_BITS).ok_or(BissError::NoFrame)? as u8;
@@ -215,6 +227,8 @@ impl<T: FrameTransfer> BissEncoder<T> {
     }
 
     /// The bits of a frame (for a board's frame buffer).
+    // Overflow-free: at most 510 position bits (two u8) + 10.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn frame_bits(layout: BissLayout) -> u32 {
         layout.position_bits() + OVERHEAD_BITS
     }
@@ -226,7 +240,9 @@ impl<T: FrameTransfer> BissEncoder<T> {
         match self.last {
             None => raw as i64,
             Some((position, last_raw)) => {
-                // Sign-extend the difference from the range's width (≤ 56 bits).
+                // Sign-extend the difference from the range's width.
+                // Overflow-free: `new` keeps bits in 1..=56, so the shift is 8..=63.
+                #[allow(clippy::arithmetic_side_effects)]
                 let shift = 64 - bits;
                 let step = ((raw.wrapping_sub(last_raw) << shift) as i64) >> shift;
                 position.saturating_add(step)

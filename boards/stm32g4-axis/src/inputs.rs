@@ -116,11 +116,12 @@ impl<P: InputPins, T: ProbeTimer> BoardInputs<P, T> {
         {
             *slot = self.edges.take_edge(probe).map(|edge| {
                 let edge = u32::from(edge);
-                let before = if edge <= now {
-                    now - edge
-                } else {
-                    // In the period that ended: the counter was reset at the valley since.
-                    (now + ended_period_ticks).saturating_sub(edge)
+                let before = match now.checked_sub(edge) {
+                    Some(since) => since,
+                    // In the period that ended: the counter was reset at the valley since, so
+                    // the edge lies (period − edge) + now = period − (edge − now) ticks back (0
+                    // for a capture the period cannot hold).
+                    None => ended_period_ticks.saturating_sub(edge.abs_diff(now)),
                 };
                 ticks_to_ns(
                     before.saturating_add(self.capture_delay_ticks),
@@ -138,10 +139,9 @@ impl<P: InputPins, T: ProbeTimer> BoardInputs<P, T> {
 
 /// `ticks` of a timer at `timer_hz` in ns (0 without a clock), saturated to `i32`.
 fn ticks_to_ns(ticks: u32, timer_hz: u32) -> i32 {
-    match timer_hz {
-        0 => 0,
-        hz => i32::try_from(u64::from(ticks) * 1_000_000_000 / u64::from(hz)).unwrap_or(i32::MAX),
-    }
+    (u64::from(ticks) * 1_000_000_000)
+        .checked_div(u64::from(timer_hz))
+        .map_or(0, |ns| i32::try_from(ns).unwrap_or(i32::MAX))
 }
 
 impl<P: InputPins, T: ProbeTimer> DigitalInputs for BoardInputs<P, T> {
@@ -325,6 +325,39 @@ mod tests {
             None
         );
         assert!(inputs.touch_probe(TouchProbe::One).active);
+    }
+
+    #[test]
+    fn captures_beyond_the_ended_period_do_not_overflow() {
+        let mut inputs = BoardInputs::new(Pins(0), POLARITY).with_probe_timer(
+            Edges {
+                now: 10,
+                edges: [Some(4_000), Some(u16::MAX)],
+            },
+            170_000_000,
+            u32::MAX,
+        );
+        // A period too short to hold the capture: the edge counts from the valley (0 ticks,
+        // plus the filter delay); an absurd period length saturates instead of wrapping.
+        inputs.latch(100);
+        assert_eq!(
+            inputs.touch_probe(TouchProbe::One).edge_ns_before_position,
+            Some(i32::MAX)
+        );
+        inputs.edges.edges = [Some(20), None];
+        inputs.capture_delay_ticks = 0;
+        inputs.latch(u32::MAX);
+        assert_eq!(
+            inputs.touch_probe(TouchProbe::One).edge_ns_before_position,
+            Some(i32::MAX)
+        );
+        inputs.edges.edges = [Some(20), None];
+        inputs.latch(15);
+        assert_eq!(
+            inputs.touch_probe(TouchProbe::One).edge_ns_before_position,
+            Some(29),
+            "15 − 10 + 10 ticks = 5 ticks = 29.4 ns"
+        );
     }
 
     struct Brake(Option<bool>);

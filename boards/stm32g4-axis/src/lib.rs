@@ -34,6 +34,21 @@
 
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
+// Firmware never panics on input: outside tests no unwrap/expect/panic and no unchecked
+// indexing or integer arithmetic; each exception states why it cannot fail where it stands.
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects
+    )
+)]
 
 pub mod biss;
 pub mod board;

@@ -26,6 +26,7 @@
 //! [`LOSS_WINDOW_FACTOR`] windows once locked, or when no lock came within [`ACQUIRE_LIMIT`]
 //! cycles.
 
+use core::num::{NonZeroU32, NonZeroU64};
 use core::sync::atomic::{AtomicI32, Ordering};
 
 /// Largest number of DC cycles in the repeating pattern.
@@ -49,7 +50,12 @@ const INTEGRAL_DIVISOR: i32 = 16;
 /// Fraction bits of the fixed-point tick values (1/256 tick).
 const FRAC_BITS: u32 = 8;
 const ONE: i64 = 1 << FRAC_BITS;
+/// The fraction of a fixed-point value (the bits below [`FRAC_BITS`]).
+const FRAC_MASK: i32 = (1 << FRAC_BITS) - 1;
 const NS_PER_S: u64 = 1_000_000_000;
+/// 10⁹ / 256: a cycle in ns × the timer clock in Hz over this is the cycle in 1/256 ticks.
+const NS_PER_S_Q8: u64 = NS_PER_S / ONE as u64;
+const _: () = assert!(NS_PER_S % ONE as u64 == 0, "10⁹ is a multiple of 256");
 
 /// The auto-reload of each PWM period for a trim in 1/256 ticks: a first-order sigma-delta,
 /// so that the periods average the trim exactly (a whole-tick trim would move the phase by
@@ -77,10 +83,13 @@ impl PeriodDither {
     #[inline]
     pub fn next_arr(&mut self, trim_q8: i32) -> u16 {
         let limit = self.nominal_q8 / 2;
-        // Below 3/2 × 2^24 + 2^8: no overflow.
+        // Overflow-free: nominal_q8 < 2^24 (`new`), the trim is clamped to ±nominal_q8 / 2 and
+        // the residual lies in 0..256: the sum is below 3/2 × 2^24 + 2^8.
+        #[allow(clippy::arithmetic_side_effects)]
         let total = self.nominal_q8 + trim_q8.clamp(-limit, limit) + self.residual;
         let arr = total >> FRAC_BITS;
-        self.residual = total - (arr << FRAC_BITS);
+        // The fraction left over (total − arr × 256) goes to the next period.
+        self.residual = total & FRAC_MASK;
         // Between 1/2 and 3/2 of a u16 nominal ARR, which exceeds u16 only for a nominal
         // above 43,690: saturate there.
         u16::try_from(arr).unwrap_or(u16::MAX)
@@ -167,16 +176,21 @@ pub struct PhaseLock {
 impl PhaseLock {
     /// A lock of a centre-aligned PWM whose nominal auto-reload is `nominal_arr` (period
     /// 2 × ARR ticks) on a timer clocked at `timer_hz`, to DC cycles of `cycle_ns`.
+    // Overflow-free for every input: cycle_ns × timer_hz is a product of two u32, so the cycle
+    // is below 2^64 / 3,906,250 < 2^43 (1/256 ticks) and 16 × or 256 × it fits an i64; the
+    // period is 512..2^25 (a non-zero u16 nominal), gain_den ≥ 8, the rest are constants.
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn new(timer_hz: u32, nominal_arr: u16, cycle_ns: u32) -> Result<Self, PhaseLockError> {
         if timer_hz == 0 || nominal_arr == 0 || cycle_ns == 0 {
             return Err(PhaseLockError::Zero);
         }
-        // The cycle in 1/256 ticks, exactly.
-        let cycle_scaled = u64::from(cycle_ns) * u64::from(timer_hz) * ONE as u64;
-        if cycle_scaled % NS_PER_S != 0 {
+        // The cycle in 1/256 ticks, exactly: cycle_ns × timer_hz × 256 / 10⁹, the 256 taken
+        // out of the 10⁹ first so that the product stays within 64 bits.
+        let cycle_ns_hz = u64::from(cycle_ns) * u64::from(timer_hz);
+        if cycle_ns_hz % NS_PER_S_Q8 != 0 {
             return Err(PhaseLockError::CycleResolution);
         }
-        let cycle = (cycle_scaled / NS_PER_S) as i64;
+        let cycle = (cycle_ns_hz / NS_PER_S_Q8) as i64;
         let period = 2 * i64::from(nominal_arr) * ONE;
         let pattern = (1..=MAX_PATTERN)
             .find(|&k| (i64::from(k) * cycle) % period == 0)
@@ -218,6 +232,10 @@ impl PhaseLock {
     ///
     /// Timing: cycle context, at every SYNC0; 32-bit arithmetic (hardware divisions) but for
     /// one 32 × 32 → 64-bit multiplication.
+    // Overflow-free: the fields keep the bounds `new` gave them (period 512..2^25, cycle_mod
+    // and expected in 0..period, pattern 1..=16, gain_q24 ≤ 2^29, limit < 2^18): k × cycle_mod
+    // < 2^29, phase differences stay within ±2^25, and an i32 × gain_q24 fits an i64.
+    #[allow(clippy::arithmetic_side_effects)]
     pub fn update(&mut self, phase_ticks: u16, cycles: u32) -> i32 {
         let cycles = cycles.max(1);
         // Advance the expected phase by the cycles passed, exactly: the pattern repeats after
@@ -251,6 +269,9 @@ impl PhaseLock {
         self.trim
     }
 
+    // Overflow-free: `run` counts to LOCK_COUNT (then starts again) while acquiring and to
+    // LOSS_COUNT (then Lost, which counts no more) while locked.
+    #[allow(clippy::arithmetic_side_effects)]
     fn judge(&mut self, error: i32) {
         match self.state {
             LockState::Acquiring => {
@@ -351,14 +372,14 @@ impl Sync0Lock {
             trim_q8: 0,
             report_lost: false,
         };
-        let Some(cycle_ns) = cycle_ns.filter(|&c| c > 0) else {
+        let Some(cycle_ns) = cycle_ns.and_then(NonZeroU32::new) else {
             self.lock = None;
             self.refused = false;
             self.last_ns = None;
             return idle;
         };
-        if cycle_ns != self.cycle_ns {
-            self.cycle_ns = cycle_ns;
+        if cycle_ns.get() != self.cycle_ns {
+            self.cycle_ns = cycle_ns.get();
             self.lock = None;
             self.refused = false;
         }
@@ -366,7 +387,7 @@ impl Sync0Lock {
             if self.refused {
                 return idle;
             }
-            match PhaseLock::new(self.timer_hz, self.nominal_arr, cycle_ns) {
+            match PhaseLock::new(self.timer_hz, self.nominal_arr, cycle_ns.get()) {
                 Ok(lock) => {
                     self.lock = Some(lock);
                     self.last_ns = None;
@@ -387,12 +408,13 @@ impl Sync0Lock {
             // Rounded; in 32 bits (a hardware division) unless SYNC0 was away for seconds.
             match u32::try_from(elapsed)
                 .ok()
-                .and_then(|e| e.checked_add(cycle_ns / 2))
+                .and_then(|e| e.checked_add(cycle_ns.get() / 2))
             {
                 Some(e) => e / cycle_ns,
                 None => {
-                    let cycle = u64::from(cycle_ns);
-                    u32::try_from((elapsed + cycle / 2) / cycle).unwrap_or(u32::MAX)
+                    let cycle = NonZeroU64::from(cycle_ns);
+                    u32::try_from(elapsed.saturating_add(cycle.get() / 2) / cycle)
+                        .unwrap_or(u32::MAX)
                 }
             }
         });
@@ -421,11 +443,13 @@ impl Sync0Lock {
     }
 }
 
+/// `ticks_q8` (1/256 ticks) of a timer at `timer_hz` in ns (0 without a clock).
 fn ticks_q8_to_ns(ticks_q8: i32, timer_hz: u32) -> i64 {
-    match timer_hz {
-        0 => 0,
-        hz => i64::from(ticks_q8) * NS_PER_S as i64 / ONE / i64::from(hz),
-    }
+    // An i32 × 10⁹ < 2^61: the product never fails.
+    i64::from(ticks_q8)
+        .checked_mul(NS_PER_S as i64)
+        .and_then(|scaled| (scaled / ONE).checked_div(i64::from(timer_hz)))
+        .unwrap_or(0)
 }
 
 #[cfg(test)]
@@ -538,6 +562,14 @@ mod tests {
         // 1 ns at 3 Hz is 3e-9 ticks: not representable.
         assert_eq!(
             PhaseLock::new(3, 1, 1).err(),
+            Some(PhaseLockError::CycleResolution)
+        );
+        // Long cycles are computed exactly (cycle × clock × 256 exceeds 64 bits): 1 s and 4 s
+        // are 40,000 and 160,000 periods.
+        assert_eq!(pattern(1_000_000_000), Ok(1));
+        assert_eq!(pattern(4_000_000_000), Ok(1));
+        assert_eq!(
+            PhaseLock::new(TIMER_HZ, ARR, u32::MAX).err(),
             Some(PhaseLockError::CycleResolution)
         );
     }
@@ -665,6 +697,10 @@ mod tests {
         // Back out of the synchronous states: dropped.
         s.on_sync0(None, t, 0);
         assert!(s.lock().is_none());
+        // A clock that jumps to the end of its range: as many cycles as a u32 counts (no
+        // overflow), far past the acquisition limit.
+        s.on_sync0(Some(CYCLE), 0, ARR);
+        assert!(s.on_sync0(Some(CYCLE), u64::MAX, ARR).report_lost);
     }
 
     #[test]

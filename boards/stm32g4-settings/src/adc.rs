@@ -9,10 +9,21 @@
 
 use crate::{SettingError, NS_PER_S};
 
-/// The sampling times of SMP codes 0–7, in half ADC clock cycles.
-const SAMPLE_HALF_CYCLES: [u64; 8] = [5, 13, 25, 49, 95, 185, 495, LONGEST_SAMPLE_HALF_CYCLES];
+/// The SMP codes 0–7 and their sampling times in half ADC clock cycles, shortest first.
+const SAMPLE_TIMES: [(u8, u64); 8] = [
+    (0b000, 5),
+    (0b001, 13),
+    (0b010, 25),
+    (0b011, 49),
+    (0b100, 95),
+    (0b101, 185),
+    (0b110, 495),
+    (0b111, LONGEST_SAMPLE_HALF_CYCLES),
+];
 /// The longest sampling time (SMP = 111), in half cycles.
 const LONGEST_SAMPLE_HALF_CYCLES: u64 = 1281;
+/// The longest sampling time in ns × the ADC clock in Hz: 640.5 cycles × 10⁹.
+const LONGEST_SAMPLE_NS_HZ: u64 = LONGEST_SAMPLE_HALF_CYCLES * NS_PER_S / 2;
 
 /// The successive-approximation time of a 12-bit conversion, in half cycles.
 const CONVERSION_12_BIT_HALF_CYCLES: u64 = 25;
@@ -33,14 +44,18 @@ impl SynchronousClock {
         if hclk_hz == 0 || max_adc_hz == 0 {
             return Err(SettingError::Zero);
         }
-        // CKMODE 01, 10, 11: HCLK / 1, / 2, / 4.
-        let mut ckmode = 0b01u8;
-        while ckmode <= 0b11 {
-            let adc_hz = hclk_hz >> (ckmode - 1);
+        // CKMODE 01, 10, 11: HCLK / 1, / 2, / 4, each half the one before.
+        let mut modes: &[u8] = &[0b01, 0b10, 0b11];
+        let mut adc_hz = hclk_hz;
+        while let [ckmode, rest @ ..] = modes {
             if adc_hz <= max_adc_hz {
-                return Ok(Self { ckmode, adc_hz });
+                return Ok(Self {
+                    ckmode: *ckmode,
+                    adc_hz,
+                });
             }
-            ckmode += 1;
+            adc_hz >>= 1;
+            modes = rest;
         }
         Err(SettingError::TooSmall {
             min: (hclk_hz / 4) as u64,
@@ -61,29 +76,35 @@ impl SampleTime {
     /// The shortest sampling time of at least `min_ns` (what the source impedance and the
     /// sampling capacitor need, from the datasheet's formula) at an ADC clock of `adc_hz`.
     pub const fn at_least(adc_hz: u32, min_ns: u32) -> Result<Self, SettingError> {
-        if adc_hz == 0 {
+        // The longest sampling time at this clock, ns (rounded down); a zero clock has none.
+        let Some(longest_ns) = LONGEST_SAMPLE_NS_HZ.checked_div(adc_hz as u64) else {
             return Err(SettingError::Zero);
-        }
-        // half_cycles / (2 f) ≥ t ⇔ half_cycles × 10⁹ ≥ 2 f t.
-        let needed = 2 * adc_hz as u64 * min_ns as u64;
-        let mut code = 0;
-        while code < SAMPLE_HALF_CYCLES.len() {
-            let half = SAMPLE_HALF_CYCLES[code];
-            if half * NS_PER_S >= needed {
+        };
+        // half_cycles / (2 f) ≥ t ⇔ half_cycles ≥ 2 f t / 10⁹, rounded up. f t is a product of
+        // two u32; doubled it saturates only far beyond the longest sampling time (refused
+        // below, as it should be).
+        let needed = (adc_hz as u64)
+            .saturating_mul(min_ns as u64)
+            .saturating_mul(2)
+            .div_ceil(NS_PER_S);
+        let mut times: &[(u8, u64)] = &SAMPLE_TIMES;
+        while let [(code, half), rest @ ..] = times {
+            if *half >= needed {
                 return Ok(Self {
-                    code: code as u8,
-                    half_cycles: half as u16,
+                    code: *code,
+                    half_cycles: *half as u16,
                 });
             }
-            code += 1;
+            times = rest;
         }
-        Err(SettingError::TooLarge {
-            max: LONGEST_SAMPLE_HALF_CYCLES * NS_PER_S / (2 * adc_hz as u64),
-        })
+        Err(SettingError::TooLarge { max: longest_ns })
     }
 
     /// The time from the start of the sampling to the end of a 12-bit conversion, in ns
     /// (rounded up), at an ADC clock of `adc_hz`.
+    // Overflow-free for every input: (65 535 + 25) half cycles × 10⁹ < 2⁴⁷, twice a u32 clock
+    // < 2³³, and the divisor is not 0 in its arm.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn conversion_ns(&self, adc_hz: u32) -> u64 {
         let half = self.half_cycles as u64 + CONVERSION_12_BIT_HALF_CYCLES;
         match adc_hz {
@@ -136,5 +157,11 @@ mod tests {
             SampleTime::at_least(42_500_000, 20_000),
             Err(SettingError::TooLarge { max: 15_070 })
         );
+        // 2 f t beyond 64 bits is refused, not wrapped.
+        assert_eq!(
+            SampleTime::at_least(u32::MAX, u32::MAX),
+            Err(SettingError::TooLarge { max: 149 })
+        );
+        assert_eq!(SampleTime::at_least(0, 100), Err(SettingError::Zero));
     }
 }

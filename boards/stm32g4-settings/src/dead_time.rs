@@ -62,6 +62,10 @@ pub struct DeadTime {
 impl DeadTime {
     /// The shortest DTG code whose dead time is at least `dead_time_ns`, for a timer clocked at
     /// `timer_hz` with clock division `ckd`.
+    // Overflow-free for every input: dead_time_ns × dts_hz is a product of two u32; `steps`
+    // lies in 64..=127 (the 2 t_DTS arm) or 32..=63 (the others), so the subtractions stay
+    // ≥ 0 and the products ≤ 1008; the last arm has needed > 1008, so dts_hz is not 0 there.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn at_least(
         timer_hz: u32,
         ckd: ClockDivision,
@@ -100,6 +104,9 @@ impl DeadTime {
 
     /// The dead time in ns for a timer clocked at `timer_hz` with clock division `ckd`
     /// (rounded down).
+    // Overflow-free for every input: the divider is 1, 2 or 4, a u16 of ticks × 10⁹ < 2⁴⁶, and
+    // dts_hz is not 0 in its arm.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn nanoseconds(&self, timer_hz: u32, ckd: ClockDivision) -> u64 {
         match timer_hz as u64 / ckd.divider() {
             0 => 0,

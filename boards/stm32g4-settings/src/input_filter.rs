@@ -19,24 +19,24 @@
 use crate::dead_time::ClockDivision;
 use crate::{SettingError, NS_PER_S};
 
-/// Codes 1–15: (sampling clock divider, N), the divider counted in timer clocks for codes 1–3
-/// and in t_DTS for the others ([`FROM_DTS`]).
-const FILTERS: [(u64, u64); 15] = [
-    (1, 2),
-    (1, 4),
-    (1, 8),
-    (2, 6),
-    (2, 8),
-    (4, 6),
-    (4, 8),
-    (8, 6),
-    (8, 8),
-    (16, 5),
-    (16, 6),
-    (16, 8),
-    (32, 5),
-    (32, 6),
-    (32, 8),
+/// Codes 1–15: (code, sampling clock divider, N), the divider counted in timer clocks for
+/// codes 1–3 and in t_DTS for the others ([`FROM_DTS`]).
+const FILTERS: [(u8, u64, u64); 15] = [
+    (0b0001, 1, 2),
+    (0b0010, 1, 4),
+    (0b0011, 1, 8),
+    (0b0100, 2, 6),
+    (0b0101, 2, 8),
+    (0b0110, 4, 6),
+    (0b0111, 4, 8),
+    (0b1000, 8, 6),
+    (0b1001, 8, 8),
+    (0b1010, 16, 5),
+    (0b1011, 16, 6),
+    (0b1100, 16, 8),
+    (0b1101, 32, 5),
+    (0b1110, 32, 6),
+    (0b1111, 32, 8),
 ];
 
 /// The first code whose sampling clock derives from f_DTS.
@@ -56,6 +56,9 @@ impl InputFilter {
     /// time between two edges of the valid signal, e.g. a quarter of an encoder line period at
     /// the top speed): the longest delay not above it, for a timer clocked at `timer_hz` with
     /// clock division `ckd`. No filter when even the weakest is too slow.
+    // Overflow-free for every input: shortest_pulse_ns × timer_hz is a product of two u32, and a
+    // filter's delay is at most 32 × 4 × 8 timer clocks.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn passing(
         timer_hz: u32,
         ckd: ClockDivision,
@@ -69,21 +72,22 @@ impl InputFilter {
             code: 0,
             delay_ticks: 0,
         };
-        let mut i = 0;
-        while i < FILTERS.len() {
-            let (divider, n) = FILTERS[i];
-            let code = i as u8 + 1;
-            let clocks = if code >= FROM_DTS {
-                divider * ckd.divider()
+        let mut filters: &[(u8, u64, u64)] = &FILTERS;
+        while let [(code, divider, n), rest @ ..] = filters {
+            let clocks = if *code >= FROM_DTS {
+                *divider * ckd.divider()
             } else {
-                divider
+                *divider
             };
-            let delay_ticks = clocks * n;
+            let delay_ticks = clocks * *n;
             // The longest delay that passes; among equal ones the later code (more samples).
             if delay_ticks <= limit_ticks && delay_ticks >= best.delay_ticks {
-                best = Self { code, delay_ticks };
+                best = Self {
+                    code: *code,
+                    delay_ticks,
+                };
             }
-            i += 1;
+            filters = rest;
         }
         Ok(best)
     }
@@ -92,7 +96,11 @@ impl InputFilter {
     pub const fn delay_ns(&self, timer_hz: u32) -> u64 {
         match timer_hz {
             0 => 0,
-            hz => (self.delay_ticks * NS_PER_S).div_ceil(hz as u64),
+            // Saturated for a delay no filter has (they reach 1024 clocks).
+            hz => self
+                .delay_ticks
+                .saturating_mul(NS_PER_S)
+                .div_ceil(hz as u64),
         }
     }
 }
@@ -130,5 +138,11 @@ mod tests {
             InputFilter::passing(0, ClockDivision::Div1, 10),
             Err(SettingError::Zero)
         );
+        // A delay no filter has saturates.
+        let f = InputFilter {
+            code: 0b1111,
+            delay_ticks: u64::MAX,
+        };
+        assert_eq!(f.delay_ns(1), u64::MAX);
     }
 }

@@ -29,6 +29,9 @@ impl Watchdog {
     /// The finest setting whose timeout is at least `timeout_us` at an LSI of `lsi_hz` (the
     /// smallest prescaler that fits the reload into 12 bits; the reload rounded up, so the
     /// watchdog never fires before the time the caller allowed).
+    // Overflow-free for every input: timeout_us × lsi_hz is a product of two u32, the divider
+    // is at most 256 (prescaler 0..=6), counts ≥ 1, and lsi_hz is not 0 past the first check.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn at_least(lsi_hz: u32, timeout_us: u32) -> Result<Self, SettingError> {
         if lsi_hz == 0 || timeout_us == 0 {
             return Err(SettingError::Zero);
@@ -54,6 +57,9 @@ impl Watchdog {
     }
 
     /// The timeout in µs at an LSI of `lsi_hz` (rounded down).
+    // Overflow-free for every input: 256 × (65 535 + 1) × 10⁶ < 2⁴⁵ (the prescaler clamped to 6,
+    // the reload a u16), and hz is not 0 in its arm.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn timeout_us(&self, lsi_hz: u32) -> u64 {
         let prescaler = if self.prescaler > PR_MAX {
             PR_MAX

@@ -22,6 +22,21 @@
 //! | [`iwdg`] | independent watchdog | prescaler PR and reload RL from a timeout |
 
 #![no_std]
+// Firmware never panics on input: outside tests no unwrap/expect/panic and no unchecked
+// indexing or integer arithmetic; each exception states why it cannot fail where it stands.
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::unreachable,
+        clippy::todo,
+        clippy::unimplemented,
+        clippy::indexing_slicing,
+        clippy::arithmetic_side_effects
+    )
+)]
 
 pub mod adc;
 pub mod dead_time;

@@ -30,6 +30,10 @@ pub struct CentreAligned {
 impl CentreAligned {
     /// The PSC/ARR whose frequency is nearest to `pwm_hz` with the finest resolution (the
     /// smallest prescaler that lets ARR fit 16 bits), for a timer clocked at `timer_hz`.
+    // Overflow-free for every input: timer and pwm are u32 (2 × pwm < 2³³, and ≤ timer past
+    // the first check, so timer / (2 × pwm) ≥ 1 and divider ≥ 1); divider ≤ 65 536, so
+    // 2 × divider × pwm < 2⁴⁹ and timer + divider × pwm < 2⁵⁰.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn new(timer_hz: u32, pwm_hz: u32) -> Result<Self, SettingError> {
         if timer_hz == 0 || pwm_hz == 0 {
             return Err(SettingError::Zero);
@@ -63,11 +67,15 @@ impl CentreAligned {
     }
 
     /// Counter ticks of one PWM period, at the timer clock (before the prescaler).
+    // Overflow-free for every input: (65 535 + 1) × 2 × 65 535 < 2³³.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn period_ticks(&self) -> u64 {
         (self.prescaler as u64 + 1) * 2 * self.auto_reload as u64
     }
 
     /// The frequency achieved, in mHz, for a timer clocked at `timer_hz` (rounded down).
+    // Overflow-free for every input: a u32 clock × 1000 < 2⁴², and ticks is not 0 in its arm.
+    #[allow(clippy::arithmetic_side_effects)]
     pub const fn frequency_mhz(&self, timer_hz: u32) -> u64 {
         match self.period_ticks() {
             0 => 0,
@@ -78,6 +86,8 @@ impl CentreAligned {
 
 /// TIMx_RCR for one update event every `periods` PWM periods in centre-aligned mode (the
 /// repetition counter counts half periods): 2 × `periods` − 1.
+// Overflow-free for every input: periods ≥ 1 past the first check, and twice a u32 fits a u64.
+#[allow(clippy::arithmetic_side_effects)]
 pub const fn repetition_counter(periods: u32) -> Result<u16, SettingError> {
     if periods == 0 {
         return Err(SettingError::Zero);

@@ -19,13 +19,15 @@ impl BaudRate {
         if pclk_hz == 0 || max_sck_hz == 0 {
             return Err(SettingError::Zero);
         }
-        let mut br = 0u8;
-        while br < 8 {
-            let sck_hz = pclk_hz >> (br + 1);
+        // BR = 0–7: PCLK / 2 … / 256, each half the one before.
+        let mut codes: &[u8] = &[0, 1, 2, 3, 4, 5, 6, 7];
+        let mut sck_hz = pclk_hz >> 1;
+        while let [br, rest @ ..] = codes {
             if sck_hz <= max_sck_hz {
-                return Ok(Self { br, sck_hz });
+                return Ok(Self { br: *br, sck_hz });
             }
-            br += 1;
+            sck_hz >>= 1;
+            codes = rest;
         }
         Err(SettingError::TooSmall {
             min: (pclk_hz >> 8) as u64,
