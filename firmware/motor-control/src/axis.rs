@@ -239,12 +239,9 @@ pub struct AxisFeedback {
     pub switches: Switches,
     /// The safe-torque-off channels at the last sample, `true` = closed.
     pub safe_torque_off_channels: [bool; 2],
-    /// Safe torque off holds: a channel is open, or was since the enable was last taken back
-    /// (the axis drives nothing, as if disabled, until then).
-    pub safe_torque_off: bool,
-    /// The enable input withholds operation: it is open, or was since the enable was last
-    /// taken back (the axis drives nothing until then, as with safe torque off).
-    pub interlocked: bool,
+    /// What withholds the permission to run: safe torque off, the enable input (the axis
+    /// drives nothing, as if disabled, while either holds).
+    pub withheld: Withheld,
     /// The torque demand is at the torque or current limit (CiA402 statusword bit 11
     /// "internal limit active").
     pub current_limited: bool,
@@ -318,6 +315,32 @@ pub struct Output {
     pub gates: bool,
     /// Duties (meaningful when `gates`).
     pub duties: Duties,
+}
+
+/// What withholds an axis' permission to run, one bit per cause (a byte, so that the
+/// feedback the control interrupt publishes every period stays small).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Withheld(u8);
+
+impl Withheld {
+    /// Nothing withholds it.
+    pub const NONE: Self = Self(0);
+    /// A safe-torque-off channel is open (or was).
+    const SAFE_TORQUE_OFF: u8 = 1 << 0;
+    /// The enable input is open (or was).
+    const ENABLE_INPUT: u8 = 1 << 1;
+
+    /// Safe torque off holds: a channel is open, or was since the enable was last taken back.
+    pub fn safe_torque_off(self) -> bool {
+        self.0 & Self::SAFE_TORQUE_OFF != 0
+    }
+
+    /// The enable input withholds operation: it is open, or was since the enable was last
+    /// taken back (nothing cuts the gates in hardware; the axis does).
+    pub fn interlocked(self) -> bool {
+        self.0 & Self::ENABLE_INPUT != 0
+    }
 }
 
 impl Sample {
@@ -439,8 +462,7 @@ impl AxisLink {
                         home: false,
                     },
                     safe_torque_off_channels: [true; 2],
-                    safe_torque_off: false,
-                    interlocked: false,
+                    withheld: Withheld::NONE,
                 })
             },
             // SAFETY: as above (written by the SYNC0 side only, read by the control interrupt).
@@ -532,10 +554,9 @@ pub struct Axis {
     identification_changed: bool,
     /// The safe-torque-off channels at the last sample (`true` = closed).
     safe_torque_off_channels: [bool; 2],
-    /// Safe torque off holds: a channel is open, or was since the enable was last taken back.
-    safe_torque_off: bool,
-    /// The enable input is open, or was since the enable was last taken back.
-    interlocked: bool,
+    /// What withholds the permission to run: each cause set while its input is open and held
+    /// until the enable is taken back.
+    withheld: Withheld,
     /// A sample has set the switch levels.
     captures_started: bool,
     /// 1 / the PWM period in ns (touch-probe edge interpolation).
@@ -659,8 +680,7 @@ impl Axis {
             captures_changed: false,
             identification_changed: false,
             safe_torque_off_channels: [true; 2],
-            safe_torque_off: false,
-            interlocked: false,
+            withheld: Withheld::NONE,
             captures_started: false,
             inv_period_ns: cfg.pwm_hz * 1e-9,
             omega_e: 0.0,
@@ -823,20 +843,25 @@ impl Axis {
         // opening was.
         self.safe_torque_off_channels = sample.safe_torque_off_channels;
         let [sto1, sto2] = sample.safe_torque_off_channels;
-        if !(sto1 && sto2) {
-            self.safe_torque_off = true;
-        } else if !self.command.enable {
-            self.safe_torque_off = false;
-        }
         // The enable input is a functional permission, not a safety function: nothing cuts the
-        // gates in hardware, so this is what does. It latches like safe torque off: the permission
-        // returning never restarts the motor by itself.
-        if !sample.enable_input {
-            self.interlocked = true;
-        } else if !self.command.enable {
-            self.interlocked = false;
-        }
-        let torque_allowed = !self.safe_torque_off && !self.interlocked;
+        // gates in hardware, so this is what does. It latches like safe torque off: the
+        // permission returning never restarts the motor by itself.
+        let open = if sto1 && sto2 {
+            0
+        } else {
+            Withheld::SAFE_TORQUE_OFF
+        } | if sample.enable_input {
+            0
+        } else {
+            Withheld::ENABLE_INPUT
+        };
+        let held = if self.command.enable {
+            self.withheld.0
+        } else {
+            0
+        };
+        self.withheld = Withheld(open | held);
+        let torque_allowed = self.withheld == Withheld::NONE;
         let loop_tick = self.tick == 0;
         // Below `loop_divider`: reset to 0 right here.
         self.tick = self.tick.wrapping_add(1);
@@ -1017,8 +1042,7 @@ impl Axis {
                 home: self.captures.home.level,
             },
             safe_torque_off_channels: self.safe_torque_off_channels,
-            safe_torque_off: self.safe_torque_off,
-            interlocked: self.interlocked,
+            withheld: self.withheld,
         });
         if self.identification_changed {
             link.identification.write(self.identified);
@@ -1656,9 +1680,13 @@ mod tests {
             safe_torque_off_channels: [true, false],
             ..closed
         };
-        let fb =
-            withheld_permission_cuts_the_output_and_never_restarts(open, |fb| fb.safe_torque_off);
-        assert!(!fb.interlocked, "safe torque off is not the enable input");
+        let fb = withheld_permission_cuts_the_output_and_never_restarts(open, |fb| {
+            fb.withheld.safe_torque_off()
+        });
+        assert!(
+            !fb.withheld.interlocked(),
+            "safe torque off is not the enable input"
+        );
         assert_eq!(fb.safe_torque_off_channels, [true, false]);
     }
 
@@ -1668,9 +1696,11 @@ mod tests {
             enable_input: false,
             ..quiet_sample(1_000)
         };
-        let fb = withheld_permission_cuts_the_output_and_never_restarts(open, |fb| fb.interlocked);
+        let fb = withheld_permission_cuts_the_output_and_never_restarts(open, |fb| {
+            fb.withheld.interlocked()
+        });
         assert!(
-            !fb.safe_torque_off,
+            !fb.withheld.safe_torque_off(),
             "the enable input is not safe torque off"
         );
     }

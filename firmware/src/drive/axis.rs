@@ -796,8 +796,8 @@ impl DriveAxis {
             // does (in firmware rather than hardware), so the PDS follows it alike; only the
             // profile's safe-torque-off display (`self.safe_torque_off`) is STO's alone.
             self.device
-                .set_safe_torque_off(f.safe_torque_off || f.interlocked);
-            self.safe_torque_off = f.safe_torque_off;
+                .set_safe_torque_off(f.withheld.safe_torque_off() || f.withheld.interlocked());
+            self.safe_torque_off = f.withheld.safe_torque_off();
             self.torque_limited = f.current_limited;
         }
         let at_rest = feedback.as_ref().is_none_or(|f| self.at_rest(f));
@@ -1372,7 +1372,7 @@ impl DriveAxis {
                     negative_limit: switches.negative_limit,
                     positive_limit: switches.positive_limit,
                     home: switches.home,
-                    interlock: feedback.interlocked,
+                    interlock: feedback.withheld.interlocked(),
                 },
                 limits::InputLayout {
                     limits_swapped: self.rules.digital_inputs_limits_swapped,
