@@ -86,7 +86,9 @@ impl PeriodDither {
         // Overflow-free: nominal_q8 < 2^24 (`new`), the trim is clamped to ±nominal_q8 / 2 and
         // the residual lies in 0..256: the sum is below 3/2 × 2^24 + 2^8.
         #[allow(clippy::arithmetic_side_effects)]
-        let total = self.nominal_q8 + trim_q8.clamp(-limit, limit) + self.residual;
+        // max/min rather than `clamp`, whose bound check would be a panic path in the
+        // control interrupt (`panic-paths`).
+        let total = self.nominal_q8 + trim_q8.max(-limit).min(limit) + self.residual;
         let arr = total >> FRAC_BITS;
         // The fraction left over (total − arr × 256) goes to the next period.
         self.residual = total & FRAC_MASK;
@@ -242,11 +244,17 @@ impl PhaseLock {
         // `pattern` cycles (k < 16, cycle_mod < 2^25: no overflow).
         let k = (cycles % self.pattern.max(1)) as i32;
         let advance = self.cycle_mod * k;
-        self.expected = (self.expected + advance).rem_euclid(self.period);
+        // checked_rem_euclid: `rem_euclid`'s zero-divisor check would be a panic path in the
+        // cycle interrupt; period ≥ 512 here, so the fallback never applies.
+        self.expected = (self.expected + advance)
+            .checked_rem_euclid(self.period)
+            .unwrap_or(0);
         let measured = i32::from(phase_ticks) << FRAC_BITS;
         // The error, wrapped into (−period/2, period/2]: positive = SYNC0 later in the period
         // than expected = the PWM runs fast.
-        let mut error = (measured - self.expected).rem_euclid(self.period);
+        let mut error = (measured - self.expected)
+            .checked_rem_euclid(self.period)
+            .unwrap_or(0);
         if error > self.period / 2 {
             error -= self.period;
         }
@@ -262,8 +270,10 @@ impl PhaseLock {
         if proportional(error.saturating_add(integral)).abs() <= i64::from(self.limit) {
             self.integral = integral;
         }
+        // max/min: no bound check that could panic (see `next_arr`).
         let trim = proportional(error.saturating_add(self.integral))
-            .clamp(-i64::from(self.limit), i64::from(self.limit));
+            .max(-i64::from(self.limit))
+            .min(i64::from(self.limit));
         // Within ±limit, an i32.
         self.trim = trim as i32;
         self.trim

@@ -334,12 +334,14 @@ impl<'d> Et1100Spi<'d> {
             }
             let mut progress = false;
             if sent < total && sent - received < MAX_IN_FLIGHT && sr.txe() {
+                // `get`: the positions are in range (sent < total), but an index would keep a
+                // panic path in the cycle interrupt (`panic-paths`).
                 let byte = if sent < header.len {
-                    header.bytes[sent]
+                    header.bytes.get(sent).copied().unwrap_or(READ_NEXT)
                 } else {
                     let i = sent - header.len;
                     match &data {
-                        Data::Write(w) => w[i],
+                        Data::Write(w) => w.get(i).copied().unwrap_or(0),
                         Data::Read(_) if i + 1 == data_len => READ_TERMINATION,
                         Data::Read(_) | Data::None => READ_NEXT,
                     }
@@ -351,10 +353,15 @@ impl<'d> Et1100Spi<'d> {
             if sr.rxne() {
                 let byte = r.dr8().read();
                 if received < header.addr_len {
-                    event[received] = byte;
+                    if let Some(e) = event.get_mut(received) {
+                        *e = byte;
+                    }
                 } else if received >= header.len {
-                    if let Data::Read(buf) = &mut data {
-                        buf[received - header.len] = byte;
+                    if let Some(b) = match &mut data {
+                        Data::Read(buf) => buf.get_mut(received - header.len),
+                        _ => None,
+                    } {
+                        *b = byte;
                     }
                 }
                 received += 1;

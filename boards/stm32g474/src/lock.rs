@@ -11,8 +11,10 @@
 //! `RawMutex` requires that no other context can lock while the lock is held. Every context
 //! that can preempt the holder and lock too would have to run at a priority more urgent than
 //! `CEILING`; [`lock`](BasepriRawMutex::lock) therefore checks the running context's priority
-//! and panics *before* touching the data if a context more urgent than the ceiling (or a
-//! system exception such as HardFault) tries to lock. Contexts at or below the ceiling are
+//! and resets the MCU *before* touching the data if a context more urgent than the ceiling (or
+//! a system exception such as HardFault) tries to lock: a firmware bug, answered with the
+//! state after reset (bridge off) rather than with the panic machinery, which no interrupt
+//! may reach (`panic-paths`). Contexts at or below the ceiling are
 //! masked while the lock is held, so they cannot run, let alone lock. The core is single-core
 //! (Cortex-M4), so nothing else can run concurrently.
 //!
@@ -50,18 +52,20 @@ unsafe impl InterruptNumber for Irqn {
 }
 
 impl<const CEILING: u8> BasepriRawMutex<CEILING> {
-    /// Panics if the running context is more urgent than the ceiling (see "Soundness").
+    /// Resets the MCU if the running context is more urgent than the ceiling (see
+    /// "Soundness").
     #[inline(always)]
     fn check_context() {
         match SCB::vect_active() {
             VectActive::ThreadMode => {}
             VectActive::Interrupt { irqn } => {
                 let prio = NVIC::get_priority(Irqn(u16::from(irqn)));
+                // No log: defmt's logger is not free of panics either.
                 if prio < CEILING {
-                    panic!("lock taken by IRQ {} above its ceiling", irqn);
+                    SCB::sys_reset();
                 }
             }
-            VectActive::Exception(_) => panic!("lock taken from a system exception"),
+            VectActive::Exception(_) => SCB::sys_reset(),
         }
     }
 }

@@ -32,7 +32,9 @@ impl SoftwareLimits {
 
     /// `target` limited to the range, and whether it was limited.
     pub fn clamp(&self, target: i64) -> (i64, bool) {
-        let limited = target.clamp(self.min, self.max);
+        // max/min rather than `clamp` (min < max holds by construction, but `clamp`'s check of
+        // it would still be a panic path in the cycle).
+        let limited = target.max(self.min).min(self.max);
         (limited, limited != target)
     }
 }

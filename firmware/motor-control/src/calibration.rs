@@ -183,9 +183,11 @@ impl Commutation {
     // Overflow-free: the difference of two i64 fits an i128; counts_per_rev ≥ 16 (`new`).
     #[allow(clippy::arithmetic_side_effects)]
     fn turn_count_of(&self, position: i64) -> i64 {
-        // `counts_per_rev` ≥ 16, so the remainder cannot panic; it is < CPR ≤ u32::MAX.
-        ((position as i128 - self.offset_counts as i128).rem_euclid(self.counts_per_rev as i128))
-            as i64
+        // `counts_per_rev` ≥ 16, so the remainder exists (checked all the same: `rem_euclid`'s
+        // zero check would be a panic path in the control interrupt); it is < CPR ≤ u32::MAX.
+        ((position as i128 - self.offset_counts as i128)
+            .checked_rem_euclid(self.counts_per_rev as i128)
+            .unwrap_or(0)) as i64
     }
 
     /// The electrical angle at the encoder `position`.

@@ -467,10 +467,11 @@ impl EsmRules {
 
     /// The drive error the profile reports with AL status code `code`, if any.
     pub fn al_error_alarm(&self, code: u16) -> Option<ErrorReport> {
+        // A linear scan of a short table, on the error path only: core's binary search keeps
+        // a slice-index panic branch the cycle interrupt must not reach (`panic-paths`).
         self.al_error_alarms
-            .binary_search_by_key(&code, |a| a.al_status_code)
-            .ok()
-            .and_then(|i| self.al_error_alarms.get(i))
+            .iter()
+            .find(|a| a.al_status_code == code)
             .map(|a| a.report)
     }
 }
