@@ -458,10 +458,10 @@ impl EsmRules {
 
     /// The ERR LED pattern the profile gives AL status code `code`, if it differs from ETG's.
     pub fn al_error_led(&self, code: u16) -> Option<ErrLed> {
+        // Linear, as `al_error_alarm`: a short table on the error path.
         self.al_error_leds
-            .binary_search_by_key(&code, |(c, _)| *c)
-            .ok()
-            .and_then(|i| self.al_error_leds.get(i))
+            .iter()
+            .find(|(c, _)| *c == code)
             .map(|(_, led)| *led)
     }
 
