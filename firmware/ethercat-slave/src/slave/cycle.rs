@@ -131,7 +131,9 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let mut events = AppEvents::new();
         self.app
             .cycle(&mut self.ram, self.sync.cycle_ns, &mut events);
-        for event in events {
+        // By reference: heapless' by-value iterator slices its rest when dropped, a panic
+        // path the cycle interrupt must not have (`panic-paths`).
+        for &event in events.iter() {
             self.report_app_event(event, now_ns);
         }
     }
