@@ -362,12 +362,11 @@ const fn bit_u32(base: u8, n: u8) -> u32 {
 
 /// Bit `base + n` of a 16-bit register; 0 for an `n` past its top.
 const fn bit_u16(base: u8, n: u8) -> u16 {
-    match base.checked_add(n) {
-        Some(pos) => match 1u16.checked_shl(pos as u32) {
-            Some(bit) => bit,
-            None => 0,
-        },
-        None => 0,
+    let bit = bit_u32(base, n);
+    if bit > u16::MAX as u32 {
+        0
+    } else {
+        bit as u16
     }
 }
 
