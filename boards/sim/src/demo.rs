@@ -64,6 +64,18 @@ impl Scenario {
     }
 }
 
+impl Default for Scenario {
+    fn default() -> Self {
+        Self {
+            profile: "standard".into(),
+            drives: 1,
+            cycle: Duration::from_millis(1),
+            cycles: 1000,
+            dc: true,
+        }
+    }
+}
+
 /// Checks a master cycle of `cycle_ns` against what the built-in `profile` accepts (the
 /// firmware's own rule, [`SyncConfig::check`]): with `dc` the SYNC0 range, its step and its
 /// fixed set of cycles; in free run the free-run range. The error says what is accepted.
@@ -109,20 +121,8 @@ pub fn check_cycle(profile: &str, cycle_ns: u64, dc: bool) -> Result<u32, String
             )
         };
         let given = given as f64 / 1e3;
-        format!("--cycle-us {given}: the {profile} profile accepts {what}")
+        format!("a cycle of {given} µs: the {profile} profile accepts {what}")
     })
-}
-
-impl Default for Scenario {
-    fn default() -> Self {
-        Self {
-            profile: "standard".into(),
-            drives: 1,
-            cycle: Duration::from_millis(1),
-            cycles: 1000,
-            dc: true,
-        }
-    }
 }
 
 /// Identity of one drive as the master read it.

@@ -161,7 +161,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     if a.command == "demo" {
         // Every drive must accept the cycle before anything starts.
         for name in &a.line {
-            demo::check_cycle(name, a.cycle_ns, !a.free_run)?;
+            demo::check_cycle(name, a.cycle_ns, !a.free_run)
+                .map_err(|e| format!("--cycle-us: {e}"))?;
         }
         if a.cycles == 0 {
             return Err("--cycles must be at least 1".into());
