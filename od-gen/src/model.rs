@@ -842,10 +842,11 @@ pub struct Doc {
     pub description: Option<String>,
 }
 
-/// The slave stack's limit on one PDO and on the process image of one direction, in bytes
-/// (`ethercat_slave::pdo::rules::MAX_PDO_BYTES`, `ethercat_slave::pdo::MAX_IMAGE`; the
-/// generated code asserts they agree). A profile's `[pdo]` limits may only be lower.
-pub const STACK_MAX_PDO_BYTES: u16 = 256;
+/// The slave stack's limit on one PDO and on the process image of one direction, in bytes:
+/// [`hal::esc::MAX_FIRMWARE_PROCESS_IMAGE`], which `ethercat_slave::pdo::rules::MAX_PDO_BYTES`
+/// and `ethercat_slave::pdo::MAX_IMAGE` are too (the generated code still asserts they agree).
+/// A profile's `[pdo]` limits may only be lower.
+pub const STACK_MAX_PDO_BYTES: u16 = hal::esc::MAX_FIRMWARE_PROCESS_IMAGE;
 
 /// The SM output and input parameter objects (ETG.1020 §5.1): generated from `[sync]`, or
 /// declared by a profile in its manual's layout.
@@ -1187,6 +1188,17 @@ pub struct InputShift {
 }
 
 impl Sync {
+    /// The DC SYNC0 cycles the firmware runs with this profile: the rule of its PREOP -> SAFEOP
+    /// check (`hal::esc::DcCycleRule`, the one definition).
+    pub fn dc_cycle_rule(&self) -> hal::esc::DcCycleRule<'_> {
+        hal::esc::DcCycleRule {
+            min_ns: self.min_cycle_ns,
+            max_ns: self.max_cycle_ns,
+            step_ns: self.cycle_step_ns,
+            allowed_ns: &self.allowed_cycles_ns,
+        }
+    }
+
     /// 1C32h:04 / 1C33h:04 "sync modes supported" (ETG.1020 §21.1.2 as reproduced in Beckhoff
     /// terminal documentation: b0 free run, b1 SM-synchronous, b2..3 = 01 DC SYNC0, = 10 DC SYNC1).
     pub fn modes_supported(&self) -> u16 {

@@ -14,6 +14,57 @@ pub const SPEED_FILTER_DEPTH_RESET: u8 = 12;
 /// The filter depths 0x0934 / 0x0935 use bits 0..3.
 pub const FILTER_DEPTH_MASK: u8 = 0x0F;
 
+/// The SYNC0 cycles a device runs: the one rule the slave stack applies at PREOP → SAFEOP
+/// (`ethercat_slave::slave::esm::sync::SyncConfig::check`, with a profile's `[sync]` limits)
+/// and od-gen applies to every cycle a profile declares (its minimum, maximum and default
+/// cycle, an op mode's fixed SYNC0 cycle), so that a profile never advertises a cycle its
+/// firmware refuses. Defined here because both depend on `hal`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DcCycleRule<'a> {
+    /// Shortest cycle, ns.
+    pub min_ns: u32,
+    /// Longest cycle, ns.
+    pub max_ns: u32,
+    /// Granularity, ns: a cycle is a whole multiple of it (0 or 1: any cycle in range).
+    pub step_ns: u32,
+    /// The only cycles, when the device has a fixed set; empty: every multiple of `step_ns`.
+    pub allowed_ns: &'a [u32],
+}
+
+impl DcCycleRule<'_> {
+    /// `Ok` for a SYNC0 cycle of `cycle_ns` the device runs, else the AL status code it
+    /// refuses it with (ETG.1000.6 Table 11): 0x0035 outside `min_ns..=max_ns` (every cycle
+    /// when `min_ns > max_ns`), 0x0036 in range but no whole multiple of `step_ns` or not one
+    /// of `allowed_ns`.
+    pub fn check(&self, cycle_ns: u32) -> Result<(), super::AlStatusCode> {
+        use super::AlStatusCode;
+        if cycle_ns < self.min_ns || cycle_ns > self.max_ns {
+            Err(AlStatusCode::DcInvalidSyncCycleTime)
+        } else if (self.step_ns > 1 && cycle_ns.checked_rem(self.step_ns) != Some(0))
+            || (!self.allowed_ns.is_empty() && !self.allowed_ns.contains(&cycle_ns))
+        {
+            Err(AlStatusCode::DcSync0CycleTime)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// The free-run cycles (1C32h:02, the local timer's period) a device runs: `Ok` within
+/// `min_ns..=max_ns`, else 0x0035, the one rule of the slave stack's PREOP → SAFEOP check and
+/// od-gen's check of a profile's free-run default.
+pub fn check_free_run_cycle(
+    cycle_ns: u32,
+    min_ns: u32,
+    max_ns: u32,
+) -> Result<(), super::AlStatusCode> {
+    if (min_ns..=max_ns).contains(&cycle_ns) {
+        Ok(())
+    } else {
+        Err(super::AlStatusCode::DcInvalidSyncCycleTime)
+    }
+}
+
 /// System time difference register 0x092C: sign-magnitude, bits 0..30 the mean difference
 /// between the local copy of the system time and the received system time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -124,5 +175,34 @@ mod tests {
         assert_eq!(DcSystemTimeDiff::encode(0).0, 0x8000_0000);
         assert_eq!(DcSystemTimeDiff::encode(-5).0, 0x0000_0005);
         assert_eq!(DcSystemTimeDiff::encode(i64::MIN).0, 0x7FFF_FFFF);
+    }
+
+    #[test]
+    fn cycle_rule_refuses_out_of_range_with_0x35_and_off_grid_with_0x36() {
+        let code = |r: Result<(), crate::esc::AlStatusCode>| r.map_err(|c| c.code());
+        let rule = DcCycleRule {
+            min_ns: 250_000,
+            max_ns: 4_000_000,
+            step_ns: 250_000,
+            allowed_ns: &[],
+        };
+        assert_eq!(code(rule.check(250_000)), Ok(()));
+        assert_eq!(code(rule.check(4_000_000)), Ok(()));
+        assert_eq!(code(rule.check(125_000)), Err(0x0035));
+        assert_eq!(code(rule.check(4_250_000)), Err(0x0035));
+        assert_eq!(code(rule.check(300_000)), Err(0x0036));
+        let set = DcCycleRule {
+            allowed_ns: &[250_000, 1_000_000],
+            ..rule
+        };
+        assert_eq!(code(set.check(500_000)), Err(0x0036));
+        let empty = DcCycleRule {
+            min_ns: 2,
+            max_ns: 1,
+            ..rule
+        };
+        assert!(empty.check(1).is_err() && empty.check(2).is_err());
+        assert_eq!(code(check_free_run_cycle(5, 1, 4)), Err(0x0035));
+        assert_eq!(code(check_free_run_cycle(4, 1, 4)), Ok(()));
     }
 }

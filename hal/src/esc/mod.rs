@@ -25,13 +25,14 @@ pub use al::{
 };
 pub use config::{EscConfig, PortDescriptor, SyncLatchConfig};
 pub use dc::{
-    DcActivation, DcActivationStatus, DcCyclicUnitControl, DcSyncStatus, DcSystemTimeDiff,
+    DcActivation, DcActivationStatus, DcCycleRule, DcCyclicUnitControl, DcSyncStatus,
+    DcSystemTimeDiff,
 };
 pub use eeprom::{EepromCommand, EepromConfig, EepromControl, EepromPdiAccess};
 pub use fmmu::{FmmuConfig, FmmuType};
 pub use sm::{
     SmActivate, SmConfig, SmControl, SmDirection, SmMode, SmPdiControl, SmStatus,
-    MAX_FIRMWARE_MAILBOX,
+    MAX_FIRMWARE_MAILBOX, MAX_FIRMWARE_MAPPED_ENTRIES, MAX_FIRMWARE_PROCESS_IMAGE,
 };
 
 /// Mailbox protocol bits of SII word 0x1C (ETG.1000.6 Table 18 / ETG.2010).

@@ -6,6 +6,20 @@
 /// declares one. Defined here because both depend on `hal`.
 pub const MAX_FIRMWARE_MAILBOX: u16 = 512;
 
+/// The largest process-data image of one direction the firmware maps, bytes (the SM2 or SM3
+/// length; also the largest single PDO): the slave stack's image buffers are this long
+/// (`ethercat_slave::pdo::MAX_IMAGE`), a longer assignment is refused at PREOP → SAFEOP with AL
+/// status code 0x0025 (outputs) / 0x0024 (inputs), and od-gen refuses a profile whose default
+/// assignment, or one of whose PDOs, needs more. Defined here because both depend on `hal`.
+pub const MAX_FIRMWARE_PROCESS_IMAGE: u16 = 256;
+
+/// The most entries (padding excluded) the firmware maps in one direction, all assigned PDOs
+/// of SM2 (or of SM3) together: the slave stack's copy plan holds this many
+/// (`ethercat_slave::pdo::MAX_MAPPED_ENTRIES`), more are refused at PREOP → SAFEOP with 0x0025
+/// / 0x0024, and od-gen refuses a profile whose default assignment, or one of whose PDOs, maps
+/// more.
+pub const MAX_FIRMWARE_MAPPED_ENTRIES: u8 = 64;
+
 /// Operation mode, control bits 0..1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -292,6 +292,17 @@ pub struct SyncSupport {
 }
 
 impl SyncSupport {
+    /// The DC SYNC0 cycles the profile runs (`min_cycle_ns`, `max_cycle_ns`, `cycle_step_ns`,
+    /// `allowed_cycles_ns`), as the rule od-gen checks a profile's cycles with.
+    pub const fn dc_cycle_rule(&self) -> hal::esc::DcCycleRule<'static> {
+        hal::esc::DcCycleRule {
+            min_ns: self.min_cycle_ns,
+            max_ns: self.max_cycle_ns,
+            step_ns: self.cycle_step_ns,
+            allowed_ns: self.allowed_cycles_ns,
+        }
+    }
+
     /// The value of 1C32h:20 (BOOLEAN): ETG.1020 "sync error" = `error`; with
     /// [`Self::sync_flag_in_sync`] it is TRUE while `dc_synchronised` and no error.
     pub fn sync_error_flag(&self, error: bool, dc_synchronised: bool) -> u8 {

@@ -15,10 +15,12 @@ pub mod rules;
 
 pub use rules::{RX_ASSIGN, RX_MAPPING, TX_ASSIGN, TX_MAPPING};
 
-/// Most mapped entries per direction (all PDOs of one SM together).
-pub const MAX_MAPPED_ENTRIES: usize = 64;
-/// Largest process-data image per direction in bytes.
-pub const MAX_IMAGE: usize = 256;
+/// Most mapped entries per direction (all PDOs of one SM together;
+/// [`hal::esc::MAX_FIRMWARE_MAPPED_ENTRIES`], the one definition od-gen checks profiles with).
+pub const MAX_MAPPED_ENTRIES: usize = hal::esc::MAX_FIRMWARE_MAPPED_ENTRIES as usize;
+/// Largest process-data image per direction in bytes
+/// ([`hal::esc::MAX_FIRMWARE_PROCESS_IMAGE`], the one definition od-gen checks profiles with).
+pub const MAX_IMAGE: usize = hal::esc::MAX_FIRMWARE_PROCESS_IMAGE as usize;
 
 /// Highest index of a dummy (padding) data-type object usable in a mapping (CiA 301 §7.4.7.1).
 const DUMMY_INDEX_MAX: u16 = 0x0007;

@@ -27,9 +27,10 @@ use crate::od::AbortCode;
 use crate::od::{Dictionary, RxMappedWrite};
 
 pub use crate::od::index::{RX_ASSIGN, RX_MAPPING, TX_ASSIGN, TX_MAPPING};
-/// Largest byte length one PDO may have; a mapping whose entries add up to more is refused with
-/// 0x06040042.
-pub const MAX_PDO_BYTES: usize = 256;
+/// Largest byte length one PDO may have: the whole image of one direction
+/// ([`hal::esc::MAX_FIRMWARE_PROCESS_IMAGE`]); a mapping whose entries add up to more is refused
+/// with 0x06040042.
+pub const MAX_PDO_BYTES: usize = hal::esc::MAX_FIRMWARE_PROCESS_IMAGE as usize;
 
 /// Index of padding entries in a mapping ("gap", any bit length).
 const PADDING_INDEX: u16 = 0x0000;

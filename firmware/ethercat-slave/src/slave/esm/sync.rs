@@ -1,7 +1,7 @@
 //! Synchronisation configuration: which cycle trigger the master configured (DC registers and
 //! 1C32h:01) and whether the profile accepts it.
 
-use hal::esc::{regs, AlStatusCode, DcActivation};
+use hal::esc::{dc, regs, AlStatusCode, DcActivation};
 use hal::pdi::EscPdi;
 
 use crate::od::SyncSupport;
@@ -65,35 +65,19 @@ impl SyncConfig {
     pub fn check(&self, support: &SyncSupport) -> Result<(), AlStatusCode> {
         match self.mode {
             SyncMode::FreeRun if !support.free_run => Err(AlStatusCode::FreeRunNotSupported),
-            SyncMode::FreeRun
-                if self.cycle_ns < support.free_run_min_cycle_ns
-                    || self.cycle_ns > support.free_run_max_cycle_ns =>
-            {
-                Err(AlStatusCode::DcInvalidSyncCycleTime)
-            }
+            SyncMode::FreeRun => dc::check_free_run_cycle(
+                self.cycle_ns,
+                support.free_run_min_cycle_ns,
+                support.free_run_max_cycle_ns,
+            ),
             SyncMode::SmSynchronous if !support.sm_synchronous => {
                 Err(AlStatusCode::SyncNotSupported)
             }
+            SyncMode::SmSynchronous => Ok(()),
             SyncMode::DcSync0 if !support.dc_sync0 => Err(AlStatusCode::InvalidDcSyncConfig),
             SyncMode::DcSync1 if !support.dc_sync1 => Err(AlStatusCode::InvalidDcSyncConfig),
-            SyncMode::DcSync0 | SyncMode::DcSync1
-                if self.cycle_ns < support.min_cycle_ns || self.cycle_ns > support.max_cycle_ns =>
-            {
-                Err(AlStatusCode::DcInvalidSyncCycleTime)
-            }
-            SyncMode::DcSync0 | SyncMode::DcSync1
-                if support.cycle_step_ns > 1
-                    && self.cycle_ns.checked_rem(support.cycle_step_ns) != Some(0) =>
-            {
-                Err(AlStatusCode::DcSync0CycleTime)
-            }
-            SyncMode::DcSync0 | SyncMode::DcSync1
-                if !support.allowed_cycles_ns.is_empty()
-                    && !support.allowed_cycles_ns.contains(&self.cycle_ns) =>
-            {
-                Err(AlStatusCode::DcSync0CycleTime)
-            }
-            _ => Ok(()),
+            // The rule od-gen applies to the profile's cycles too (`hal::esc::DcCycleRule`).
+            SyncMode::DcSync0 | SyncMode::DcSync1 => support.dc_cycle_rule().check(self.cycle_ns),
         }
     }
 
