@@ -194,10 +194,15 @@ pub fn run(args: &[String]) -> Result<(), CliError> {
                     "`{cmd}` needs at least one profile"
                 )));
             }
-            let profiles = inputs
-                .iter()
-                .map(|i| crate::load_any(i))
-                .collect::<Result<Vec<_>, _>>()?;
+            // Every profile is loaded, and the errors of all of them reported.
+            let (mut profiles, mut errors) = (Vec::new(), Vec::new());
+            for input in &inputs {
+                match crate::load_any(input) {
+                    Ok(p) => profiles.push(p),
+                    Err(e) => errors.push(e),
+                }
+            }
+            Error::all(errors)?;
             if cmd == "rust" {
                 // Drive profiles generate for the firmware, device profiles for any other crate
                 // on the slave stack; one file cannot hold both.

@@ -33,6 +33,10 @@ pub enum Error {
         /// What is wrong.
         error: Invalid,
     },
+    /// Every consistency error found in a profile (or in the profiles of one command), in the
+    /// order found, each an [`Error::Invalid`] with its file and line; one alone is returned
+    /// as itself. Displayed one per line.
+    Several(Vec<Error>),
     /// No built-in profile has this name.
     UnknownProfile {
         /// The requested name.
@@ -256,6 +260,44 @@ impl fmt::Display for Invalid {
     }
 }
 
+impl Error {
+    /// The errors this one stands for: those of [`Error::Several`], else itself.
+    pub fn errors(&self) -> Vec<&Error> {
+        match self {
+            Self::Several(errors) => errors.iter().flat_map(Error::errors).collect(),
+            one => vec![one],
+        }
+    }
+
+    /// The key and consistency error of each [`Error::Invalid`] this one stands for.
+    pub fn invalids(&self) -> Vec<(&str, &Invalid)> {
+        self.errors()
+            .into_iter()
+            .filter_map(|e| match e {
+                Self::Invalid { key, error, .. } => Some((key.as_str(), error)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// One error for several: `Ok` when there are none, the one alone, else [`Error::Several`]
+    /// (nested ones flattened).
+    pub fn all(errors: Vec<Error>) -> Result<(), Error> {
+        let mut flat: Vec<Error> = Vec::new();
+        for e in errors {
+            match e {
+                Self::Several(inner) => flat.extend(inner),
+                one => flat.push(one),
+            }
+        }
+        match flat.len() {
+            0 => Ok(()),
+            1 => Err(flat.remove(0)),
+            _ => Err(Self::Several(flat)),
+        }
+    }
+}
+
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -273,6 +315,15 @@ impl fmt::Display for Error {
                 line: None,
                 error,
             } => write!(f, "{file}: `{key}`: {error}"),
+            Self::Several(errors) => {
+                for (i, e) in errors.iter().enumerate() {
+                    if i > 0 {
+                        writeln!(f)?;
+                    }
+                    write!(f, "{e}")?;
+                }
+                Ok(())
+            }
             Self::UnknownProfile { name, available } => write!(
                 f,
                 "no built-in profile `{name}` (available: {}); pass a path to a .toml file instead",

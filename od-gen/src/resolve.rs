@@ -10,6 +10,7 @@ use crate::file::{
     AlErrorAlarmFile, EntryAttrs, MotorFaultFile, ObjectFile, PdoFile, ProfileFile, SmFileEntry,
 };
 use crate::model::*;
+use crate::validate::Faults;
 
 /// The bytes of an emergency message that form its manufacturer-specific field (CiA 301).
 const EMCY_DATA_BYTES: std::ops::RangeInclusive<u8> = 3..=7;
@@ -43,11 +44,20 @@ pub fn parse(text: &str, source: &str, dir: Option<&Path>) -> Result<Profile, Er
 
 /// Checks a parsed profile file and derives the full dictionary.
 pub fn resolve(file: &ProfileFile, source: &str) -> Result<Profile, Error> {
-    build(file, source).map_err(|(key, error)| Error::Invalid {
-        file: source.to_string(),
-        key,
-        line: None,
-        error,
+    build(file, source).map_err(|faults| {
+        let errors = faults
+            .0
+            .into_iter()
+            .map(|(key, error)| Error::Invalid {
+                file: source.to_string(),
+                key,
+                line: None,
+                error,
+            })
+            .collect();
+        Error::all(errors)
+            .err()
+            .unwrap_or(Error::Several(Vec::new()))
     })
 }
 
@@ -55,6 +65,9 @@ pub fn resolve(file: &ProfileFile, source: &str) -> Result<Profile, Error> {
 /// its bases or a library).
 fn with_line(e: Error, sources: &[compose::Source]) -> Error {
     match e {
+        Error::Several(errors) => {
+            Error::Several(errors.into_iter().map(|e| with_line(e, sources)).collect())
+        }
         Error::Invalid {
             file,
             key,
@@ -124,7 +137,28 @@ fn key_path(path: &serde_path_to_error::Path, root: &toml::Value) -> String {
     out
 }
 
-fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
+/// The profile with its derived objects, every check run.
+fn build(f: &ProfileFile, source: &str) -> Result<Profile, Faults> {
+    let mut profile = dictionary(f, source)?;
+    // From here on every check runs and every fault is reported: the dictionary is complete,
+    // and the checks below read it only.
+    let mut faults = match crate::validate::check(&profile) {
+        Ok(()) => Faults::default(),
+        Err(faults) => faults,
+    };
+    let storage = faults.take(crate::storage::resolve(&f.storage, &profile));
+    let adjusting = faults.take(crate::adjusting::resolve(&f.adjusting, &profile));
+    let split = faults.take(split_values(&f.split_values, &profile));
+    faults.into_result()?;
+    profile.storage = storage.unwrap_or_default();
+    profile.adjusting = adjusting.unwrap_or_default();
+    profile.split_values = split.unwrap_or_default();
+    Ok(profile)
+}
+
+/// The profile's values converted and its communication objects derived; stops at the first
+/// fault (what follows it is built from what it rejected).
+fn dictionary(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     let mut protocols = 0u16;
     for p in &f.mailbox.protocols {
         let bit = protocol::NAMES
@@ -750,10 +784,6 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
     }
     profile.objects = declared.into_values().collect();
     profile.units = units(&f.units, &profile)?;
-    crate::validate::check(&profile)?;
-    profile.storage = crate::storage::resolve(&f.storage, &profile)?;
-    profile.adjusting = crate::adjusting::resolve(&f.adjusting, &profile)?;
-    profile.split_values = split_values(&f.split_values, &profile)?;
     Ok(profile)
 }
 

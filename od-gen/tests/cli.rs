@@ -181,3 +181,45 @@ fn table_csv_and_text() {
         "{err}"
     );
 }
+
+/// Every error of a profile file, one per line with its line number, from `check` and from
+/// the commands that generate; exit code 1 as for one error.
+#[test]
+fn every_error_of_a_file_is_printed_one_per_line() {
+    let text = include_str!("../profiles/standard.toml")
+        .replacen("physics = \"YY\"", "physics = \"QQ\"", 1)
+        .replacen("byte_size = 2048", "byte_size = 1000", 1)
+        .replacen("safeop_op_timeout_ms = 9000", "safeop_op_timeout_ms = 0", 1);
+    let dir = std::env::temp_dir().join(format!("od-gen-cli-errors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("standard.toml");
+    std::fs::write(&path, &text).unwrap();
+    let path = path.to_str().unwrap();
+    for args in [
+        &["check", path][..],
+        &["esi", path],
+        &["sii", path],
+        &["rust", path],
+    ] {
+        let out = od_gen(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 3, "{args:?}: {err}");
+        for (line, key) in lines.iter().zip([
+            "esm.safeop_op_timeout_ms",
+            "device.physics",
+            "eeprom.byte_size",
+        ]) {
+            assert!(
+                line.starts_with(&format!("od-gen: {path}:")) && line.contains(&format!("`{key}`")),
+                "{line}"
+            );
+        }
+    }
+    // `check` of several profiles reports the errors of each.
+    let out = od_gen(&["check", path, "standard", path]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(String::from_utf8_lossy(&out.stderr).lines().count(), 6);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

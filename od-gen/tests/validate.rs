@@ -30,6 +30,18 @@ fn invalid(text: &str) -> (String, Invalid) {
     }
 }
 
+/// Every error `text` is refused with, in the order found.
+fn all_invalid(text: &str) -> Vec<(String, Invalid)> {
+    match od_gen::parse(text, "bad.toml") {
+        Err(e) => e
+            .invalids()
+            .into_iter()
+            .map(|(key, error)| (key.to_string(), error.clone()))
+            .collect(),
+        Ok(_) => panic!("expected a validation error, the profile loaded"),
+    }
+}
+
 #[test]
 fn standard_profile_is_valid() {
     let p = od_gen::parse(STANDARD, "standard.toml").unwrap();
@@ -191,10 +203,15 @@ fn role_on_wrong_type() {
 
 #[test]
 fn duplicate_role() {
-    let (_, e) = invalid(&appended(
+    // 2001h also becomes a process-data command that [storage] stores: reported as well.
+    let all = all_invalid(&appended(
         "[[object]]\nindex = 0x2001\nname = \"x\"\ntype = \"UINT\"\naccess = \"rw\"\nrole = \"controlword\"",
     ));
-    assert_eq!(e, Invalid::DuplicateRole("controlword".into()));
+    assert_eq!(all[0].1, Invalid::DuplicateRole("controlword".into()));
+    assert!(
+        matches!(&all[1], (key, Invalid::Storage(_)) if key == "object[0x2001]"),
+        "{all:?}"
+    );
 }
 
 #[test]
@@ -1843,5 +1860,156 @@ fn warnings_are_checked() {
     assert!(
         matches!(&error, Invalid::Value(m) if m.contains("not a warning")),
         "{error:?}"
+    );
+}
+
+/// Three independent errors of one file: all three are reported, each with the line of its
+/// value, in the order of the checks.
+#[test]
+fn every_error_of_a_file_is_reported_with_its_line() {
+    let text = with("physics = \"YY\"", "physics = \"QQ\"")
+        .replacen("byte_size = 2048", "byte_size = 1000", 1)
+        .replacen("safeop_op_timeout_ms = 9000", "safeop_op_timeout_ms = 0", 1);
+    let line_of = |needle: &str| {
+        1 + text
+            .lines()
+            .position(|l| l.starts_with(needle))
+            .expect("the changed line")
+    };
+    let e = od_gen::parse(&text, "bad.toml").expect_err("three errors");
+    let Error::Several(errors) = &e else {
+        panic!("expected every error, got one: {e}");
+    };
+    let found: Vec<(&str, Option<usize>)> = errors
+        .iter()
+        .map(|e| match e {
+            Error::Invalid {
+                file, key, line, ..
+            } => {
+                assert_eq!(file, "bad.toml");
+                (key.as_str(), *line)
+            }
+            other => panic!("not a validation error: {other}"),
+        })
+        .collect();
+    assert_eq!(
+        found,
+        [
+            (
+                "esm.safeop_op_timeout_ms",
+                Some(line_of("safeop_op_timeout_ms"))
+            ),
+            ("device.physics", Some(line_of("physics"))),
+            ("eeprom.byte_size", Some(line_of("byte_size"))),
+        ]
+    );
+    // Displayed one per line, each `file:line: key: why`.
+    let shown = e.to_string();
+    let lines: Vec<&str> = shown.lines().collect();
+    assert_eq!(lines.len(), 3, "{shown}");
+    assert!(lines[0].starts_with(&format!(
+        "bad.toml:{}: `esm.safeop_op_timeout_ms`",
+        line_of("safeop_op_timeout_ms")
+    )));
+    assert_eq!(e.invalids().len(), 3);
+}
+
+/// A check that needs an earlier one to pass is skipped when it failed: cycle step 0 is one
+/// error, not a division by zero nor a fault of every cycle.
+#[test]
+fn dependent_checks_are_skipped_not_reported_twice() {
+    let all = all_invalid(&with("cycle_step_ns = 31_250", "cycle_step_ns = 0"));
+    assert_eq!(all.len(), 1, "{all:?}");
+    assert_eq!(all[0].0, "sync.cycle_step_ns");
+    // An empty range: one error, the cycles in it are not checked against it.
+    let all = all_invalid(&with("max_cycle_ns = 10_000_000", "max_cycle_ns = 20_000"));
+    assert_eq!(all.len(), 1, "{all:?}");
+    assert_eq!(all[0].0, "sync.min_cycle_ns");
+    assert!(matches!(&all[0].1, Invalid::Sync(m) if m.contains("0x0035")));
+}
+
+/// The longest cycle of a DC profile is one the firmware runs: a multiple of the step (the
+/// firmware refuses others with AL status code 0x0036).
+#[test]
+fn the_longest_cycle_must_be_one_the_firmware_runs() {
+    let (key, e) = invalid(&with(
+        "max_cycle_ns = 10_000_000",
+        "max_cycle_ns = 10_000_001",
+    ));
+    assert_eq!(key, "sync.max_cycle_ns");
+    assert!(
+        matches!(&e, Invalid::Sync(m) if m.contains("0x0036")),
+        "{e}"
+    );
+}
+
+/// An op mode's fixed SYNC0 cycle (factor 0) is the cycle a master configures from the ESI:
+/// outside the profile's range it is refused (0x0035 at PREOP -> SAFEOP).
+#[test]
+fn a_fixed_sync0_cycle_must_be_one_the_firmware_runs() {
+    let factor = "sync0_factor = 1              # SYNC0 cycle = 1 × the master's cycle";
+    let (key, e) = invalid(&with(factor, "sync0_cycle_ns = 20_000"));
+    assert_eq!(key, "dc_op_mode[1].sync0_cycle_ns");
+    assert!(
+        matches!(&e, Invalid::Sync(m) if m.contains("0x0035")),
+        "{e}"
+    );
+    let (_, e) = invalid(&with(factor, "sync0_cycle_ns = 40_000"));
+    assert!(
+        matches!(&e, Invalid::Sync(m) if m.contains("0x0036")),
+        "{e}"
+    );
+    let p = od_gen::parse(&with(factor, "sync0_cycle_ns = 62_500"), "standard.toml")
+        .expect("a cycle the firmware runs");
+    assert_eq!(p.dc_op_modes[1].sync0_cycle_ns, 62_500);
+}
+
+/// The firmware maps at most `hal::esc::MAX_FIRMWARE_MAPPED_ENTRIES` entries per direction: a
+/// default assignment with more is refused (0x0025 / 0x0024 at PREOP -> SAFEOP), and so is a
+/// PDO that alone maps more, or more bytes than `max_process_bytes`.
+#[test]
+fn pdos_beyond_what_the_firmware_maps_are_refused() {
+    let limit = usize::from(hal::esc::MAX_FIRMWARE_MAPPED_ENTRIES);
+    let entries = |n: usize| vec!["{ index = 0x6040, sub = 0, bits = 16 }"; n].join(", ");
+    let rx = "entries = [\n    { index = 0x6040, sub = 0, bits = 16 },  # controlword\n    { index = 0x607A, sub = 0, bits = 32 },  # target position\n    { index = 0x6060, sub = 0, bits = 8 },   # modes of operation\n]";
+    let mapping = |n: usize| {
+        with("max_entries = 16", "max_entries = 254").replacen(
+            rx,
+            &format!("entries = [{}]", entries(n)),
+            1,
+        )
+    };
+    assert!(od_gen::parse(&mapping(limit), "standard.toml").is_ok());
+    let (key, e) = invalid(&mapping(limit + 1));
+    assert_eq!(key, "rxpdo");
+    assert!(
+        matches!(&e, Invalid::Value(m) if m.contains(&format!("{} entries", limit + 1)) && m.contains("0x0025")),
+        "{e}"
+    );
+    // Not assigned by default: still refused whenever a master assigns it.
+    let spare = |entries: String, extra: &str| {
+        with("max_entries = 16", &format!("max_entries = 254{extra}")).replacen(
+            "[[txpdo]]\nindex = 0x1A00",
+            &format!(
+                "[[rxpdo]]\nindex = 0x1601\nname = \"spare\"\nsm = 2\nassigned = false\n\
+                 entries = [{entries}]\n\n[[txpdo]]\nindex = 0x1A00"
+            ),
+            1,
+        )
+    };
+    let (key, e) = invalid(&spare(entries(limit + 1), ""));
+    assert_eq!(key, "rxpdo[0x1601].entries");
+    assert!(
+        matches!(&e, Invalid::Value(m) if m.contains("0x0025")),
+        "{e}"
+    );
+    let (key, e) = invalid(&spare(
+        ["{ index = 0x607A, sub = 0, bits = 32 }"; 3].join(", "),
+        "\nmax_process_bytes = 8",
+    ));
+    assert_eq!(key, "rxpdo[0x1601].entries");
+    assert!(
+        matches!(&e, Invalid::Value(m) if m.contains("12 bytes exceed pdo.max_process_bytes = 8")),
+        "{e}"
     );
 }
