@@ -16,6 +16,7 @@ pub mod leds;
 pub mod plant;
 pub mod plot;
 pub mod rawsock;
+pub mod record;
 pub mod segment;
 pub mod servo;
 pub mod storage;

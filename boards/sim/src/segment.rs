@@ -9,6 +9,7 @@ use firmware::profile::DriveProfile;
 
 use crate::drive::SimDrive;
 use crate::esc::{self, Et1100};
+use crate::record::Recorder;
 
 /// Time a frame of `len` bytes spends on a 100 Mbit/s wire, plus the fixed forwarding latency
 /// of the master's NIC (a few µs on a PC); both only need to be plausible, not exact.
@@ -83,6 +84,8 @@ impl SimDevice for SimDrive {
 pub struct Segment<D: SimDevice = SimDrive> {
     drives: Vec<D>,
     now_ns: u64,
+    /// The master's frames, recorded for the fuzzers' seeds (`SIM_RECORD_FRAMES`).
+    recorder: Option<Recorder>,
 }
 
 impl Segment {
@@ -133,9 +136,13 @@ fn load_profile(name: &str) -> Result<(&'static DriveProfile, Vec<u8>), SegmentE
 impl<D: SimDevice> Segment<D> {
     /// A segment of `devices` in ring order, at simulated time 0.
     pub fn from_devices(devices: Vec<D>) -> Self {
+        let recorder = devices
+            .first()
+            .and_then(|d| Recorder::from_env(d.esc().sii()));
         let mut segment = Self {
             drives: devices,
             now_ns: 0,
+            recorder,
         };
         segment.wire_ports();
         segment
@@ -179,6 +186,9 @@ impl<D: SimDevice> Segment<D> {
     pub fn process_frame(&mut self, frame: &[u8]) -> Option<Vec<u8>> {
         let t = self.now_ns + wire_time_ns(frame.len());
         self.advance_to(t);
+        if let Some(r) = self.recorder.as_mut() {
+            r.frame(t, frame);
+        }
         if self
             .drives
             .first()

@@ -109,6 +109,7 @@ use hal::storage::{NvStorage, StorageError};
 pub use crate::od::index::{RESTORE_DEFAULTS, STORE_PARAMETERS};
 use crate::od::storable::{any_contains, EntryRange, StorageRules};
 pub use crate::od::storable::{is_storable, NOT_STORED, STORED_SM_PARAMETER};
+use crate::od::value::{check_range, check_value_list};
 use crate::od::{AbortCode, DownloadHook};
 use crate::od::{Dictionary, Profile, StoreError};
 
@@ -319,7 +320,19 @@ impl<S: NvStorage, const CAP: usize> ParamStore<S, CAP> {
                     o.entry(stored.subindex)
                         .filter(|e| is_storable(&od.profile().storage, o, e))
                 })
-                .filter(|e| e.byte_len() == stored.value.len());
+                .filter(|e| e.byte_len() == stored.value.len())
+                // A value an SDO download would refuse is not loaded either (a record of the
+                // same identity from a firmware with other ranges, or a bit error the CRC
+                // missed): the entry keeps its default.
+                .filter(|e| {
+                    check_range(e, stored.value).is_ok()
+                        && check_value_list(
+                            od.profile().value_list(stored.index, stored.subindex),
+                            e,
+                            stored.value,
+                        )
+                        .is_ok()
+                });
             match entry.map(|e| od.set_value(e, stored.value)) {
                 Some(Ok(())) => loaded.applied = loaded.applied.saturating_add(1),
                 _ => loaded.skipped = loaded.skipped.saturating_add(1),

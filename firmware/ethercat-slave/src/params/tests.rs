@@ -451,6 +451,26 @@ fn empty_storage_loads_nothing_and_keeps_the_defaults() {
 }
 
 #[test]
+fn a_stored_value_outside_its_range_is_not_loaded() {
+    // The standard profile's 605Ah (quick stop option code) is stored, INT16 in 0..=8; 6065h
+    // (following error window) is stored and has no maximum.
+    let profile = &profiles::standard::PROFILE;
+    let id = identity(profile);
+    let mut storage = TestStorage::new();
+    let mut buf = vec![0u8; 256];
+    let mut w = Writer::new(&mut buf).unwrap();
+    w.push(0x605A, 0, &9i16.to_le_bytes()).unwrap();
+    w.push(0x6065, 0, &1234u32.to_le_bytes()).unwrap();
+    let len = w.finish(&id, 1);
+    storage.write(0, &buf[..len]).unwrap();
+    let (mut dev, loaded) = Device::power_on(profile, &storage);
+    let loaded = loaded.unwrap();
+    assert_eq!((loaded.applied, loaded.skipped), (1, 1));
+    assert_eq!(dev.get(0x6065, 0), 1234);
+    assert_eq!(dev.get(0x605A, 0), Device::new(profile).get(0x605A, 0));
+}
+
+#[test]
 fn store_then_power_on_loads_exactly_the_storable_entries() {
     let profile = fixture(1);
     let mut store: ParamStore<TestStorage> = ParamStore::new(TestStorage::new());

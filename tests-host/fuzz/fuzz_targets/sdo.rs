@@ -1,0 +1,9 @@
+//! libFuzzer entry of the `sdo` target (`fuzz_targets::targets::sdo`): a violation of its
+//! oracle is a crash.
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    if let Err(v) = fuzz_targets::targets::sdo::run(data) {
+        panic!("oracle: {}", v.0);
+    }
+});
