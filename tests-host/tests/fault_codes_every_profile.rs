@@ -7,6 +7,14 @@
 //! Σ-V-SD's 4210h in 603Fh, its EMCY FF00h with 4210h in bytes 4-5 and the axis number in
 //! byte 7, §2.7).
 //!
+//! Beyond the codes: where the profile has the diagnosis history, its newest 10F3h message is
+//! the fault's (ETG.1020: diag code = the EMCY code << 16 | E800h, type error); in Fault the
+//! bridge is off; and the drive recovers as a machine needs it to. With the cause still there
+//! (a broken current sensor) a master's fault reset and enable sequence do not bring it back;
+//! with the cause gone (cooled down, voltage back, encoder reconnected, rotor freed, gate
+//! driver cleared) they do, and the bridge runs again, unless the manual's alarm needs a
+//! power cycle (`resettable = false`), when the drive stays in Fault.
+//!
 //! Every fault of the firmware (`motor::MotorFault`) is provoked the way it happens on a
 //! machine: the power stage or the motor over temperature, the DC link over or under its
 //! limits, a serial encoder whose frames fail their CRC, an incremental encoder that loses its
@@ -235,6 +243,92 @@ impl Injection {
             }
         }
     }
+}
+
+impl Injection {
+    /// Takes the cause away as a machine's operator would: the power stage and the motor cool
+    /// down, the DC link returns to its nominal voltage, the encoder is reconnected, the rotor
+    /// freed, the winding repaired, the gate driver's fault cleared. `false` where the board
+    /// keeps its defect (a current sensor whose offset is out of range stays so).
+    fn clear(self, m: &InProcess) -> bool {
+        let mut segment = m.shared.segment();
+        let servo = &mut segment.drives_mut()[0].servos[0];
+        let nominal_bus_v = servo.plant.config().inverter.bus_voltage_v;
+        let protection = servo.axis.config().protection;
+        let plant = &mut servo.plant;
+        match self {
+            Injection::DriveOverTemperature => {
+                plant.set_drive_temperature(f64::from(protection.drive_over_temperature_c) - 40.0)
+            }
+            Injection::MotorOverTemperature => plant.set_motor_overtemp_input(false),
+            Injection::BusOverVoltage | Injection::BusUnderVoltage => {
+                plant.set_bus_voltage(nominal_bus_v)
+            }
+            Injection::EncoderCrc | Injection::EncoderJump | Injection::EncoderSignalLoss => {
+                plant.set_encoder_fault(None)
+            }
+            Injection::OverCurrent
+            | Injection::MotorOverload
+            | Injection::DriveOverload
+            | Injection::Alignment => plant.set_driven_speed(None),
+            Injection::Identification => plant.set_phase_resistance_scale(1.0),
+            Injection::OverSpeed => {}
+            Injection::CurrentOffset => return false,
+            Injection::PowerStageTrip => servo.io_mut().power.set_break_input(false),
+        }
+        true
+    }
+}
+
+/// Fault reset (controlword bit 7, CiA402 transition 15 on its rising edge).
+const FAULT_RESET: u16 = 0x80;
+/// Cycles a recovery may take: the I²t models cool down from their trip level first (the
+/// motor's thermal time constant is seconds), a master retries the reset meanwhile.
+const RECOVERY_CYCLES: usize = 30_000;
+/// A master's retry period of the fault reset + enable sequence, cycles.
+const RETRY_CYCLES: usize = 500;
+
+/// The controlwords of one recovery attempt: a fault-reset edge, then the enable sequence.
+fn recovery_attempt() -> impl Iterator<Item = u16> {
+    [0, FAULT_RESET, FAULT_RESET]
+        .into_iter()
+        .chain(vendor::enable_sequence(RETRY_CYCLES - 13))
+}
+
+/// Whether a fault reset clears the alarm the profile raises for `injection` (a row of the
+/// manual's table may ask for a power cycle instead: `resettable = false`).
+fn resettable(profile: &od_gen::Profile, report: Report) -> bool {
+    match report {
+        Alarm(display, _) => profile
+            .alarms
+            .iter()
+            .find(|a| a.display == display)
+            .is_none_or(|a| a.resettable),
+        _ => true,
+    }
+}
+
+/// The newest 10F3h message where the profile has the diagnosis history (ETG.1020): its first
+/// 6 bytes (diag code, flags).
+async fn newest_diag(
+    sd: &ethercrab::SubDeviceRef<'_, impl std::ops::Deref<Target = ethercrab::SubDevice>>,
+    profile: &od_gen::Profile,
+) -> Result<Option<[u8; 6]>, String> {
+    if profile.entry(0x10F3, 2).is_none() {
+        return Ok(None);
+    }
+    let newest = sd
+        .sdo_read::<u8>(0x10F3, 2)
+        .await
+        .map_err(|e| format!("10F3h:02: {e:?}"))?;
+    if newest == 0 {
+        return Ok(Some([0; 6]));
+    }
+    let msg = sd
+        .sdo_read::<[u8; 28]>(0x10F3, newest)
+        .await
+        .map_err(|e| format!("10F3h:{newest}: {e:?}"))?;
+    Ok(Some([msg[0], msg[1], msg[2], msg[3], msg[4], msg[5]]))
 }
 
 /// One cycle with controlword `cw`, 6060h and 60FFh as `command` gives them; the statusword.
@@ -511,7 +605,82 @@ async fn fault(name: &str, profile: &od_gen::Profile, injection: Injection) -> R
             ));
         }
     }
-    Ok(())
+    // The diagnosis history holds the error (ETG.1020: diag code = EMCY code << 16 | E800h,
+    // type error in the flags' low nibble).
+    if let Some(msg) = newest_diag(&sd, profile).await? {
+        let [c0, c1] = emcy_code.code.to_le_bytes();
+        if msg[..4] != [0x00, 0xE8, c0, c1] || msg[4] & 0x0F != 0x02 {
+            return Err(format!(
+                "newest 10F3h message {msg:02x?}, expected the error {:04X}h",
+                emcy_code.code
+            ));
+        }
+    }
+    // Safe outputs: in Fault the bridge is off.
+    if m.shared.segment().drives()[0].servos[0].latched().gates {
+        return Err("Fault with the bridge on".into());
+    }
+    recover(&m, md, &group, profile, injection).await
+}
+
+/// After the fault: with the cause still present a reset does not bring the drive back; with
+/// the cause gone, a master's fault reset and enable sequence does (unless the manual's alarm
+/// needs a power cycle: then the drive stays in Fault), and the motor is under control again.
+async fn recover(
+    m: &InProcess,
+    md: &MainDevice<'_>,
+    group: &DcGroup,
+    profile: &od_gen::Profile,
+    injection: Injection,
+) -> Result<(), String> {
+    let name = profile.name.as_str();
+    // Recover in velocity mode at standstill (identification was the fault's mode).
+    let command = (CSV, 0);
+    let gone = injection.clear(m);
+    let expect_back = gone && resettable(profile, manual(name, injection));
+    let mut sw = 0;
+    let mut cycles = 0;
+    'retry: while cycles < RECOVERY_CYCLES {
+        for cw in recovery_attempt() {
+            sw = cycle(m, md, group, cw, command).await;
+            cycles += 1;
+            if expect_back && cia402::is(sw, cia402::OPERATION_ENABLED) {
+                break 'retry;
+            }
+        }
+        // Where the drive must not come back, two attempts show it (judged at the end of
+        // each: an enable may show Operation Enabled while the offsets are measured, and
+        // fault again when they are out of range).
+        if !expect_back && cycles >= 2 * RETRY_CYCLES {
+            break;
+        }
+    }
+    let enabled = cia402::is(sw, cia402::OPERATION_ENABLED);
+    match (expect_back, enabled) {
+        (true, true) => {
+            // Under control again: the bridge runs.
+            for _ in 0..50 {
+                sw = cycle(m, md, group, vendor::ENABLE_OPERATION, command).await;
+            }
+            let gates = m.shared.segment().drives()[0].servos[0].latched().gates;
+            if !cia402::is(sw, cia402::OPERATION_ENABLED) || !gates {
+                return Err(format!("recovered, then {sw:#06x}, bridge on: {gates}"));
+            }
+            Ok(())
+        }
+        (true, false) => Err(format!(
+            "cause gone, not enabled again after {cycles} cycles: {sw:#06x}"
+        )),
+        (false, true) => Err(format!(
+            "enabled again although {}",
+            if gone {
+                "the alarm needs a power cycle"
+            } else {
+                "the cause is still there"
+            }
+        )),
+        (false, false) => Ok(()),
+    }
 }
 
 fn every_fault(name: &str) {

@@ -928,6 +928,7 @@ impl Axis {
         {
             self.electrical_ident = None;
             self.inertia_ident = None;
+            self.no_current();
             // A fault recorded during a controlled stop holds until its reset.
             self.state = if self.fault.is_some() {
                 AxisState::Faulted
@@ -987,10 +988,19 @@ impl Axis {
         }
     }
 
+    /// The gates are off: no current flows. The I²t models, 6077h and the protections see
+    /// zero from now on, not the last current the loop measured (with which an overload would
+    /// go on heating its model while faulted, and never become resettable).
+    fn no_current(&mut self) {
+        self.last_id = 0.0;
+        self.last_iq = 0.0;
+    }
+
     /// Latches `fault` (the first one stays until a reset) and stops: gates off.
     fn latch(&mut self, fault: MotorFault) {
         self.record(fault);
         self.state = AxisState::Faulted;
+        self.no_current();
     }
 
     fn trip(&mut self, fault: MotorFault, link: &AxisLink) -> Output {

@@ -147,9 +147,13 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 let _ = self.clear_error(code);
             }
             AppEvent::ErrorRaised { code, data } => {
-                // An application error (a drive: protection, encoder, ...): 1001h and the EMCY.
-                // A full EMCY queue loses only the message; 1001h and the application hold it.
-                let _ = self.report_error(code, emcy::register::DEVICE_PROFILE, data, None, now_ns);
+                // An application error (a drive: protection, encoder, ...): 1001h, the EMCY
+                // and its 10F3h message (ETG.1020: the emergency's code in the diag code, the
+                // error's type). A full EMCY queue loses only the emergency; 1001h, 10F3h and
+                // the application hold the error.
+                let msg = DiagMessage::new(diag_code_for_emcy(code), DiagType::Error, 0);
+                let register = emcy::register::DEVICE_PROFILE;
+                let _ = self.report_error(code, register, data, Some(&msg), now_ns);
             }
             AppEvent::None => {}
         }
