@@ -38,6 +38,8 @@ pub const HOMING_BITS: u16 = TARGET_REACHED | HOMING_ATTAINED | HOMING_ERROR;
 pub const HOMING: i8 = 6;
 /// 6060h: cyclic synchronous velocity.
 pub const CYCLIC_SYNCHRONOUS_VELOCITY: i8 = 9;
+/// 6060h: profile velocity.
+pub const PROFILE_VELOCITY: i8 = 3;
 
 /// The modes of operation `profile` supports: its 6502h (bit n−1 is mode n, CiA402: bit 0 PP …
 /// bit 9 CST).

@@ -68,6 +68,11 @@ pub struct SimDrive {
     pub cycle_during_mailbox_transfer: bool,
     /// Cycles run that way.
     pub cycles_during_mailbox_transfer: u32,
+    /// Longest host time one process-data cycle of the firmware took (`on_sync0` +
+    /// `cycle_finished`), ns: what a soak reports (host time, not the MCU's).
+    pub max_cycle_host_ns: u64,
+    /// Longest host time one ESC-event round of the firmware took, ns.
+    pub max_event_host_ns: u64,
 }
 
 /// The simulated drive's motor of axis `axis` (0 = the first): the 400 W servo with the default
@@ -121,6 +126,8 @@ impl SimDrive {
             servos,
             cycle_during_mailbox_transfer: false,
             cycles_during_mailbox_transfer: 0,
+            max_cycle_host_ns: 0,
+            max_event_host_ns: 0,
         })
     }
 
@@ -237,7 +244,9 @@ impl SimDrive {
 
     /// One process-data cycle (see [`run_cycle`]).
     fn cycle(&mut self, now_ns: u64) {
+        let started = std::time::Instant::now();
         run_cycle(&mut self.slave, &mut self.esc, now_ns);
+        self.max_cycle_host_ns = self.max_cycle_host_ns.max(elapsed_ns(started));
     }
 
     /// Runs the ESC event handler while the IRQ line is asserted (bounded: the handler clears
@@ -256,6 +265,12 @@ impl SimDrive {
     /// One call of the firmware's ESC event handler (one round, see
     /// `ethercat_slave::slave::MailboxSide`).
     fn esc_event(&mut self, now_ns: u64) {
+        let started = std::time::Instant::now();
+        self.esc_event_round(now_ns);
+        self.max_event_host_ns = self.max_event_host_ns.max(elapsed_ns(started));
+    }
+
+    fn esc_event_round(&mut self, now_ns: u64) {
         let inject = self.cycle_during_mailbox_transfer;
         let mut injected = 0;
         let _ = self.slave.event_round(
@@ -275,6 +290,11 @@ impl SimDrive {
         );
         self.cycles_during_mailbox_transfer += injected;
     }
+}
+
+/// Host nanoseconds since `started` (saturating: a soak runs for minutes, not centuries).
+fn elapsed_ns(started: std::time::Instant) -> u64 {
+    u64::try_from(started.elapsed().as_nanos()).unwrap_or(u64::MAX)
 }
 
 /// Attaches the servos to the slave's axes, in order (one per axis of the profile).
