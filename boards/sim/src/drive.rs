@@ -73,6 +73,8 @@ pub struct SimDrive {
     pub max_cycle_host_ns: u64,
     /// Longest host time one ESC-event round of the firmware took, ns.
     pub max_event_host_ns: u64,
+    /// Host times of the process-data cycles: `[n]` counts those of `2^(n-1)..2^n` ns.
+    pub cycle_host_histogram: [u64; 64],
 }
 
 /// The simulated drive's motor of axis `axis` (0 = the first): the 400 W servo with the default
@@ -128,6 +130,7 @@ impl SimDrive {
             cycles_during_mailbox_transfer: 0,
             max_cycle_host_ns: 0,
             max_event_host_ns: 0,
+            cycle_host_histogram: [0; 64],
         })
     }
 
@@ -246,7 +249,12 @@ impl SimDrive {
     fn cycle(&mut self, now_ns: u64) {
         let started = std::time::Instant::now();
         run_cycle(&mut self.slave, &mut self.esc, now_ns);
-        self.max_cycle_host_ns = self.max_cycle_host_ns.max(elapsed_ns(started));
+        let took = elapsed_ns(started);
+        self.max_cycle_host_ns = self.max_cycle_host_ns.max(took);
+        let bucket = (u64::BITS - took.leading_zeros()) as usize;
+        if let Some(n) = self.cycle_host_histogram.get_mut(bucket) {
+            *n += 1;
+        }
     }
 
     /// Runs the ESC event handler while the IRQ line is asserted (bounded: the handler clears

@@ -49,6 +49,14 @@ pub mod op {
 /// FMMU operation flag: the 16 bytes follow as they are.
 pub const FMMU_RAW: u8 = 0x20;
 
+/// The shortest SYNC0 cycle an input may set, ns. An ESC generates SYNC0 at any period the
+/// master writes; below a few µs no MCU can take the interrupts, the board's SYNC0 context
+/// never ends and the simulation (which runs a firmware cycle per pulse) crawls: the first
+/// fuzz run found a 256 ns cycle that took 40 s to simulate (libFuzzer timeout). The firmware
+/// refuses every cycle below its profile's shortest (31.25 µs at best) with 0x0035, which
+/// cycles from this bound up still exercise.
+const MIN_SYNC0_CYCLE_NS: u32 = 10_000;
+
 /// AL control error acknowledge bit.
 const ACK: u16 = 0x10;
 
@@ -169,7 +177,7 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
                 let flags = input.u8();
                 let sync = &device.sync;
                 let cycle = if flags & 1 != 0 {
-                    input.u32()
+                    input.u32().max(MIN_SYNC0_CYCLE_NS)
                 } else if let Some(&c) = sync
                     .allowed_cycles_ns
                     .get(usize::from(flags >> 1) % sync.allowed_cycles_ns.len().max(1))
