@@ -11,7 +11,7 @@
 //!     exchange, back to INIT, and print what happened; US may have up to three decimals
 //!     (31.25) and must be a cycle every drive of the line accepts (its profile's DC or
 //!     free-run range, step and fixed cycles: the error says which)
-//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K] [MACHINE]
+//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [FAULTS] [MACHINE]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
@@ -29,6 +29,12 @@
 //!     --home-switch-rev X                a home switch, active from X revolutions upward
 //!     --limit-switches-rev N,P           limit switches, negative active at or below N,
 //!                                        positive at or above P (N < 0 < P)
+//! FAULTS (attach), for a master's error handling:
+//!     --lose-every N                     every N-th cyclic (process-data) frame is lost
+//!     --pull-cable-at-ms T --pull-cable-for-ms D
+//!                                        the cable to the first drive is pulled T ms after the
+//!                                        start for D ms (the interface going down does the same)
+//!     --drop-mailbox-read K              the reply to the K-th mailbox read is lost
 //! ```
 //!
 //! Profile names are the built-in profiles of `list-profiles` (`sdv3-e` and `sdv3_e` are the
@@ -45,7 +51,7 @@ use board_sim::{rawsock, Segment};
 
 const USAGE: &str = "usage: sim-drive [tour] [--plot FILE]
        sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
-       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--drop-mailbox-read K] [MACHINE]
+       sim-drive attach --iface IFNAME [LINE] [--seconds S] [FAULTS] [MACHINE]
        sim-drive list-profiles
        sim-drive plots [--out DIR]
 LINE (the drives in ring order; default one standard drive):
@@ -54,7 +60,14 @@ LINE (the drives in ring order; default one standard drive):
 MACHINE (attach; switches around every axis's motor, in revolutions, the rotor starting at 0):
        --home-switch-rev X               a home switch, active from X revolutions upward
        --limit-switches-rev N,P          limits: negative at or below N, positive at or above P,
-                                         N < 0 < P";
+                                         N < 0 < P
+FAULTS (attach; what a master developer tests their error handling with):
+       --lose-every N                    every N-th cyclic (process-data) frame is lost on the cable
+       --pull-cable-at-ms T --pull-cable-for-ms D
+                                         the cable to the first drive is pulled T ms after the
+                                         start for D ms (no frame passes, no link on its port 0;
+                                         taking the interface down does the same)
+       --drop-mailbox-read K             the reply to the K-th mailbox read is lost";
 
 struct Args {
     command: String,
@@ -67,6 +80,11 @@ struct Args {
     seconds: Option<u64>,
     free_run: bool,
     drop_mailbox_read: Option<u32>,
+    /// `--lose-every N`.
+    lose_every: Option<u32>,
+    /// `--pull-cable-at-ms` and `--pull-cable-for-ms`.
+    pull_cable_at_ms: Option<u64>,
+    pull_cable_for_ms: Option<u64>,
     out: String,
     plot: String,
     /// A LINE option was given.
@@ -87,6 +105,9 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         seconds: None,
         free_run: false,
         drop_mailbox_read: None,
+        lose_every: None,
+        pull_cable_at_ms: None,
+        pull_cable_for_ms: None,
         out: "docs/plots".into(),
         plot: "target/sim-drive/tour.svg".into(),
         line_given: false,
@@ -119,6 +140,17 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                 )?)
             }
             "--seconds" => a.seconds = Some(number(&value("--seconds")?, "--seconds")?),
+            "--lose-every" => a.lose_every = Some(number(&value("--lose-every")?, "--lose-every")?),
+            "--pull-cable-at-ms" => {
+                a.pull_cable_at_ms =
+                    Some(number(&value("--pull-cable-at-ms")?, "--pull-cable-at-ms")?)
+            }
+            "--pull-cable-for-ms" => {
+                a.pull_cable_for_ms = Some(number(
+                    &value("--pull-cable-for-ms")?,
+                    "--pull-cable-for-ms",
+                )?)
+            }
             "--home-switch-rev" => {
                 a.home_switch_rev = Some(revolutions(
                     &value("--home-switch-rev")?,
@@ -177,6 +209,23 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             }
             Some(_) => {}
         }
+    }
+    let injects = a.drop_mailbox_read.is_some()
+        || a.lose_every.is_some()
+        || a.pull_cable_at_ms.is_some()
+        || a.pull_cable_for_ms.is_some();
+    if a.command != "attach" && injects {
+        return Err("fault injection (--drop-mailbox-read, --lose-every, --pull-cable-*) is an option of `attach`".into());
+    }
+    if a.lose_every == Some(0) {
+        return Err("--lose-every must be at least 1 (1 loses every cyclic frame)".into());
+    }
+    match (a.pull_cable_at_ms, a.pull_cable_for_ms) {
+        (Some(_), Some(0)) => return Err("--pull-cable-for-ms must be at least 1".into()),
+        (Some(_), None) | (None, Some(_)) => {
+            return Err("--pull-cable-at-ms and --pull-cable-for-ms go together".into())
+        }
+        _ => {}
     }
     if a.command != "attach" && a.machine().is_some() {
         return Err("--home-switch-rev and --limit-switches-rev are options of `attach`".into());
@@ -358,6 +407,11 @@ fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     }
     let faults = rawsock::Faults {
         drop_mailbox_read: args.drop_mailbox_read,
+        lose_every: args.lose_every,
+        cable_out: args
+            .pull_cable_at_ms
+            .zip(args.pull_cable_for_ms)
+            .map(|(at, long)| (Duration::from_millis(at), Duration::from_millis(long))),
     };
     rawsock::serve_with_faults(segment, iface, args.seconds.map(Duration::from_secs), faults)
         .map_err(|e| format!("{iface}: {e} (a raw socket needs CAP_NET_RAW, e.g. run inside `unshare --user --map-root-user --net`)"))?;
@@ -503,6 +557,29 @@ mod tests {
             args("demo --profile gha_e --drives 2").expect("two").line,
             ["gha-e", "gha-e"]
         );
+    }
+
+    #[test]
+    fn fault_injection_flags_belong_to_attach_and_are_range_checked() {
+        let a = args(
+            "attach --iface veth0 --lose-every 10 --pull-cable-at-ms 5000 --pull-cable-for-ms 200",
+        )
+        .expect("valid");
+        assert_eq!(a.lose_every, Some(10));
+        assert_eq!(
+            (a.pull_cable_at_ms, a.pull_cable_for_ms),
+            (Some(5000), Some(200))
+        );
+        let e = refused("demo --lose-every 10");
+        assert!(e.contains("option of `attach`"), "{e}");
+        let e = refused("attach --iface veth0 --lose-every 0");
+        assert!(e.contains("at least 1"), "{e}");
+        let e = refused("attach --iface veth0 --pull-cable-at-ms 5");
+        assert!(e.contains("go together"), "{e}");
+        let e = refused("attach --iface veth0 --pull-cable-at-ms 5 --pull-cable-for-ms 0");
+        assert!(e.contains("at least 1"), "{e}");
+        let e = refused("attach --iface veth0 --lose-every x");
+        assert!(e.contains("--lose-every"), "{e}");
     }
 
     #[test]

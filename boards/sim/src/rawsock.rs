@@ -16,6 +16,8 @@ const ETHERTYPE_ETHERCAT: u16 = 0x88A4;
 const MAX_FRAME: usize = 1518;
 /// Longest wait for a frame when no simulated event is due (keeps the stop flag responsive).
 const IDLE_WAIT: Duration = Duration::from_millis(10);
+/// How often the interface's link state is read.
+const LINK_POLL: Duration = Duration::from_millis(50);
 
 static STOP: AtomicBool = AtomicBool::new(false);
 
@@ -60,6 +62,32 @@ impl RawSocket {
             }
             Ok(sock)
         }
+    }
+
+    /// Whether the interface is up with a link (IFF_UP and IFF_RUNNING): a veth whose peer was
+    /// taken down, or a NIC without a cable, is not.
+    pub fn link_up(&self, interface: &str) -> io::Result<bool> {
+        let mut req: libc::ifreq = unsafe { std::mem::zeroed() };
+        let name = interface.as_bytes();
+        if name.len() >= req.ifr_name.len() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "interface name too long",
+            ));
+        }
+        for (dst, &src) in req.ifr_name.iter_mut().zip(name) {
+            *dst = src as libc::c_char;
+        }
+        // SAFETY: SIOCGIFFLAGS reads the flags into the zero-initialised request, whose name is
+        // NUL-terminated (checked length above).
+        let r = unsafe { libc::ioctl(self.fd, libc::SIOCGIFFLAGS, &mut req) };
+        if r < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        // SAFETY: SIOCGIFFLAGS filled the flags member of the union.
+        let flags = unsafe { req.ifr_ifru.ifru_flags };
+        let want = (libc::IFF_UP | libc::IFF_RUNNING) as libc::c_short;
+        Ok(flags & want == want)
     }
 
     /// Waits up to `timeout` for a frame; `Ok(None)` on timeout.
@@ -123,17 +151,80 @@ impl Drop for RawSocket {
     }
 }
 
-/// Fault injection for tests of the master/slave recovery paths.
+/// Fault injection for tests of the master/slave recovery paths (`sim-drive attach` flags).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Faults {
     /// Drop the reply to the frame that carries the K-th successful read (1-based) of drive
     /// 0's slave → master mailbox: the ESC has handed the response over, the master never sees
     /// it, and must recover with a mailbox repeat request (ETG.1000.4 §5.6).
     pub drop_mailbox_read: Option<u32>,
+    /// Lose every N-th cyclic frame from the master (one with a logical read/write: the process
+    /// data) on the cable: it reaches no drive and nothing comes back (the master sees a
+    /// timeout or a working-counter error; the drives see a cycle without new outputs).
+    /// Mailbox and configuration frames pass.
+    pub lose_every: Option<u32>,
+    /// Pull the cable between master and first drive at this time after the start, for this
+    /// long: no frame passes and the first drive loses the link on its port 0.
+    pub cable_out: Option<(Duration, Duration)>,
 }
 
-/// FPRD command code (ETG.1000.4 Table 20).
+/// What fault injection does to the frames from the master.
+#[derive(Debug, Default)]
+pub struct Injector {
+    faults: Faults,
+    frames: u64,
+    lost: u64,
+}
+
+impl Injector {
+    /// Injects `faults`.
+    pub fn new(faults: Faults) -> Self {
+        Self {
+            faults,
+            ..Self::default()
+        }
+    }
+
+    /// Whether `frame` from the master is lost (`lose_every`, counting cyclic frames).
+    pub fn loses(&mut self, frame: &[u8]) -> bool {
+        let cyclic = crate::esc::datagrams(frame)
+            .iter()
+            .any(|d| matches!(d.command, CMD_LRD | CMD_LWR | CMD_LRW));
+        if !cyclic {
+            return false;
+        }
+        self.frames = self.frames.saturating_add(1);
+        let lost = self
+            .faults
+            .lose_every
+            .is_some_and(|n| n > 0 && self.frames % u64::from(n) == 0);
+        if lost {
+            self.lost = self.lost.saturating_add(1);
+        }
+        lost
+    }
+
+    /// Frames lost so far.
+    pub fn lost(&self) -> u64 {
+        self.lost
+    }
+
+    /// Whether the cable to the first drive is plugged `elapsed` after the start, with the
+    /// network interface's link `interface_up` (an interface taken down is a pulled cable).
+    pub fn cable_plugged(&self, elapsed: Duration, interface_up: bool) -> bool {
+        let pulled = self
+            .faults
+            .cable_out
+            .is_some_and(|(at, long)| elapsed >= at && elapsed < at.saturating_add(long));
+        interface_up && !pulled
+    }
+}
+
+/// Command codes (ETG.1000.4 Table 20): FPRD, and the logical reads and writes.
 const CMD_FPRD: u8 = 4;
+const CMD_LRD: u8 = 10;
+const CMD_LWR: u8 = 11;
+const CMD_LRW: u8 = 12;
 
 /// Whether `frame` (as returned) contains an FPRD with a non-zero working counter of `len`
 /// bytes at ESC address `ado`: a completed mailbox read.
@@ -171,6 +262,10 @@ pub fn serve_with_faults(
         libc::signal(libc::SIGTERM, on_signal as *const () as libc::sighandler_t);
     }
     let start = Instant::now();
+    let mut injector = Injector::new(faults);
+    let mut plugged = true;
+    let mut next_link_check = Duration::ZERO;
+    let mut interface_up = true;
     let mut buf = vec![0u8; MAX_FRAME];
     let mut frames = 0u64;
     let mut states: Vec<_> = segment
@@ -193,13 +288,36 @@ pub fn serve_with_faults(
         let wait = next.map_or(IDLE_WAIT, |t| {
             Duration::from_nanos(t.saturating_sub(now)).min(IDLE_WAIT)
         });
+        // The link: the interface's own (polled) and the injected cable pull.
+        let elapsed = start.elapsed();
+        if elapsed >= next_link_check {
+            interface_up = sock.link_up(interface).unwrap_or(true);
+            next_link_check = elapsed + LINK_POLL;
+        }
+        let now_plugged = injector.cable_plugged(elapsed, interface_up);
+        if now_plugged != plugged {
+            plugged = now_plugged;
+            segment.set_master_cable(plugged);
+            println!(
+                "sim-drive: cable to drive 0 {}",
+                if plugged {
+                    "plugged in"
+                } else {
+                    "pulled (no link on its port 0)"
+                }
+            );
+        }
         if let Some(n) = sock.recv(&mut buf, wait)? {
             let frame = buf.get(..n).unwrap_or(&[]);
             // Frames we sent ourselves carry the locally-administered bit: never answer those.
             if frame.get(6).is_some_and(|b| b & 0x02 != 0) {
                 continue;
             }
+            if injector.loses(frame) {
+                continue;
+            }
             segment.advance_to(start.elapsed().as_nanos() as u64);
+            // With the cable pulled the frame reaches no drive: `process_frame` gives nothing.
             if let Some(reply) = segment.process_frame(frame) {
                 if let (Some(k), Some(mbx)) = (faults.drop_mailbox_read, mailbox_in) {
                     if reads_mailbox(&reply, mbx.start, mbx.length) {
@@ -232,6 +350,59 @@ pub fn serve_with_faults(
             }
         }
     }
-    println!("sim-drive: stopped after {frames} frames");
+    println!(
+        "sim-drive: stopped after {frames} frames ({} lost by fault injection)",
+        injector.lost()
+    );
     Ok(frames)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An EtherCAT frame with one datagram of `command` (2 data bytes).
+    fn frame(command: u8) -> Vec<u8> {
+        let mut f = vec![0xFF; 6];
+        f.extend_from_slice(&[2, 0, 0, 0, 0, 1]);
+        f.extend_from_slice(&ETHERTYPE_ETHERCAT.to_be_bytes());
+        f.extend_from_slice(&(14u16 | 0x1000).to_le_bytes());
+        f.extend_from_slice(&[command, 0, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0, 0]);
+        f
+    }
+
+    #[test]
+    fn every_nth_cyclic_frame_is_lost_and_counted_mailbox_frames_pass() {
+        let mut inj = Injector::new(Faults {
+            lose_every: Some(3),
+            ..Faults::default()
+        });
+        let (cyclic, mailbox) = (frame(CMD_LRW), frame(CMD_FPRD));
+        let mut lost = Vec::new();
+        for _ in 0..9 {
+            assert!(!inj.loses(&mailbox), "mailbox frames pass");
+            lost.push(inj.loses(&cyclic));
+        }
+        assert_eq!(
+            lost,
+            [false, false, true, false, false, true, false, false, true]
+        );
+        assert_eq!(inj.lost(), 3);
+        let mut none = Injector::new(Faults::default());
+        assert!((0..100).all(|_| !none.loses(&cyclic)));
+    }
+
+    #[test]
+    fn the_cable_is_out_for_its_window_and_whenever_the_interface_is_down() {
+        let ms = Duration::from_millis;
+        let inj = Injector::new(Faults {
+            cable_out: Some((ms(1000), ms(200))),
+            ..Faults::default()
+        });
+        assert!(inj.cable_plugged(ms(999), true));
+        assert!(!inj.cable_plugged(ms(1000), true));
+        assert!(!inj.cable_plugged(ms(1199), true));
+        assert!(inj.cable_plugged(ms(1200), true));
+        assert!(!inj.cable_plugged(ms(5), false), "interface down");
+    }
 }

@@ -1,0 +1,93 @@
+"""SOEM (pysoem 1.1.13) against `sim-drive attach --lose-every 10 --pull-cable-at-ms T
+--pull-cable-for-ms D`: the drive in OP (free run, 1 ms) while every 10th cyclic frame is lost
+on the cable, then the cable pulled for D ms and plugged again, then the master's recovery.
+Prints what SOEM saw as one JSON object; the Rust test asserts on it."""
+
+import json
+import struct
+import sys
+import time
+
+import pysoem
+
+CYCLE_S = 0.001
+# A lost frame must show as lost within the cycle.
+RECEIVE_TIMEOUT_US = 2_000
+# Consecutive cycles without a reply that mean the cable is out (lost frames come one in ten).
+PULLED_AFTER = 20
+MAX_CYCLES = 20_000
+AL_CONTROL, AL_STATUS, AL_STATUS_CODE = 0x0120, 0x0130, 0x0134
+ACK = 0x10
+
+
+def al(s):
+    return (
+        struct.unpack("<H", s._fprd(AL_STATUS, 2))[0],
+        struct.unpack("<H", s._fprd(AL_STATUS_CODE, 2))[0],
+    )
+
+
+def to_op(m):
+    m.state = pysoem.OP_STATE
+    m.write_state()
+    for _ in range(3000):
+        m.send_processdata()
+        m.receive_processdata(RECEIVE_TIMEOUT_US)
+        if m.state_check(pysoem.OP_STATE, 1000) == pysoem.OP_STATE:
+            return True
+        time.sleep(CYCLE_S)
+    return False
+
+
+def main():
+    ifname = sys.argv[1]
+    out = {}
+    m = pysoem.Master()
+    m.open(ifname)
+    out["slave_count"] = m.config_init()
+    s0 = m.slaves[0]
+    out["iomap_size"] = m.config_map()
+    out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+    out["op"] = to_op(m)
+    expected = m.expected_wkc
+    out["expected_wkc"] = expected
+
+    cycles = errors = misses = 0
+    states_while_losing = set()
+    pulled_at = None
+    while cycles < MAX_CYCLES:
+        for s in m.slaves:
+            s.output = bytes(len(s.output))
+        m.send_processdata()
+        wkc = m.receive_processdata(RECEIVE_TIMEOUT_US)
+        cycles += 1
+        if wkc == expected:
+            if pulled_at is not None:
+                break
+            misses = 0
+        else:
+            misses += 1
+            if pulled_at is None:
+                errors += 1
+            if misses == PULLED_AFTER and pulled_at is None:
+                pulled_at = cycles
+        if pulled_at is None and cycles % 500 == 0:
+            states_while_losing.add(al(s0))
+        time.sleep(CYCLE_S)
+    out["cycles_before_pull"] = (pulled_at or cycles) - PULLED_AFTER
+    out["wkc_errors_before_pull"] = errors - PULLED_AFTER + 1 if pulled_at else errors
+    out["states_while_losing"] = sorted(states_while_losing)
+    out["cable_pulled_seen"] = pulled_at is not None
+    # Replies came back: the cable is in again. The mailbox and register frames pass.
+    out["after_pull"] = al(s0)
+    s0._fpwr(AL_CONTROL, struct.pack("<H", pysoem.SAFEOP_STATE | ACK))
+    time.sleep(0.05)
+    out["after_ack"] = al(s0)
+    out["recovered"] = to_op(m)
+    out["final"] = al(s0)
+    m.close()
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,59 @@
+//! Faults on the bus as a master developer injects them with `sim-drive attach` (SOEM over a
+//! veth pair): every 10th cyclic frame lost, then the cable pulled for 300 ms.
+//!
+//! - With one cyclic frame in ten lost the master counts working-counter errors (ETG.1000.4:
+//!   no frame, no working counter) in about one cycle in ten, and the drive stays in OP: two
+//!   cycles between outputs are far inside the process-data watchdog (100 ms).
+//! - With the cable out longer than the watchdog the drive drops to SAFE-OP with the error
+//!   indication and 0x001B (ETG.1000.6 Table 11).
+//! - The master acknowledges and requests OP: the drive is in OP again.
+
+use tests_host::soem::run_script;
+
+/// AL status (ETG.1000.6 Table 9).
+const OP: u64 = 0x08;
+const SAFEOP_ERROR: u64 = 0x14;
+const SAFEOP: u64 = 0x04;
+const SM_WATCHDOG: u64 = 0x001B;
+
+#[test]
+fn soem_sees_lost_frames_and_a_pulled_cable_and_recovers_the_drive() {
+    let (r, log) = run_script(
+        "bus_fault_scenario.py",
+        "standard",
+        1,
+        &[
+            "--lose-every",
+            "10",
+            "--pull-cable-at-ms",
+            "6000",
+            "--pull-cable-for-ms",
+            "300",
+        ],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r["op"], true, "OP with lost frames: {r}");
+    assert!(log.contains("cable to drive 0 pulled"), "{log}");
+    assert!(log.contains("cable to drive 0 plugged in"), "{log}");
+    let cycles = r["cycles_before_pull"].as_u64().expect("cycles");
+    let errors = r["wkc_errors_before_pull"].as_u64().expect("errors");
+    assert!(cycles > 500, "ran before the pull: {r}");
+    let share = errors as f64 / cycles as f64;
+    assert!(
+        (0.05..=0.2).contains(&share),
+        "working-counter errors in {errors} of {cycles} cycles"
+    );
+    let states: Vec<(u64, u64)> = r["states_while_losing"]
+        .as_array()
+        .expect("states")
+        .iter()
+        .map(|s| (s[0].as_u64().expect("u16"), s[1].as_u64().expect("u16")))
+        .collect();
+    assert_eq!(states, [(OP, 0)], "OP throughout the frame loss");
+    assert_eq!(r["cable_pulled_seen"], true, "{r}");
+    assert_eq!(r["after_pull"][0], SAFEOP_ERROR, "{r}");
+    assert_eq!(r["after_pull"][1], SM_WATCHDOG, "{r}");
+    assert_eq!(r["after_ack"][0], SAFEOP, "{r}");
+    assert_eq!(r["recovered"], true, "{r}");
+    assert_eq!(r["final"][0], OP, "{r}");
+}
