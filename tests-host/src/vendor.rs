@@ -82,8 +82,11 @@ pub fn remap(pdo: u16, assign: u16, entries: &[MappedEntry]) -> Vec<Sdo> {
 }
 
 /// Writes `sdo` to the first drive of `group` in PREOP.
-async fn write(group: &SubDeviceGroup<4, 64, DefaultLock, PreOp>, md: &MainDevice<'_>, sdo: Sdo) {
-    let sd = group.subdevice(md, 0).expect("drive");
+/// Writes `sdo` to the drive `sd` (panics with the SDO on an abort: a scenario's set-up).
+pub async fn write_to<S: std::ops::Deref<Target = ethercrab::SubDevice>>(
+    sd: &ethercrab::SubDeviceRef<'_, S>,
+    sdo: Sdo,
+) {
     let r = match sdo {
         Sdo::I8(i, s, v) => sd.sdo_write(i, s, v).await,
         Sdo::U8(i, s, v) => sd.sdo_write(i, s, v).await,
@@ -95,7 +98,14 @@ async fn write(group: &SubDeviceGroup<4, 64, DefaultLock, PreOp>, md: &MainDevic
     r.unwrap_or_else(|e| panic!("SDO {sdo:?}: {e:?}"));
 }
 
-/// INIT → PREOP with `setup` written.
+/// Writes `sdo` to every drive of the group.
+async fn write(group: &SubDeviceGroup<4, 64, DefaultLock, PreOp>, md: &MainDevice<'_>, sdo: Sdo) {
+    for sd in group.iter(md) {
+        write_to(&sd, sdo).await;
+    }
+}
+
+/// INIT → PREOP with `setup` written to every drive.
 async fn preop(
     m: &InProcess,
     md: &MainDevice<'_>,

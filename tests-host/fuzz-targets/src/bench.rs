@@ -197,6 +197,8 @@ pub struct Bench {
     pub profile: &'static Loaded,
     /// The next mailbox counter (1..=7).
     counter: u8,
+    /// The last value written to AL control (a request that may still be pending).
+    pub last_request: Option<u16>,
 }
 
 impl Bench {
@@ -213,6 +215,7 @@ impl Bench {
             segment: Segment::from_devices(vec![drive]),
             profile,
             counter: 1,
+            last_request: None,
         }
     }
 
@@ -270,6 +273,7 @@ impl Bench {
 
     /// Requests `state` (AL control, error acknowledge set as masters do after an error).
     pub fn request(&mut self, control: u16) -> u16 {
+        self.last_request = Some(control);
         self.write(regs::AL_CONTROL.addr, &control.to_le_bytes())
     }
 

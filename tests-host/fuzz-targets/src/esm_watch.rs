@@ -8,16 +8,19 @@ use crate::spec::{self, state};
 /// Follows the AL status between master actions.
 pub struct EsmWatch {
     last: Status,
-    /// States the master requested since the last observation.
+    /// States the master requested since the state last changed: a request stays in the AL
+    /// control register and may complete later (SAFEOP → OP waits for outputs and SYNC0,
+    /// ETG.1000.6 §6.4.1), so it counts until the state changes.
     requested: Vec<u8>,
 }
 
 impl EsmWatch {
-    /// Starts from what the master read.
-    pub fn new(first: Status) -> Self {
+    /// Starts from what the master read, with the master's last request (`pending`, the AL
+    /// control value, which may not have completed yet).
+    pub fn new(first: Status, pending: Option<u16>) -> Self {
         Self {
             last: first,
-            requested: Vec::new(),
+            requested: pending.map(|c| (c & 0x0F) as u8).into_iter().collect(),
         }
     }
 
@@ -31,7 +34,8 @@ impl EsmWatch {
         self.last
     }
 
-    /// The master read `now`; checks it against the last observation and the requests between.
+    /// The master read `now`; checks it against the last observation and the requests made
+    /// since the state last changed.
     pub fn observe(&mut self, now: Status) -> Result<(), Violation> {
         let valid = [
             state::INIT,
@@ -75,8 +79,10 @@ impl EsmWatch {
                 )));
             }
         }
+        if now.state != self.last.state {
+            self.requested.clear();
+        }
         self.last = now;
-        self.requested.clear();
         Ok(())
     }
 }

@@ -65,7 +65,7 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
     let mut input = Input::new(data);
     let profile = profile_of(input.u8());
     let mut bench = Bench::new(profile);
-    let mut watch = EsmWatch::new(status(&mut bench)?);
+    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
     let device = &profile.fw.od.device;
     let layouts = [
         device.mailbox_out,

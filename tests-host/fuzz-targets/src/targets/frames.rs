@@ -42,7 +42,7 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
     let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
     let mut bench = Bench::new(profile);
     bench.bring_to(start);
-    let mut watch = EsmWatch::new(status(&mut bench)?);
+    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
     let d = &profile.fw.od.device;
     let targets: [u16; 20] = [
         regs::AL_CONTROL.addr,
@@ -110,6 +110,10 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
                 check_datagrams(&mut bench, &dgs)?;
             }
             _ => bench.segment.advance(u64::from(input.u16()) * 1_000),
+        }
+        // A raw frame may have written AL control: what it holds now is the master's request.
+        if let Some(c) = bench.read(regs::AL_CONTROL.addr, 2) {
+            watch.requested(u16::from_le_bytes([c[0], c[1]]));
         }
         watch.observe(status(&mut bench)?)?;
     }

@@ -54,7 +54,7 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
     let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
     let mut bench = Bench::new(profile);
     bench.bring_to(start);
-    let mut watch = EsmWatch::new(status(&mut bench)?);
+    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
     let mbx_len = bench.mailbox_out_len();
     let mut ops = 0;
     while !input.is_empty() && ops < MAX_OPS {

@@ -65,7 +65,7 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
     let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
     let mut bench = Bench::new(profile);
     bench.bring_to(start);
-    let mut watch = EsmWatch::new(status(&mut bench)?);
+    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
     let mut named: Vec<u16> = vec![0];
     let body_room = bench
         .mailbox_out_len()
