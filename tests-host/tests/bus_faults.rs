@@ -72,6 +72,18 @@ async fn cycles(
     sw
 }
 
+/// The drive in OP (DC, CSV) enabled and commanded to `target`: the master's group.
+async fn turning(m: &board_sim::inproc::InProcess, target: i32) -> DcGroup {
+    let md: &MainDevice<'_> = &m.maindevice;
+    let group = vendor::into_op_dc_velocity(m, md, (0, &[]), CSV, CYCLE_NS).await;
+    let sw = cycles(m, md, &group, vendor::enable_sequence(1_000), target).await;
+    assert!(
+        cia402::is(sw, cia402::OPERATION_ENABLED),
+        "enabled: {sw:#06x}"
+    );
+    group
+}
+
 #[test]
 fn link_loss_in_op_stops_the_motor_and_the_drive_runs_again_after_recovery() {
     let profile = od_gen::builtin("standard").expect("profile");
@@ -81,12 +93,7 @@ fn link_loss_in_op_stops_the_motor_and_the_drive_runs_again_after_recovery() {
         let (m, transport) = master_for(segment);
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = vendor::into_op_dc_velocity(&m, md, (0, &[]), CSV, CYCLE_NS).await;
-        let sw = cycles(&m, md, &group, vendor::enable_sequence(1_000), target).await;
-        assert!(
-            cia402::is(sw, cia402::OPERATION_ENABLED),
-            "enabled: {sw:#06x}"
-        );
+        let group = turning(&m, target).await;
         let (rpm, _) = vendor::motor(&m);
         assert!(
             (rpm / 60.0 - SPEED_REV_S).abs() < 0.5,
@@ -182,12 +189,7 @@ fn a_motor_fault_while_the_cable_is_out_is_reported_with_the_bus_fault_and_both_
         let (m, transport) = master_for(segment);
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = vendor::into_op_dc_velocity(&m, md, (0, &[]), CSV, CYCLE_NS).await;
-        let sw = cycles(&m, md, &group, vendor::enable_sequence(1_000), target).await;
-        assert!(
-            cia402::is(sw, cia402::OPERATION_ENABLED),
-            "enabled: {sw:#06x}"
-        );
+        let group = turning(&m, target).await;
 
         m.shared.segment().set_master_cable(false);
         m.shared.advance(300_000_000);

@@ -12,11 +12,10 @@
 
 use hal::esc::regs;
 
-use crate::bench::{cmd, profile_of, replies, Bench, Datagram, MAX_DATAGRAM_DATA};
+use crate::bench::{cmd, replies, Bench, Datagram, MAX_DATAGRAM_DATA};
 use crate::coe::Violation;
-use crate::esm_watch::EsmWatch;
 use crate::input::Input;
-use crate::targets::mailbox::{status, START_STATES};
+use crate::targets::mailbox::{started, status};
 
 /// Operations per input.
 pub const MAX_OPS: usize = 32;
@@ -38,11 +37,8 @@ pub mod op {
 /// Runs one input.
 pub fn run(data: &[u8]) -> Result<(), Violation> {
     let mut input = Input::new(data);
-    let profile = profile_of(input.u8());
-    let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
-    let mut bench = Bench::new(profile);
-    bench.bring_to(start);
-    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
+    let (mut bench, mut watch) = started(&mut input)?;
+    let profile = bench.profile;
     let d = &profile.fw.od.device;
     let targets: [u16; 20] = [
         regs::AL_CONTROL.addr,

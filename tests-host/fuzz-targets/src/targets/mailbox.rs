@@ -50,11 +50,8 @@ pub mod op {
 /// Runs one input.
 pub fn run(data: &[u8]) -> Result<(), Violation> {
     let mut input = Input::new(data);
-    let profile = profile_of(input.u8());
-    let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
-    let mut bench = Bench::new(profile);
-    bench.bring_to(start);
-    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
+    let (mut bench, mut watch) = started(&mut input)?;
+    let profile = bench.profile;
     let mbx_len = bench.mailbox_out_len();
     let mut ops = 0;
     while !input.is_empty() && ops < MAX_OPS {
@@ -98,6 +95,17 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
         poll(&mut bench)?;
     }
     Ok(())
+}
+
+/// The start every bus target shares: the profile and the state (INIT..OP) the first two input
+/// bytes choose, the drive brought there, and the ESM oracle watching from there on.
+pub fn started(input: &mut Input<'_>) -> Result<(Bench, EsmWatch), Violation> {
+    let profile = profile_of(input.u8());
+    let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
+    let mut bench = Bench::new(profile);
+    bench.bring_to(start);
+    let watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
+    Ok((bench, watch))
 }
 
 /// The AL status, which a drive on the bus always answers.

@@ -9,14 +9,13 @@
 //! Oracle: every reply passes [`crate::coe::check_reply`]; an SDO response or abort names an
 //! index a request named (or 0: an abort outside a transfer); the ESM oracle holds.
 
-use crate::bench::{profile_of, Bench};
+use crate::bench::Bench;
 use crate::coe::{
     self, ccs, check_reply, Reply, Violation, COMPLETE_ACCESS, EXPEDITED, SIZE_INDICATED,
 };
-use crate::esm_watch::EsmWatch;
 use crate::input::Input;
 use crate::spec::{self, coe_service};
-use crate::targets::mailbox::{status, START_STATES};
+use crate::targets::mailbox::{started, status, START_STATES};
 
 /// Operations per input.
 pub const MAX_OPS: usize = 48;
@@ -61,11 +60,8 @@ mod info_request {
 /// Runs one input.
 pub fn run(data: &[u8]) -> Result<(), Violation> {
     let mut input = Input::new(data);
-    let profile = profile_of(input.u8());
-    let start = START_STATES[usize::from(input.u8()) % START_STATES.len()];
-    let mut bench = Bench::new(profile);
-    bench.bring_to(start);
-    let mut watch = EsmWatch::new(status(&mut bench)?, bench.last_request);
+    let (mut bench, mut watch) = started(&mut input)?;
+    let profile = bench.profile;
     let mut named: Vec<u16> = vec![0];
     let body_room = bench
         .mailbox_out_len()
