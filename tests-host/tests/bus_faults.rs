@@ -26,14 +26,14 @@
 
 use ethercrab::{Command, MainDevice};
 use tests_host::vendor::{self, DcGroup};
-use tests_host::{block_on, cia402, master_for, units};
+use tests_host::{al_status, block_on, cia402, master_for, units};
 
 const CYCLE_NS: u64 = 1_000_000;
 const CSV: i8 = cia402::CYCLIC_SYNCHRONOUS_VELOCITY;
 const STATION: u16 = 0x1000;
-const AL_CONTROL: u16 = 0x0120;
-const AL_STATUS: u16 = 0x0130;
-const AL_STATUS_CODE: u16 = 0x0134;
+const AL_CONTROL: u16 = hal::esc::regs::AL_CONTROL.addr;
+const AL_STATUS: u16 = hal::esc::regs::AL_STATUS.addr;
+const AL_STATUS_CODE: u16 = hal::esc::regs::AL_STATUS_CODE.addr;
 /// AL status (ETG.1000.6 Table 9): SAFE-OP, OP, error indication; AL control acknowledge.
 const SAFEOP: u16 = 0x04;
 const OP: u16 = 0x08;
@@ -44,16 +44,10 @@ const SM_WATCHDOG: u16 = 0x001B;
 /// The speed the motor turns at, rev/s.
 const SPEED_REV_S: f64 = 10.0;
 
-async fn al(md: &MainDevice<'_>) -> (u16, u16) {
-    let status: u16 = Command::fprd(STATION, AL_STATUS)
-        .receive(md)
-        .await
-        .expect("AL status");
-    let code: u16 = Command::fprd(STATION, AL_STATUS_CODE)
-        .receive(md)
-        .await
-        .expect("AL status code");
-    (status, code)
+/// The motor turns at [`SPEED_REV_S`] (within 0.5 rev/s).
+fn assert_at_speed(m: &board_sim::inproc::InProcess, what: &str) {
+    let (rpm, _) = vendor::motor(m);
+    assert!((rpm / 60.0 - SPEED_REV_S).abs() < 0.5, "{what}: {rpm} rpm");
 }
 
 /// `n` cycles at `cw` and the target speed; the last statusword.
@@ -94,11 +88,7 @@ fn link_loss_in_op_stops_the_motor_and_the_drive_runs_again_after_recovery() {
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
         let group = turning(&m, target).await;
-        let (rpm, _) = vendor::motor(&m);
-        assert!(
-            (rpm / 60.0 - SPEED_REV_S).abs() < 0.5,
-            "at speed: {rpm} rpm"
-        );
+        assert_at_speed(&m, "at speed");
 
         // The cable is pulled for 1.5 s.
         m.shared.segment().set_master_cable(false);
@@ -118,7 +108,7 @@ fn link_loss_in_op_stops_the_motor_and_the_drive_runs_again_after_recovery() {
 
         // Plugged again: the master finds the drive in SAFE-OP with the watchdog error.
         m.shared.segment().set_master_cable(true);
-        assert_eq!(al(md).await, (SAFEOP | ERROR, SM_WATCHDOG));
+        assert_eq!(al_status(md).await, (SAFEOP | ERROR, SM_WATCHDOG));
         let sd = group.subdevice(md, 0).expect("drive");
         let register: u8 = sd.sdo_read(0x1001, 0).await.expect("1001h");
         assert_ne!(register & 0x11, 0, "1001h: generic + communication error");
@@ -143,23 +133,23 @@ fn link_loss_in_op_stops_the_motor_and_the_drive_runs_again_after_recovery() {
             .send(md, SAFEOP | ACK)
             .await
             .expect("acknowledge");
-        assert_eq!(al(md).await, (SAFEOP, 0), "acknowledged");
+        assert_eq!(al_status(md).await, (SAFEOP, 0), "acknowledged");
         Command::fpwr(STATION, AL_CONTROL)
             .send(md, OP)
             .await
             .expect("request OP");
         let sw = cycles(&m, md, &group, std::iter::repeat_n(0, 20), 0).await;
-        assert_eq!(al(md).await, (OP, 0), "OP again (statusword {sw:#06x})");
+        assert_eq!(
+            al_status(md).await,
+            (OP, 0),
+            "OP again (statusword {sw:#06x})"
+        );
         let sw = cycles(&m, md, &group, vendor::enable_sequence(1_000), target).await;
         assert!(
             cia402::is(sw, cia402::OPERATION_ENABLED),
             "enabled again: {sw:#06x}"
         );
-        let (rpm, _) = vendor::motor(&m);
-        assert!(
-            (rpm / 60.0 - SPEED_REV_S).abs() < 0.5,
-            "at speed again: {rpm} rpm"
-        );
+        assert_at_speed(&m, "at speed again");
         assert!(drive(&m).1, "bridge on");
     });
 }
@@ -197,7 +187,11 @@ fn a_motor_fault_while_the_cable_is_out_is_reported_with_the_bus_fault_and_both_
         m.shared.advance(300_000_000);
         m.shared.segment().set_master_cable(true);
 
-        assert_eq!(al(md).await, (SAFEOP | ERROR, SM_WATCHDOG), "the bus fault");
+        assert_eq!(
+            al_status(md).await,
+            (SAFEOP | ERROR, SM_WATCHDOG),
+            "the bus fault"
+        );
         let sd = group.subdevice(md, 0).expect("drive");
         let shown: u16 = sd.sdo_read(0x603F, 0).await.expect("603Fh");
         assert_eq!(shown, fault, "603Fh: the over-voltage");
@@ -222,7 +216,7 @@ fn a_motor_fault_while_the_cable_is_out_is_reported_with_the_bus_fault_and_both_
             .await
             .expect("request OP");
         cycles(&m, md, &group, std::iter::repeat_n(0, 20), 0).await;
-        assert_eq!(al(md).await, (OP, 0), "OP again");
+        assert_eq!(al_status(md).await, (OP, 0), "OP again");
         let reset = [0u16, 0x80, 0x80, 0].into_iter();
         let sw = cycles(
             &m,
@@ -236,11 +230,7 @@ fn a_motor_fault_while_the_cable_is_out_is_reported_with_the_bus_fault_and_both_
             cia402::is(sw, cia402::OPERATION_ENABLED),
             "enabled again: {sw:#06x}"
         );
-        let (rpm, _) = vendor::motor(&m);
-        assert!(
-            (rpm / 60.0 - SPEED_REV_S).abs() < 0.5,
-            "at speed again: {rpm} rpm"
-        );
+        assert_at_speed(&m, "at speed again");
         let register: u8 = sd.sdo_read(0x1001, 0).await.expect("1001h");
         assert_eq!(register, 0, "1001h clear");
     });
