@@ -5,6 +5,9 @@
 pub const SPEED_COUNTER_START_RESET: u16 = 0x1000;
 /// Smallest legal speed counter start 0x0930 (Section II 0x0930: 0x0080..0x3FFF).
 pub const SPEED_COUNTER_START_MIN: u16 = 0x0080;
+/// The speed counter diff 0x0932 ranges ±(speed counter start − this) (Section II 0x0932): the
+/// period between two 1 ns corrections of the local time can shrink to this many ticks.
+pub const SPEED_COUNTER_DIFF_MARGIN: u16 = 0x7F;
 /// One speed-counter step of the DC unit, in ns (the ET1100 DC unit runs on a 100 MHz clock).
 pub const SPEED_COUNTER_TICK_NS: u32 = 10;
 /// Reset value of the system time difference filter depth 0x0934.

@@ -9,7 +9,9 @@
 //!   ARMW/FRMW, or BWR/FPWR) gives the loop `diff = (local + offset - delay) - received`, stored
 //!   sign-magnitude in 0x092C; the loop slews the local clock with a critically damped PI whose
 //!   time constant is at least [`TIME_LOOP_TAU_MIN_NS`] and two write intervals, limited to
-//!   1 ns per speed-counter period (0x0930 x 10 ns, as the ET1100). A write to 0x0930 resets it.
+//!   what the speed counter diff 0x0932 can represent: one 1 ns step every
+//!   [`SPEED_COUNTER_DIFF_MARGIN`] ticks of 10 ns (787 ppm; ET1100 crystals are specified to
+//!   ±25 ppm, so any two ESCs can be locked). A write to 0x0930 resets it.
 //! - SYNC: with 0x0981 cyclic + SYNC0, pulses at start time + k x SYNC0 cycle (system time).
 //!   SYNC1 follows a SYNC0 pulse by the SYNC1 cycle; the delay is measured again from the first
 //!   SYNC0 pulse at or after the SYNC1 pulse (TI/Beckhoff ESC description), so SYNC1 cycle =
@@ -20,7 +22,7 @@
 //!   status clears both. The SYNC pin edge ([`hal::pdi::EscSignals`]) needs the SYNC output
 //!   configured in 0x0151.
 
-use hal::esc::dc::{FILTER_DEPTH_MASK, SPEED_COUNTER_START_MIN, SPEED_COUNTER_TICK_NS};
+use hal::esc::dc::{FILTER_DEPTH_MASK, SPEED_COUNTER_DIFF_MARGIN, SPEED_COUNTER_TICK_NS};
 use hal::esc::{
     regs, AlEvent, DcActivation, DcActivationStatus, DcSyncStatus, DcSystemTimeDiff,
     SyncLatchConfig,
@@ -170,10 +172,8 @@ impl Et1100 {
         );
 
         let depth = u32::from(self.u8_at(regs::DC_TIME_FILTER_DEPTH.addr) & FILTER_DEPTH_MASK);
-        let speed_start = self
-            .u16_at(regs::DC_SPEED_COUNTER_START.addr)
-            .max(SPEED_COUNTER_START_MIN);
-        let max_slew_ppb = NS_PER_S / (f64::from(speed_start) * f64::from(SPEED_COUNTER_TICK_NS));
+        let max_slew_ppb =
+            NS_PER_S / (f64::from(SPEED_COUNTER_DIFF_MARGIN) * f64::from(SPEED_COUNTER_TICK_NS));
         let tl = &mut self.dc.time_loop;
         tl.filtered_ns += (diff as f64 - tl.filtered_ns) / f64::from(1u32 << depth);
         let dt_ns = tl

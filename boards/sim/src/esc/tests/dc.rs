@@ -142,6 +142,31 @@ fn frmw_drift_loop_converges() {
 }
 
 #[test]
+fn crystals_at_opposite_tolerance_limits_lock() {
+    // ET1100 crystals: 25 MHz ± 25 ppm, so two ESCs may run 50 ppm apart; the time control loop
+    // (0x0930 at its reset value, as masters write it) must hold them together.
+    let mut escs = clocked_ring();
+    escs[0].set_clock(5_000_000_000, 25.0);
+    escs[1].set_clock(1_234_567, -25.0);
+    dc_init(&mut escs);
+    for i in 1..=2_000u64 {
+        for e in escs.iter_mut() {
+            e.advance_to(i * 1_000_000);
+        }
+        send1(
+            &mut escs,
+            FRMW,
+            station(0),
+            regs::DC_SYSTEM_TIME.addr,
+            &[0; 8],
+        );
+    }
+    let t = escs[0].now();
+    let skew = escs[1].system_time_at(t) as i64 - escs[0].system_time_at(t) as i64;
+    assert!(skew.abs() < 100, "skew {skew} ns after 2 s");
+}
+
+#[test]
 fn speed_counter_write_resets_the_loop() {
     let mut escs = ring(1);
     escs[0].set_clock(1_000_000, 0.0);
