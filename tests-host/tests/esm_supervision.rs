@@ -322,6 +322,37 @@ fn a_phase_lock_the_board_lost_is_a_pll_error_0x32_in_op_only() {
 }
 
 #[test]
+fn sync0_served_late_within_the_pll_tolerance_keeps_op_beyond_it_is_a_pll_error_0x32() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md = &*m.maindevice;
+        let group = into_op_with_dc(&m).await;
+        dc_cycles(&m, &group, 10).await;
+        assert_eq!(al(md).await, (OP, 0));
+        let set_latency = |max_ns: u64| {
+            for d in m.shared.segment().drives_mut() {
+                d.sync0_latency_max_ns = max_ns;
+            }
+        };
+        // Interrupt latency of up to 8 % of the cycle: intervals between served SYNC0s vary by
+        // as much, which the control loop's PLL follows.
+        set_latency(CYCLE_NS * 8 / 100);
+        dc_cycles(&m, &group, 2_000).await;
+        assert_eq!(al(md).await, (OP, 0), "locked through the latency");
+        // Up to half a cycle: intervals off the period by more than the PLL follows, three in a
+        // row within a few cycles.
+        set_latency(CYCLE_NS / 2);
+        dc_cycles(&m, &group, 200).await;
+        assert_eq!(
+            al(md).await,
+            (SAFEOP | ERROR, 0x0032),
+            "SAFEOP + error, PLL error"
+        );
+    });
+}
+
+#[test]
 fn sync0_at_another_period_than_configured_is_a_pll_error_0x32() {
     block_on(async {
         let (m, transport) = master();

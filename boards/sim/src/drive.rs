@@ -31,6 +31,9 @@ pub const LED_PERIOD_NS: u64 = 10_000_000;
 /// fallback does every 10 ms: re-evaluates waiting transitions and timeouts.
 pub const BACKGROUND_POLL_PERIOD_NS: u64 = 10_000_000;
 
+/// Seed of the SYNC0 latency sequence ([`SimDrive::sync0_latency_max_ns`]); any non-zero value.
+const SYNC0_LATENCY_SEED: u64 = 0x9E37_79B9_7F4A_7C15;
+
 /// Why [`SimDrive::fit_servo`] failed.
 #[derive(Debug)]
 pub enum FitError {
@@ -68,6 +71,11 @@ pub struct SimDrive {
     pub cycle_during_mailbox_transfer: bool,
     /// Cycles run that way.
     pub cycles_during_mailbox_transfer: u32,
+    /// Fault injection: the SYNC0 interrupt is served late by a pseudo-random time up to this
+    /// (ns), as interrupt latency behind a higher-priority handler makes it on a board; the
+    /// firmware's cycle sees the later time. 0: served at the pulse.
+    pub sync0_latency_max_ns: u64,
+    sync0_latency_state: u64,
     /// Longest host time one process-data cycle of the firmware took (`on_sync0` +
     /// `cycle_finished`), ns: what a soak reports (host time, not the MCU's).
     pub max_cycle_host_ns: u64,
@@ -128,6 +136,8 @@ impl SimDrive {
             servos,
             cycle_during_mailbox_transfer: false,
             cycles_during_mailbox_transfer: 0,
+            sync0_latency_max_ns: 0,
+            sync0_latency_state: SYNC0_LATENCY_SEED,
             max_cycle_host_ns: 0,
             max_event_host_ns: 0,
             cycle_host_histogram: [0; 64],
@@ -212,7 +222,8 @@ impl SimDrive {
         }
         self.esc.advance_to(now_ns);
         if self.esc.take_sync0() {
-            self.cycle(now_ns);
+            let served = now_ns.saturating_add(self.sync0_latency());
+            self.cycle(served);
         }
         if self.free_running() && now_ns >= self.next_free_run_ns {
             self.cycle(now_ns);
@@ -243,6 +254,18 @@ impl SimDrive {
                 servo.io_mut().outputs.set_outputs(a.digital_outputs());
             }
         }
+    }
+
+    /// The next SYNC0 service latency, in `0..=sync0_latency_max_ns` (xorshift64).
+    fn sync0_latency(&mut self) -> u64 {
+        if self.sync0_latency_max_ns == 0 {
+            return 0;
+        }
+        let x = &mut self.sync0_latency_state;
+        *x ^= *x << 13;
+        *x ^= *x >> 7;
+        *x ^= *x << 17;
+        *x % (self.sync0_latency_max_ns + 1)
     }
 
     /// One process-data cycle (see [`run_cycle`]).
