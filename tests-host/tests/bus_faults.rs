@@ -252,6 +252,77 @@ const PROFILE: &str = "sigma-v-sd";
 /// the sim's loop is no better than 1 µs with frames that jitter).
 const LOCKED_NS: u64 = 1_000;
 
+/// The PDI watchdog as the master sees it: DL status 0x0110 bit 1 (not expired) and the expiry
+/// counter 0x0443.
+async fn pdi_watchdog(md: &MainDevice<'_>) -> (bool, u8) {
+    let dl: u16 = Command::fprd(STATION, hal::esc::regs::DL_STATUS.addr)
+        .receive(md)
+        .await
+        .expect("DL status");
+    let expiries: u8 = Command::fprd(STATION, hal::esc::regs::WATCHDOG_COUNTER_PDI.addr)
+        .receive(md)
+        .await
+        .expect("0x0443");
+    (dl & hal::esc::DlStatus::PDI_WATCHDOG_OK != 0, expiries)
+}
+
+#[test]
+fn mcu_stopped_expires_the_pdi_watchdog_and_its_restart_is_reported_as_0x0060() {
+    const INIT: u16 = 0x01;
+    const RESTARTED_LOCALLY: u16 = 0x0060;
+    let profile = od_gen::builtin("standard").expect("profile");
+    let target = units::target_velocity(&profile, SPEED_REV_S);
+    block_on(async {
+        let segment = board_sim::Segment::new("standard", 1).expect("profile");
+        let (m, transport) = master_for(segment);
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = turning(&m, target).await;
+        assert_at_speed(&m, "at speed");
+        assert_eq!(pdi_watchdog(md).await, (true, 0), "PDI watchdog running");
+
+        // The MCU stops for 300 ms while the master goes on cycling.
+        m.shared.segment().drives_mut()[0].halt_mcu();
+        cycles(&m, md, &group, std::iter::repeat_n(0x0F, 150), target).await;
+        // ETG.1000.4 / ESC: without PDI accesses for the PDI watchdog time (0x0410, 100 ms by
+        // default) DL status 0x0110 bit 1 clears and 0x0443 counts the expiry; the ESC itself
+        // leaves the AL status as the firmware last wrote it.
+        assert_eq!(pdi_watchdog(md).await, (false, 1), "PDI watchdog expired");
+        assert_eq!(al_status(md).await, (OP, 0), "AL status as last written");
+        assert!(
+            !m.shared.segment().drives()[0].servos[0].latched().gates,
+            "bridge off while the MCU is stopped"
+        );
+        cycles(&m, md, &group, std::iter::repeat_n(0x0F, 150), target).await;
+
+        // The MCU restarts (the board's watchdog) with the ESC as it was: INIT with the error
+        // indication and "slave restarted locally" (ETG.1000.6 Table 11).
+        m.shared.segment().drives_mut()[0]
+            .restart_mcu()
+            .expect("restart");
+        cycles(&m, md, &group, std::iter::repeat_n(0, 5), 0).await;
+        assert_eq!(al_status(md).await, (INIT | ERROR, RESTARTED_LOCALLY));
+        assert!(pdi_watchdog(md).await.0, "PDI served again");
+
+        // The master runs its start-up again (which acknowledges the error): the drive turns.
+        drop(group);
+        let group = turning(&m, target).await;
+        assert_at_speed(&m, "at speed again");
+        // The restart is in the diagnosis history: the ESM's error A000h, AL status code 0x0060,
+        // from OP (the state the ESC showed) to INIT.
+        let sd = group.subdevice(md, 0).expect("drive");
+        let newest: u8 = sd.sdo_read(0x10F3, 2).await.expect("10F3h:02");
+        let mut found = false;
+        for sub in 6..=newest {
+            let msg = sd.sdo_read::<[u8; 28]>(0x10F3, sub).await.expect("message");
+            found |= msg[..4] == [0x00, 0xE8, 0x00, 0xA0]
+                && msg[16..20] == [0x06, 0x00, 0x60, 0x00]
+                && msg[20..26] == [0x05, 0x00, OP as u8, 0x05, 0x00, INIT as u8];
+        }
+        assert!(found, "10F3h: a message of the local restart");
+    });
+}
+
 #[test]
 fn clocks_50_ppm_apart_miss_no_cycle() {
     line_of_sigma_v_sd(0, 0);

@@ -83,6 +83,8 @@ pub struct SimDrive {
     pub max_event_host_ns: u64,
     /// Host times of the process-data cycles: `[n]` counts those of `2^(n-1)..2^n` ns.
     pub cycle_host_histogram: [u64; 64],
+    /// The MCU is stopped ([`SimDrive::halt_mcu`]).
+    mcu_halted: bool,
 }
 
 /// The simulated drive's motor of axis `axis` (0 = the first): the 400 W servo with the default
@@ -141,6 +143,7 @@ impl SimDrive {
             max_cycle_host_ns: 0,
             max_event_host_ns: 0,
             cycle_host_histogram: [0; 64],
+            mcu_halted: false,
         })
     }
 
@@ -152,6 +155,27 @@ impl SimDrive {
         let now = self.esc.now();
         let mut esc = Et1100::new(self.esc.sii());
         esc.advance_to(now);
+        self.esc = esc;
+        self.restart_mcu()
+    }
+
+    /// The MCU stops: the firmware serves neither the ESC (so the ESC's PDI watchdog runs out)
+    /// nor the motor (the gate driver is off, see [`SimServo::halt_firmware`]); the LEDs it
+    /// drives go dark. The ESC goes on answering the master. [`Self::restart_mcu`] ends it.
+    pub fn halt_mcu(&mut self) {
+        self.mcu_halted = true;
+        for servo in &mut self.servos {
+            servo.halt_firmware();
+        }
+        self.leds.set_run(false);
+        self.leds.set_err(false);
+    }
+
+    /// The MCU restarts (the board's watchdog, its supply back) while the ESC keeps its state:
+    /// a new firmware core in INIT that loads the stored parameters and starts against the ESC
+    /// as it is.
+    pub fn restart_mcu(&mut self) -> Result<(), SlaveError> {
+        let now = self.esc.now();
         let mut slave = Box::new(firmware::new_slave(self.profile)?);
         self.loaded = slave.load_parameters(&mut self.params);
         for servo in &mut self.servos {
@@ -159,9 +183,9 @@ impl SimDrive {
         }
         attach_servos(&mut slave, &self.servos);
         // As in `with_storage`: the simulated PDI does not fail.
-        let _ = slave.start(&mut esc);
-        self.esc = esc;
+        let _ = slave.start(&mut self.esc);
         self.slave = slave;
+        self.mcu_halted = false;
         self.next_free_run_ns = now + FREE_RUN_PERIOD_NS;
         self.next_poll_ns = now + BACKGROUND_POLL_PERIOD_NS;
         Ok(())
@@ -183,6 +207,9 @@ impl SimDrive {
 
     /// Earliest simulated time at which the drive has something to do.
     pub fn next_event_ns(&self) -> Option<u64> {
+        if self.mcu_halted {
+            return self.esc.next_event_ns();
+        }
         let free_run = self.free_running().then_some(self.next_free_run_ns);
         [
             self.esc.next_event_ns(),
@@ -221,6 +248,11 @@ impl SimDrive {
             servo.advance_to(now_ns);
         }
         self.esc.advance_to(now_ns);
+        if self.mcu_halted {
+            // Nothing runs on the MCU; the ESC's SYNC0 goes unserved.
+            let _ = self.esc.take_sync0();
+            return;
+        }
         if self.esc.take_sync0() {
             let served = now_ns.saturating_add(self.sync0_latency());
             self.cycle(served);
@@ -284,6 +316,9 @@ impl SimDrive {
     /// what it serves; a stuck line is left for the next call).
     pub fn service_irq(&mut self, now_ns: u64) {
         const MAX_ROUNDS: usize = 4;
+        if self.mcu_halted {
+            return;
+        }
         for _ in 0..MAX_ROUNDS {
             if !self.esc.irq_asserted() {
                 break;

@@ -104,6 +104,8 @@ pub struct SimServo {
     io: AxisIo,
     last_sample: Option<Sample>,
     periods: u64,
+    /// The MCU is stopped ([`SimServo::halt_firmware`]): no control interrupt runs.
+    halted: bool,
 }
 
 impl SimServo {
@@ -121,6 +123,7 @@ impl SimServo {
             io,
             last_sample: None,
             periods: 0,
+            halted: false,
         })
     }
 
@@ -135,6 +138,15 @@ impl SimServo {
         self.link = Box::leak(Box::new(unsafe { AxisLink::new() }));
         // The power stage and the encoder interface restart too.
         self.io.reset();
+        self.halted = false;
+    }
+
+    /// The MCU stops (held in reset, or crashed): the control interrupt no longer runs and the
+    /// timer's outputs are at their reset state, so the gate driver is off and the motor
+    /// coasts; the plant goes on. [`Self::restart_firmware`] starts it again.
+    pub fn halt_firmware(&mut self) {
+        self.io.reset();
+        self.halted = true;
     }
 
     /// The PWM period, ns.
@@ -215,6 +227,11 @@ impl SimServo {
     /// over the period with the duties latched at its start. A gate-off decision acts at once
     /// (the board's disable is immediate), duties and a gate enable at the next period boundary.
     pub fn period(&mut self) {
+        if self.halted {
+            self.io.run_period(&mut self.plant);
+            self.periods += 1;
+            return;
+        }
         let io = &mut self.io;
         io.sample(&mut self.plant);
         let sample = Sample::read(

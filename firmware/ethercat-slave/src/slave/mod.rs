@@ -236,8 +236,36 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             self.pdi_errors_seen = pdi.read_u8(regs::PDI_ERROR_COUNTER.addr)?;
         }
         self.app.power_on(&mut self.ram);
+        // The ESC is not reset with the MCU (the board's watchdog, a crash, the MCU's supply
+        // alone): an ESC still showing a state above INIT had this slave running for a master,
+        // which must learn that it restarted and lost its configuration.
+        let esc_state = AlStatus::from_bits(pdi.read_u16(regs::AL_STATUS.addr)?)
+            .map_or(AlState::Init, |s| s.state);
         pdi.write_u16(regs::AL_STATUS_CODE.addr, AlStatusCode::NoError.code())?;
-        pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())
+        pdi.write_u16(regs::AL_STATUS.addr, self.status.bits())?;
+        if esc_state != AlState::Init {
+            self.restarted_locally(pdi, esc_state)?;
+        }
+        Ok(())
+    }
+
+    /// INIT with the error indication and 0x0060 "slave restarted locally" (ETG.1000.6 Table 11,
+    /// any state → INIT), with the emergency, 10F3h message and 1001h of every AL error; the
+    /// message names `was`, the state the ESC still showed.
+    fn restarted_locally<P: EscPdi>(&mut self, pdi: &mut P, was: AlState) -> Result<(), P::Error> {
+        let previous = (self.status, self.code);
+        let outcome = esm::fault(AlState::Init, AlState::Init, AlStatusCode::RestartedLocally);
+        pdi.write_u16(regs::AL_STATUS_CODE.addr, outcome.code.code())?;
+        pdi.write_u16(regs::AL_STATUS.addr, outcome.status.bits())?;
+        self.status = outcome.status;
+        self.code = outcome.code;
+        // The profile's ERR LED for this error, else ETG.1300's for a local error.
+        self.error_indication = match self.profile.device.esm.al_error_led(outcome.code.code()) {
+            Some(led) => ErrorIndication::showing(led),
+            None => ErrorIndication::LocalError,
+        };
+        self.track_al_error(was, previous, outcome);
+        Ok(())
     }
 
     /// The object dictionary.
