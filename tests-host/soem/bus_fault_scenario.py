@@ -1,7 +1,9 @@
 """SOEM (pysoem 1.1.13) against `sim-drive attach --lose-every 10 --pull-cable-at-ms T
---pull-cable-for-ms D`: the drive in OP (free run, 1 ms) while every 10th cyclic frame is lost
-on the cable, then the cable pulled for D ms and plugged again, then the master's recovery.
-Prints what SOEM saw as one JSON object; the Rust test asserts on it."""
+--pull-cable-for-ms D --halt-mcu-at-ms H --halt-mcu-for-ms E`: the drive in OP (free run, 1 ms)
+while every 10th cyclic frame is lost on the cable, then the cable pulled for D ms and plugged
+again, then the master's recovery; then the drive's MCU stopped for E ms and restarted, and the
+master's start-up run again. Prints what SOEM saw as one JSON object; the Rust test asserts on
+it."""
 
 import json
 import struct
@@ -17,7 +19,12 @@ RECEIVE_TIMEOUT_US = 2_000
 PULLED_AFTER = 20
 MAX_CYCLES = 20_000
 AL_CONTROL, AL_STATUS, AL_STATUS_CODE = 0x0120, 0x0130, 0x0134
+DL_STATUS, WATCHDOG_COUNTER_PDI = 0x0110, 0x0443
+PDI_WATCHDOG_OK = 0x0002
 ACK = 0x10
+STATE_MASK = 0x0F
+# How long to wait for the MCU halt and its restart after the recovery.
+HALT_WATCH_S = 15.0
 
 
 def al(s):
@@ -85,6 +92,30 @@ def main():
     out["after_ack"] = al(s0)
     out["recovered"] = to_op(m)
     out["final"] = al(s0)
+
+    # The MCU stops (attach's --halt-mcu-at-ms) and restarts: the master cycles on and watches
+    # the PDI watchdog in DL status, then the AL status.
+    pdi_expired_seen = False
+    deadline = time.monotonic() + HALT_WATCH_S
+    while time.monotonic() < deadline:
+        m.send_processdata()
+        m.receive_processdata(RECEIVE_TIMEOUT_US)
+        dl = struct.unpack("<H", s0._fprd(DL_STATUS, 2))[0]
+        if not dl & PDI_WATCHDOG_OK and not pdi_expired_seen:
+            pdi_expired_seen = True
+            out["al_while_halted"] = al(s0)
+            out["pdi_expiries"] = s0._fprd(WATCHDOG_COUNTER_PDI, 1)[0]
+        if pdi_expired_seen and al(s0)[0] & STATE_MASK == pysoem.INIT_STATE:
+            out["after_restart"] = al(s0)
+            break
+        time.sleep(CYCLE_S)
+    out["pdi_expired_seen"] = pdi_expired_seen
+    # The master's start-up again (SOEM's init acknowledges the error).
+    out["slave_count_again"] = m.config_init()
+    m.config_map()
+    m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+    out["op_again"] = to_op(m)
+    out["final_again"] = al(s0)
     m.close()
     print(json.dumps(out))
 

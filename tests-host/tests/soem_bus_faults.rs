@@ -7,6 +7,10 @@
 //! - With the cable out longer than the watchdog the drive drops to SAFE-OP with the error
 //!   indication and 0x001B (ETG.1000.6 Table 11).
 //! - The master acknowledges and requests OP: the drive is in OP again.
+//! - Then the drive's MCU stops for 300 ms: the ESC answers on with the AL status as last
+//!   written, its PDI watchdog (100 ms) expires (DL status 0x0110 bit 1 clear, 0x0443 = 1); the
+//!   MCU restarts with the ESC as it was: INIT with the error indication and 0x0060 "slave
+//!   restarted locally" (ETG.1000.6 Table 11); the master's start-up brings it to OP again.
 
 use tests_host::soem::run_script;
 
@@ -15,9 +19,11 @@ const OP: u64 = 0x08;
 const SAFEOP_ERROR: u64 = 0x14;
 const SAFEOP: u64 = 0x04;
 const SM_WATCHDOG: u64 = 0x001B;
+const INIT_ERROR: u64 = 0x11;
+const RESTARTED_LOCALLY: u64 = 0x0060;
 
 #[test]
-fn soem_sees_lost_frames_and_a_pulled_cable_and_recovers_the_drive() {
+fn soem_sees_lost_frames_a_pulled_cable_and_a_stopped_mcu_and_recovers_the_drive() {
     let (r, log) = run_script(
         "bus_fault_scenario.py",
         "standard",
@@ -28,6 +34,10 @@ fn soem_sees_lost_frames_and_a_pulled_cable_and_recovers_the_drive() {
             "--pull-cable-at-ms",
             "6000",
             "--pull-cable-for-ms",
+            "300",
+            "--halt-mcu-at-ms",
+            "9000",
+            "--halt-mcu-for-ms",
             "300",
         ],
     )
@@ -56,4 +66,14 @@ fn soem_sees_lost_frames_and_a_pulled_cable_and_recovers_the_drive() {
     assert_eq!(r["after_ack"][0], SAFEOP, "{r}");
     assert_eq!(r["recovered"], true, "{r}");
     assert_eq!(r["final"][0], OP, "{r}");
+
+    assert!(log.contains("drive 0's MCU stopped"), "{log}");
+    assert_eq!(r["pdi_expired_seen"], true, "{r}");
+    assert_eq!(r["al_while_halted"][0], OP, "{r}");
+    assert_eq!(r["pdi_expiries"], 1, "{r}");
+    assert_eq!(r["after_restart"][0], INIT_ERROR, "{r}");
+    assert_eq!(r["after_restart"][1], RESTARTED_LOCALLY, "{r}");
+    assert_eq!(r["slave_count_again"], 1, "{r}");
+    assert_eq!(r["op_again"], true, "{r}");
+    assert_eq!(r["final_again"][0], OP, "{r}");
 }

@@ -35,6 +35,9 @@
 //!                                        the cable to the first drive is pulled T ms after the
 //!                                        start for D ms (the interface going down does the same)
 //!     --drop-mailbox-read K              the reply to the K-th mailbox read is lost
+//!     --halt-mcu-at-ms T --halt-mcu-for-ms D
+//!                                        the first drive's MCU stops T ms after the start for
+//!                                        D ms, then restarts with its ESC as it was
 //! ```
 //!
 //! Profile names are the built-in profiles of `list-profiles` (`sdv3-e` and `sdv3_e` are the
@@ -67,7 +70,12 @@ FAULTS (attach; what a master developer tests their error handling with):
                                          the cable to the first drive is pulled T ms after the
                                          start for D ms (no frame passes, no link on its port 0;
                                          taking the interface down does the same)
-       --drop-mailbox-read K             the reply to the K-th mailbox read is lost";
+       --drop-mailbox-read K             the reply to the K-th mailbox read is lost
+       --halt-mcu-at-ms T --halt-mcu-for-ms D
+                                         the first drive's MCU stops T ms after the start for
+                                         D ms (bridge off, the ESC's PDI watchdog runs out after
+                                         100 ms), then restarts with its ESC as it was (INIT,
+                                         AL status code 0x0060 \"slave restarted locally\")";
 
 struct Args {
     command: String,
@@ -85,6 +93,9 @@ struct Args {
     /// `--pull-cable-at-ms` and `--pull-cable-for-ms`.
     pull_cable_at_ms: Option<u64>,
     pull_cable_for_ms: Option<u64>,
+    /// `--halt-mcu-at-ms` and `--halt-mcu-for-ms`.
+    halt_mcu_at_ms: Option<u64>,
+    halt_mcu_for_ms: Option<u64>,
     out: String,
     plot: String,
     /// A LINE option was given.
@@ -108,6 +119,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         lose_every: None,
         pull_cable_at_ms: None,
         pull_cable_for_ms: None,
+        halt_mcu_at_ms: None,
+        halt_mcu_for_ms: None,
         out: "docs/plots".into(),
         plot: "target/sim-drive/tour.svg".into(),
         line_given: false,
@@ -150,6 +163,12 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                     &value("--pull-cable-for-ms")?,
                     "--pull-cable-for-ms",
                 )?)
+            }
+            "--halt-mcu-at-ms" => {
+                a.halt_mcu_at_ms = Some(number(&value("--halt-mcu-at-ms")?, "--halt-mcu-at-ms")?)
+            }
+            "--halt-mcu-for-ms" => {
+                a.halt_mcu_for_ms = Some(number(&value("--halt-mcu-for-ms")?, "--halt-mcu-for-ms")?)
             }
             "--home-switch-rev" => {
                 a.home_switch_rev = Some(revolutions(
@@ -213,9 +232,11 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let injects = a.drop_mailbox_read.is_some()
         || a.lose_every.is_some()
         || a.pull_cable_at_ms.is_some()
-        || a.pull_cable_for_ms.is_some();
+        || a.pull_cable_for_ms.is_some()
+        || a.halt_mcu_at_ms.is_some()
+        || a.halt_mcu_for_ms.is_some();
     if a.command != "attach" && injects {
-        return Err("fault injection (--drop-mailbox-read, --lose-every, --pull-cable-*) is an option of `attach`".into());
+        return Err("fault injection (--drop-mailbox-read, --lose-every, --pull-cable-*, --halt-mcu-*) is an option of `attach`".into());
     }
     if a.lose_every == Some(0) {
         return Err("--lose-every must be at least 1 (1 loses every cyclic frame)".into());
@@ -224,6 +245,13 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         (Some(_), Some(0)) => return Err("--pull-cable-for-ms must be at least 1".into()),
         (Some(_), None) | (None, Some(_)) => {
             return Err("--pull-cable-at-ms and --pull-cable-for-ms go together".into())
+        }
+        _ => {}
+    }
+    match (a.halt_mcu_at_ms, a.halt_mcu_for_ms) {
+        (Some(_), Some(0)) => return Err("--halt-mcu-for-ms must be at least 1".into()),
+        (Some(_), None) | (None, Some(_)) => {
+            return Err("--halt-mcu-at-ms and --halt-mcu-for-ms go together".into())
         }
         _ => {}
     }
@@ -412,6 +440,10 @@ fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
             .pull_cable_at_ms
             .zip(args.pull_cable_for_ms)
             .map(|(at, long)| (Duration::from_millis(at), Duration::from_millis(long))),
+        mcu_halt: args
+            .halt_mcu_at_ms
+            .zip(args.halt_mcu_for_ms)
+            .map(|(at, long)| (Duration::from_millis(at), Duration::from_millis(long))),
     };
     rawsock::serve_with_faults(segment, iface, args.seconds.map(Duration::from_secs), faults)
         .map_err(|e| format!("{iface}: {e} (a raw socket needs CAP_NET_RAW, e.g. run inside `unshare --user --map-root-user --net`)"))?;
@@ -580,6 +612,18 @@ mod tests {
         assert!(e.contains("at least 1"), "{e}");
         let e = refused("attach --iface veth0 --lose-every x");
         assert!(e.contains("--lose-every"), "{e}");
+        let a = args("attach --iface veth0 --halt-mcu-at-ms 3000 --halt-mcu-for-ms 300")
+            .expect("valid");
+        assert_eq!(
+            (a.halt_mcu_at_ms, a.halt_mcu_for_ms),
+            (Some(3000), Some(300))
+        );
+        let e = refused("demo --halt-mcu-at-ms 1 --halt-mcu-for-ms 1");
+        assert!(e.contains("option of `attach`"), "{e}");
+        let e = refused("attach --iface veth0 --halt-mcu-for-ms 300");
+        assert!(e.contains("go together"), "{e}");
+        let e = refused("attach --iface veth0 --halt-mcu-at-ms 5 --halt-mcu-for-ms 0");
+        assert!(e.contains("at least 1"), "{e}");
     }
 
     #[test]

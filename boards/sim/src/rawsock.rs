@@ -166,6 +166,15 @@ pub struct Faults {
     /// Pull the cable between master and first drive at this time after the start, for this
     /// long: no frame passes and the first drive loses the link on its port 0.
     pub cable_out: Option<(Duration, Duration)>,
+    /// Stop the first drive's MCU at this time after the start, for this long, then restart it
+    /// with its ESC as it is (see [`crate::SimDrive::halt_mcu`]): the ESC's PDI watchdog runs
+    /// out, and the restart is reported with AL status code 0x0060.
+    pub mcu_halt: Option<(Duration, Duration)>,
+}
+
+/// Whether `elapsed` falls into the window (start, length).
+fn within(window: Option<(Duration, Duration)>, elapsed: Duration) -> bool {
+    window.is_some_and(|(at, long)| elapsed >= at && elapsed < at.saturating_add(long))
 }
 
 /// What fault injection does to the frames from the master.
@@ -212,11 +221,12 @@ impl Injector {
     /// Whether the cable to the first drive is plugged `elapsed` after the start, with the
     /// network interface's link `interface_up` (an interface taken down is a pulled cable).
     pub fn cable_plugged(&self, elapsed: Duration, interface_up: bool) -> bool {
-        let pulled = self
-            .faults
-            .cable_out
-            .is_some_and(|(at, long)| elapsed >= at && elapsed < at.saturating_add(long));
-        interface_up && !pulled
+        interface_up && !within(self.faults.cable_out, elapsed)
+    }
+
+    /// Whether the first drive's MCU runs `elapsed` after the start.
+    pub fn mcu_running(&self, elapsed: Duration) -> bool {
+        !within(self.faults.mcu_halt, elapsed)
     }
 }
 
@@ -264,6 +274,7 @@ pub fn serve_with_faults(
     let start = Instant::now();
     let mut injector = Injector::new(faults);
     let mut plugged = true;
+    let mut mcu_running = true;
     let mut next_link_check = Duration::ZERO;
     let mut interface_up = true;
     let mut buf = vec![0u8; MAX_FRAME];
@@ -306,6 +317,20 @@ pub fn serve_with_faults(
                     "pulled (no link on its port 0)"
                 }
             );
+        }
+        let now_running = injector.mcu_running(elapsed);
+        if now_running != mcu_running {
+            mcu_running = now_running;
+            if let Some(d) = segment.drives_mut().first_mut() {
+                if mcu_running {
+                    d.restart_mcu()
+                        .map_err(|e| io::Error::other(format!("{e:?}")))?;
+                    println!("sim-drive: drive 0's MCU restarted (its ESC kept its state)");
+                } else {
+                    d.halt_mcu();
+                    println!("sim-drive: drive 0's MCU stopped (the ESC goes on)");
+                }
+            }
         }
         if let Some(n) = sock.recv(&mut buf, wait)? {
             let frame = buf.get(..n).unwrap_or(&[]);
@@ -404,5 +429,23 @@ mod tests {
         assert!(!inj.cable_plugged(ms(1199), true));
         assert!(inj.cable_plugged(ms(1200), true));
         assert!(!inj.cable_plugged(ms(5), false), "interface down");
+        assert!(
+            (0..3000).all(|t| inj.mcu_running(ms(t))),
+            "no MCU halt asked"
+        );
+    }
+
+    #[test]
+    fn the_mcu_is_stopped_for_its_window() {
+        let ms = Duration::from_millis;
+        let inj = Injector::new(Faults {
+            mcu_halt: Some((ms(500), ms(300))),
+            ..Faults::default()
+        });
+        assert!(inj.mcu_running(ms(499)));
+        assert!(!inj.mcu_running(ms(500)));
+        assert!(!inj.mcu_running(ms(799)));
+        assert!(inj.mcu_running(ms(800)));
+        assert!(inj.cable_plugged(ms(600), true), "the cable stays in");
     }
 }
