@@ -2,11 +2,12 @@
 --pull-cable-for-ms D --halt-mcu-at-ms H --halt-mcu-for-ms E`: the drive in OP (free run, 1 ms)
 while every 10th cyclic frame is lost on the cable, then the cable pulled for D ms and plugged
 again, then the master's recovery; then the drive's MCU stopped for E ms and restarted, and the
-master's start-up run again. Prints what SOEM saw as one JSON object; the Rust test asserts on
+master's start-up run again; then the master's interface taken down for 0.5 s. Prints what SOEM saw as one JSON object; the Rust test asserts on
 it."""
 
 import json
 import struct
+import subprocess
 import sys
 import time
 
@@ -25,6 +26,8 @@ ACK = 0x10
 STATE_MASK = 0x0F
 # How long to wait for the MCU halt and its restart after the recovery.
 HALT_WATCH_S = 15.0
+# How long the master's interface is down (longer than the process-data watchdog, 100 ms).
+INTERFACE_DOWN_S = 0.5
 
 
 def al(s):
@@ -32,6 +35,17 @@ def al(s):
         struct.unpack("<H", s._fprd(AL_STATUS, 2))[0],
         struct.unpack("<H", s._fprd(AL_STATUS_CODE, 2))[0],
     )
+
+
+def al_once_answering(s, timeout_s=2.0):
+    """`al(s)` as soon as the slave answers register reads (None if it does not in time)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            return al(s)
+        except Exception:  # pysoem raises on a read without a reply
+            time.sleep(0.01)
+    return None
 
 
 def to_op(m):
@@ -116,6 +130,26 @@ def main():
     m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
     out["op_again"] = to_op(m)
     out["final_again"] = al(s0)
+
+    # The master's interface goes down for half a second (its cable pulled at the master's
+    # end): the simulator's end loses its carrier, which `attach` takes for a pulled cable.
+    subprocess.run(["ip", "link", "set", ifname, "down"], check=True)
+    time.sleep(INTERFACE_DOWN_S)
+    subprocess.run(["ip", "link", "set", ifname, "up"], check=True)
+    # (/sys shows the parent namespace's interfaces: ask `ip` for the carrier, LOWER_UP.)
+    for _ in range(200):
+        link = subprocess.run(
+            ["ip", "-o", "link", "show", ifname], capture_output=True, text=True
+        ).stdout
+        if "LOWER_UP" in link:
+            break
+        time.sleep(0.01)
+    # `attach` polls the interface's flags: the drive answers again once it saw the link back.
+    out["after_interface_down"] = al_once_answering(s0)
+    s0._fpwr(AL_CONTROL, struct.pack("<H", pysoem.SAFEOP_STATE | ACK))
+    time.sleep(0.05)
+    out["op_after_interface_down"] = to_op(m)
+    out["final_after_interface_down"] = al(s0)
     m.close()
     print(json.dumps(out))
 

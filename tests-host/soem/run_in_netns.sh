@@ -14,9 +14,10 @@ ip link set ecm0 up
 ip link set ecs0 up
 # IPv6 router/neighbour traffic would otherwise show up on the wire.
 sysctl -qw net.ipv6.conf.ecm0.disable_ipv6=1 net.ipv6.conf.ecs0.disable_ipv6=1 2>/dev/null || true
-# A veth end reports carrier only some time after both ends are up; frames sent before are lost.
+# A veth end reports carrier (LOWER_UP) only some time after both ends are up; frames sent before
+# are lost. (`ip`, not /sys/class/net: /sys still shows the parent namespace's interfaces.)
 for _ in $(seq 1 100); do
-    [ "$(cat /sys/class/net/ecm0/carrier 2>/dev/null)" = 1 ] && [ "$(cat /sys/class/net/ecs0/carrier 2>/dev/null)" = 1 ] && break
+    ip -o link show ecm0 | grep -q LOWER_UP && ip -o link show ecs0 | grep -q LOWER_UP && break
     sleep 0.02
 done
 

@@ -11,6 +11,9 @@
 //!   written, its PDI watchdog (100 ms) expires (DL status 0x0110 bit 1 clear, 0x0443 = 1); the
 //!   MCU restarts with the ESC as it was: INIT with the error indication and 0x0060 "slave
 //!   restarted locally" (ETG.1000.6 Table 11); the master's start-up brings it to OP again.
+//! - Then the master's interface goes down for 0.5 s: `attach` sees its own end of the veth
+//!   lose the carrier and pulls the cable of the first drive, which drops to SAFE-OP with
+//!   0x001B; acknowledged, it is in OP again.
 
 use tests_host::soem::run_script;
 
@@ -23,7 +26,7 @@ const INIT_ERROR: u64 = 0x11;
 const RESTARTED_LOCALLY: u64 = 0x0060;
 
 #[test]
-fn soem_sees_lost_frames_a_pulled_cable_and_a_stopped_mcu_and_recovers_the_drive() {
+fn soem_sees_lost_frames_a_pulled_cable_a_stopped_mcu_and_its_interface_down_and_recovers() {
     let (r, log) = run_script(
         "bus_fault_scenario.py",
         "standard",
@@ -76,4 +79,14 @@ fn soem_sees_lost_frames_a_pulled_cable_and_a_stopped_mcu_and_recovers_the_drive
     assert_eq!(r["slave_count_again"], 1, "{r}");
     assert_eq!(r["op_again"], true, "{r}");
     assert_eq!(r["final_again"][0], OP, "{r}");
+
+    assert_eq!(
+        log.matches("cable to drive 0 pulled").count(),
+        2,
+        "the interface going down is a pulled cable: {log}"
+    );
+    assert_eq!(r["after_interface_down"][0], SAFEOP_ERROR, "{r}");
+    assert_eq!(r["after_interface_down"][1], SM_WATCHDOG, "{r}");
+    assert_eq!(r["op_after_interface_down"], true, "{r}");
+    assert_eq!(r["final_after_interface_down"][0], OP, "{r}");
 }
