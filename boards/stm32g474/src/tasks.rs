@@ -43,7 +43,7 @@ pub async fn esc_event(irq: ExtiInput<'static, Blocking>) {
             // An edge between the check and the wait is kept by the signal.
             ESC_IRQ.wait().await;
         }
-        irq::service_esc_events();
+        esc_event_round();
         if irq.is_low() {
             Timer::after(IRQ_RETRY).await;
         }
@@ -59,13 +59,27 @@ pub async fn free_run() {
     let mut ticker = Ticker::every(Duration::from_nanos(u64::from(period_ns)));
     loop {
         ticker.next().await;
-        irq::request_cycle(irq::REQUEST_FREE_RUN);
+        free_run_tick();
         let current = irq::free_run_period_ns();
         if current != period_ns {
             period_ns = current;
             ticker = Ticker::every(Duration::from_nanos(u64::from(period_ns)));
         }
     }
+}
+
+/// One ESC-event round of the P2 context ([`esc_event`]). Never inlined: `panic-paths` tells the
+/// tasks the P2 executor runs by their calls of this function and of [`free_run_tick`] (the
+/// machine code does not say which executor a task was spawned on).
+#[inline(never)]
+fn esc_event_round() {
+    irq::service_esc_events();
+}
+
+/// One free-run tick of the P2 context ([`free_run`]); never inlined, see [`esc_event_round`].
+#[inline(never)]
+fn free_run_tick() {
+    irq::request_cycle(irq::REQUEST_FREE_RUN);
 }
 
 /// Value of the ESC type register 0x0000 on an ET1100.
