@@ -139,7 +139,8 @@ fn key_path(path: &serde_path_to_error::Path, root: &toml::Value) -> String {
 
 /// The profile with its derived objects, every check run.
 fn build(f: &ProfileFile, source: &str) -> Result<Profile, Faults> {
-    let mut profile = dictionary(f, source)?;
+    let declared = declared_objects(f)?;
+    let mut profile = dictionary(f, source, declared)?;
     // From here on every check runs and every fault is reported: the dictionary is complete,
     // and the checks below read it only.
     let mut faults = match crate::validate::check(&profile) {
@@ -156,9 +157,40 @@ fn build(f: &ProfileFile, source: &str) -> Result<Profile, Faults> {
     Ok(profile)
 }
 
-/// The profile's values converted and its communication objects derived; stops at the first
-/// fault (what follows it is built from what it rejected).
-fn dictionary(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
+/// The declared objects, each converted: they are independent of each other, so the faults of
+/// every faulty one are reported.
+fn declared_objects(f: &ProfileFile) -> Result<BTreeMap<u16, Object>, Faults> {
+    let mut declared: BTreeMap<u16, Object> = BTreeMap::new();
+    let mut faults = Faults::default();
+    for o in &f.objects {
+        let key = format!("object[{:#06x}]", o.index);
+        if let Some(from) = derived_from(o.index, f) {
+            faults.add(
+                &key,
+                Invalid::DerivedObject {
+                    index: o.index,
+                    from,
+                },
+            );
+            continue;
+        }
+        let Some(obj) = faults.take(object(o, &key)) else {
+            continue;
+        };
+        if declared.insert(o.index, obj).is_some() {
+            faults.add(&key, Invalid::DuplicateIndex(o.index));
+        }
+    }
+    faults.into_result().map(|()| declared)
+}
+
+/// The profile's values converted (the declared objects already are) and its communication
+/// objects derived; stops at the first fault (what follows it is built from what it rejected).
+fn dictionary(
+    f: &ProfileFile,
+    source: &str,
+    mut declared: BTreeMap<u16, Object>,
+) -> Result<Profile, Fault> {
     let mut protocols = 0u16;
     for p in &f.mailbox.protocols {
         let bit = protocol::NAMES
@@ -435,25 +467,6 @@ fn dictionary(f: &ProfileFile, source: &str) -> Result<Profile, Fault> {
             .transpose()?
             .flatten(),
     };
-
-    // Declared objects.
-    let mut declared: BTreeMap<u16, Object> = BTreeMap::new();
-    for o in &f.objects {
-        let key = format!("object[{:#06x}]", o.index);
-        if let Some(from) = derived_from(o.index, f) {
-            return Err(fault(
-                &key,
-                Invalid::DerivedObject {
-                    index: o.index,
-                    from,
-                },
-            ));
-        }
-        let obj = object(o, &key)?;
-        if declared.insert(o.index, obj).is_some() {
-            return Err(fault(&key, Invalid::DuplicateIndex(o.index)));
-        }
-    }
 
     // PDOs, checked against the declared objects.
     let max_entries = f.pdo.max_entries;

@@ -1914,6 +1914,40 @@ fn every_error_of_a_file_is_reported_with_its_line() {
     assert_eq!(e.invalids().len(), 3);
 }
 
+/// Faulty declared objects are independent of each other: each one is reported, with its line,
+/// not only the first.
+#[test]
+fn every_faulty_object_is_reported() {
+    let text = appended(
+        "[[object]]\nindex = 0x2002\nname = \"Limit\"\ntype = \"INT\"\naccess = \"rw\"\nmin = -10\nmax = 10\ndefault = 11\n\
+         [[object]]\nindex = 0x2003\nname = \"Fine\"\ntype = \"INT\"\naccess = \"rw\"\ndefault = 1\n\
+         [[object]]\nindex = 0x2004\nname = \"Also\"\ntype = \"UINT\"\naccess = \"rw\"\nmin = 5\nmax = 1\n\
+         [[object]]\nindex = 0x6040\nname = \"Again\"\ntype = \"UINT\"\naccess = \"ro\"",
+    );
+    let all = all_invalid(&text);
+    let keys: Vec<&str> = all.iter().map(|(k, _)| k.as_str()).collect();
+    assert_eq!(
+        keys,
+        [
+            "object[0x2002].default",
+            "object[0x2004].default",
+            "object[0x6040]"
+        ],
+        "{all:?}"
+    );
+    assert_eq!(all[0].1, Invalid::DefaultOutOfRange);
+    assert_eq!(all[1].1, Invalid::DefaultOutOfRange);
+    assert_eq!(all[2].1, Invalid::DuplicateIndex(0x6040));
+    // Each with the line of its value.
+    let e = od_gen::parse(&text, "bad.toml").expect_err("three faulty objects");
+    let line_of = |needle: &str| 1 + text.lines().position(|l| l == needle).expect("line");
+    let shown = e.to_string();
+    assert!(
+        shown.contains(&format!("bad.toml:{}:", line_of("default = 11"))),
+        "{shown}"
+    );
+}
+
 /// A check that needs an earlier one to pass is skipped when it failed: cycle step 0 is one
 /// error, not a division by zero nor a fault of every cycle.
 #[test]
