@@ -216,6 +216,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// event mask that drives the IRQ line (AL control, SM activation, mailbox SM0/SM1, SM2 for
     /// SM-synchronous cycles, process-data watchdog), and the station alias from the profile's
     /// alias parameter if it has one and it is not 0 (call after [`Self::load_parameters`]).
+    /// If the ESC still shows a state above INIT (the MCU restarted without the ESC), INIT with
+    /// the error indication and 0x0060 instead.
     pub fn start<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
         let mask = AlEvent::AL_CONTROL
             | AlEvent::SM_ACTIVATION
