@@ -141,6 +141,18 @@ fn frmw_drift_loop_converges() {
     }
 }
 
+/// `n` cycles of 1 ms, each distributing the reference's system time with FRMW 0x0910 (the
+/// masters' drift compensation).
+fn frmw_cycles(escs: &mut [Et1100], n: u64) {
+    let start = escs.first().map_or(0, Et1100::now);
+    for i in 1..=n {
+        for e in escs.iter_mut() {
+            e.advance_to(start + i * 1_000_000);
+        }
+        send1(escs, FRMW, station(0), regs::DC_SYSTEM_TIME.addr, &[0; 8]);
+    }
+}
+
 #[test]
 fn crystals_at_opposite_tolerance_limits_lock() {
     // ET1100 crystals: 25 MHz ± 25 ppm, so two ESCs may run 50 ppm apart; the time control loop
@@ -149,18 +161,7 @@ fn crystals_at_opposite_tolerance_limits_lock() {
     escs[0].set_clock(5_000_000_000, 25.0);
     escs[1].set_clock(1_234_567, -25.0);
     dc_init(&mut escs);
-    for i in 1..=2_000u64 {
-        for e in escs.iter_mut() {
-            e.advance_to(i * 1_000_000);
-        }
-        send1(
-            &mut escs,
-            FRMW,
-            station(0),
-            regs::DC_SYSTEM_TIME.addr,
-            &[0; 8],
-        );
-    }
+    frmw_cycles(&mut escs, 2_000);
     let t = escs[0].now();
     let skew = escs[1].system_time_at(t) as i64 - escs[0].system_time_at(t) as i64;
     assert!(skew.abs() < 100, "skew {skew} ns after 2 s");
@@ -349,18 +350,7 @@ fn fresh_escs_get_distinct_clocks_by_ring_position() {
 fn frmw_loop_converges_with_default_ring_clocks() {
     let mut escs = ring(3);
     dc_init(&mut escs);
-    for i in 1..=300u64 {
-        for e in escs.iter_mut() {
-            e.advance_to(i * 1_000_000);
-        }
-        send1(
-            &mut escs,
-            FRMW,
-            station(0),
-            regs::DC_SYSTEM_TIME.addr,
-            &[0; 8],
-        );
-    }
+    frmw_cycles(&mut escs, 300);
     let t = escs[0].now();
     for k in 1..3 {
         let skew = escs[k].system_time_at(t) as i64 - escs[0].system_time_at(t) as i64;
