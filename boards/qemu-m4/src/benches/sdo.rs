@@ -2,7 +2,8 @@
 //! 6041h and a download of the user parameter 2F00h, in OP (SDO traffic beside running process
 //! data). The download target is not the controlword 6040h: it is mapped to the RxPDO, and the
 //! profile (`pdo.sdo_write_to_rx_mapped = "blocked"`) refuses SDO writes to it in SAFEOP and OP
-//! with abort 0x06010006. The request is the mailbox payload after the 6-byte mailbox header (CoE header + SDO
+//! with abort 0x06010006; the server knows the OD RAM the RxPDO plan writes, as the slave's
+//! mailbox side tells it. The request is the mailbox payload after the 6-byte mailbox header (CoE header + SDO
 //! frame), the response buffer is as long as the profile's input mailbox allows; the mailbox
 //! data-link layer and the PDI transfers are not included.
 
@@ -12,6 +13,7 @@ use firmware::mailbox::coe::sdo::SDO_FRAME_LEN;
 use firmware::mailbox::coe::{CoeServer, CoeService, COE_HEADER_LEN};
 use firmware::mailbox::header::HEADER_LEN as MAILBOX_HEADER_LEN;
 use firmware::od::Dictionary;
+use firmware::pdo::{Direction, PdoPlan};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 use hal::esc::AlState;
 
@@ -26,6 +28,14 @@ const STATUSWORD: (u16, u8) = (0x6041, 0);
 pub(super) const USER_PARAMETER: (u16, u8) = (0x2F00, 0);
 /// The value the download writes; any value other than the default 0.
 pub(super) const USER_PARAMETER_VALUE: u32 = 0x1234_5678;
+/// Profile velocity 6081h (UDINT, RxPDO-mappable, not in the default RxPDO 1600h): a download
+/// to it is checked against the OD RAM the RxPDO plan writes before it is allowed (the
+/// `blocked` rule), the most expensive check of an expedited download.
+const MAPPABLE_PARAMETER: (u16, u8) = (0x6081, 0);
+/// The value written to 6081h (increments/s, inside its range).
+const MAPPABLE_PARAMETER_VALUE: u32 = 1_000_000;
+/// Budget of an expedited SDO download (issue 13: ≤ 1,000 instructions).
+const SDO_DOWNLOAD_BUDGET: u32 = 1_000;
 /// Largest response buffer the benchmark provides (the standard profile's mailbox is 256 bytes).
 const RESPONSE_CAPACITY: usize = 512;
 
@@ -95,8 +105,17 @@ fn response_u16(result: Result<usize, impl Sized>, response: &[u8], command: u8)
 /// Measures the upload and the download.
 pub fn run(h: &mut Harness) {
     let mut ram = [0; RAM_SIZE];
-    let mut od = Dictionary::new(&PROFILE.od, &mut ram);
-    od.load_defaults();
+    Dictionary::new(&PROFILE.od, &mut ram).load_defaults();
+    // The OD RAM the default RxPDO plan writes, as the slave's mailbox side hands it to the
+    // SDO server (its "mapped to an RxPDO" check in SAFEOP and OP).
+    let rx_outputs = match PdoPlan::build(&Dictionary::new(&PROFILE.od, &mut ram), Direction::Rx) {
+        Ok(plan) => plan.ram_ranges(),
+        Err(_) => {
+            h.fail("sdo", format_args!("the default RxPDO mapping does not build"));
+            return;
+        }
+    };
+    let mut od = Dictionary::new(&PROFILE.od, &mut ram).with_rx_outputs(&rx_outputs);
     let mut server = CoeServer::new();
     let mut buffer = [0; RESPONSE_CAPACITY];
     let response_len = usize::from(PROFILE.od.device.mailbox_in.length) - MAILBOX_HEADER_LEN;
@@ -142,9 +161,38 @@ pub fn run(h: &mut Harness) {
     }
     h.bench(
         "sdo-download-expedited",
-        None,
+        Some(SDO_DOWNLOAD_BUDGET),
         format_args!(
             "CoeServer::handle, expedited download of 2F00h (4 bytes, not PDO-mapped) in OP"
+        ),
+        &mut || {
+            let _ = server.handle(&mut od, STATE, black_box(&download), response);
+        },
+    );
+
+    let download = request(
+        command::DOWNLOAD_REQUEST_U32,
+        MAPPABLE_PARAMETER,
+        MAPPABLE_PARAMETER_VALUE.to_le_bytes(),
+    );
+    let r = server.handle(&mut od, STATE, &download, response);
+    let answered = r.ok() == Some(FRAME_LEN)
+        && response.get(COE_HEADER_LEN) == Some(&command::DOWNLOAD_RESPONSE)
+        && od.read_u32(MAPPABLE_PARAMETER.0, MAPPABLE_PARAMETER.1)
+            == Some(MAPPABLE_PARAMETER_VALUE);
+    if !answered {
+        h.fail(
+            "sdo-download-mappable",
+            format_args!("6081h download was not answered"),
+        );
+        return;
+    }
+    h.bench(
+        "sdo-download-expedited-mappable",
+        Some(SDO_DOWNLOAD_BUDGET),
+        format_args!(
+            "CoeServer::handle, expedited download of 6081h (4 bytes, RxPDO-mappable, not in \
+             the active RxPDO mapping: checked against the plan's OD RAM ranges) in OP"
         ),
         &mut || {
             let _ = server.handle(&mut od, STATE, black_box(&download), response);

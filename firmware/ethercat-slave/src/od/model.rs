@@ -221,10 +221,16 @@ pub struct Object {
 impl Object {
     /// The entry with this subindex.
     pub fn entry(&self, subindex: u8) -> Option<&'static Entry> {
-        self.entries
-            .binary_search_by_key(&subindex, |e| e.subindex)
-            .ok()
-            .and_then(|i| self.entries.get(i))
+        // Most objects number their entries without gaps (subindex n at position n): one
+        // comparison instead of a search.
+        match self.entries.get(usize::from(subindex)) {
+            Some(e) if e.subindex == subindex => Some(e),
+            _ => self
+                .entries
+                .binary_search_by_key(&subindex, |e| e.subindex)
+                .ok()
+                .and_then(|i| self.entries.get(i)),
+        }
     }
 }
 

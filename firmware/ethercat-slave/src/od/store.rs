@@ -26,6 +26,9 @@ pub struct Dictionary<'r> {
     ram: &'r mut [u8],
     /// Where writes are recorded, for a view over a working copy of the OD RAM.
     dirty: Option<&'r mut DirtyMap>,
+    /// The OD RAM bytes the active RxPDO plan writes, where the owner knows them (see
+    /// [`Self::with_rx_outputs`]).
+    rx_outputs: Option<&'r [(u16, u16)]>,
 }
 
 impl<'r> Dictionary<'r> {
@@ -36,6 +39,7 @@ impl<'r> Dictionary<'r> {
             profile,
             ram,
             dirty: None,
+            rx_outputs: None,
         }
     }
 
@@ -46,7 +50,21 @@ impl<'r> Dictionary<'r> {
             profile,
             ram,
             dirty: Some(dirty),
+            rx_outputs: None,
         }
+    }
+
+    /// The same view, told which OD RAM bytes the active RxPDO plan writes
+    /// (`PdoPlan::ram_ranges` of the plan built at PREOP → SAFEOP): the SDO server then
+    /// answers "mapped to an RxPDO" from them instead of searching 1C12h and 16xxh.
+    pub fn with_rx_outputs(mut self, ranges: &'r [(u16, u16)]) -> Self {
+        self.rx_outputs = Some(ranges);
+        self
+    }
+
+    /// The OD RAM ranges of [`Self::with_rx_outputs`], if given.
+    pub fn rx_outputs(&self) -> Option<&[(u16, u16)]> {
+        self.rx_outputs
     }
 
     /// Resets every variable to its default.
@@ -115,12 +133,19 @@ impl<'r> Dictionary<'r> {
 
     /// Reads an unsigned value of up to 4 bytes of `index:subindex` (0 if the entry is missing).
     pub fn read_u32(&self, index: u16, subindex: u8) -> Option<u32> {
-        let entry = self.entry(index, subindex)?;
-        let bytes = self.value(entry).ok()?;
-        let mut b = [0u8; 4];
-        let n = bytes.len().min(4);
-        b.get_mut(..n)?.copy_from_slice(bytes.get(..n)?);
-        Some(u32::from_le_bytes(b))
+        self.entry_u32(self.entry(index, subindex)?)
+    }
+
+    /// [`Self::read_u32`] of an entry already looked up.
+    pub fn entry_u32(&self, entry: &Entry) -> Option<u32> {
+        // Its first (up to) 4 bytes, little-endian: by pattern, without a variable-length copy.
+        Some(match *self.value(entry).ok()? {
+            [] => 0,
+            [b0] => u32::from(b0),
+            [b0, b1] => u32::from(u16::from_le_bytes([b0, b1])),
+            [b0, b1, b2] => u32::from_le_bytes([b0, b1, b2, 0]),
+            [b0, b1, b2, b3, ..] => u32::from_le_bytes([b0, b1, b2, b3]),
+        })
     }
 
     /// The whole OD RAM (for process-data copy plans, which address it by offset).

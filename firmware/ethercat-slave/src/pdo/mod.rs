@@ -22,6 +22,27 @@ pub const MAX_MAPPED_ENTRIES: usize = hal::esc::MAX_FIRMWARE_MAPPED_ENTRIES as u
 /// ([`hal::esc::MAX_FIRMWARE_PROCESS_IMAGE`], the one definition od-gen checks profiles with).
 pub const MAX_IMAGE: usize = hal::esc::MAX_FIRMWARE_PROCESS_IMAGE as usize;
 
+/// The OD RAM byte ranges a plan copies to (RxPDO) or from (TxPDO): (offset, length) of each
+/// byte run and bit-copied entry. At most one per mapped entry.
+pub type RamRanges = Vec<(u16, u16), MAX_MAPPED_ENTRIES>;
+
+/// Whether any of `ranges` shares a byte with the `len` OD RAM bytes from offset `at`.
+pub fn overlaps(ranges: &[(u16, u16)], at: u16, len: u16) -> bool {
+    any_overlaps(ranges.iter().copied(), at, len)
+}
+
+/// Whether any (offset, length) span shares a byte with the `len` bytes from `at`.
+fn any_overlaps(spans: impl IntoIterator<Item = (u16, u16)>, at: u16, len: u16) -> bool {
+    if len == 0 {
+        return false;
+    }
+    // u16 + u16 in u32: never saturates.
+    let (at, end) = (u32::from(at), u32::from(at).saturating_add(u32::from(len)));
+    spans
+        .into_iter()
+        .any(|(from, n)| u32::from(from) < end && at < u32::from(from).saturating_add(u32::from(n)))
+}
+
 /// Highest index of a dummy (padding) data-type object usable in a mapping (CiA 301 §7.4.7.1).
 const DUMMY_INDEX_MAX: u16 = 0x0007;
 
@@ -212,21 +233,17 @@ impl PdoPlan {
 
     /// Whether the plan copies into (or out of) any of the `len` OD RAM bytes from offset `at`.
     pub fn writes_ram(&self, at: u16, len: u16) -> bool {
-        if len == 0 {
-            return false;
-        }
-        // u16 + u16 in u32: never saturates.
-        let (at, end) = (u32::from(at), u32::from(at).saturating_add(u32::from(len)));
-        let overlaps = |from: u16, bytes: u32| {
-            u32::from(from) < end && at < u32::from(from).saturating_add(bytes)
-        };
-        self.runs
-            .iter()
-            .any(|run| overlaps(run.ram, u32::from(run.len)))
-            || self.steps.iter().any(|step| match step.slot {
-                Slot::Ram(offset) => overlaps(offset, u32::from(step.bits).div_ceil(8)),
-                Slot::Const(_) => false,
-            })
+        any_overlaps(self.ram_spans(), at, len)
+    }
+
+    /// The OD RAM (offset, length) of each byte run and bit-copied entry.
+    fn ram_spans(&self) -> impl Iterator<Item = (u16, u16)> + '_ {
+        let runs = self.runs.iter().map(|r| (r.ram, r.len));
+        let steps = self.steps.iter().filter_map(|s| match s.slot {
+            Slot::Ram(ram) => Some((ram, s.bits.div_ceil(8))),
+            Slot::Const(_) => None,
+        });
+        runs.chain(steps)
     }
 
     /// Mapped entries (padding excluded).
@@ -239,6 +256,12 @@ impl PdoPlan {
     pub fn copies(&self) -> usize {
         // Two lists of at most MAX_MAPPED_ENTRIES: never saturates.
         self.runs.len().saturating_add(self.steps.len())
+    }
+
+    /// The OD RAM bytes this plan copies to or from ([`RamRanges`]).
+    pub fn ram_ranges(&self) -> RamRanges {
+        // Runs and steps together hold at most one item per mapped entry: they fit.
+        self.ram_spans().take(MAX_MAPPED_ENTRIES).collect()
     }
 
     /// Size of the process-data image in bytes (the SM length the master must configure).
@@ -519,6 +542,36 @@ mod tests {
             !PdoPlan::default().writes_ram(0, 2),
             "the empty plan writes nothing"
         );
+    }
+
+    #[test]
+    fn ram_ranges_answer_as_the_plan_and_as_the_mapping_search() {
+        let mut ram = [0u8; 31];
+        // 6040h and 607Ah byte-aligned (one run), the 1-bit flag 2000h bit-copied.
+        od_with(
+            &mut ram,
+            &[0x6040_0010, 0x607A_0020, 0x2000_0001, 0x0000_0007],
+        );
+        let plan = PdoPlan::build(&Dictionary::new(&PROFILE, &mut ram), Direction::Rx).unwrap();
+        let ranges = plan.ram_ranges();
+        let od = Dictionary::new(&PROFILE, &mut ram);
+        for object in PROFILE.objects {
+            for e in object.entries {
+                let Value::Ram(at) = e.value else { continue };
+                let len = e.byte_len() as u16;
+                let searched = rules::is_rx_mapped(&od, object.index, e.subindex);
+                assert_eq!(
+                    overlaps(&ranges, at, len),
+                    searched,
+                    "{:#06x}",
+                    object.index
+                );
+                assert_eq!(plan.writes_ram(at, len), searched, "{:#06x}", object.index);
+            }
+        }
+        assert!(overlaps(&ranges, 6, 1), "the bit-copied flag");
+        assert!(!overlaps(&ranges, 0, 0), "no bytes");
+        assert!(PdoPlan::default().ram_ranges().is_empty());
     }
 
     #[test]

@@ -22,6 +22,7 @@
 
 use hal::esc::AlState;
 
+use crate::od::model::{Entry, Value};
 use crate::od::value::as_u32;
 use crate::od::AbortCode;
 use crate::od::{Dictionary, RxMappedWrite};
@@ -207,22 +208,33 @@ fn check_assignment_entry(
 }
 
 /// Whether `index:subindex` is mapped by a PDO assigned in 1C12h: the active RxPDO mapping
-/// (fixed from PREOP → SAFEOP on, because 1C12h and 16xxh are writable in PREOP only).
+/// (fixed from PREOP → SAFEOP on, because 1C12h and 16xxh are writable in PREOP only). Each
+/// object is looked up once and its entries read in place.
 pub fn is_rx_mapped(od: &Dictionary<'_>, index: u16, subindex: u8) -> bool {
-    let assigned = od.read_u32(RX_ASSIGN, 0).unwrap_or(0);
+    let Some(assignment) = od.object(RX_ASSIGN) else {
+        return false;
+    };
+    let assigned = assignment
+        .entry(0)
+        .and_then(|e| od.entry_u32(e))
+        .unwrap_or(0);
     (1..=assigned).any(|a| {
         let pdo = u8::try_from(a)
             .ok()
-            .and_then(|a| od.read_u32(RX_ASSIGN, a))
-            .and_then(|v| u16::try_from(v).ok());
-        let Some(pdo) = pdo.filter(|p| RX_MAPPING.contains(p)) else {
+            .and_then(|a| assignment.entry(a))
+            .and_then(|e| od.entry_u32(e))
+            .and_then(|v| u16::try_from(v).ok())
+            .filter(|p| RX_MAPPING.contains(p))
+            .and_then(|p| od.object(p));
+        let Some(pdo) = pdo else {
             return false;
         };
-        let count = od.read_u32(pdo, 0).unwrap_or(0);
+        let count = pdo.entry(0).and_then(|e| od.entry_u32(e)).unwrap_or(0);
         (1..=count).any(|si| {
             u8::try_from(si)
                 .ok()
-                .and_then(|si| od.read_u32(pdo, si))
+                .and_then(|si| pdo.entry(si))
+                .and_then(|e| od.entry_u32(e))
                 .map(MappingEntry::from_u32)
                 .is_some_and(|m| m.index == index && m.subindex == subindex)
         })
@@ -233,15 +245,32 @@ pub fn is_rx_mapped(od: &Dictionary<'_>, index: u16, subindex: u8) -> bool {
 /// `pdo.sdo_write_to_rx_mapped = "blocked"`, a download to an entry of the active RxPDO mapping
 /// is refused (the next process-data cycle would overwrite it). PREOP (no PDO runs) and
 /// `"allowed"` profiles pass.
+///
+/// `entry` is `index:subindex`'s: an entry that cannot be mapped into an RxPDO is not in the
+/// active mapping (the plan built at PREOP → SAFEOP refused any such mapping), so the mapping is
+/// searched for RxPDO-mappable entries only.
 pub(crate) fn check_rx_mapped(
     od: &Dictionary<'_>,
     state: AlState,
+    entry: &Entry,
     index: u16,
     subindex: u8,
 ) -> Result<(), AbortCode> {
     let blocked = od.profile().device.sdo_write_to_rx_mapped == RxMappedWrite::Blocked
-        && matches!(state, AlState::SafeOp | AlState::Op);
-    if blocked && is_rx_mapped(od, index, subindex) {
+        && matches!(state, AlState::SafeOp | AlState::Op)
+        && entry.pdo.rx();
+    // The plan's OD RAM ranges where the owner gave them (the slave's mailbox side does), else
+    // a search of the mapping objects.
+    let mapped = || match (od.rx_outputs(), entry.value) {
+        (Some(ranges), Value::Ram(offset)) => {
+            let len = u16::try_from(entry.byte_len()).unwrap_or(u16::MAX);
+            super::overlaps(ranges, offset, len)
+        }
+        // Only OD RAM variables are RxPDO destinations.
+        (Some(_), Value::Const(_) | Value::Domain(_)) => false,
+        (None, _) => is_rx_mapped(od, index, subindex),
+    };
+    if blocked && mapped() {
         Err(AbortCode::MappedToRxPdo)
     } else {
         Ok(())

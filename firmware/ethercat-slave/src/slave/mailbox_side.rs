@@ -6,8 +6,9 @@
 //! time that does not depend on the mailbox traffic (on a board: under the lock the SYNC0
 //! interrupt shares, as its priority ceiling):
 //!
-//! 1. [`MailboxSide::load`]: copy the OD RAM (RAM size bytes), take the emergencies the core
-//!    raised and a pending mailbox reset;
+//! 1. [`MailboxSide::load`]: copy the OD RAM (RAM size bytes) and, when the core's RxPDO plan
+//!    changed, the OD RAM ranges it writes; take the emergencies the core raised and a pending
+//!    mailbox reset;
 //! 2. [`MailboxSide::serve`]: the mailbox transfers over the PDI and the SDO services, on the
 //!    copy — as long as they take, with no lock: the cycle runs meanwhile;
 //! 3. [`MailboxSide::store`]: copy back exactly the entries the SDO services wrote (a
@@ -26,6 +27,7 @@ use crate::mailbox::Mailbox;
 use heapless::Vec;
 
 use crate::od::{AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Profile};
+use crate::pdo::RamRanges;
 use crate::slave::Application;
 
 /// Committed downloads one round can record: a round serves one mailbox request, which
@@ -41,6 +43,10 @@ pub struct MailboxSide<const RAM: usize> {
     dirty: DirtyMap,
     /// Downloads committed in this round (index, subindex), for the application.
     downloads: Vec<(u16, u8), DOWNLOADS_PER_ROUND>,
+    /// The OD RAM the core's RxPDO plan writes (the SDO server's "mapped to an RxPDO" check),
+    /// and the plan generation it was copied at.
+    rx_outputs: RamRanges,
+    rx_generation: Option<u32>,
 }
 
 impl<const RAM: usize> MailboxSide<RAM> {
@@ -52,6 +58,8 @@ impl<const RAM: usize> MailboxSide<RAM> {
             ram: [0; RAM],
             dirty: DirtyMap::new(),
             downloads: Vec::new(),
+            rx_outputs: RamRanges::new(),
+            rx_generation: None,
         }
     }
 
@@ -69,6 +77,10 @@ impl<const RAM: usize> MailboxSide<RAM> {
             core.emcy_out.pop_front();
         }
         self.ram = core.ram;
+        if self.rx_generation != Some(core.rx_plan_generation) {
+            self.rx_outputs = core.rx_plan.ram_ranges();
+            self.rx_generation = Some(core.rx_plan_generation);
+        }
         self.dirty.clear();
         self.downloads.clear();
     }
@@ -86,7 +98,8 @@ impl<const RAM: usize> MailboxSide<RAM> {
         if matches!(job.state, AlState::Init | AlState::Boot) {
             return Ok(());
         }
-        let mut od = Dictionary::tracked(self.profile, &mut self.ram, &mut self.dirty);
+        let mut od = Dictionary::tracked(self.profile, &mut self.ram, &mut self.dirty)
+            .with_rx_outputs(&self.rx_outputs);
         let mut recording = Recording {
             hook,
             downloads: &mut self.downloads,

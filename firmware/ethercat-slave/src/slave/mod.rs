@@ -81,6 +81,9 @@ pub struct SlaveCore<const RAM: usize, A: Application = NoApplication> {
     /// The mailbox must start afresh (INIT was entered); the mailbox side takes it.
     mailbox_reset: bool,
     rx_plan: PdoPlan,
+    /// Counts the changes of [`Self::rx_plan`], so that the mailbox side copies its OD RAM
+    /// ranges only when they change.
+    rx_plan_generation: u32,
     tx_plan: PdoPlan,
     sync: SyncConfig,
     rx_image: [u8; MAX_IMAGE],
@@ -182,6 +185,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             emcy_out: Deque::new(),
             mailbox_reset: false,
             rx_plan: PdoPlan::default(),
+            rx_plan_generation: 0,
             tx_plan: PdoPlan::default(),
             sync: SyncConfig {
                 mode: Mode::FreeRun,

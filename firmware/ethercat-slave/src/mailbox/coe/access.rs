@@ -49,7 +49,7 @@ pub(crate) fn find_writable(
 ) -> Result<&'static Entry, AbortCode> {
     let entry = find_entry(od, index, subindex)?;
     check_access(entry.access, state, AccessKind::Write)?;
-    pdo_rules::check_rx_mapped(od, state, index, subindex)?;
+    pdo_rules::check_rx_mapped(od, state, entry, index, subindex)?;
     Ok(entry)
 }
 

@@ -137,9 +137,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             AlStatusCode::InvalidInputConfig,
         ));
         if result.is_ok() {
-            self.rx_plan = rx;
+            self.set_rx_plan(rx);
             self.tx_plan = tx;
-            self.app.outputs_mapped(&self.rx_plan);
         }
         Ok(result)
     }
@@ -180,6 +179,14 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         Ok(())
     }
 
+    /// Puts `plan` in place as the RxPDO plan: the application learns the mapped outputs, the
+    /// mailbox side the OD RAM it writes (at its next load).
+    fn set_rx_plan(&mut self, plan: PdoPlan) {
+        self.rx_plan = plan;
+        self.rx_plan_generation = self.rx_plan_generation.wrapping_add(1);
+        self.app.outputs_mapped(&self.rx_plan);
+    }
+
     pub(in crate::slave) fn leave_and_enter<P: EscPdi>(
         &mut self,
         pdi: &mut P,
@@ -206,9 +213,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             }
         }
         if rank_to < 2 && rank_from >= 2 {
-            self.rx_plan = PdoPlan::default();
+            self.set_rx_plan(PdoPlan::default());
             self.tx_plan = PdoPlan::default();
-            self.app.outputs_mapped(&self.rx_plan);
             self.sync = SyncConfig {
                 mode: Mode::FreeRun,
                 cycle_ns: 0,
