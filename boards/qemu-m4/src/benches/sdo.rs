@@ -111,7 +111,10 @@ pub fn run(h: &mut Harness) {
     let rx_outputs = match PdoPlan::build(&Dictionary::new(&PROFILE.od, &mut ram), Direction::Rx) {
         Ok(plan) => plan.ram_ranges(),
         Err(_) => {
-            h.fail("sdo", format_args!("the default RxPDO mapping does not build"));
+            h.fail(
+                "sdo",
+                format_args!("the default RxPDO mapping does not build"),
+            );
             return;
         }
     };
