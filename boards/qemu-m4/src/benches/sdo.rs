@@ -201,4 +201,91 @@ pub fn run(h: &mut Harness) {
             let _ = server.handle(&mut od, STATE, black_box(&download), response);
         },
     );
+
+    // The same download with the largest RxPDO mapping the profile takes: the most ranges the
+    // check compares.
+    let entries = map_max_rx(&mut Dictionary::new(&PROFILE.od, &mut ram));
+    let rx_outputs = match PdoPlan::build(&Dictionary::new(&PROFILE.od, &mut ram), Direction::Rx) {
+        Ok(plan) if plan.entries() == entries => plan.ram_ranges(),
+        _ => {
+            h.fail(
+                "sdo",
+                format_args!("the largest RxPDO mapping ({entries} entries) does not build"),
+            );
+            return;
+        }
+    };
+    let mut od = Dictionary::new(&PROFILE.od, &mut ram).with_rx_outputs(&rx_outputs);
+    let r = server.handle(&mut od, STATE, &download, response);
+    if r.ok() != Some(FRAME_LEN)
+        || response.get(COE_HEADER_LEN) != Some(&command::DOWNLOAD_RESPONSE)
+    {
+        h.fail(
+            "sdo-download-max-mapping",
+            format_args!("6081h download was not answered"),
+        );
+        return;
+    }
+    h.bench(
+        "sdo-download-expedited-max-mapping",
+        Some(SDO_DOWNLOAD_BUDGET),
+        format_args!(
+            "the same with 1600h mapping {entries} RxPDO-mappable entries ({} OD RAM ranges to \
+             compare, none adjacent)",
+            rx_outputs.len()
+        ),
+        &mut || {
+            let _ = server.handle(&mut od, STATE, black_box(&download), response);
+        },
+    );
+}
+
+/// Maps into RxPDO 1600h as many RxPDO-mappable OD RAM entries of the profile as its
+/// subindices, the process image and the profile's `max_process_bytes` allow (6081h, the
+/// download's target, left out), from the highest index down so that no two are adjacent in the
+/// OD RAM in mapping order (each is its own copy); returns how many.
+fn map_max_rx(od: &mut Dictionary<'_>) -> usize {
+    const RX_MAPPING: u16 = 0x1600;
+    let Some(mapping) = od.object(RX_MAPPING) else {
+        return 0;
+    };
+    let slots = mapping.entries.len().saturating_sub(1);
+    let limit_bits =
+        8 * usize::from(PROFILE.od.device.max_process_bytes).min(firmware::pdo::MAX_IMAGE);
+    let candidates = PROFILE.od.objects.iter().rev().flat_map(|o| {
+        o.entries.iter().rev().filter_map(move |e| {
+            let mappable = e.pdo.rx()
+                && matches!(e.value, firmware::od::Value::Ram(_))
+                && (o.index, e.subindex) != MAPPABLE_PARAMETER;
+            mappable.then_some((o.index, e.subindex, e.bit_len))
+        })
+    });
+    let (mut mapped, mut bits) = (0usize, 0usize);
+    let _ = set(od, mapping, 0, 0);
+    for (index, subindex, bit_len) in candidates {
+        if mapped == slots || bits + usize::from(bit_len) > limit_bits {
+            break;
+        }
+        let value = (u32::from(index) << 16) | (u32::from(subindex) << 8) | u32::from(bit_len);
+        // Sub 1.. of 1600h: `mapped` < `slots` ≤ 254.
+        if set(od, mapping, mapped as u8 + 1, value) {
+            mapped += 1;
+            bits += usize::from(bit_len);
+        }
+    }
+    let _ = set(od, mapping, 0, mapped as u32);
+    mapped
+}
+
+/// Writes `value` to `object`'s `subindex` (its own width); whether it was stored.
+fn set(od: &mut Dictionary<'_>, object: &firmware::od::Object, subindex: u8, value: u32) -> bool {
+    match object.entry(subindex) {
+        Some(e) => od
+            .set_value(
+                e,
+                value.to_le_bytes().get(..e.byte_len()).unwrap_or_default(),
+            )
+            .is_ok(),
+        None => false,
+    }
 }
