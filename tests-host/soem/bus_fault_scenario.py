@@ -93,7 +93,11 @@ def main():
             if misses == PULLED_AFTER and pulled_at is None:
                 pulled_at = cycles
         if pulled_at is None and cycles % 500 == 0:
-            states_while_losing.add(al(s0))
+            # The cable may be out already, before PULLED_AFTER missed cycles tell: no reply.
+            try:
+                states_while_losing.add(al(s0))
+            except pysoem.WkcError:
+                pass
         time.sleep(CYCLE_S)
     out["cycles_before_pull"] = (pulled_at or cycles) - PULLED_AFTER
     out["wkc_errors_before_pull"] = errors - PULLED_AFTER + 1 if pulled_at else errors
