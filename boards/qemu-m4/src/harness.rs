@@ -16,13 +16,28 @@
 //! return, minus the baseline's, gave the same counts for every operation (after dropping the
 //! trace's repeated lines of a block QEMU re-enters when the icount budget runs out).
 //!
+//! Three modes, chosen by the command line (QEMU `-append`):
+//!
+//! | mode | a measurement | returns |
+//! |---|---|---|
+//! | (none) | [`ITERATIONS`] calls counted with the SysTick, as above | instructions per call |
+//! | `trace` | one call between the markers [`bench_span_begin`] and [`bench_span_end`], for an instruction trace (`-singlestep -d exec,nochain`) that `benchmarks/cycle-model` turns into a value per span | 0 |
+//! | `replay FILE` | one call | the next line of the host file FILE: the span's value from the trace |
+//!
+//! The benchmarks run the same code in every mode, so the spans come in the same order, and a
+//! replay derives its rows from the span values exactly as the counting run does from its
+//! counts: replaying the trace's instruction counts must give the counting run's records, and
+//! replaying its cycle estimates gives the same rows in cycles.
+//!
 //! Output, one record per line, tab-separated, for `benchmarks/run` to turn into the report:
 //!
 //! | record | fields |
 //! |---|---|
 //! | `META` | key, value |
 //! | `CALIBRATION` | expected, measured |
-//! | `BENCH` | name, instructions, budget (`-` if none), description |
+//! | `BENCH` | name, instructions (the max over its inputs), budget (`-` if none), description |
+//! | `CASE` | name, input, instructions: one input of a benchmark measured over a set |
+//! | `SPREAD` | name, min, median, max, number of inputs (after a set's `CASE` records) |
 //! | `FAIL` | name, reason |
 //! | `DONE` | `ok` or `failed` |
 
@@ -30,17 +45,68 @@ use core::fmt::{self, Write};
 use core::hint::black_box;
 
 use crate::counter::{InstructionCounter, INSTRUCTIONS_PER_TICK};
-use crate::semihosting::Console;
+use crate::semihosting::{Arguments, Console, HostFile};
+
+/// Most inputs one benchmark's set may hold.
+pub const MAX_CASES: usize = 16;
+
+/// The costs of one operation over a set of inputs that covers its branches
+/// ([`Harness::case`] adds one, [`Harness::report_cases`] reports them). The budget applies to
+/// the most expensive input.
+pub struct Cases {
+    name: &'static str,
+    costs: [(&'static str, u32); MAX_CASES],
+    len: usize,
+}
+
+impl Cases {
+    /// An empty set for benchmark `name`.
+    pub const fn new(name: &'static str) -> Self {
+        Self {
+            name,
+            costs: [("", 0); MAX_CASES],
+            len: 0,
+        }
+    }
+
+    /// The measured inputs and their costs, in the order measured.
+    pub fn costs(&self) -> &[(&'static str, u32)] {
+        self.costs.get(..self.len).unwrap_or(&[])
+    }
+
+    /// (min, median, max) of the costs; the median of an even count is the lower middle one.
+    fn spread(&self) -> Option<(u32, u32, u32)> {
+        let mut sorted = [0u32; MAX_CASES];
+        let sorted = sorted.get_mut(..self.len)?;
+        for (dst, (_, cost)) in sorted.iter_mut().zip(self.costs()) {
+            *dst = *cost;
+        }
+        sorted.sort_unstable();
+        let min = *sorted.first()?;
+        let max = *sorted.last()?;
+        let median = *sorted.get((sorted.len() - 1) / 2)?;
+        Some((min, median, max))
+    }
+}
 
 /// Calls of an operation per measurement. Resolution: 2 ticks × 40 / 1000 = 0.08 instructions.
 pub const ITERATIONS: u32 = 1_000;
 /// NOPs of the calibration operation; it must measure exactly this many instructions.
 const CALIBRATION_NOPS: u32 = 100;
 
+/// How a measurement is made (module documentation).
+enum Mode {
+    Count,
+    Trace,
+    /// The values to replay, one decimal number per line.
+    Replay(HostFile),
+}
+
 /// Runs the operations and prints their costs.
 pub struct Harness {
     counter: InstructionCounter,
     console: Console,
+    mode: Mode,
     /// SysTick ticks of [`ITERATIONS`] calls of the empty operation.
     baseline_ticks: u32,
     failed: bool,
@@ -58,18 +124,62 @@ fn repeat(n: u32, op: &mut dyn FnMut()) {
 /// The empty operation of the baseline.
 fn empty() {}
 
+/// Marks the start of a traced span: the trace analysis counts from this function's first
+/// instruction up to [`bench_span_end`]'s (the marker's own instructions are in the baseline
+/// span too and cancel).
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn bench_span_begin() {
+    // SAFETY: a NOP; it keeps the two markers different functions (not merged by the linker).
+    unsafe { core::arch::asm!("nop", options(nomem, nostack, preserves_flags)) };
+}
+
+/// Marks the end of a traced span ([`bench_span_begin`]).
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn bench_span_end() {
+    // SAFETY: NOPs only.
+    unsafe { core::arch::asm!("nop", "nop", options(nomem, nostack, preserves_flags)) };
+}
+
 impl Harness {
     /// A harness that measures with `counter` and prints to `console`; measures the baseline.
     pub fn new(counter: InstructionCounter, console: Console) -> Self {
+        let args = Arguments::get();
+        let mut words = args.words();
+        let (mode, bad_mode) = match (words.next(), words.next()) {
+            (None, _) => (Mode::Count, false),
+            (Some("trace"), None) => (Mode::Trace, false),
+            (Some("replay"), Some(path)) => match HostFile::open(path) {
+                Some(file) => (Mode::Replay(file), false),
+                None => (Mode::Count, true),
+            },
+            _ => (Mode::Count, true),
+        };
         let mut harness = Self {
             counter,
             console,
+            mode,
             baseline_ticks: 0,
             failed: false,
         };
-        match harness.ticks(&mut empty) {
-            Some(ticks) => harness.baseline_ticks = ticks,
-            None => harness.fail("baseline", format_args!("the SysTick overflowed")),
+        if bad_mode {
+            harness.fail(
+                "mode",
+                format_args!("arguments: none, `trace`, or `replay FILE` (a readable file)"),
+            );
+        }
+        match harness.mode {
+            Mode::Count => match harness.ticks(&mut empty) {
+                Some(ticks) => harness.baseline_ticks = ticks,
+                None => harness.fail("baseline", format_args!("the SysTick overflowed")),
+            },
+            // The baseline is the first span; its value, the others' reference, is 0.
+            Mode::Trace | Mode::Replay(_) => {
+                if harness.instructions(&mut empty) != Some(0) {
+                    harness.fail("baseline", format_args!("the replayed baseline is not 0"));
+                }
+            }
         }
         harness.record(format_args!("META\titerations\t{ITERATIONS}"));
         harness.record(format_args!(
@@ -98,7 +208,8 @@ impl Harness {
             "CALIBRATION\t{CALIBRATION_NOPS}\t{}",
             Display(measured)
         ));
-        if measured != Some(CALIBRATION_NOPS) {
+        // A trace run measures nothing (its values come from the trace afterwards).
+        if !matches!(self.mode, Mode::Trace) && measured != Some(CALIBRATION_NOPS) {
             self.fail(
                 "calibration",
                 format_args!("{CALIBRATION_NOPS} NOPs did not measure {CALIBRATION_NOPS}"),
@@ -183,7 +294,8 @@ impl Harness {
             "BENCH\t{name}\t{instructions}\t{}\t{description}",
             Display(budget)
         ));
-        if let Some(b) = budget {
+        // The budgets are instructions: a replay of other values (cycles) is not held to them.
+        if let (Some(b), Mode::Count) = (budget, &self.mode) {
             if instructions > b {
                 self.fail(
                     name,
@@ -191,6 +303,44 @@ impl Harness {
                 );
             }
         }
+    }
+
+    /// Adds input `label` of `cases`, measured as `cost` (by [`measure`](Self::measure) or
+    /// [`measure_net`](Self::measure_net)); prints it as a `CASE` record. A set that is full
+    /// fails the run.
+    pub fn case(&mut self, cases: &mut Cases, label: &'static str, cost: u32) {
+        match cases.costs.get_mut(cases.len) {
+            Some(slot) => {
+                *slot = (label, cost);
+                cases.len += 1;
+                self.record(format_args!("CASE\t{}\t{label}\t{cost}", cases.name));
+            }
+            None => self.fail(
+                cases.name,
+                format_args!("more than {MAX_CASES} inputs in one set"),
+            ),
+        }
+    }
+
+    /// Reports benchmark `cases` over its inputs: a `SPREAD` record (min, median, max) and the
+    /// `BENCH` record with the max, checked against `budget`. Returns the max; `None` (a
+    /// failure) if no input was measured.
+    pub fn report_cases(
+        &mut self,
+        cases: &Cases,
+        budget: Option<u32>,
+        description: fmt::Arguments<'_>,
+    ) -> Option<u32> {
+        let Some((min, median, max)) = cases.spread() else {
+            self.fail(cases.name, format_args!("no input was measured"));
+            return None;
+        };
+        self.record(format_args!(
+            "SPREAD\t{}\t{min}\t{median}\t{max}\t{}",
+            cases.name, cases.len
+        ));
+        self.report(cases.name, max, budget, description);
+        Some(max)
     }
 
     /// Prints a `META` record: a fact of the measured code the report computes with (e.g. a
@@ -225,8 +375,26 @@ impl Harness {
             .ok()
     }
 
-    /// Instructions of one call of `op`, or `None` if the measurement cannot be exact.
+    /// Instructions of one call of `op` (or in the other modes what the module documentation
+    /// says), or `None` if the measurement cannot be exact.
     fn instructions(&mut self, op: &mut dyn FnMut()) -> Option<u32> {
+        match self.mode {
+            Mode::Count => self.counted(op),
+            Mode::Trace => {
+                bench_span_begin();
+                repeat(black_box(1), black_box(op));
+                bench_span_end();
+                Some(0)
+            }
+            Mode::Replay(ref mut file) => {
+                repeat(black_box(1), black_box(op));
+                replayed(file)
+            }
+        }
+    }
+
+    /// Instructions of one call of `op` counted with the SysTick over [`ITERATIONS`] calls.
+    fn counted(&mut self, op: &mut dyn FnMut()) -> Option<u32> {
         let ticks = self.ticks(op)?;
         let total =
             i64::from(ticks.checked_sub(self.baseline_ticks)?) * INSTRUCTIONS_PER_TICK as i64;
@@ -238,6 +406,23 @@ impl Harness {
             return None;
         }
         u32::try_from(per_call).ok()
+    }
+}
+
+/// The next value of a replay input: one decimal number per line; `None` at its end or on
+/// anything else.
+fn replayed(file: &mut HostFile) -> Option<u32> {
+    let mut value: u32 = 0;
+    let mut digits = 0;
+    loop {
+        match file.read_byte()? {
+            b'\n' if digits > 0 => return Some(value),
+            d @ b'0'..=b'9' => {
+                value = value.checked_mul(10)?.checked_add(u32::from(d - b'0'))?;
+                digits += 1;
+            }
+            _ => return None,
+        }
     }
 }
 

@@ -1,4 +1,5 @@
-//! ARM semihosting, the two calls the benchmark needs: print a string and exit with a status.
+//! ARM semihosting, the calls the benchmark needs: print a string, read its command line and a
+//! host file, and exit with a status.
 //!
 //! On M-profile cores a semihosting call is `BKPT 0xAB` with the operation number in r0 and its
 //! parameter in r1; the result comes back in r0 ("Semihosting for AArch32 and AArch64", Arm,
@@ -9,6 +10,18 @@ use core::fmt;
 
 /// SYS_WRITE0: writes a NUL-terminated string to the debug console; r1 = its address.
 const SYS_WRITE0: usize = 0x04;
+/// SYS_OPEN: opens a host file; r1 = address of a block {name address, mode, name length};
+/// returns a handle, or −1.
+const SYS_OPEN: usize = 0x01;
+/// SYS_OPEN mode "r" (ISO C `fopen` modes in the order of the semihosting specification).
+const OPEN_MODE_READ: usize = 0;
+/// SYS_READ: reads from a handle; r1 = address of a block {handle, buffer address, length};
+/// returns the number of bytes *not* read (equal to the length at the end of the file).
+const SYS_READ: usize = 0x06;
+/// SYS_GET_CMDLINE: copies the command line (QEMU: the `-kernel` file name, then the `-append`
+/// text) into a buffer; r1 = address of a block {buffer address, buffer length}, the length
+/// comes back as the bytes written.
+const SYS_GET_CMDLINE: usize = 0x15;
 /// SYS_EXIT: ends the program; on AArch32 r1 is the reason code itself.
 const SYS_EXIT: usize = 0x18;
 /// Reason code of SYS_EXIT for a normal end; QEMU exits with status 0.
@@ -30,6 +43,84 @@ unsafe fn call(op: usize, arg: usize) -> usize {
     // compiler keeps the string in memory before the trap).
     unsafe { asm!("bkpt #0xab", inout("r0") r0, in("r1") arg, options(nostack, preserves_flags)) };
     r0
+}
+
+/// A host file read byte by byte (through a small buffer).
+pub struct HostFile {
+    handle: usize,
+    buf: [u8; 64],
+    len: usize,
+    at: usize,
+}
+
+impl HostFile {
+    /// Opens the host file `path` for reading, or `None`.
+    pub fn open(path: &str) -> Option<Self> {
+        // The host wants a NUL-terminated name (and its length without the NUL).
+        let mut name = [0u8; 256];
+        name.get_mut(..path.len())?.copy_from_slice(path.as_bytes());
+        if path.len() >= name.len() {
+            return None;
+        }
+        let block = [name.as_ptr() as usize, OPEN_MODE_READ, path.len()];
+        // SAFETY: `block` names a NUL-terminated name of the stated length; both outlive the
+        // call.
+        let handle = unsafe { call(SYS_OPEN, block.as_ptr() as usize) };
+        (handle != usize::MAX).then_some(Self {
+            handle,
+            buf: [0; 64],
+            len: 0,
+            at: 0,
+        })
+    }
+
+    /// The next byte, or `None` at the end of the file (or on an error).
+    pub fn read_byte(&mut self) -> Option<u8> {
+        if self.at == self.len {
+            let block = [self.handle, self.buf.as_mut_ptr() as usize, self.buf.len()];
+            // SAFETY: `block` names this file's handle and a writable buffer of the stated
+            // length; both outlive the call.
+            let not_read = unsafe { call(SYS_READ, block.as_ptr() as usize) };
+            self.len = self.buf.len().checked_sub(not_read)?;
+            self.at = 0;
+        }
+        let byte = *self.buf.get(self.at)?;
+        self.at += 1;
+        Some(byte)
+    }
+}
+
+/// The words of the command line after the program's own name, in a buffer of their own.
+pub struct Arguments {
+    buf: [u8; 256],
+    len: usize,
+}
+
+impl Arguments {
+    /// The command line (empty if the host gives none).
+    pub fn get() -> Self {
+        let mut args = Self {
+            buf: [0; 256],
+            len: 0,
+        };
+        let mut block = [args.buf.as_mut_ptr() as usize, args.buf.len()];
+        // SAFETY: `block` names a writable buffer of its stated length; both outlive the call.
+        let status = unsafe { call(SYS_GET_CMDLINE, block.as_mut_ptr() as usize) };
+        if status == 0 {
+            args.len = block[1].min(args.buf.len());
+        }
+        args
+    }
+
+    /// The words after the program's name.
+    pub fn words(&self) -> impl Iterator<Item = &str> {
+        let line = self
+            .buf
+            .get(..self.len)
+            .and_then(|b| core::str::from_utf8(b).ok())
+            .unwrap_or("");
+        line.split_ascii_whitespace().skip(1)
+    }
 }
 
 /// Ends the program: exit status 0 if `success`, else 1.

@@ -25,7 +25,7 @@
 //! * Then [`svpwm::modulate`] (with over-modulation when `max_modulation` > 1) and
 //!   [`svpwm::compensate_dead_time`].
 
-use super::math::{clamp, sin_cos, sqrt, INV_SQRT3, TAU, TWO_INV_SQRT3};
+use super::math::{sin_cos, sqrt_unguarded, INV_SQRT3, TAU, TWO_INV_SQRT3};
 use super::pi::PiGains;
 use super::svpwm;
 use super::{Duties, ElectricalAngle};
@@ -144,15 +144,16 @@ pub struct CurrentLoop {
     current_band_inv: f32,
 }
 
-/// The PI of one axis: parallel form, u = kp·e + I + ff limited to lo..=hi, I ← I + ki·Ts·e
-/// unless the output is pinned at a limit and e pushes further out — the anti-windup rule of
+/// The PI of one axis: parallel form, u = kp·e + I + ff limited to ±limit, I ← I + ki·Ts·e
+/// unless the output is pinned at the limit and e pushes further out — the anti-windup rule of
 /// [`Pi::update_limited`](super::pi::Pi::update_limited). Why not that function itself: it also
 /// clamps the integrator into the union of its static and the dynamic limits, four more
 /// compare-selects per call; with two of them the current loop measured 291 instructions under
-/// QEMU against its budget of 250. The hold test here is one product: the output's excess over
-/// the limit, (unclamped − limited), has the sign of e exactly when e pushes further out. Written
-/// as "integrate if excess·e ≤ 0" so that a NaN or infinite error holds the integrator: it stays
-/// finite whatever the measurements.
+/// QEMU against its budget of 250. Here the caller decides inside/outside with one compare and
+/// calls [`linear`](Self::linear) (integrate) or [`limited`](Self::limited) (the limit with the
+/// output's sign, and the hold test: the output's excess over the limit has the sign of e
+/// exactly when e pushes further out). The test is written as "integrate if excess·e ≤ 0" so
+/// that a NaN or infinite error holds the integrator: it stays finite whatever the measurements.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct AxisPi {
     gains: PiGains,
@@ -169,12 +170,24 @@ impl AxisPi {
         (candidate, self.gains.kp * e + candidate + ff)
     }
 
-    /// Limits `unlimited` to lo..=hi and integrates (`candidate`) unless that would wind up.
+    /// Integrates (`candidate`) and passes `unlimited` on: the output is inside its limit.
     ///
-    /// Timing: about 14 instructions (2 compare-selects, the hold test 5, a store).
+    /// Timing: 1 store.
     #[inline(always)]
-    fn limit(&mut self, e: f32, candidate: f32, unlimited: f32, lo: f32, hi: f32) -> f32 {
-        let out = clamp(unlimited, lo, hi);
+    fn linear(&mut self, candidate: f32, unlimited: f32) -> f32 {
+        self.integral = candidate;
+        unlimited
+    }
+
+    /// The output `unlimited` lies beyond ±`limit` (or is NaN): returns the limit with its
+    /// sign, and integrates (`candidate`) only if the error `e` pulls the output back in.
+    ///
+    /// Timing: about 10 instructions (copysign 3, the hold test 5, a store).
+    #[inline(always)]
+    fn limited(&mut self, e: f32, candidate: f32, unlimited: f32, limit: f32) -> f32 {
+        let out = limit.copysign(unlimited);
+        // The excess (unlimited − out) has the sign of e exactly when e pushes further out;
+        // NaN (a NaN error or output) compares false and holds.
         if (unlimited - out) * e <= 0.0 {
             self.integral = candidate;
         }
@@ -292,10 +305,12 @@ impl CurrentLoop {
 
     /// One period: measured currents and references in, duties for the next period out.
     ///
-    /// Timing: about 230 instructions on a Cortex-M4F, straight-line except compare-selects:
-    /// Clarke 5, sin/cos 30, Park 4, feed-forward 4, PI d 20, circle (√) 16, PI q 20, limiter
-    /// flag 6, latency rotation 9, inverse Park 4, SVPWM 35, dead-time compensation 50, loads
-    /// and stores about 25. No division, no library call.
+    /// Timing (`benchmarks/REPORT.md`, `foc-step`): 212 instructions on a Cortex-M4F in the
+    /// linear range, 237 at most (the d output at the circle, which also cuts q: the square
+    /// root). Clarke 5, sin/cos 40, Park 4, feed-forward 4, each PI 5 inside its limit (about 12
+    /// at it), circle test 4, latency rotation 9, inverse Park 4, dead-time compensation 30,
+    /// SVPWM 35 (over-modulation: three VDIV), loads, stores and the flag about 40. No library
+    /// call.
     #[inline]
     pub fn step(&mut self, input: &CurrentLoopInput) -> CurrentLoopOutput {
         let i = input.currents;
@@ -314,23 +329,28 @@ impl CurrentLoop {
         let vmax = self.vmax_per_vbus * input.vbus;
         let ed = input.id_ref - id;
         let (candidate_d, unlimited_d) = self.pi_d.unlimited(ed, vd_ff);
-        let vd = self.pi_d.limit(ed, candidate_d, unlimited_d, -vmax, vmax);
+        // Inside the limit: integrate and pass on (the common case: a compare and a store).
+        // Outside it, or NaN (which fails the compare): the limit, conditional integration.
+        let d_inside = unlimited_d.abs() <= vmax;
+        let vd = if d_inside {
+            self.pi_d.linear(candidate_d, unlimited_d)
+        } else {
+            self.pi_d.limited(ed, candidate_d, unlimited_d, vmax)
+        };
         let eq = input.iq_ref - iq;
         let (candidate_q, unlimited_q) = self.pi_q.unlimited(eq, vq_ff);
+        // What the d output leaves of the circle, squared. Never negative: |vd| ≤ vmax, and
+        // rounding is monotonic (a NaN vmax gives NaN, which the modulator turns into the zero
+        // vector).
         let vq_room2 = vmax * vmax - vd * vd;
-        // When the unlimited q output lies inside what is left of the circle, the limit does not
-        // bind and its radius (a square root, some 30 instructions) is not needed: ±vmax gives
-        // the same result then.
-        let vq_max = if unlimited_q * unlimited_q <= vq_room2 {
-            vmax
+        // Compared squared, so the radius (a square root) is only taken when the limit binds.
+        let q_inside = unlimited_q * unlimited_q <= vq_room2;
+        let vq = if q_inside {
+            self.pi_q.linear(candidate_q, unlimited_q)
         } else {
-            sqrt(vq_room2)
+            self.pi_q
+                .limited(eq, candidate_q, unlimited_q, sqrt_unguarded(vq_room2))
         };
-        let vq = self
-            .pi_q
-            .limit(eq, candidate_q, unlimited_q, -vq_max, vq_max);
-        // The clamp returns the limit itself, so reaching it is an exact comparison.
-        let circle_limited = vd.abs() >= vmax || vq.abs() >= vq_max;
 
         // Rotate the sampled (sin, cos) forward by δ = ω·1.5·Ts with truncated series
         // cos δ ≈ 1 − δ²/2, sin δ ≈ δ·(1 − δ²/6) instead of a second sin_cos: the rotation's
@@ -360,7 +380,7 @@ impl CurrentLoop {
             iq,
             vd,
             vq,
-            voltage_limited: circle_limited || modulation.overmodulated,
+            voltage_limited: !(d_inside && q_inside) || modulation.overmodulated,
         }
     }
 }

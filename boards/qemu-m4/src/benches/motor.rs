@@ -8,22 +8,28 @@
 //! dead-time compensation, 150 Hz speed loop, 20-bit absolute encoder with a known commutation
 //! offset (no alignment at enable).
 //!
-//! Every measured operation runs the same code on every call (the harness fails otherwise): the
-//! inputs are constant and the state is a steady state in which the errors are zero, so that no
-//! integrator, filter or counter moves.
+//! Every measured call runs the same code (the harness fails otherwise). The FOC step and the
+//! control interrupt are measured over sets of inputs that cover their branches; each input
+//! starts from a state restored before every call (the restore measured alone and subtracted),
+//! and its branch is checked on the output before it is measured.
 
 use core::hint::black_box;
 
-use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState, ControlMode, Output, Sample};
+use firmware::motor::axis::{
+    Axis, AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, Output, Sample,
+};
 use firmware::motor::capture::Switches;
-use firmware::motor::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
-use firmware::motor::math::{self, sin_cos, TAU};
+use firmware::motor::foc::{
+    CurrentLoop, CurrentLoopConfig, CurrentLoopInput, CurrentLoopOutput, MAX_MODULATION_LIMIT,
+};
+use firmware::motor::math::{self, sin_cos, INV_SQRT3, TAU};
 use firmware::motor::servo::{self, Tuning, SERVO_400W};
+use firmware::motor::MotorFault;
 use firmware::motor::{Duties, ElectricalAngle};
 use hal::io::ProbeCapture;
 use hal::power::PhaseCurrents;
 
-use crate::harness::Harness;
+use crate::harness::{Cases, Harness};
 
 /// DESIGN.md §6: FOC current-loop step (Clarke, Park, 2 PI with decoupling and anti-windup,
 /// inverse Park, SVPWM).
@@ -134,17 +140,33 @@ fn sqrt_bench(h: &mut Harness) {
     );
 }
 
-/// One `CurrentLoop::step` of the servo at 1500 rpm with 5 A of q current.
+/// One `CurrentLoop::step` of the servo, over inputs that cover its branches.
 ///
-/// Steady state: a probe step measures the id/iq the loop sees for the constant currents and
-/// angle; with the references set to exactly those values (and the integrators emptied) the PI
-/// errors are zero, the integrators stay where they are and every call is the same. The output
-/// is then the decoupling feed-forward alone (vd = −ω·Lq·iq, vq = ω·(Ld·id + ψ)), which is
-/// checked, as are the duties (valid and centred) and the linear range (no limiting).
+/// The base input is 1500 rpm (100 Hz electrical) with 5 A of q current. A probe step
+/// measures the id/iq the loop sees for the constant currents and angle, and the references of
+/// the steady case are exactly those values (integrators empty): the PI errors are zero and the
+/// output is the decoupling feed-forward alone (vd = −ω·Lq·iq, vq = ω·(Ld·id + ψ)), which is
+/// checked. The other inputs change one thing each and their branch is checked from the output:
+///
+/// | input | branch |
+/// |---|---|
+/// | steady | linear range, PI errors 0 |
+/// | current step | linear range, both integrators move |
+/// | q limited | the q output is cut to what the d output leaves of the circle (its square root) |
+/// | d limited | the d output is pinned at the circle, q gets nothing |
+/// | over-modulation | a loop allowed the hexagon (`max_modulation` 2/√3) asks for its corner: the modulator's division path |
+/// | NaN current | a sample that is not a number: the modulator's zero vector |
+///
+/// A step moves the integrators, so each call empties them first (every input starts from
+/// empty integrators) and the emptying alone is measured and subtracted.
 fn foc_step(h: &mut Harness) {
     const NAME: &str = "foc-step";
     let cfg = current_loop_config();
-    let Ok(mut cl) = CurrentLoop::new(&cfg) else {
+    let hexagon = CurrentLoopConfig {
+        max_modulation: MAX_MODULATION_LIMIT,
+        ..cfg
+    };
+    let (Ok(mut cl), Ok(hexagon_cl)) = (CurrentLoop::new(&cfg), CurrentLoop::new(&hexagon)) else {
         h.fail(
             NAME,
             format_args!("the current-loop configuration was refused"),
@@ -160,7 +182,7 @@ fn foc_step(h: &mut Harness) {
         b: -4.330_127,
         c: 0.0,
     };
-    let mut input = CurrentLoopInput {
+    let mut steady = CurrentLoopInput {
         currents,
         angle: ElectricalAngle::from_bits(0xAAAA_AAAA),
         omega_e,
@@ -169,15 +191,15 @@ fn foc_step(h: &mut Harness) {
         id_ref: 0.0,
         iq_ref: 0.0,
     };
-    let probe = cl.step(&input);
-    input.id_ref = probe.id;
-    input.iq_ref = probe.iq;
+    let probe = cl.step(&steady);
+    steady.id_ref = probe.id;
+    steady.iq_ref = probe.iq;
     cl.reset();
-    let out = cl.step(&input);
+    let out = cl.step(&steady);
     let vd_ff = -omega_e * cfg.lq_h * out.iq;
     let vq_ff = omega_e * (cfg.ld_h * out.id + cfg.flux_wb);
-    let ok = out.id == input.id_ref
-        && out.iq == input.iq_ref
+    let ok = out.id == steady.id_ref
+        && out.iq == steady.iq_ref
         && cl.integrals() == (0.0, 0.0)
         && (out.vd - vd_ff).abs() < 1e-4
         && (out.vq - vq_ff).abs() < 1e-4
@@ -196,25 +218,138 @@ fn foc_step(h: &mut Harness) {
         );
         return;
     }
-    h.bench(
-        NAME,
+    // The circle's radius at the bus voltage of the measurement.
+    let vmax = cfg.max_modulation * INV_SQRT3 * BUS_VOLTAGE;
+    let limited = |x: f32| x.abs() >= vmax * (1.0 - 1e-6);
+    let inside = |x: f32| x.abs() < vmax * 0.9;
+    let inputs: [FocInput; 6] = [
+        FocInput {
+            label: "steady",
+            cl,
+            input: steady,
+            branch: |o| !o.voltage_limited && centred(&o.duties),
+        },
+        FocInput {
+            label: "current step",
+            cl,
+            input: CurrentLoopInput {
+                iq_ref: steady.iq_ref + 2.0,
+                ..steady
+            },
+            branch: |o| !o.voltage_limited && centred(&o.duties),
+        },
+        FocInput {
+            label: "q limited",
+            cl,
+            input: CurrentLoopInput {
+                iq_ref: steady.iq_ref + 100.0,
+                ..steady
+            },
+            branch: |o| o.voltage_limited && centred(&o.duties),
+        },
+        FocInput {
+            label: "d limited",
+            cl,
+            input: CurrentLoopInput {
+                id_ref: steady.id_ref - 100.0,
+                ..steady
+            },
+            branch: |o| o.voltage_limited && o.vq == 0.0 && centred(&o.duties),
+        },
+        FocInput {
+            label: "over-modulation",
+            cl: hexagon_cl,
+            input: CurrentLoopInput {
+                iq_ref: steady.iq_ref + 100.0,
+                ..steady
+            },
+            branch: |o| o.voltage_limited && spans_the_bus(&o.duties),
+        },
+        FocInput {
+            label: "NaN current",
+            cl,
+            input: CurrentLoopInput {
+                currents: PhaseCurrents {
+                    a: f32::NAN,
+                    ..currents
+                },
+                ..steady
+            },
+            branch: |o| o.voltage_limited && o.duties == Duties::CENTRED,
+        },
+    ];
+    let mut cases = Cases::new(NAME);
+    for case in &inputs {
+        let out = case.cl.clone().step(&case.input);
+        let checked = (case.branch)(&out)
+            && match case.label {
+                "q limited" => inside(out.vd) && !limited(out.vd),
+                "d limited" => limited(out.vd),
+                _ => true,
+            };
+        if !checked {
+            h.fail(
+                NAME,
+                format_args!(
+                    "input \"{}\" did not take its branch: vd {} vq {} duties {:?} limited {}",
+                    case.label, out.vd, out.vq, out.duties, out.voltage_limited
+                ),
+            );
+            return;
+        }
+        // Every input starts from empty integrators (the loop's only state), so the restore is
+        // `reset`: two stores instead of a copy of the loop.
+        let mut cl = case.cl;
+        if cl.integrals() != (0.0, 0.0) {
+            h.fail(
+                NAME,
+                format_args!("input \"{}\" does not start empty", case.label),
+            );
+            return;
+        }
+        let mut restored = cl;
+        let input = case.input;
+        let Some((cost, _, _)) = h.measure_net(
+            NAME,
+            &mut || {
+                restored.reset();
+                black_box(&mut restored);
+            },
+            &mut || {
+                cl.reset();
+                black_box(cl.step(black_box(&input)));
+            },
+        ) else {
+            return;
+        };
+        h.case(&mut cases, case.label, cost);
+    }
+    h.report_cases(
+        &cases,
         Some(FOC_STEP_BUDGET),
         format_args!(
             "CurrentLoop::step: Clarke, sin/cos, Park, 2 PI with decoupling and anti-windup, \
              circle limiter, inverse Park with latency compensation, SVPWM, dead-time \
-             compensation; steady state (PI errors 0) at 100 Hz electrical, iq {:.1} A",
-            out.iq
+             compensation; at 100 Hz electrical, over its branches (linear, current step, q \
+             limited, d limited, over-modulation, NaN current)"
         ),
-        &mut || {
-            black_box(cl.step(black_box(&input)));
-        },
     );
-    if cl.integrals() != (0.0, 0.0) {
-        h.fail(
-            NAME,
-            format_args!("the measured steps moved the integrators"),
-        );
-    }
+}
+
+/// One input of the current-loop measurement: the loop's state before the step, the input and
+/// the check that the step took the input's branch.
+struct FocInput {
+    label: &'static str,
+    cl: CurrentLoop,
+    input: CurrentLoopInput,
+    branch: fn(&CurrentLoopOutput) -> bool,
+}
+
+/// Whether `d` spans the whole bus (over-modulation: the lowest duty 0, the highest 1).
+fn spans_the_bus(d: &Duties) -> bool {
+    let hi = d.a.max(d.b).max(d.c);
+    let lo = d.a.min(d.b).min(d.c);
+    hi == 1.0 && lo == 0.0
 }
 
 /// The command of the measurement: enabled, CSP, target = the actual position.
@@ -310,28 +445,31 @@ fn still_running(h: &mut Harness, name: &str, axis: &Axis, link: &AxisLink) {
     }
 }
 
-/// The control interrupt in its worst period, and the SYNC0 side of the handoff.
+/// The control interrupt in its loop period over inputs that cover its branches, and the SYNC0
+/// side of the handoff.
 ///
 /// `Axis::control_step` with `loop_divider` 1, so that every period is a loop period: command
-/// taken from the link with a new CSP set-point pushed into the interpolator, velocity
-/// estimator, interpolation, position loop, speed loop, current loop, protections, feedback
-/// published. The bus cycle equals the loop period (25 µs at 40 kHz) and the op publishes the
-/// same command (target = actual position) before each step, as the SYNC0 handler would once
-/// per bus cycle: the interpolator then stays in its continuous-stream path (new segment every
-/// tick, evaluated in the segment) and every error is zero, so every call runs the same code.
-/// Not publishing would instead leave the interpolator in its missed-set-point hold after three
-/// ticks, which skips the set-point push and the in-segment polynomial: not the worst period.
-/// The publish belongs to the SYNC0 handler, so its separately measured cost is subtracted.
+/// taken from the link with a new set-point pushed into the interpolator, velocity estimator,
+/// interpolation, position loop, speed loop, current loop, protections, feedback published.
+/// The bus cycle equals the loop period (25 µs at 40 kHz) and each call publishes the input's
+/// command before the step, as the SYNC0 handler would once per bus cycle: the interpolator
+/// stays in its continuous-stream path (new segment every tick, evaluated in the segment).
+///
+/// Every input starts from the axis running in CSP at rest on [`POSITION`] and changes one
+/// thing ([`CONTROL_INPUTS`]), measured in the period that takes it or, for another mode, after
+/// a few periods in it; its branch is checked on the output and feedback of one step. That
+/// state is restored from a copy before each call (the restore and the publish are measured
+/// alone and subtracted).
 fn control_interrupt(h: &mut Harness) {
     const NAME: &str = "control-interrupt";
     // SAFETY: everything here runs in one context (the benchmark's main), so the publishing and
     // the reading side never preempt each other: the single-writer/priority contract holds.
     let link = unsafe { AxisLink::new() };
-    let Some(mut axis) = h.ready(NAME, running_axis(&tuning(1, 1.0 / PWM_HZ), &link)) else {
+    let Some(snapshot) = h.ready(NAME, running_axis(&tuning(1, 1.0 / PWM_HZ), &link)) else {
         return;
     };
 
-    let publish = h.bench(
+    h.bench(
         "sync0-publish",
         None,
         format_args!("AxisLink::publish of an AxisCommand (SYNC0 side of the set-point handoff)"),
@@ -349,30 +487,217 @@ fn control_interrupt(h: &mut Harness) {
             black_box(link.feedback());
         },
     );
-    let with_publish = h.measure(NAME, &mut || {
-        link.publish(black_box(COMMAND));
-        black_box(axis.control_step(black_box(&SAMPLE), &link));
-    });
-    still_running(h, NAME, &axis, &link);
-    let (Some(publish), Some(with_publish)) = (publish, with_publish) else {
-        return;
-    };
-    let Some(cost) = with_publish.checked_sub(publish) else {
-        h.fail(NAME, format_args!("publish costs more than publish + step"));
-        return;
-    };
-    h.report(
-        NAME,
-        cost,
+    let mut cases = Cases::new(NAME);
+    for input in CONTROL_INPUTS {
+        let (command, sample) = (input.command, input.sample);
+        // The state the input is measured in: its command and sample taken for `settle`
+        // periods, or until the next period takes the input's branch.
+        let mut start = snapshot.clone();
+        let mut settled = false;
+        for period in 0..MAX_SETTLE_PERIODS {
+            settled = match input.settle {
+                Settle::Periods(n) => period >= n,
+                Settle::UntilBranch => {
+                    let mut next = start.clone();
+                    link.publish(command);
+                    let output = next.control_step(&sample, &link);
+                    (input.branch)(&next, &link.feedback(), &output)
+                }
+            };
+            if settled {
+                break;
+            }
+            link.publish(command);
+            start.control_step(&sample, &link);
+        }
+        if !settled {
+            h.fail(
+                NAME,
+                format_args!("input \"{}\" never reached its branch", input.label),
+            );
+            return;
+        }
+        let snapshot = &start;
+        let mut axis = snapshot.clone();
+        link.publish(command);
+        let output = axis.control_step(&sample, &link);
+        let fb = link.feedback();
+        if !(input.branch)(&axis, &fb, &output) {
+            h.fail(
+                NAME,
+                format_args!(
+                    "input \"{}\" did not take its branch: state {:?} fault {:?} gates {} \
+                     following error {} current limited {} duties {:?}",
+                    input.label,
+                    axis.state(),
+                    axis.fault(),
+                    output.gates,
+                    fb.following_error,
+                    fb.current_limited,
+                    output.duties
+                ),
+            );
+            return;
+        }
+        let mut restored = snapshot.clone();
+        let Some((cost, _, _)) = h.measure_net(
+            NAME,
+            &mut || {
+                restored = black_box(snapshot).clone();
+                link.publish(black_box(command));
+                black_box(&mut restored);
+            },
+            &mut || {
+                axis = black_box(snapshot).clone();
+                link.publish(black_box(command));
+                black_box(axis.control_step(black_box(&sample), &link));
+            },
+        ) else {
+            return;
+        };
+        h.case(&mut cases, input.label, cost);
+    }
+    h.report_cases(
+        &cases,
         Some(CONTROL_INTERRUPT_BUDGET),
         format_args!(
-            "Axis::control_step, worst period: running in CSP at rest, a new set-point every \
-             period (loop divider 1, bus cycle = loop period): command take + interpolation + \
-             position, speed and current loops + protections + feedback publish \
-             ({with_publish} with the SYNC0 publish in the same op − {publish} publish)"
+            "Axis::control_step in its loop period (loop divider 1, a new set-point every \
+             period): command take + interpolation + position, speed and current loops + \
+             protections + feedback publish; over its branches (CSP at rest, following, at the \
+             torque limit and the voltage circle, CSV, CST, stop ramp, over-current and \
+             over-voltage trips)"
         ),
     );
 }
+
+/// One input of the control-interrupt measurement: the command published before the step,
+/// the sample, and the check that the step took the input's branch.
+struct ControlInput {
+    label: &'static str,
+    /// How long the command and sample run (from the axis at rest) before the measured period.
+    settle: Settle,
+    command: AxisCommand,
+    sample: Sample,
+    branch: fn(&Axis, &AxisFeedback, &Output) -> bool,
+}
+
+/// How an input of [`CONTROL_INPUTS`] reaches the state it is measured in.
+#[derive(Clone, Copy)]
+enum Settle {
+    /// This many periods: 0 measures the period that takes a new command, more the steady path
+    /// of a mode switched to.
+    Periods(u32),
+    /// Until the next period takes the input's branch (a protection that confirms over time
+    /// trips in the measured period).
+    UntilBranch,
+}
+
+/// Most periods an input may need to reach its state (0.25 s at 40 kHz).
+const MAX_SETTLE_PERIODS: u32 = 10_000;
+
+/// Whether the axis runs with the gates on after the step.
+fn runs(axis: &Axis, fb: &AxisFeedback, out: &Output) -> bool {
+    axis.state() == AxisState::Running && axis.fault().is_none() && fb.fault.is_none() && out.gates
+}
+
+/// Whether the step tripped `fault`: gates off, latched.
+fn tripped(axis: &Axis, fault: MotorFault, out: &Output) -> bool {
+    axis.state() == AxisState::Faulted && axis.fault() == Some(fault) && !out.gates
+}
+
+/// The spread of the duties: above 0.8 the voltage vector is at the circle of the servo's
+/// `max_modulation` 0.95 (its SVPWM span lies between 0.95·√3/2 = 0.82 and 0.95 there).
+fn duty_span(d: &Duties) -> f32 {
+    d.a.max(d.b).max(d.c) - d.a.min(d.b).min(d.c)
+}
+
+/// The inputs of the control-interrupt measurement.
+const CONTROL_INPUTS: [ControlInput; 8] = [
+    ControlInput {
+        label: "CSP at rest",
+        settle: Settle::Periods(0),
+        command: COMMAND,
+        sample: SAMPLE,
+        branch: |a, fb, o| runs(a, fb, o) && fb.following_error == 0 && zero_voltage(&o.duties),
+    },
+    ControlInput {
+        label: "CSP following (1 increment per period)",
+        settle: Settle::Periods(0),
+        command: AxisCommand {
+            position: POSITION + 1,
+            ..COMMAND
+        },
+        sample: SAMPLE,
+        branch: |a, fb, o| runs(a, fb, o) && !fb.current_limited && !zero_voltage(&o.duties),
+    },
+    ControlInput {
+        label: "CSP step: torque limit, voltage circle",
+        settle: Settle::Periods(0),
+        command: AxisCommand {
+            position: POSITION + 200_000,
+            ..COMMAND
+        },
+        sample: SAMPLE,
+        branch: |a, fb, o| runs(a, fb, o) && fb.current_limited && duty_span(&o.duties) > 0.8,
+    },
+    ControlInput {
+        label: "CSV 1000 rpm",
+        settle: Settle::Periods(4),
+        command: AxisCommand {
+            mode: ControlMode::Velocity,
+            velocity: 17_476_267.0,
+            ..COMMAND
+        },
+        sample: SAMPLE,
+        branch: |a, fb, o| runs(a, fb, o) && !zero_voltage(&o.duties),
+    },
+    ControlInput {
+        label: "CST 0.5 N·m",
+        settle: Settle::Periods(4),
+        command: AxisCommand {
+            mode: ControlMode::Torque,
+            torque: 0.5,
+            ..COMMAND
+        },
+        sample: SAMPLE,
+        branch: |a, fb, o| runs(a, fb, o) && !zero_voltage(&o.duties),
+    },
+    ControlInput {
+        label: "stop ramp",
+        settle: Settle::Periods(4),
+        command: AxisCommand {
+            mode: ControlMode::Stop,
+            deceleration: 1.0e7,
+            ..COMMAND
+        },
+        sample: SAMPLE,
+        branch: runs,
+    },
+    ControlInput {
+        label: "over-current trip",
+        settle: Settle::Periods(0),
+        command: COMMAND,
+        sample: Sample {
+            currents: PhaseCurrents {
+                a: 100.0,
+                b: -50.0,
+                c: -50.0,
+            },
+            ..SAMPLE
+        },
+        branch: |a, _, o| tripped(a, MotorFault::OverCurrent, o),
+    },
+    ControlInput {
+        label: "bus over-voltage trip",
+        settle: Settle::UntilBranch,
+        command: COMMAND,
+        sample: Sample {
+            bus_voltage: 80.0,
+            ..SAMPLE
+        },
+        branch: |a, _, o| tripped(a, MotorFault::BusOverVoltage, o),
+    },
+];
 
 /// The control interrupt averaged over one loop cycle with the servo's real loop divider:
 /// [`LOOP_DIVIDER`] periods, the first a loop period (command, set-point push, loops, current

@@ -30,7 +30,7 @@ use firmware::DriveCore;
 use super::motor::{tuning, POSITION, SAMPLE};
 use super::sync0_handler::Setup;
 use super::{axis_vars, master_outputs_for, read, MODE_CYCLIC_SYNC_POSITION};
-use crate::harness::Harness;
+use crate::harness::{Cases, Harness};
 
 /// DESIGN.md §6: SYNC0 handler (PDO unpack, CiA402, PDO pack; PDI bus time excluded).
 const SYNC0_HANDLER_BUDGET: u32 = 2_000;
@@ -233,10 +233,11 @@ impl Phase {
     }
 }
 
-/// The costs of the phases measured so far, in order.
+/// The phases measured so far, in order, and their costs.
 struct PhaseCosts {
-    costs: [(Phase, u32); PHASES],
+    phases: [Phase; PHASES],
     len: usize,
+    cases: Cases,
 }
 
 /// The number of [`Phase`]s.
@@ -244,7 +245,7 @@ const PHASES: usize = 6;
 
 impl PhaseCosts {
     fn has(&self, phase: Phase) -> bool {
-        self.costs.iter().take(self.len).any(|(p, _)| *p == phase)
+        self.phases.iter().take(self.len).any(|p| *p == phase)
     }
 
     /// Measures the next cycle of `bench` as `phase` ([`cost_from`] a snapshot), then runs it.
@@ -257,11 +258,12 @@ impl PhaseCosts {
         let snapshot = bench.setup.core.clone();
         let cost = cost_from(h, PP_NAME, &snapshot, &mut bench.setup).ok_or("not measurable")?;
         let slot = self
-            .costs
+            .phases
             .get_mut(self.len)
             .ok_or("a phase measured twice")?;
-        *slot = (phase, cost);
+        *slot = phase;
         self.len += 1;
+        h.case(&mut self.cases, phase.label(), cost);
         // On from the snapshot: the measured cycle once more, as the move would run it.
         bench.setup.core = snapshot;
         bench.cycle(0)
@@ -280,8 +282,9 @@ fn profile_position_move(h: &mut Harness, bench: &mut Bench) -> Result<(), &'sta
     bench.at_rest()?;
     let target = START + MOVE_DISTANCE;
     let mut phases = PhaseCosts {
-        costs: [(Phase::Accept, 0); PHASES],
+        phases: [Phase::Accept; PHASES],
         len: 0,
+        cases: Cases::new(PP_NAME),
     };
     // The rising edge of bit 4 with the target 8 revolutions on.
     bench.outputs(
@@ -332,31 +335,13 @@ fn profile_position_move(h: &mut Harness, bench: &mut Bench) -> Result<(), &'sta
     if phases.len != PHASES {
         return Err("the move did not go through every phase");
     }
-    let Some(&(worst_phase, worst)) = phases.costs.iter().max_by_key(|(_, c)| *c) else {
-        return Err("nothing measured");
-    };
-    let [a, b, c, d, e, f] = phases.costs;
-    h.report(
-        PP_NAME,
-        worst,
+    h.report_cases(
+        &phases.cases,
         Some(SYNC0_HANDLER_BUDGET),
         format_args!(
-            "on_sync0 in OP with the axis attached, profile position: the most expensive cycle of \
-             an 8-revolution move ({}); by cycle: {} {}, {} {}, {} {}, {} {}, {} {}, {} {} (each \
-             from a snapshot of the core: restore + handler − restore)",
-            worst_phase.label(),
-            a.0.label(),
-            a.1,
-            b.0.label(),
-            b.1,
-            c.0.label(),
-            c.1,
-            d.0.label(),
-            d.1,
-            e.0.label(),
-            e.1,
-            f.0.label(),
-            f.1,
+            "on_sync0 in OP with the axis attached, profile position: the cycles of an \
+             8-revolution move, each kind from a snapshot of the core taken just before it \
+             (restore + handler − restore)"
         ),
     );
     Ok(())
