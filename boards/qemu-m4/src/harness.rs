@@ -35,7 +35,7 @@
 //! |---|---|
 //! | `META` | key, value |
 //! | `CALIBRATION` | expected, measured |
-//! | `BENCH` | name, instructions (the max over its inputs), budget (`-` if none), description |
+//! | `BENCH` | name, instructions (the max over its inputs), budget (`-` if none; `N*` a target not yet met, not enforced), description |
 //! | `CASE` | name, input, instructions: one input of a benchmark measured over a set |
 //! | `SPREAD` | name, min, median, max, number of inputs (after a set's `CASE` records) |
 //! | `FAIL` | name, reason |
@@ -186,6 +186,11 @@ impl Harness {
             "META\tinstructions_per_tick\t{INSTRUCTIONS_PER_TICK}"
         ));
         harness
+    }
+
+    /// Whether this run counts instructions (the default mode, not `trace` or `replay`).
+    pub fn counting(&self) -> bool {
+        matches!(self.mode, Mode::Count)
     }
 
     /// Checks the method: an operation of [`CALIBRATION_NOPS`] NOPs must cost exactly that many
@@ -340,6 +345,31 @@ impl Harness {
             cases.name, cases.len
         ));
         self.report(cases.name, max, budget, description);
+        Some(max)
+    }
+
+    /// Reports benchmark `cases` against a `target` not yet met (a budget of an open issue):
+    /// as [`report_cases`](Self::report_cases), the budget printed with a `*` and not
+    /// enforced, so that the measurement is in the report while the work goes on. Returns the
+    /// max.
+    pub fn report_cases_target(
+        &mut self,
+        cases: &Cases,
+        target: u32,
+        description: fmt::Arguments<'_>,
+    ) -> Option<u32> {
+        let Some((min, median, max)) = cases.spread() else {
+            self.fail(cases.name, format_args!("no input was measured"));
+            return None;
+        };
+        self.record(format_args!(
+            "SPREAD\t{}\t{min}\t{median}\t{max}\t{}",
+            cases.name, cases.len
+        ));
+        self.record(format_args!(
+            "BENCH\t{}\t{max}\t{target}*\t{description}",
+            cases.name
+        ));
         Some(max)
     }
 

@@ -30,6 +30,11 @@ fn main() -> ! {
     for bench in benches::ALL {
         bench(&mut harness);
     }
+    if harness.counting() {
+        for bench in benches::COUNT_ONLY {
+            bench(&mut harness);
+        }
+    }
     semihosting::exit(harness.finish())
 }
 

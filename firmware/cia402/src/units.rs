@@ -69,11 +69,28 @@ pub fn to_object_units(value: f32, unit: f32) -> u32 {
 /// velocities in floating point through the ratio's [`Scale`] (made once: a 64-bit
 /// integer to float conversion is a library call on the Cortex-M4, too slow to repeat per
 /// value).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+///
+/// A ratio [`prepared`](Self::prepared) once (when the unit objects change) carries the
+/// reciprocals of its two sides, so that a position converts with multiplications instead of a
+/// 64-bit division (a library routine of some 150 to 300 instructions on the Cortex-M4, several
+/// of them per SYNC0 cycle). Equality compares the ratio only.
+#[derive(Clone, Copy, Debug)]
 pub struct Ratio {
     numerator: u64,
     denominator: u64,
+    /// ⌊(2⁶⁴ − 1) / numerator⌋ and ⌊(2⁶⁴ − 1) / denominator⌋ once prepared (0: not prepared,
+    /// or a side above `u32::MAX`, which converts by division).
+    inv_numerator: u64,
+    inv_denominator: u64,
 }
+
+impl PartialEq for Ratio {
+    fn eq(&self, other: &Self) -> bool {
+        self.numerator == other.numerator && self.denominator == other.denominator
+    }
+}
+
+impl Eq for Ratio {}
 
 /// A [`Ratio`] as the floating-point factors of velocity-like quantities (increments/s,
 /// increments/s²): converts with one multiplication either way.
@@ -113,6 +130,8 @@ impl Ratio {
     pub const ONE: Self = Self {
         numerator: 1,
         denominator: 1,
+        inv_numerator: 0,
+        inv_denominator: 0,
     };
 
     /// `numerator / denominator`. A zero on either side (a factor object the master set to 0,
@@ -125,7 +144,19 @@ impl Ratio {
             Self {
                 numerator,
                 denominator,
+                inv_numerator: 0,
+                inv_denominator: 0,
             }
+        }
+    }
+
+    /// This ratio with the reciprocals that let positions convert without a division (the
+    /// two divisions happen here, once). The conversions give the same results either way.
+    pub fn prepared(self) -> Self {
+        Self {
+            inv_numerator: reciprocal(self.numerator),
+            inv_denominator: reciprocal(self.denominator),
+            ..self
         }
     }
 
@@ -162,7 +193,7 @@ impl Ratio {
         if self.is_one() {
             return user;
         }
-        scale(user, self.numerator, self.denominator)
+        scale(user, self.numerator, self.denominator, self.inv_denominator)
     }
 
     /// Increments as a position in user units (the nearest, halves away from zero),
@@ -173,21 +204,95 @@ impl Ratio {
         if self.is_one() {
             return increments;
         }
-        scale(increments, self.denominator, self.numerator)
+        scale(
+            increments,
+            self.denominator,
+            self.numerator,
+            self.inv_numerator,
+        )
     }
 }
 
+/// ⌊(2⁶⁴ − 1) / `divisor`⌋ for a divisor in 1..=`u32::MAX` (the reciprocal [`scale`] divides
+/// with); 0 (no reciprocal: divide) for 0 and for larger divisors.
+fn reciprocal(divisor: u64) -> u64 {
+    if divisor > u64::from(u32::MAX) {
+        return 0;
+    }
+    u64::MAX.checked_div(divisor).unwrap_or(0)
+}
+
+/// The high 64 bits of the 128-bit product `a × b`, from four 32 × 32 → 64 multiplications
+/// (UMULL on the Cortex-M4; a `u128` product would be a library call).
+#[inline]
+fn mul_high(a: u64, b: u64) -> u64 {
+    let (a0, a1) = (a & 0xFFFF_FFFF, a >> 32);
+    let (b0, b1) = (b & 0xFFFF_FFFF, b >> 32);
+    // Each factor < 2³², so each product < 2⁶⁴ and the sums below cannot overflow:
+    // mid < 3 · 2³², the result < 2⁶⁴.
+    let (p00, p01, p10, p11) = (
+        a0.wrapping_mul(b0),
+        a0.wrapping_mul(b1),
+        a1.wrapping_mul(b0),
+        a1.wrapping_mul(b1),
+    );
+    let mid = (p00 >> 32)
+        .wrapping_add(p01 & 0xFFFF_FFFF)
+        .wrapping_add(p10 & 0xFFFF_FFFF);
+    p11.wrapping_add(p01 >> 32)
+        .wrapping_add(p10 >> 32)
+        .wrapping_add(mid >> 32)
+}
+
+/// `magnitude / divisor` rounded to the nearest (halves up) through `inv` =
+/// ⌊(2⁶⁴ − 1) / divisor⌋, divisor in 1..=`u32::MAX`: the estimate ⌊magnitude · inv / 2⁶⁴⌋ is
+/// the quotient or at most 2 below it (inv is at most 1 + 1/divisor below 2⁶⁴/divisor, and
+/// magnitude < 2⁶⁴), so at most two corrections by the remainder. `None` if a correction is
+/// still due after two (which the bound excludes).
+#[inline]
+fn divide_by_reciprocal(magnitude: u64, divisor: u64, inv: u64) -> Option<u64> {
+    let mut quotient = mul_high(magnitude, inv);
+    // quotient ≤ magnitude / divisor: the remainder is magnitude − quotient·divisor ≥ 0 and
+    // < 3·divisor < 2³⁴, exact in wrapping arithmetic.
+    let mut remainder = magnitude.wrapping_sub(quotient.wrapping_mul(divisor));
+    for _ in 0..2 {
+        if remainder >= divisor {
+            quotient = quotient.wrapping_add(1);
+            remainder = remainder.wrapping_sub(divisor);
+        }
+    }
+    if remainder >= divisor {
+        return None;
+    }
+    // Halves away from zero (on the magnitude: up). remainder < divisor ≤ 2³²: no overflow.
+    if remainder.wrapping_mul(2) >= divisor {
+        quotient = quotient.wrapping_add(1);
+    }
+    Some(quotient)
+}
+
 /// `value × multiplier / divisor` (`divisor` > 0) rounded to the nearest (halves away from
-/// zero), saturating at the i64 range: in 64 bits when the product fits (the common case, a
-/// short library division on the Cortex-M4), else in 128. Rounding to the nearest both ways
-/// makes a position survive the round trip through the other unit (truncating both ways
-/// loses a unit whenever the increments of a target have a fraction).
-fn scale(value: i64, multiplier: u64, divisor: u64) -> i64 {
-    let narrow = i64::try_from(multiplier)
+/// zero), saturating at the i64 range: with the divisor's reciprocal `inv` (0: none) when the
+/// product fits 64 bits (the common case: multiplications only), by a 64-bit division when
+/// there is no reciprocal, else in 128 bits. Rounding to the nearest both ways makes a position
+/// survive the round trip through the other unit (truncating both ways loses a unit whenever
+/// the increments of a target have a fraction).
+fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
+    let product = i64::try_from(multiplier)
         .ok()
-        .zip(i64::try_from(divisor).ok())
-        .and_then(|(m, d)| {
-            let product = value.checked_mul(m)?;
+        .and_then(|m| value.checked_mul(m));
+    if let (Some(product), true) = (product, inv != 0) {
+        let quotient = divide_by_reciprocal(product.unsigned_abs(), divisor, inv)
+            .and_then(|q| i64::try_from(q).ok());
+        if let Some(q) = quotient {
+            // q ≥ 0 and ≤ i64::MAX: its negation fits.
+            return if product < 0 { q.wrapping_neg() } else { q };
+        }
+    }
+    let narrow = i64::try_from(divisor)
+        .ok()
+        .zip(product)
+        .and_then(|(d, product)| {
             let (quotient, remainder) = (product.checked_div(d)?, product.checked_rem(d)?);
             // |remainder| < d ≤ i64::MAX: twice it fits a u64.
             let twice = remainder.unsigned_abs().checked_mul(2)?;
@@ -328,19 +433,126 @@ impl RatioRange {
 mod tests {
     use super::*;
 
+    /// `value × n / d` rounded to the nearest, halves away from zero, in exact 128-bit
+    /// arithmetic (the reference), saturated to i64.
+    fn reference(value: i64, n: u64, d: u64) -> i64 {
+        let p = i128::from(value) * i128::from(n);
+        let (q, r) = (p / i128::from(d), p % i128::from(d));
+        let q = if 2 * r.abs() >= i128::from(d) {
+            q + p.signum()
+        } else {
+            q
+        };
+        q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+    }
+
+    #[test]
+    fn a_prepared_ratio_converts_exactly_as_the_division() {
+        let sides = [
+            1u64,
+            2,
+            3,
+            7,
+            10,
+            600,
+            1_000,
+            4_096,
+            10_000,
+            131_072,
+            1 << 20,
+            1 << 31,
+            u64::from(u32::MAX) - 1,
+            u64::from(u32::MAX),
+            u64::from(u32::MAX) + 1,
+            1 << 40,
+        ];
+        let values = [
+            0i64,
+            1,
+            -1,
+            2,
+            -2,
+            3,
+            5,
+            7,
+            4_999,
+            5_000,
+            5_001,
+            -5_000,
+            123_456_789,
+            -987_654_321,
+            i64::from(i32::MAX),
+            i64::from(i32::MIN),
+            1 << 40,
+            -(1 << 40),
+            i64::MAX / 3,
+            i64::MIN / 3,
+            i64::MAX,
+            i64::MIN,
+            i64::MIN + 1,
+        ];
+        for n in sides {
+            for d in sides {
+                let plain = Ratio::new(n, d);
+                let prepared = plain.prepared();
+                assert_eq!(plain, prepared, "equality ignores the reciprocals");
+                for v in values {
+                    assert_eq!(
+                        prepared.position_to_internal(v),
+                        reference(v, n, d),
+                        "{v}·{n}/{d}"
+                    );
+                    assert_eq!(
+                        plain.position_to_internal(v),
+                        reference(v, n, d),
+                        "{v}·{n}/{d}"
+                    );
+                    assert_eq!(
+                        prepared.position_from_internal(v),
+                        reference(v, d, n),
+                        "{v}·{d}/{n}"
+                    );
+                }
+            }
+        }
+        // Pseudo-random products near the reciprocal's error bound (large magnitudes).
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let d = (x >> 32) | 1;
+            let n = (x & 0xFFFF) + 1;
+            let v = (x as i64) >> (x % 48);
+            let r = Ratio::new(n, d).prepared();
+            assert_eq!(r.position_to_internal(v), reference(v, n, d), "{v}·{n}/{d}");
+        }
+    }
+
     #[test]
     fn scaling_rounds_saturates_and_refuses_a_zero_divisor_without_panicking() {
-        assert_eq!(scale(7, 1, 2), 4, "3.5 rounds away from zero");
-        assert_eq!(scale(-7, 1, 2), -4);
-        assert_eq!(scale(i64::MAX, u64::MAX, 1), i64::MAX, "saturated");
-        assert_eq!(scale(i64::MIN, u64::MAX, 3), i64::MIN);
+        // Without a reciprocal (the division) and with one (the multiplications).
+        for inv in [0, reciprocal(2)] {
+            assert_eq!(scale(7, 1, 2, inv), 4, "3.5 rounds away from zero");
+            assert_eq!(scale(-7, 1, 2, inv), -4);
+        }
+        assert_eq!(scale(i64::MAX, u64::MAX, 1, 0), i64::MAX, "saturated");
+        assert_eq!(scale(i64::MAX, u64::MAX, 1, reciprocal(1)), i64::MAX);
+        assert_eq!(scale(i64::MIN, u64::MAX, 3, 0), i64::MIN);
+        assert_eq!(scale(i64::MIN, u64::MAX, 3, reciprocal(3)), i64::MIN);
+        assert_eq!(scale(i64::MIN, 1, 1, reciprocal(1)), i64::MIN, "−2⁶³ / 1");
         assert_eq!(
-            scale(i64::MAX, u64::MAX, u64::MAX),
+            scale(i64::MAX, u64::MAX, u64::MAX, 0),
             i64::MAX,
             "through 128 bits"
         );
-        assert_eq!(scale(5, 1, 0), 0);
-        assert_eq!(scale(5, u64::MAX, 0), 0, "the wide path");
+        assert_eq!(scale(5, 1, 0, 0), 0);
+        assert_eq!(
+            reciprocal(0),
+            0,
+            "no reciprocal of 0: the division path refuses it"
+        );
+        assert_eq!(scale(5, u64::MAX, 0, 0), 0, "the wide path");
     }
 
     #[test]

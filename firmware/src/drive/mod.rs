@@ -36,6 +36,7 @@ use crate::adjust::{Action, AdjustingService};
 use crate::alarm_log::{AlarmLog, AlarmTable};
 use crate::motor::axis::{AxisFeedback, AxisLink, AxisState};
 use crate::motor::servo::EncoderSpec;
+use crate::profile::Operand;
 use crate::profile::{DriveProfile, SplitValue, MAX_AXES};
 
 /// Adjusting-service objects a drive serves (one per axis of the two-axis profiles).
@@ -79,6 +80,12 @@ pub struct Drive {
     /// The profile's split settings and their values `[whole, high, low]` as last seen.
     split_values: &'static [SplitValue],
     split_seen: [[u32; 3]; MAX_SPLIT_VALUES],
+    /// Which split settings the master's outputs write (one of their forms is RxPDO-mapped):
+    /// only those can change between two SDO downloads, so only those are reconciled every
+    /// cycle (`Application::outputs_mapped`).
+    split_mapped: [bool; MAX_SPLIT_VALUES],
+    /// Any of `split_mapped` (one test per cycle).
+    any_split_mapped: bool,
     /// The slave runs the cycle in sync (`Application::synchronisation`).
     in_sync: bool,
 }
@@ -116,6 +123,8 @@ impl Drive {
             od: &profile.od,
             split_values: profile.split_values,
             split_seen: [[0; 3]; MAX_SPLIT_VALUES],
+            split_mapped: [false; MAX_SPLIT_VALUES],
+            any_split_mapped: false,
             in_sync: false,
         }
     }
@@ -334,9 +343,18 @@ impl Drive {
     }
 
     /// Keeps each split setting's forms equal (`SplitValue::reconcile`): after an SDO download
-    /// and every cycle; at power-on (`power_on`) the parts set the whole.
-    fn sync_split_values(&mut self, ram: &mut [u8], power_on: bool) {
-        for (value, seen) in self.split_values.iter().zip(self.split_seen.iter_mut()) {
+    /// (`only_mapped` false) and every cycle (`only_mapped`: those the master's outputs write);
+    /// at power-on (`power_on`) the parts set the whole.
+    fn sync_split_values(&mut self, ram: &mut [u8], power_on: bool, only_mapped: bool) {
+        for ((value, seen), mapped) in self
+            .split_values
+            .iter()
+            .zip(self.split_seen.iter_mut())
+            .zip(self.split_mapped)
+        {
+            if only_mapped && !mapped {
+                continue;
+            }
             let now = [value.whole, value.high, value.low].map(|o| o.value(ram, 0));
             let next = value.reconcile(now, (!power_on).then_some(*seen));
             for ((object, old), new) in [value.whole, value.high, value.low]
@@ -364,8 +382,8 @@ impl Drive {
 impl Application for Drive {
     fn cycle(&mut self, ram: &mut [u8], cycle_ns: u32, events: &mut AppEvents) {
         // A split setting the master wrote by PDO (both forms may be mapped).
-        if !self.split_values.is_empty() {
-            self.sync_split_values(ram, false);
+        if self.any_split_mapped {
+            self.sync_split_values(ram, false, true);
         }
         let in_sync = self.in_sync;
         for i in 0..MAX_AXES {
@@ -426,7 +444,7 @@ impl Application for Drive {
     }
 
     fn power_on(&mut self, ram: &mut [u8]) {
-        self.sync_split_values(ram, true);
+        self.sync_split_values(ram, true, false);
         // CiA402 transition 1: initialisation is done at power-on, in any EtherCAT state, so a
         // master reads Switch On Disabled in PREOP already (and profile rules that test it,
         // e.g. the Σ-V-SD's 1010h write condition, see the real state).
@@ -460,7 +478,7 @@ impl Application for Drive {
         for axis in self.axes.iter_mut().flatten() {
             axis.downloaded(self.od, index);
         }
-        self.sync_split_values(ram, false);
+        self.sync_split_values(ram, false, false);
         self.act_on_download(ram, index, subindex);
         // The settings the download changed, in drive units before the next cycle uses them.
         for axis in self.axes.iter_mut().flatten() {
@@ -490,6 +508,15 @@ impl Application for Drive {
         for axis in self.axes.iter_mut().flatten() {
             axis.outputs_mapped(outputs);
         }
+        for (mapped, value) in self.split_mapped.iter_mut().zip(self.split_values) {
+            *mapped = [value.whole, value.high, value.low]
+                .iter()
+                .any(|form| match *form {
+                    Operand::Ram { at, len } => outputs.writes_ram(at, u16::from(len)),
+                    _ => false,
+                });
+        }
+        self.any_split_mapped = self.split_mapped.contains(&true);
     }
 
     fn background(&mut self, ram: &mut [u8], now_ns: u64) {
@@ -554,9 +581,36 @@ mod tests {
         assert_eq!(i32::from_le_bytes(ram[10..14].try_into().unwrap()), 1234);
     }
 
-    /// The GHA-E's gear ratio in two forms (6091h:01 = Pn-006 × 10000 + Pn-007): a part the
-    /// master wrote by PDO (straight into the OD RAM) sets the whole in the next cycle; at
-    /// power-on the parts set the whole.
+    /// An RxPDO mapping (1600h, assigned alone in 1C12h) of `entries` (index, subindex, bits)
+    /// in `ram` of `profile`, and its plan.
+    fn rx_plan(
+        profile: &'static DriveProfile,
+        ram: &mut [u8],
+        entries: &[(u16, u8, u8)],
+    ) -> ethercat_slave::pdo::PdoPlan {
+        use ethercat_slave::od::Dictionary;
+        use ethercat_slave::pdo::Direction;
+        let mut od = Dictionary::new(&profile.od, ram);
+        let mut set = |index: u16, sub: u8, value: u32| {
+            let entry = od.object(index).and_then(|o| o.entry(sub)).unwrap();
+            let bytes = value.to_le_bytes();
+            od.set_value(entry, &bytes[..entry.byte_len()]).unwrap();
+        };
+        set(0x1C12, 0, 0);
+        set(0x1C12, 1, 0x1600);
+        set(0x1C12, 0, 1);
+        set(0x1600, 0, 0);
+        for (i, &(index, sub, bits)) in entries.iter().enumerate() {
+            let value = u32::from(index) << 16 | u32::from(sub) << 8 | u32::from(bits);
+            set(0x1600, i as u8 + 1, value);
+        }
+        set(0x1600, 0, entries.len() as u32);
+        PdoPlan::build(&Dictionary::new(&profile.od, ram), Direction::Rx).unwrap()
+    }
+
+    /// The GHA-E's gear ratio in two forms (6091h:01 = Pn-006 × 10000 + Pn-007): at power-on
+    /// the parts set the whole; a form the master writes by PDO (straight into the OD RAM) sets
+    /// the other in the next cycle, when the RxPDO mapping has it; an SDO download always does.
     #[test]
     fn a_split_setting_follows_a_pdo_write_and_the_parts_at_power_on() {
         use crate::profiles::gha_e;
@@ -570,6 +624,13 @@ mod tests {
         let mut app = Drive::new(&gha_e::PROFILE);
         app.power_on(&mut ram);
         assert_eq!(gear.whole.value(&ram, 0), 20_005);
+        // Pn-007 (2000h:08) and 6091h:01 in the RxPDO.
+        let plan = rx_plan(
+            &gha_e::PROFILE,
+            &mut ram,
+            &[(0x2000, 8, 16), (0x6091, 1, 32)],
+        );
+        app.outputs_mapped(&plan);
         // A PDO write of the low part: the whole follows in the cycle.
         gear.low.write(&mut ram, 7);
         app.cycle(&mut ram, 1_000_000, &mut AppEvents::new());
@@ -581,6 +642,19 @@ mod tests {
             (gear.high.value(&ram, 0), gear.low.value(&ram, 0)),
             (13, 1_072)
         );
+        // Not in the mapping: the master cannot write it by PDO, the cycle leaves it (it costs
+        // the SYNC0 handler nothing), and an SDO download of it sets the other form.
+        let plan = rx_plan(&gha_e::PROFILE, &mut ram, &[(0x6040, 0, 16)]);
+        app.outputs_mapped(&plan);
+        gear.low.write(&mut ram, 9);
+        app.cycle(&mut ram, 1_000_000, &mut AppEvents::new());
+        assert_eq!(
+            gear.whole.value(&ram, 0),
+            131_072,
+            "not reconciled in the cycle"
+        );
+        app.downloaded(&mut ram, 0x2000, 8, 0);
+        assert_eq!(gear.whole.value(&ram, 0), 130_009);
     }
 
     #[test]

@@ -13,8 +13,11 @@ mod motor;
 mod process_data;
 mod sdo;
 mod sync0_handler;
+mod sync0_profiles;
 mod sync0_with_axis;
 
+use firmware::od::{Dictionary, Object, Profile, Value};
+use firmware::pdo::{Direction, MAX_IMAGE};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 
 use crate::harness::Harness;
@@ -24,7 +27,8 @@ const MODE_CYCLIC_SYNC_POSITION: i8 = 8;
 /// Target position 607Ah the master sends; any non-zero value, so that its echo is visible.
 const TARGET_POSITION: i32 = 0x0012_3456;
 
-/// Every benchmark, in report order.
+/// Every benchmark with a cycle estimate, in report order (traced in the harness's `trace`
+/// mode, so their setups must stay short: the trace has a line per executed instruction).
 pub const ALL: &[fn(&mut Harness)] = &[
     process_data::run,
     sync0_handler::run,
@@ -35,6 +39,11 @@ pub const ALL: &[fn(&mut Harness)] = &[
     board_sync0::run,
     board_esc_event::run,
 ];
+
+/// The benchmarks counted only (no cycle estimate), after [`ALL`] in the report: their setups
+/// run hundreds of millions of instructions (every profile brought to OP with running axes),
+/// too many to trace.
+pub const COUNT_ONLY: &[fn(&mut Harness)] = &[sync0_profiles::run];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.
 fn read<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
@@ -81,4 +90,83 @@ fn master_outputs_for(controlword: u16, target_position: i32, mode: i8) -> Optio
         )
         && write(&mut master, vars.modes_of_operation, &mode.to_le_bytes());
     ok.then_some(master)
+}
+
+/// The mapping object a benchmark fills: the first RxPDO (1600h) or TxPDO (1A00h).
+fn first_mapping(direction: Direction) -> u16 {
+    match direction {
+        Direction::Rx => 0x1600,
+        Direction::Tx => 0x1A00,
+    }
+}
+
+/// The OD entry (index, subindex, bit length) whose value lives at OD RAM offset `at`.
+fn entry_at(profile: &Profile, at: Option<u16>) -> Option<(u16, u8, u16)> {
+    let at = at?;
+    profile.objects.iter().find_map(|o| {
+        o.entries.iter().find_map(|e| {
+            matches!(e.value, Value::Ram(a) if a == at).then_some((o.index, e.subindex, e.bit_len))
+        })
+    })
+}
+
+/// Maps into the first PDO of `direction` the entries `first` (e.g. the controlword a master
+/// needs), then as many other mappable OD RAM entries of `profile` as its subindices, the
+/// process image and the profile's `max_process_bytes` allow (`exclude` left out), from the
+/// highest index down so that no two are adjacent in the OD RAM in mapping order (each is its
+/// own copy); returns how many.
+fn map_max(
+    od: &mut Dictionary<'_>,
+    profile: &Profile,
+    direction: Direction,
+    first: &[(u16, u8, u16)],
+    exclude: Option<(u16, u8)>,
+) -> usize {
+    let Some(mapping) = od.object(first_mapping(direction)) else {
+        return 0;
+    };
+    let slots = mapping.entries.len().saturating_sub(1);
+    let limit_bits = 8 * usize::from(profile.device.max_process_bytes).min(MAX_IMAGE);
+    let candidates = profile.objects.iter().rev().flat_map(|o| {
+        o.entries.iter().rev().filter_map(move |e| {
+            let mappable = match direction {
+                Direction::Rx => e.pdo.rx(),
+                Direction::Tx => e.pdo.tx(),
+            } && matches!(e.value, Value::Ram(_))
+                && Some((o.index, e.subindex)) != exclude
+                && !first
+                    .iter()
+                    .any(|&(i, s, _)| (i, s) == (o.index, e.subindex));
+            mappable.then_some((o.index, e.subindex, e.bit_len))
+        })
+    });
+    let candidates = first.iter().copied().chain(candidates);
+    let (mut mapped, mut bits) = (0usize, 0usize);
+    let _ = set(od, mapping, 0, 0);
+    for (index, subindex, bit_len) in candidates {
+        if mapped == slots || bits + usize::from(bit_len) > limit_bits {
+            break;
+        }
+        let value = (u32::from(index) << 16) | (u32::from(subindex) << 8) | u32::from(bit_len);
+        // Sub 1.. of the mapping: `mapped` < `slots` ≤ 254.
+        if set(od, mapping, mapped as u8 + 1, value) {
+            mapped += 1;
+            bits += usize::from(bit_len);
+        }
+    }
+    let _ = set(od, mapping, 0, mapped as u32);
+    mapped
+}
+
+/// Writes `value` to `object`'s `subindex` (its own width); whether it was stored.
+fn set(od: &mut Dictionary<'_>, object: &Object, subindex: u8, value: u32) -> bool {
+    match object.entry(subindex) {
+        Some(e) => od
+            .set_value(
+                e,
+                value.to_le_bytes().get(..e.byte_len()).unwrap_or_default(),
+            )
+            .is_ok(),
+        None => false,
+    }
 }

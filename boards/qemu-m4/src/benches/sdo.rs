@@ -17,8 +17,8 @@ use firmware::pdo::{Direction, PdoPlan};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 use hal::esc::AlState;
 
-use super::read;
 use super::sync0_handler::MBX_TYPE_COE;
+use super::{map_max, read};
 use crate::harness::Harness;
 
 /// The EtherCAT state the requests are served in.
@@ -204,7 +204,13 @@ pub fn run(h: &mut Harness) {
 
     // The same download with the largest RxPDO mapping the profile takes: the most ranges the
     // check compares.
-    let entries = map_max_rx(&mut Dictionary::new(&PROFILE.od, &mut ram));
+    let entries = map_max(
+        &mut Dictionary::new(&PROFILE.od, &mut ram),
+        &PROFILE.od,
+        Direction::Rx,
+        &[],
+        Some(MAPPABLE_PARAMETER),
+    );
     let rx_outputs = match PdoPlan::build(&Dictionary::new(&PROFILE.od, &mut ram), Direction::Rx) {
         Ok(plan) if plan.entries() == entries => plan.ram_ranges(),
         _ => {
@@ -238,54 +244,4 @@ pub fn run(h: &mut Harness) {
             let _ = server.handle(&mut od, STATE, black_box(&download), response);
         },
     );
-}
-
-/// Maps into RxPDO 1600h as many RxPDO-mappable OD RAM entries of the profile as its
-/// subindices, the process image and the profile's `max_process_bytes` allow (6081h, the
-/// download's target, left out), from the highest index down so that no two are adjacent in the
-/// OD RAM in mapping order (each is its own copy); returns how many.
-fn map_max_rx(od: &mut Dictionary<'_>) -> usize {
-    const RX_MAPPING: u16 = 0x1600;
-    let Some(mapping) = od.object(RX_MAPPING) else {
-        return 0;
-    };
-    let slots = mapping.entries.len().saturating_sub(1);
-    let limit_bits =
-        8 * usize::from(PROFILE.od.device.max_process_bytes).min(firmware::pdo::MAX_IMAGE);
-    let candidates = PROFILE.od.objects.iter().rev().flat_map(|o| {
-        o.entries.iter().rev().filter_map(move |e| {
-            let mappable = e.pdo.rx()
-                && matches!(e.value, firmware::od::Value::Ram(_))
-                && (o.index, e.subindex) != MAPPABLE_PARAMETER;
-            mappable.then_some((o.index, e.subindex, e.bit_len))
-        })
-    });
-    let (mut mapped, mut bits) = (0usize, 0usize);
-    let _ = set(od, mapping, 0, 0);
-    for (index, subindex, bit_len) in candidates {
-        if mapped == slots || bits + usize::from(bit_len) > limit_bits {
-            break;
-        }
-        let value = (u32::from(index) << 16) | (u32::from(subindex) << 8) | u32::from(bit_len);
-        // Sub 1.. of 1600h: `mapped` < `slots` ≤ 254.
-        if set(od, mapping, mapped as u8 + 1, value) {
-            mapped += 1;
-            bits += usize::from(bit_len);
-        }
-    }
-    let _ = set(od, mapping, 0, mapped as u32);
-    mapped
-}
-
-/// Writes `value` to `object`'s `subindex` (its own width); whether it was stored.
-fn set(od: &mut Dictionary<'_>, object: &firmware::od::Object, subindex: u8, value: u32) -> bool {
-    match object.entry(subindex) {
-        Some(e) => od
-            .set_value(
-                e,
-                value.to_le_bytes().get(..e.byte_len()).unwrap_or_default(),
-            )
-            .is_ok(),
-        None => false,
-    }
 }

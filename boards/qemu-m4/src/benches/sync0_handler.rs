@@ -53,6 +53,13 @@ pub(super) struct RamEsc {
 }
 
 impl RamEsc {
+    /// An ESC image of zeros.
+    pub(super) fn new() -> Self {
+        Self {
+            mem: [0; ESC_IMAGE],
+        }
+    }
+
     fn events(&self) -> AlEvent {
         let at = usize::from(regs::AL_EVENT_REQUEST.addr);
         let b = &self.mem[at..at + 4];
@@ -69,7 +76,7 @@ impl RamEsc {
         self.mem[at..at + bytes.len()].copy_from_slice(bytes);
     }
 
-    fn set_sm(&mut self, n: u8, layout: &SmLayout, length: u16) {
+    pub(super) fn set_sm(&mut self, n: u8, layout: &SmLayout, length: u16) {
         let sm = SmConfig {
             start: layout.start,
             length,
@@ -123,6 +130,28 @@ fn transfer(from: &[u8], to: &mut [u8]) {
     }
 }
 
+/// A master's request of AL `state` (with the AL events `events` besides AL control), handled
+/// as the ESC-event context does; `Some` if the core went to `state`.
+pub(super) fn request_state<const R: usize>(
+    core: &mut DriveCore<R>,
+    esc: &mut RamEsc,
+    state: AlState,
+    events: u32,
+) -> Option<()> {
+    esc.set(
+        regs::AL_CONTROL.addr,
+        &u16::from(state.bits()).to_le_bytes(),
+    );
+    esc.set(
+        regs::AL_EVENT_REQUEST.addr,
+        &(AlEvent::AL_CONTROL | events).to_le_bytes(),
+    );
+    let job = core.event_begin(esc, 0).ok()?;
+    core.event_end(esc, job, 0).ok()?;
+    esc.set(regs::AL_EVENT_REQUEST.addr, &[0; 4]);
+    (core.al_state() == state).then_some(())
+}
+
 /// The drive's core, its mailbox side and the ESC image.
 pub(super) struct Setup {
     pub(super) core: DriveCore<RAM_SIZE>,
@@ -134,18 +163,7 @@ pub(super) struct Setup {
 impl Setup {
     /// A master's state request, handled as the ESC-event context does.
     fn request(&mut self, state: AlState, events: u32) -> Option<()> {
-        self.esc.set(
-            regs::AL_CONTROL.addr,
-            &u16::from(state.bits()).to_le_bytes(),
-        );
-        self.esc.set(
-            regs::AL_EVENT_REQUEST.addr,
-            &(AlEvent::AL_CONTROL | events).to_le_bytes(),
-        );
-        let job = self.core.event_begin(&mut self.esc, 0).ok()?;
-        self.core.event_end(&mut self.esc, job, 0).ok()?;
-        self.esc.set(regs::AL_EVENT_REQUEST.addr, &[0; 4]);
-        (self.core.al_state() == state).then_some(())
+        request_state(&mut self.core, &mut self.esc, state, events)
     }
 
     /// INIT → PREOP → SAFEOP → OP in free run with the profile's mailbox and default mapping.
@@ -158,9 +176,7 @@ impl Setup {
         let mut s = Self {
             core,
             mailbox,
-            esc: RamEsc {
-                mem: [0; ESC_IMAGE],
-            },
+            esc: RamEsc::new(),
             rx,
         };
         let device = &PROFILE.od.device;
