@@ -336,14 +336,7 @@ impl Harness {
         budget: Option<u32>,
         description: fmt::Arguments<'_>,
     ) -> Option<u32> {
-        let Some((min, median, max)) = cases.spread() else {
-            self.fail(cases.name, format_args!("no input was measured"));
-            return None;
-        };
-        self.record(format_args!(
-            "SPREAD\t{}\t{min}\t{median}\t{max}\t{}",
-            cases.name, cases.len
-        ));
+        let max = self.spread(cases)?;
         self.report(cases.name, max, budget, description);
         Some(max)
     }
@@ -358,6 +351,17 @@ impl Harness {
         target: u32,
         description: fmt::Arguments<'_>,
     ) -> Option<u32> {
+        let max = self.spread(cases)?;
+        self.record(format_args!(
+            "BENCH\t{}\t{max}\t{target}*\t{description}",
+            cases.name
+        ));
+        Some(max)
+    }
+
+    /// Prints the `SPREAD` record of `cases` and returns their max; `None` (a failure) if no
+    /// input was measured.
+    fn spread(&mut self, cases: &Cases) -> Option<u32> {
         let Some((min, median, max)) = cases.spread() else {
             self.fail(cases.name, format_args!("no input was measured"));
             return None;
@@ -365,10 +369,6 @@ impl Harness {
         self.record(format_args!(
             "SPREAD\t{}\t{min}\t{median}\t{max}\t{}",
             cases.name, cases.len
-        ));
-        self.record(format_args!(
-            "BENCH\t{}\t{max}\t{target}*\t{description}",
-            cases.name
         ));
         Some(max)
     }
