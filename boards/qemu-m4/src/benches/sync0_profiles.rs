@@ -19,7 +19,7 @@ use firmware::motor::axis::{Axis, AxisLink, AxisState};
 use firmware::motor::servo::{self, SERVO_400W};
 use firmware::od::Dictionary;
 use firmware::pdo::{Direction, PdoPlan, MAX_IMAGE};
-use firmware::profile::{AppVars, DriveProfile};
+use firmware::profile::DriveProfile;
 use firmware::profiles::{ALL, MAX_RAM_SIZE};
 use firmware::sync0::on_sync0;
 use firmware::DriveCore;
@@ -141,32 +141,23 @@ impl ProfileBench {
         };
         // The master has written the outputs once (the SAFEOP → OP rule of some profiles).
         bench.outputs(0)?;
-        // The master writes the outputs every cycle: the SM2 event stays set in the image.
-        bench
-            .esc
-            .set(regs::AL_EVENT_REQUEST.addr, &AlEvent::sm(2).to_le_bytes());
         // In DC mode the drive may take SAFEOP → OP only once its cycle runs on the SYNC0
         // events: SYNC0 cycles between the requests.
+        let events = AlEvent::sm(2);
         for _ in 0..MAX_OP_REQUESTS {
-            let events = AlEvent::sm(2);
-            if request_state(&mut bench.core, &mut bench.esc, AlState::Op, events).is_some() {
-                bench
-                    .esc
-                    .set(regs::AL_EVENT_REQUEST.addr, &events.to_le_bytes());
-                return Ok(bench);
-            }
+            let reached = request_state(&mut bench.core, &mut bench.esc, AlState::Op, events);
+            // The request clears the event register; the master writes the outputs every
+            // cycle, so SM2's event stays set in the image.
             bench
                 .esc
                 .set(regs::AL_EVENT_REQUEST.addr, &events.to_le_bytes());
+            if reached.is_some() {
+                return Ok(bench);
+            }
             bench.cycle(0)?;
         }
         Err("no OP")
     }
-    /// The variables of the profile's axes.
-    fn vars(&self) -> impl Iterator<Item = &'static AppVars> {
-        self.profile.axes.iter().take(MAX_AXES)
-    }
-
     /// The master's outputs to every axis: controlword `cw`, CSP, the target at the actual
     /// position (6064h echoed into 607Ah, in the profile's own position unit). 6060h is also
     /// written into the OD, as the master would by SDO where the mapping lacks it.
@@ -234,21 +225,20 @@ impl ProfileBench {
     /// Every axis: statusword "operation enabled", the motor axis running without a following
     /// error.
     fn at_rest(&mut self) -> bool {
-        let vars: [Option<&AppVars>; MAX_AXES] = {
-            let mut v = self.vars();
-            [v.next(), v.next()]
-        };
+        let profile = self.profile;
         let (_, ram) = self.core.application();
-        vars.iter().zip(&LINKS).all(|(vars, link)| {
-            let Some(vars) = vars else {
-                return true;
-            };
-            let sw = read::<2>(ram, vars.statusword).map(u16::from_le_bytes);
-            let fb = link.feedback();
-            sw.is_some_and(|sw| sw & STATE_MASK == OPERATION_ENABLED)
-                && fb.state == AxisState::Running
-                && fb.following_error.abs() <= MAX_FOLLOWING_ERROR
-        })
+        profile
+            .axes
+            .iter()
+            .take(MAX_AXES)
+            .zip(&LINKS)
+            .all(|(vars, link)| {
+                let sw = read::<2>(ram, vars.statusword).map(u16::from_le_bytes);
+                let fb = link.feedback();
+                sw.is_some_and(|sw| sw & STATE_MASK == OPERATION_ENABLED)
+                    && fb.state == AxisState::Running
+                    && fb.following_error.abs() <= MAX_FOLLOWING_ERROR
+            })
     }
 }
 
