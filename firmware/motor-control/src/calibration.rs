@@ -178,16 +178,25 @@ impl Commutation {
         self.turn_count = self.turn_count_of(self.last_position);
     }
 
-    /// (position − offset) mod CPR by a true modulo (in 128 bits, so no position overflows):
-    /// the slow path, for construction, offset changes and position jumps of a turn or more.
-    // Overflow-free: the difference of two i64 fits an i128; counts_per_rev ≥ 16 (`new`).
+    /// (position − offset) mod CPR by a true modulo: the slow path, for construction, offset
+    /// changes and position jumps of a turn or more. Each position is reduced on its own
+    /// (64-bit divisions; the difference of two i64 would need 128 bits, whose library division
+    /// costs nearly 3 KiB of flash), then the two residues are subtracted and brought back into
+    /// 0..CPR.
+    // Overflow-free: both residues are in 0..CPR ≤ u32::MAX, so their difference and the one
+    // correction stay within ±CPR.
     #[allow(clippy::arithmetic_side_effects)]
     fn turn_count_of(&self, position: i64) -> i64 {
-        // `counts_per_rev` ≥ 16, so the remainder exists (checked all the same: `rem_euclid`'s
-        // zero check would be a panic path in the control interrupt); it is < CPR ≤ u32::MAX.
-        ((position as i128 - self.offset_counts as i128)
-            .checked_rem_euclid(self.counts_per_rev as i128)
-            .unwrap_or(0)) as i64
+        let cpr = self.counts_per_rev;
+        // `counts_per_rev` ≥ 16 (`new`), so the remainders exist (checked all the same:
+        // `rem_euclid`'s zero check would be a panic path in the control interrupt).
+        let residue = |x: i64| x.checked_rem_euclid(cpr).unwrap_or(0);
+        let difference = residue(position) - residue(self.offset_counts);
+        if difference < 0 {
+            difference + cpr
+        } else {
+            difference
+        }
     }
 
     /// The electrical angle at the encoder `position`.
@@ -195,7 +204,7 @@ impl Commutation {
     /// Timing: about 25 instructions (64-bit subtract and compares, one conditional add or
     /// subtract, a 64×64 multiply of 3 `UMULL`/`MLA`). A position jump of a full turn or more
     /// since the last call (only the very first call or an encoder fault) takes the slow path,
-    /// a 128-bit modulo library call (some hundred instructions, once).
+    /// two 64-bit modulo library calls (some hundred instructions, once).
     #[inline]
     // Overflow-free: |delta| < CPR ≤ u32::MAX and 0 ≤ turn_count < CPR (the guard below), so
     // every sum stays within ±2·CPR; the fast-path multiply wraps by design (mod 2^64 is the
@@ -359,7 +368,13 @@ impl Alignment {
                 reason: "must be a fraction between 0 and 1 (exclusive)",
             });
         }
-        let quarter = counts_per_rev as f64 / (4.0 * pole_pairs as f64);
+        // A quarter electrical turn in counts, CPR / (4·p), rounded (in integers: p ≥ 1 and
+        // CPR ≥ 16·p, checked by the commutation above); its tolerance in single precision
+        // (exact to 1 part in 2^24, which is plenty for a tolerance; a double would link the
+        // soft-float library on this single-precision FPU).
+        let quarter_divisor = 4 * u64::from(pole_pairs);
+        let expected_counts = (u64::from(counts_per_rev) + quarter_divisor / 2) / quarter_divisor;
+        let quarter = counts_per_rev as f32 / quarter_divisor as f32;
         Ok(Self {
             current_a,
             ramp_increment_a: current_a / ramp_periods as f32,
@@ -367,8 +382,8 @@ impl Alignment {
             settle_periods,
             rotate_periods,
             angle_increment: ((QUARTER_TURN_BITS as u64) << 32) / rotate_periods as u64,
-            expected_counts: (quarter + 0.5) as i64,
-            tolerance_counts: ((quarter * cfg.tolerance as f64 + 0.5) as i64).max(1),
+            expected_counts: expected_counts as i64,
+            tolerance_counts: ((quarter * cfg.tolerance + 0.5) as i64).max(1),
             stage: Stage::Ramp,
             count: 0,
             p0: 0,
@@ -625,6 +640,38 @@ mod tests {
         }
     }
 
+    /// The slow path (a jump of a turn or more) for positions and offsets at the ends of the
+    /// i64 range, against the exact modulo of the difference in 128 bits.
+    #[test]
+    fn a_jump_anywhere_in_the_position_range_lands_on_the_exact_turn_count() {
+        let positions = [
+            i64::MIN,
+            i64::MIN + 1,
+            -4_294_967_297,
+            -1,
+            0,
+            1,
+            123_456_789_012,
+            i64::MAX - 1,
+            i64::MAX,
+        ];
+        for cpr in [16u32, 10_000, 131_071, u32::MAX] {
+            for offset in [i64::MIN, -987_654, 0, 5, i64::MAX] {
+                let mut c = Commutation::new(cpr, 1, offset).unwrap();
+                for position in positions {
+                    c.angle(position);
+                    let exact =
+                        (i128::from(position) - i128::from(offset)).rem_euclid(i128::from(cpr));
+                    assert_eq!(
+                        i128::from(c.turn_count),
+                        exact,
+                        "cpr {cpr}, offset {offset}, position {position}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn set_offset_moves_the_zero() {
         let mut c = Commutation::new(10_000, 5, 0).unwrap();
@@ -730,6 +777,22 @@ mod tests {
                 }
             }
             assert!(periods < 100_000, "never finishes");
+        }
+    }
+
+    /// The distance the check expects is a quarter electrical turn, CPR / (4·p), rounded to
+    /// the nearest count (halves up), for every encoder resolution.
+    #[test]
+    fn the_expected_quarter_turn_is_rounded_to_the_nearest_count() {
+        for (cpr, p, expected) in [
+            (10_000u32, 3u32, 833i64),
+            (10_002, 3, 834),
+            (1 << 20, 4, 65_536),
+            (u32::MAX, 1, 1_073_741_824),
+        ] {
+            let a = Alignment::new(&alignment_config(), cpr, p, 25e-6).unwrap();
+            assert_eq!(a.expected_counts, expected, "cpr {cpr}, p {p}");
+            assert!(a.tolerance_counts >= 1);
         }
     }
 

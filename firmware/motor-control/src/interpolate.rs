@@ -57,7 +57,9 @@ use super::position::saturating_to_f32;
 use super::velocity::floor_i32;
 
 /// Phase units per control tick.
-pub const TICK_UNITS: i32 = 1 << 20;
+pub const TICK_UNITS: i32 = 1 << TICK_UNIT_BITS;
+/// log2 of [`TICK_UNITS`].
+const TICK_UNIT_BITS: i32 = 20;
 /// The most control ticks per bus cycle accepted (the phase must hold two cycles and a tick in
 /// an `i32`).
 pub const MAX_TICKS_PER_CYCLE: f32 = 1_000.0;
@@ -147,6 +149,60 @@ pub struct Interpolator {
 }
 
 /// `x` if finite, else 0.
+/// `a · b` in [`TICK_UNITS`] (a, b positive and finite) rounded to the nearest (halves up),
+/// computed exactly: each f32 is an integer mantissa below 2^24 times a power of two, so the
+/// product is an integer below 2^48 times a power of two. (A double product would be exact
+/// too, but on a single-precision FPU it links the soft-float library.) `None` if the result
+/// exceeds the i32 range or an argument is not positive and finite.
+fn product_in_tick_units(a: f32, b: f32) -> Option<i32> {
+    let (ma, ea) = mantissa_exponent(a)?;
+    let (mb, eb) = mantissa_exponent(b)?;
+    // Both mantissas < 2^24: the product < 2^48, no overflow.
+    let product = ma.checked_mul(mb)?;
+    let shift = ea.checked_add(eb)?.checked_add(TICK_UNIT_BITS)?;
+    let scaled = if shift >= 0 {
+        // `checked_shl` checks the shift amount only, not the bits shifted out.
+        let left = u32::try_from(shift).ok()?;
+        if left > product.leading_zeros() {
+            return None;
+        }
+        product << left
+    } else {
+        // Right by −shift with halves rounded up; beyond 63 bits the result is 0.
+        let right = shift.unsigned_abs();
+        let half = 1u64.checked_shl(right.checked_sub(1)?).unwrap_or(0);
+        product.checked_add(half)?.checked_shr(right).unwrap_or(0)
+    };
+    i32::try_from(scaled).ok()
+}
+
+/// A positive finite `x` as `mantissa · 2^exponent` with an integer mantissa below 2^24
+/// (IEEE 754 binary32: implicit leading one for normal numbers, exponent bias 127 plus the 23
+/// fraction bits); `None` for zero, negative, infinite and NaN values.
+fn mantissa_exponent(x: f32) -> Option<(u64, i32)> {
+    const FRACTION_BITS: u32 = 23;
+    const EXPONENT_MASK: u32 = 0xFF;
+    // Bias 127 plus the fraction's 23 bits.
+    const EXPONENT_OFFSET: i32 = 150;
+    if !(x > 0.0 && x < f32::INFINITY) {
+        return None;
+    }
+    let bits = x.to_bits();
+    let fraction = bits & ((1 << FRACTION_BITS) - 1);
+    let biased = (bits >> FRACTION_BITS) & EXPONENT_MASK;
+    let (mantissa, biased) = if biased == 0 {
+        // Subnormal: no implicit one, the exponent of the smallest normal.
+        (fraction, 1)
+    } else {
+        (fraction | (1 << FRACTION_BITS), biased)
+    };
+    // biased ≤ 254: the difference fits.
+    Some((
+        u64::from(mantissa),
+        (biased as i32).wrapping_sub(EXPONENT_OFFSET),
+    ))
+}
+
 fn finite_or_zero(x: f32) -> f32 {
     if x.is_finite() {
         x
@@ -172,8 +228,9 @@ impl Interpolator {
         if ticks > MAX_TICKS_PER_CYCLE {
             return Err(InterpolateError::CycleTooLong);
         }
-        // In f64: the product must be exact to 2^-20 tick for the supported ratios.
-        let cycle_units = (cycle_s as f64 * loop_hz as f64 * TICK_UNITS as f64 + 0.5) as i32;
+        // Exact: a rounded f32 product could be a tick unit off for some ratios.
+        let cycle_units =
+            product_in_tick_units(cycle_s, loop_hz).ok_or(InterpolateError::CycleTooLong)?;
         let inv = 1.0 / cycle_s;
         let mut interpolator = Self {
             cycle_units,
@@ -446,6 +503,64 @@ fn min_i32(a: i32, b: i32) -> i32 {
 mod tests {
     extern crate std;
     use super::*;
+
+    /// The segment length in tick units is the exact product cycle · f_loop · 2^20, rounded to
+    /// the nearest (halves up): against the host's double product (exact for two f32), over
+    /// the bus cycles and loop rates drives run and pseudo-random pairs across the range.
+    #[test]
+    fn the_segment_length_is_the_exact_product_rounded() {
+        let reference = |a: f32, b: f32| {
+            let exact = f64::from(a) * f64::from(b) * f64::from(TICK_UNITS);
+            (exact + 0.5).floor()
+        };
+        let mut pairs = std::vec::Vec::new();
+        for cycle in [
+            31.25e-6f32,
+            62.5e-6,
+            125e-6,
+            250e-6,
+            1e-3,
+            2e-3,
+            4e-3,
+            10e-3,
+        ] {
+            for hz in [8_000.0f32, 10_000.0, 16_000.0, 20_000.0, 40_000.0] {
+                pairs.push((cycle, hz));
+            }
+        }
+        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..20_000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let cycle = f32::from_bits(0x3800_0000 + (seed as u32 % 0x0200_0000));
+            let hz = f32::from_bits(0x4500_0000 + ((seed >> 32) as u32 % 0x0180_0000));
+            pairs.push((cycle, hz));
+        }
+        let mut checked = 0;
+        for (cycle, hz) in pairs {
+            let Ok(ip) = Interpolator::new(cycle, hz) else {
+                continue;
+            };
+            assert_eq!(
+                f64::from(ip.cycle_units),
+                reference(cycle, hz),
+                "{cycle:e} s at {hz} Hz"
+            );
+            checked += 1;
+        }
+        assert!(checked > 5_000, "{checked}");
+        // Halves round up; zero, negatives, infinities and NaN have no product.
+        assert_eq!(product_in_tick_units(0.5, 2.0f32.powi(-20)), Some(1));
+        assert_eq!(product_in_tick_units(0.25, 2.0f32.powi(-20)), Some(0));
+        assert_eq!(product_in_tick_units(0.75, 2.0f32.powi(-20)), Some(1));
+        assert_eq!(product_in_tick_units(2048.0, 1.0), None);
+        for bad in [0.0, -1.0, f32::INFINITY, f32::NAN] {
+            assert_eq!(product_in_tick_units(bad, 1.0), None);
+            assert_eq!(product_in_tick_units(1.0, bad), None);
+        }
+        assert_eq!(product_in_tick_units(f32::from_bits(1), 1.0), Some(0));
+    }
     use std::vec::Vec;
 
     /// One run: SYNC0 events at k·T deliver `target(k)` (unless `delivered(k)` is false), the

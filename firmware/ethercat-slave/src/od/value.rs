@@ -18,8 +18,11 @@ enum Number {
     Signed(i64),
     /// UNSIGNEDn, BOOLEAN, BITn.
     Unsigned(u64),
-    /// REAL32 / REAL64.
-    Real(f64),
+    /// REAL32, compared in single precision (the FPU's).
+    Real32(f32),
+    /// REAL64 as its IEEE 754 bits, compared by [`real64_cmp`]: a single-precision FPU has no
+    /// double compare, and the soft-float library it would call costs flash for one range check.
+    Real64(u64),
 }
 
 impl Number {
@@ -48,11 +51,11 @@ impl Number {
             | DataType::Bit8 => unsigned(bytes).map(Self::Unsigned),
             DataType::Real32 => {
                 let b: [u8; 4] = bytes.try_into().ok()?;
-                Some(Self::Real(f64::from(f32::from_le_bytes(b))))
+                Some(Self::Real32(f32::from_le_bytes(b)))
             }
             DataType::Real64 => {
                 let b: [u8; 8] = bytes.try_into().ok()?;
-                Some(Self::Real(f64::from_le_bytes(b)))
+                Some(Self::Real64(u64::from_le_bytes(b)))
             }
             DataType::VisibleString
             | DataType::OctetString
@@ -66,10 +69,37 @@ impl Number {
         match (self, other) {
             (Self::Signed(a), Self::Signed(b)) => Some(a.cmp(&b)),
             (Self::Unsigned(a), Self::Unsigned(b)) => Some(a.cmp(&b)),
-            (Self::Real(a), Self::Real(b)) => a.partial_cmp(&b),
+            (Self::Real32(a), Self::Real32(b)) => a.partial_cmp(&b),
+            (Self::Real64(a), Self::Real64(b)) => real64_cmp(a, b),
             _ => None,
         }
     }
+}
+
+/// The sign bit of an IEEE 754 double.
+const REAL64_SIGN: u64 = 1 << 63;
+/// The bits of +∞: a magnitude above it is a NaN.
+const REAL64_INFINITY: u64 = 0x7FF0_0000_0000_0000;
+
+/// Orders two IEEE 754 doubles given as bits as `f64::partial_cmp` does: `None` if either is a
+/// NaN, −0 equal to +0. Sign and magnitude order like an integer: the magnitude bits of a
+/// double grow with its value (exponent above mantissa), so the magnitude, negated for a
+/// negative sign, is a key whose integer order is the value's.
+fn real64_cmp(a: u64, b: u64) -> Option<Ordering> {
+    let key = |bits: u64| -> Option<i64> {
+        let magnitude = bits & !REAL64_SIGN;
+        if magnitude > REAL64_INFINITY {
+            return None;
+        }
+        // magnitude < 2^63: fits an i64, and so does its negation.
+        let magnitude = magnitude as i64;
+        Some(if bits & REAL64_SIGN != 0 {
+            magnitude.wrapping_neg()
+        } else {
+            magnitude
+        })
+    };
+    Some(key(a)?.cmp(&key(b)?))
 }
 
 /// Little-endian unsigned integer of 1..=8 bytes.
@@ -184,7 +214,48 @@ mod tests {
 
     #[test]
     fn real_nan_is_out_of_range() {
-        let nan = Number::Real(f64::NAN);
-        assert_eq!(nan.compare(Number::Real(0.0)), None);
+        let nan = Number::Real32(f32::NAN);
+        assert_eq!(nan.compare(Number::Real32(0.0)), None);
+        let nan = Number::Real64(f64::NAN.to_bits());
+        assert_eq!(nan.compare(Number::Real64(0.0f64.to_bits())), None);
+        assert_eq!(Number::Real64(0).compare(nan), None);
+    }
+
+    /// REAL64 compares as the host's double compare (the reference) over the special values
+    /// and the neighbours of each: signed zeros, subnormals, extremes, infinities, NaNs of
+    /// either sign and payload.
+    #[test]
+    fn real64_orders_as_double_precision() {
+        let specials = [
+            0.0,
+            -0.0,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            f64::from_bits(1),
+            -f64::from_bits(1),
+            1.0,
+            -1.0,
+            1.5,
+            -2.75,
+            1e300,
+            -1e-300,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            -f64::NAN,
+            f64::from_bits(0x7FF0_0000_0000_0001),
+        ];
+        let neighbours = |v: &f64| {
+            let b = v.to_bits();
+            [b.wrapping_sub(1), b, b.wrapping_add(1)].map(f64::from_bits)
+        };
+        for a in specials.iter().flat_map(neighbours) {
+            for b in specials.iter().flat_map(neighbours) {
+                let got = Number::Real64(a.to_bits()).compare(Number::Real64(b.to_bits()));
+                assert_eq!(got, a.partial_cmp(&b), "{a:e} vs {b:e}");
+            }
+        }
     }
 }
