@@ -166,6 +166,8 @@ pub struct Report {
     pub wkc_errors: u32,
     /// Per drive, 1C32h:01 (sync mode) and 1C32h:02 (cycle time, ns) read by SDO in OP.
     pub sync_parameters: Vec<(u16, u32)>,
+    /// Per drive, what it saw of the synchronisation, read in OP after the exchange.
+    pub sync_health: Vec<SyncHealth>,
     /// SYNC0 cycles each drive ran (from the firmware).
     pub firmware_cycles: Vec<u32>,
     /// Frames exchanged.
@@ -173,6 +175,38 @@ pub struct Report {
     /// Simulated time at the end, ns.
     pub sim_time_ns: u64,
 }
+
+/// A drive's account of the synchronisation after the cyclic exchange (ETG.1020 §5.1, the SM
+/// output parameter 1C32h), read in OP. `None`: not readable (a profile without that subindex).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SyncHealth {
+    /// AL status register 0x0130 (OP without error: 0x0008).
+    pub al_status: Option<u16>,
+    /// 1C32h:0B, SM-event missed counter: SYNC0 events without new outputs.
+    pub sm_events_missed: Option<u16>,
+    /// 1C32h:0C, cycle time too small counter: cycles whose processing (with the modelled PDI
+    /// bus time) outlasted the cycle.
+    pub cycle_time_too_small: Option<u16>,
+    /// 1C32h:20, sync error.
+    pub sync_error: Option<bool>,
+    /// 1C32h:06, calc and copy time (ns): the longest cycle the drive measured, which in the
+    /// simulation is the modelled SPI bus time of its PDI accesses.
+    pub calc_and_copy_ns: Option<u32>,
+}
+
+impl SyncHealth {
+    /// Whether the drive kept the cycle: in OP without error, no missed SM event, no cycle too
+    /// small and no sync error (each subindex it has).
+    pub fn kept_the_cycle(&self) -> bool {
+        self.al_status == Some(AL_STATUS_OP)
+            && self.sm_events_missed.unwrap_or(0) == 0
+            && self.cycle_time_too_small.unwrap_or(0) == 0
+            && self.sync_error != Some(true)
+    }
+}
+
+/// AL status 0x0130 of a drive in OP without error indication (ETG.1000.6 Table 9).
+const AL_STATUS_OP: u16 = 0x0008;
 
 /// Reads a little-endian value out of a PDI slice (missing bytes read as 0).
 fn le<const N: usize>(b: &[u8], at: usize) -> [u8; N] {
@@ -211,7 +245,7 @@ macro_rules! operate {
             $report.sync_parameters
         ));
         for i in 0..$s.cycles {
-            let (controlword, target) = set_points(i);
+            let (controlword, target) = set_points(i, $cycle_ns);
             for (sd, io) in $group.iter($md).zip(&$ios) {
                 io.write_outputs(&mut sd.outputs_raw_mut(), controlword, target);
             }
@@ -231,6 +265,29 @@ macro_rules! operate {
             });
             $shared.advance($cycle_ns);
         }
+        for sd in $group.iter($md) {
+            let health = SyncHealth {
+                al_status: Command::fprd(sd.configured_address(), regs::AL_STATUS.addr)
+                    .receive::<u16>($md)
+                    .await
+                    .ok(),
+                sm_events_missed: sd.sdo_read::<u16>(SM_OUTPUT_PARAMETER, SM_EVENT_MISSED).await.ok(),
+                cycle_time_too_small: sd
+                    .sdo_read::<u16>(SM_OUTPUT_PARAMETER, CYCLE_TIME_TOO_SMALL)
+                    .await
+                    .ok(),
+                sync_error: sd
+                    .sdo_read::<u8>(SM_OUTPUT_PARAMETER, SYNC_ERROR)
+                    .await
+                    .ok()
+                    .map(|b| b != 0),
+                calc_and_copy_ns: sd
+                    .sdo_read::<u32>(SM_OUTPUT_PARAMETER, CALC_AND_COPY_TIME)
+                    .await
+                    .ok(),
+            };
+            $report.sync_health.push(health);
+        }
         if let Some(last) = $report.samples.last() {
             $log(format!(
                 "{} cycles: working counter {} (expected {}), {} wrong",
@@ -240,6 +297,19 @@ macro_rules! operate {
                 $log(format!(
                     "  drive {i} ({}): statusword {sw:#06x}, position actual {actual}",
                     $report.drives[i].profile
+                ));
+            }
+            for (i, h) in $report.sync_health.iter().enumerate() {
+                let show = |v: Option<u16>| v.map_or("-".to_string(), |v| v.to_string());
+                $log(format!(
+                    "  drive {i}: {}; SM events missed {}, cycle time too small {}, sync error {}, \
+                     longest cycle {} (modelled PDI bus time)",
+                    if h.kept_the_cycle() { "kept the cycle" } else { "LOST the cycle" },
+                    show(h.sm_events_missed),
+                    show(h.cycle_time_too_small),
+                    h.sync_error.map_or("-", |e| if e { "yes" } else { "no" }),
+                    h.calc_and_copy_ns
+                        .map_or("-".to_string(), |ns| format!("{:.2} µs", f64::from(ns) / 1e3)),
                 ));
             }
         }
@@ -257,6 +327,10 @@ macro_rules! operate {
 const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
 const SYNC_MODE: u8 = 1;
 const CYCLE_TIME: u8 = 2;
+const CALC_AND_COPY_TIME: u8 = 6;
+const SM_EVENT_MISSED: u8 = 0x0B;
+const CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
+const SYNC_ERROR: u8 = 0x20;
 
 /// Modes of operation 6060h: cyclic synchronous position (CiA402).
 const MODE_CSP: i8 = 8;
@@ -417,15 +491,22 @@ fn put(out: &mut [u8], at: Option<usize>, value: &[u8]) {
     }
 }
 
-/// Controlword and target position of cycle `i`: shutdown, switch on, then enable operation
-/// (CiA402 Table 5), with a target ramp of 100 increments per cycle.
-fn set_points(i: u32) -> (u16, i32) {
+/// The demo's target speed: 100 increments per millisecond (100 per cycle at the default 1 ms).
+pub const TARGET_INCREMENTS_PER_MS: i64 = 100;
+
+/// Controlword and target position of cycle `i` of `cycle_ns`: shutdown, switch on, then enable
+/// operation (CiA402 Table 5), with a target ramp of [`TARGET_INCREMENTS_PER_MS`] (the same
+/// speed at every cycle time).
+pub fn set_points(i: u32, cycle_ns: u64) -> (u16, i32) {
+    const NS_PER_MS: i128 = 1_000_000;
     let controlword = match i {
         0..=9 => cw::SHUTDOWN,
         10..=19 => cw::SWITCH_ON,
         _ => cw::ENABLE_OPERATION,
     };
-    (controlword, i as i32 * 100)
+    let elapsed_ns = i128::from(i) * i128::from(cycle_ns);
+    let target = elapsed_ns * i128::from(TARGET_INCREMENTS_PER_MS) / NS_PER_MS;
+    (controlword, i32::try_from(target).unwrap_or(i32::MAX))
 }
 
 /// Runs the scenario ([`Scenario::drives`] drives of [`Scenario::profile`]), calling `log`

@@ -19,6 +19,8 @@
 //! Timing budget (whole interrupt, Cortex-M4F, measured under QEMU): ≤ 1,500 instructions in the
 //! worst period (the one running the position and speed loops); the current loop alone ≤ 250.
 
+use core::sync::atomic::{AtomicU32, Ordering};
+
 use hal::encoder::{Encoder, EncoderFault};
 use hal::io::{DigitalInputs, ProbeCapture, TouchProbe};
 use hal::power::{BusSense, CurrentSense, Inverter, PhaseCurrents};
@@ -32,7 +34,7 @@ use super::commissioning::{
 use super::field_weakening::{FieldWeakening, FieldWeakeningConfig};
 use super::foc::{CurrentLoop, CurrentLoopConfig, CurrentLoopInput};
 use super::handoff::{FeedbackHandoff, SetpointHandoff};
-use super::interpolate::Interpolator;
+use super::interpolate::{InterpolateError, Interpolator};
 use super::math::{self, TAU};
 use super::position::PositionLoop;
 use super::protection::{ProtectionConfig, ProtectionInputs, Protections};
@@ -408,6 +410,27 @@ pub struct AxisLink {
     /// Identification results, written when they change (kept apart from the feedback that
     /// every cycle copies).
     identification: FeedbackHandoff<Option<Identification>>,
+    /// Bus cycles shorter than the control loop's period.
+    decimation: Decimation,
+}
+
+/// A bus cycle T shorter than the control loop's period (DESIGN.md allows DC cycles from
+/// 31.25 µs, and the position and speed loops may run at a sub-rate of the PWM, e.g. 20 kHz)
+/// cannot be interpolated: more set-points arrive than the loop takes, and the one it takes
+/// is a varying number of cycles after the previous one. So the SYNC0 side hands over only
+/// every k-th command, with k the fewest cycles that span a loop period, and tells the axis
+/// the cycle is k·T: the axis sees an evenly spaced stream as if the bus ran at k·T (the
+/// targets in between are dropped, as a loop slower than the bus must; a command's other
+/// fields, e.g. enable, reach the axis up to k − 1 cycles later).
+///
+/// The control side sets the loop period when it is handed a cycle it cannot interpolate
+/// (a rare path); until then, and for cycles of a loop period or more, every command is
+/// handed over as it is.
+struct Decimation {
+    /// The control loop's period, ns (rounded up); 0: no cycle shorter than it seen.
+    loop_period_ns: AtomicU32,
+    /// SYNC0 side only: cycles since the last command handed over while decimating.
+    skipped: AtomicU32,
 }
 
 impl AxisLink {
@@ -484,6 +507,10 @@ impl AxisLink {
             },
             // SAFETY: as above (written by the control interrupt only).
             identification: unsafe { FeedbackHandoff::new(None) },
+            decimation: Decimation {
+                loop_period_ns: AtomicU32::new(0),
+                skipped: AtomicU32::new(0),
+            },
         }
     }
 
@@ -493,9 +520,49 @@ impl AxisLink {
         self.model.write(model);
     }
 
-    /// SYNC0 side: hands over this bus cycle's command.
+    /// SYNC0 side: hands over this bus cycle's command (with a cycle shorter than the control
+    /// loop's period, every k-th: see [`Decimation`]).
     pub fn publish(&self, command: AxisCommand) {
+        // One compare on the common path (no loop period set: 0, nothing is below it).
+        let loop_period_ns = self.decimation.loop_period_ns.load(Ordering::Relaxed);
+        if command.bus_cycle_ns < loop_period_ns {
+            self.publish_decimated(&command, loop_period_ns);
+        } else {
+            self.commands.write(command);
+        }
+    }
+
+    /// [`Self::publish`] of a cycle shorter than `loop_period_ns` (0: no cycle given, handed
+    /// over as it is).
+    #[inline(never)]
+    fn publish_decimated(&self, command: &AxisCommand, loop_period_ns: u32) {
+        let mut command = *command;
+        let cycle_ns = command.bus_cycle_ns;
+        if cycle_ns == 0 {
+            self.commands.write(command);
+            return;
+        }
+        let factor = loop_period_ns.div_ceil(cycle_ns);
+        let skipped = self
+            .decimation
+            .skipped
+            .load(Ordering::Relaxed)
+            .saturating_add(1);
+        if skipped < factor {
+            self.decimation.skipped.store(skipped, Ordering::Relaxed);
+            return;
+        }
+        self.decimation.skipped.store(0, Ordering::Relaxed);
+        command.bus_cycle_ns = cycle_ns.saturating_mul(factor);
         self.commands.write(command);
+    }
+
+    /// Control side: the axis was handed a bus cycle shorter than its loop period of
+    /// `loop_period_ns` (rounded up): from now on the SYNC0 side decimates such cycles.
+    fn decimate_below(&self, loop_period_ns: u32) {
+        self.decimation
+            .loop_period_ns
+            .store(loop_period_ns, Ordering::Relaxed);
     }
 
     /// SYNC0 side: the latest feedback.
@@ -1109,7 +1176,7 @@ impl Axis {
             }
             self.command = command;
             if command.bus_cycle_ns != 0 && command.bus_cycle_ns != self.bus_cycle_ns {
-                self.retime_interpolator(command.bus_cycle_ns);
+                self.retime_interpolator(command.bus_cycle_ns, link);
             }
             if self.state == AxisState::Running {
                 let stop = ControlMode::Stop;
@@ -1138,14 +1205,30 @@ impl Axis {
         self.stop_ramp = StopRamp::new(velocity, self.command.deceleration, loop_dt);
     }
 
-    /// Rebuilds the interpolator for set-points every `bus_cycle_ns` (a cycle it cannot serve
-    /// keeps the previous timing; the SYNC supervision of the slave reports such cycles).
-    fn retime_interpolator(&mut self, bus_cycle_ns: u32) {
+    /// Rebuilds the interpolator for set-points every `bus_cycle_ns`. A cycle shorter than the
+    /// loop period keeps the previous timing and has `link`'s SYNC0 side hand over every k-th
+    /// command as one of k cycles ([`Decimation`]), which the next command brings; any other
+    /// cycle it cannot serve (longer than the interpolator's limit: the slave's cycle range
+    /// excludes those) keeps the previous timing.
+    #[cold]
+    #[inline(never)]
+    fn retime_interpolator(&mut self, bus_cycle_ns: u32, link: &AxisLink) {
+        const NS_PER_S: f32 = 1e9;
         let loop_hz = self.cfg.pwm_hz / self.cfg.loop_divider as f32;
-        if let Ok(interpolator) = Interpolator::new(bus_cycle_ns as f32 * 1e-9, loop_hz) {
-            self.interpolator = interpolator;
-            self.interpolator.reset(self.position);
-            self.bus_cycle_ns = bus_cycle_ns;
+        match Interpolator::new(bus_cycle_ns as f32 * 1e-9, loop_hz) {
+            Ok(interpolator) => {
+                self.interpolator = interpolator;
+                self.interpolator.reset(self.position);
+                self.bus_cycle_ns = bus_cycle_ns;
+            }
+            Err(InterpolateError::CycleShorterThanTick) => {
+                // Rounded up, so that k cycles of the decimation span a whole loop period.
+                let period_ns = NS_PER_S / loop_hz;
+                let whole = period_ns as u32;
+                let rounded_up = whole.saturating_add(u32::from((whole as f32) < period_ns));
+                link.decimate_below(rounded_up);
+            }
+            Err(_) => {}
         }
     }
 
@@ -1621,6 +1704,63 @@ mod tests {
         }
         let fb = link.feedback();
         (axis, fb)
+    }
+
+    /// A bus cycle shorter than the loop period (31.25 µs against the 400 W servo's 20 kHz
+    /// position loop, 50 µs): the axis has the SYNC0 side decimate, which from then on hands
+    /// over every second command as one of 62.5 µs, evenly spaced, and the interpolator is
+    /// timed to it (1.25 ticks). Before that, and for a cycle of a loop period or more, every
+    /// command is handed over as it is.
+    #[test]
+    fn a_bus_cycle_shorter_than_the_loop_period_is_handed_over_decimated() {
+        use crate::servo::{axis_config, Tuning, SERVO_400W};
+        let cfg = axis_config(&SERVO_400W, &Tuning::DEFAULT);
+        assert_eq!(cfg.pwm_hz / cfg.loop_divider as f32, 20_000.0);
+        let mut axis = Axis::new(cfg).unwrap();
+        // SAFETY: one thread calls both sides, one after the other.
+        let link = unsafe { AxisLink::new() };
+        let sample = quiet_sample(0);
+        // One loop cycle: the commands are taken in its first PWM period.
+        let loop_cycle = |axis: &mut Axis| {
+            for _ in 0..cfg.loop_divider {
+                axis.control_step(&sample, &link);
+            }
+        };
+        let command = |position, bus_cycle_ns| AxisCommand {
+            position,
+            bus_cycle_ns,
+            ..AxisCommand::default()
+        };
+        link.publish(command(1, 31_250));
+        assert_eq!(link.commands.read(), (command(1, 31_250), 1));
+        loop_cycle(&mut axis);
+        // Not servable: the tuning's 1 ms timing is kept.
+        assert_eq!(axis.interpolator.ticks_per_cycle(), 20.0);
+        let mut handed_over = 1;
+        for k in 2..12 {
+            link.publish(command(k, 31_250));
+            if k % 2 == 1 {
+                handed_over += 1;
+                assert_eq!(
+                    link.commands.read(),
+                    (command(k, 62_500), handed_over),
+                    "command {k}"
+                );
+            } else {
+                assert_eq!(link.commands.read().1, handed_over, "command {k} held back");
+            }
+        }
+        loop_cycle(&mut axis);
+        assert_eq!(axis.interpolator.ticks_per_cycle(), 1.25);
+        assert_eq!(axis.bus_cycle_ns, 62_500);
+        // A cycle of a loop period or more: every command.
+        for (k, cycle_ns) in [(20, 50_000), (21, 50_000), (22, 1_000_000), (23, 1_000_000)] {
+            link.publish(command(k, cycle_ns));
+            handed_over += 1;
+            assert_eq!(link.commands.read(), (command(k, cycle_ns), handed_over));
+        }
+        loop_cycle(&mut axis);
+        assert_eq!(axis.interpolator.ticks_per_cycle(), 20.0);
     }
 
     #[test]

@@ -186,6 +186,8 @@ impl Commutation {
     // Overflow-free: both residues are in 0..CPR ≤ u32::MAX, so their difference and the one
     // correction stay within ±CPR.
     #[allow(clippy::arithmetic_side_effects)]
+    #[cold]
+    #[inline(never)]
     fn turn_count_of(&self, position: i64) -> i64 {
         let cpr = self.counts_per_rev;
         // `counts_per_rev` ≥ 16 (`new`), so the remainders exist (checked all the same:

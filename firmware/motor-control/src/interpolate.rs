@@ -62,7 +62,7 @@ pub const TICK_UNITS: i32 = 1 << TICK_UNIT_BITS;
 const TICK_UNIT_BITS: i32 = 20;
 /// The most control ticks per bus cycle accepted (the phase must hold two cycles and a tick in
 /// an `i32`).
-pub const MAX_TICKS_PER_CYCLE: f32 = 1_000.0;
+pub const MAX_TICKS_PER_CYCLE: i32 = 1_000;
 
 /// Why an interpolator could not be configured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -221,16 +221,18 @@ impl Interpolator {
         if !(cycle_s.is_finite() && cycle_s > 0.0 && loop_hz.is_finite() && loop_hz > 0.0) {
             return Err(InterpolateError::InvalidTiming);
         }
-        let ticks = cycle_s * loop_hz;
-        if ticks < 1.0 {
-            return Err(InterpolateError::CycleShorterThanTick);
-        }
-        if ticks > MAX_TICKS_PER_CYCLE {
-            return Err(InterpolateError::CycleTooLong);
-        }
-        // Exact: a rounded f32 product could be a tick unit off for some ratios.
+        // Exact, then judged in whole tick units: a cycle given in ns converts to seconds with
+        // a rounding error (31 250 ns is 3.1249998e-5 s in f32), and the rounded product of a
+        // 31.25 µs cycle and a 32 kHz loop is 0.99999994 tick, which must count as the one tick
+        // it is.
         let cycle_units =
             product_in_tick_units(cycle_s, loop_hz).ok_or(InterpolateError::CycleTooLong)?;
+        if cycle_units < TICK_UNITS {
+            return Err(InterpolateError::CycleShorterThanTick);
+        }
+        if cycle_units > MAX_TICKS_PER_CYCLE * TICK_UNITS {
+            return Err(InterpolateError::CycleTooLong);
+        }
         let inv = 1.0 / cycle_s;
         let mut interpolator = Self {
             cycle_units,
@@ -909,6 +911,20 @@ mod tests {
         );
         let ip = Interpolator::new(62.5e-6, 40_000.0).unwrap();
         assert_eq!(ip.ticks_per_cycle(), 2.5);
+        // The shortest DC cycle at the 32 kHz loop, converted from ns as the axis does
+        // (3.1249998e-5 s: a rounded product of 0.99999994 tick), is one tick; one 2^-20 tick
+        // less is shorter than a tick, and 1000 ticks is the longest cycle.
+        let ip = Interpolator::new(31_250.0 * 1e-9, 32_000.0).unwrap();
+        assert_eq!(ip.ticks_per_cycle(), 1.0);
+        assert_eq!(
+            Interpolator::new((1.0 - 1.0 / 1_048_576.0) / 32_000.0, 32_000.0),
+            Err(InterpolateError::CycleShorterThanTick)
+        );
+        assert!(Interpolator::new(1000.0 / 32_000.0, 32_000.0).is_ok());
+        assert_eq!(
+            Interpolator::new(1000.01 / 32_000.0, 32_000.0),
+            Err(InterpolateError::CycleTooLong)
+        );
         // Garbage targets do not panic.
         let mut ip = Interpolator::new(1e-3, 10_000.0).unwrap();
         ip.push_position(i64::MAX, Some(f32::INFINITY));
