@@ -75,6 +75,37 @@ impl LegTiming {
     /// the start of the PWM period, `0 <= t0 < t1 <= Ts`), for a leg switching with `duty` and
     /// carrying `current_a` (taken as constant over the interval).
     pub fn average_voltage(&self, duty: f64, t0: f64, t1: f64, current_a: f64) -> f64 {
+        let span = t1 - t0;
+        if span <= 0.0 {
+            return 0.0;
+        }
+        self.average_voltage_over(duty, (t0, t1, 1.0 / span), current_a)
+    }
+
+    /// [`Self::average_voltage`] of the three legs over the same interval (one division).
+    pub fn average_voltages(
+        &self,
+        duties: [f64; 3],
+        t0: f64,
+        t1: f64,
+        currents_a: [f64; 3],
+    ) -> [f64; 3] {
+        let span = t1 - t0;
+        if span <= 0.0 {
+            return [0.0; 3];
+        }
+        let inverse_span = 1.0 / span;
+        [0, 1, 2]
+            .map(|k| self.average_voltage_over(duties[k], (t0, t1, inverse_span), currents_a[k]))
+    }
+
+    /// The average over `[t0, t1]` (t1 > t0) with `inverse_span` = 1 / (t1 − t0).
+    fn average_voltage_over(
+        &self,
+        duty: f64,
+        (t0, t1, inverse_span): (f64, f64, f64),
+        current_a: f64,
+    ) -> f64 {
         let LegTiming {
             period_s,
             dead_time_s,
@@ -82,9 +113,6 @@ impl LegTiming {
             drop_v,
         } = *self;
         let span = t1 - t0;
-        if span <= 0.0 {
-            return 0.0;
-        }
         let d = clamp_duty(duty);
         let sign = current_sign(current_a);
         // Time of [t0, t1] with the high switch conducting and with the low switch conducting;
@@ -108,7 +136,7 @@ impl LegTiming {
             s if s < 0.0 => bus_v,
             _ => 0.5 * bus_v,
         };
-        (bus_v * high + dead_level * dead) / span - drop_v * sign
+        (bus_v * high + dead_level * dead) * inverse_span - drop_v * sign
     }
 }
 
@@ -149,6 +177,31 @@ mod tests {
             })
             .sum::<f64>()
             / TS
+    }
+
+    /// The three legs at once give each leg's own average, to the last bit or so (one
+    /// reciprocal of the span instead of a division per leg), and nothing over an empty span.
+    #[test]
+    fn three_legs_at_once_are_each_legs_average() {
+        let leg = LegTiming {
+            period_s: TS,
+            dead_time_s: 0.5e-6,
+            bus_v: VBUS,
+            drop_v: 0.7,
+        };
+        let duties = [0.0, 0.37, 1.0];
+        let currents = [2.0, -1.5, 0.0];
+        for (t0, t1) in [(0.0, TS), (1e-6, 2.25e-6), (5e-6, 15e-6), (24e-6, TS)] {
+            let all = leg.average_voltages(duties, t0, t1, currents);
+            for k in 0..3 {
+                let one = leg.average_voltage(duties[k], t0, t1, currents[k]);
+                assert!(
+                    (all[k] - one).abs() <= 1e-12 * VBUS,
+                    "leg {k} over {t0}..{t1}"
+                );
+            }
+        }
+        assert_eq!(leg.average_voltages(duties, 3e-6, 3e-6, currents), [0.0; 3]);
     }
 
     #[test]

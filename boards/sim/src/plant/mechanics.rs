@@ -125,7 +125,8 @@ impl MechParams {
         };
         let b = self.viscous_nm_per_rad_s;
         let net = torque_nm - self.coulomb_nm * dir - b * w0;
-        let mut w1 = w0 + net * h / inertia_kgm2 * phi(h * b / inertia_kgm2);
+        let h_over_j = h / inertia_kgm2;
+        let mut w1 = w0 + net * h_over_j * phi(h_over_j * b);
         if w1 * dir < 0.0 {
             // Friction cannot reverse the motion: the rotor stops within this step.
             w1 = 0.0;

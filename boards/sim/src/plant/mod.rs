@@ -73,7 +73,9 @@ use encoder::EncoderModel;
 use firmware::motor::servo::{EncoderSpec, SERVO_400W};
 use inverter::LegTiming;
 use mechanics::MechState;
-use pmsm::{clarke, inverse_clarke, inverse_park, park, CurrentLoop};
+use pmsm::{
+    clarke, inverse_clarke, inverse_park, inverse_park_at, park, park_at, rotated, CurrentLoop,
+};
 use rng::Rng;
 
 /// Fewest substeps per PWM period the plant accepts (coarser steps cannot resolve the PWM
@@ -525,11 +527,23 @@ impl Plant {
             .step_dq(self.r(), (self.id, self.iq), v, omega_e, h);
     }
 
+    /// [`Self::phase_currents`] and [`Self::step_with_leg_voltages`] of a switching substep with
+    /// one `sin_cos`: the currents at the substep's start angle, the voltages at its middle
+    /// (the start angle turned by half the substep, [`rotated`]).
     fn switching_substep(&mut self, duties: [f64; 3], t0: f64, t1: f64) {
-        let leg = self.leg_timing();
-        let i = self.phase_currents();
-        let legs = [0, 1, 2].map(|k| leg.average_voltage(duties[k], t0, t1, i[k]));
-        self.step_with_leg_voltages(legs, t1 - t0);
+        let h = t1 - t0;
+        let omega_e = self.omega_e();
+        let start = self.electrical_angle_rad().sin_cos();
+        let (alpha, beta) = inverse_park_at(self.id, self.iq, start);
+        let currents = inverse_clarke(alpha, beta);
+        let legs = self.leg_timing().average_voltages(duties, t0, t1, currents);
+        // Clarke discards the zero sequence: this is v_an = v_a0 − mean(v_x0).
+        let (va, vb) = clarke(legs);
+        let v = park_at(va, vb, rotated(start, 0.5 * omega_e * h));
+        (self.id, self.iq) = self
+            .cfg
+            .motor
+            .step_dq(self.r(), (self.id, self.iq), v, omega_e, h);
     }
 
     /// Conduction state when the gates turn off: every phase with current keeps it flowing
