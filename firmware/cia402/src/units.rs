@@ -303,22 +303,54 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
                 quotient
             })
         });
-    narrow.unwrap_or_else(|| {
-        let (m, d) = (i128::from(multiplier), i128::from(divisor));
-        // |value| ≤ 2^63 and multiplier < 2^64: the product fits an i128.
-        let product = i128::from(value).saturating_mul(m);
-        // A divisor of 0 (the callers never pass one) gives 0.
-        let (Some(quotient), Some(remainder)) = (product.checked_div(d), product.checked_rem(d))
-        else {
-            return 0;
+    narrow.unwrap_or_else(|| scale_wide(value, multiplier, divisor))
+}
+
+/// [`scale`] when the product does not fit 64 bits: the 128-bit product magnitude as two
+/// 64-bit halves and a restoring division, one quotient bit per step (64 steps; positions
+/// this large are rare, and a 128-bit division would link some 800 bytes of library code).
+/// Saturates at the i64 range; a divisor of 0 (the callers never pass one) gives 0.
+#[cold]
+#[inline(never)]
+fn scale_wide(value: i64, multiplier: u64, divisor: u64) -> i64 {
+    if divisor == 0 {
+        return 0;
+    }
+    let magnitude = value.unsigned_abs();
+    let (high, low) = (
+        mul_high(magnitude, multiplier),
+        magnitude.wrapping_mul(multiplier),
+    );
+    let saturated = if value < 0 { i64::MIN } else { i64::MAX };
+    // A high half of at least the divisor: a quotient of 2^64 or more.
+    if high >= divisor {
+        return saturated;
+    }
+    let (mut quotient, mut remainder) = (0u64, high);
+    for bit in (0..u64::BITS).rev() {
+        // remainder < divisor: doubling it plus the next bit stays below 2·divisor, which
+        // may carry out of 64 bits (then it certainly exceeds the divisor).
+        let carry = remainder >> (u64::BITS - 1);
+        remainder = (remainder << 1) | ((low >> bit) & 1);
+        quotient <<= 1;
+        if carry != 0 || remainder >= divisor {
+            remainder = remainder.wrapping_sub(divisor);
+            quotient |= 1;
+        }
+    }
+    // Halves away from zero (on the magnitude: up); remainder < divisor.
+    if remainder >= divisor.wrapping_sub(remainder) {
+        let Some(rounded) = quotient.checked_add(1) else {
+            return saturated;
         };
-        let wide = if remainder.unsigned_abs().saturating_mul(2) >= d.unsigned_abs() {
-            quotient.saturating_add(product.signum())
-        } else {
-            quotient
-        };
-        i64::try_from(wide).unwrap_or(if wide < 0 { i64::MIN } else { i64::MAX })
-    })
+        quotient = rounded;
+    }
+    if value < 0 {
+        // −2^63 is i64::MIN; a larger magnitude saturates.
+        0i64.checked_sub_unsigned(quotient).unwrap_or(i64::MIN)
+    } else {
+        i64::try_from(quotient).unwrap_or(i64::MAX)
+    }
 }
 
 /// Polarity 607Eh (CiA402): bit 7 multiplies the position objects by −1, bit 6 the velocity
@@ -444,6 +476,32 @@ mod tests {
             q
         };
         q.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+    }
+
+    /// The 128-bit path on its own: halves away from zero, saturation at both ends of the i64
+    /// range (−2^63 itself is representable), the largest factors, and 0 for a 0 divisor.
+    #[test]
+    fn the_wide_path_rounds_and_saturates_as_the_exact_division() {
+        let cases = [
+            (i64::MIN, 2, 2),
+            (i64::MIN, 3, 3),
+            (i64::MIN + 1, 3, 3),
+            (i64::MAX, 3, 2),
+            (i64::MIN, 3, 2),
+            (i64::MAX, u64::MAX, u64::MAX),
+            (i64::MIN, u64::MAX, u64::MAX),
+            (-5, u64::MAX, u64::MAX - 1),
+            (i64::MAX, 1 << 40, (1 << 41) + 1),
+            (-(1 << 62) - 3, 6, 4),
+            ((1 << 62) + 1, 6, 4),
+            ((1 << 62) + 3, 10, 4),
+            (-(1 << 62) - 3, 10, 4),
+            (i64::MAX, 1 << 63, 1),
+        ];
+        for (v, m, d) in cases {
+            assert_eq!(scale_wide(v, m, d), reference(v, m, d), "{v}·{m}/{d}");
+        }
+        assert_eq!(scale_wide(5, 3, 0), 0);
     }
 
     #[test]
