@@ -520,8 +520,9 @@ impl AxisLink {
         self.model.write(model);
     }
 
-    /// SYNC0 side: hands over this bus cycle's command (with a cycle shorter than the control
-    /// loop's period, every k-th: see [`Decimation`]).
+    /// SYNC0 side: hands over this bus cycle's command; with a cycle shorter than the control
+    /// loop's period, every k-th as one of k cycles (the decimation of short cycles, set up by
+    /// the control side when it is handed one).
     pub fn publish(&self, command: AxisCommand) {
         // One compare on the common path (no loop period set: 0, nothing is below it).
         let loop_period_ns = self.decimation.loop_period_ns.load(Ordering::Relaxed);
