@@ -17,6 +17,12 @@ use std::time::Duration;
 
 use ethercrab::subdevice_group::DcConfiguration;
 use ethercrab::{Command, DcSync, MainDevice, MainDeviceConfig, Timeouts};
+use firmware::od::index::sm_parameter::{
+    SUB_CALC_AND_COPY_TIME as CALC_AND_COPY_TIME, SUB_CYCLE_TIME as CYCLE_TIME,
+    SUB_CYCLE_TIME_TOO_SMALL as CYCLE_TIME_TOO_SMALL, SUB_SM_EVENT_MISSED as SM_EVENT_MISSED,
+    SUB_SYNC_ERROR as SYNC_ERROR, SUB_SYNC_TYPE as SYNC_MODE,
+};
+use firmware::od::index::SM_OUTPUT_PARAMETER;
 use firmware::slave::esm::sync::{SyncConfig, SyncMode};
 use hal::esc::regs;
 
@@ -322,15 +328,6 @@ macro_rules! operate {
         $log("back in INIT".into());
     }};
 }
-
-/// Sync manager output parameter object and its subindices (ETG.1020).
-const SM_OUTPUT_PARAMETER: u16 = 0x1C32;
-const SYNC_MODE: u8 = 1;
-const CYCLE_TIME: u8 = 2;
-const CALC_AND_COPY_TIME: u8 = 6;
-const SM_EVENT_MISSED: u8 = 0x0B;
-const CYCLE_TIME_TOO_SMALL: u8 = 0x0C;
-const SYNC_ERROR: u8 = 0x20;
 
 /// Modes of operation 6060h: cyclic synchronous position (CiA402).
 const MODE_CSP: i8 = 8;
