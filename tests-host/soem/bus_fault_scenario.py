@@ -30,10 +30,23 @@ HALT_WATCH_S = 15.0
 INTERFACE_DOWN_S = 0.5
 
 
+# Register reads wait this long for their frame (pysoem's default is 2 ms): the simulated drive
+# runs in wall-clock time, and on a loaded machine a reply can take longer than a cycle.
+REGISTER_TIMEOUT_US = 50_000
+
+
+def fprd(s, address, size):
+    return s._fprd(address, size, REGISTER_TIMEOUT_US)
+
+
+def fpwr(s, address, data):
+    return s._fpwr(address, data, REGISTER_TIMEOUT_US)
+
+
 def al(s):
     return (
-        struct.unpack("<H", s._fprd(AL_STATUS, 2))[0],
-        struct.unpack("<H", s._fprd(AL_STATUS_CODE, 2))[0],
+        struct.unpack("<H", fprd(s, AL_STATUS, 2))[0],
+        struct.unpack("<H", fprd(s, AL_STATUS_CODE, 2))[0],
     )
 
 
@@ -105,7 +118,7 @@ def main():
     out["cable_pulled_seen"] = pulled_at is not None
     # Replies came back: the cable is in again. The mailbox and register frames pass.
     out["after_pull"] = al(s0)
-    s0._fpwr(AL_CONTROL, struct.pack("<H", pysoem.SAFEOP_STATE | ACK))
+    fpwr(s0, AL_CONTROL, struct.pack("<H", pysoem.SAFEOP_STATE | ACK))
     time.sleep(0.05)
     out["after_ack"] = al(s0)
     out["recovered"] = to_op(m)
@@ -118,11 +131,11 @@ def main():
     while time.monotonic() < deadline:
         m.send_processdata()
         m.receive_processdata(RECEIVE_TIMEOUT_US)
-        dl = struct.unpack("<H", s0._fprd(DL_STATUS, 2))[0]
+        dl = struct.unpack("<H", fprd(s0, DL_STATUS, 2))[0]
         if not dl & PDI_WATCHDOG_OK and not pdi_expired_seen:
             pdi_expired_seen = True
             out["al_while_halted"] = al(s0)
-            out["pdi_expiries"] = s0._fprd(WATCHDOG_COUNTER_PDI, 1)[0]
+            out["pdi_expiries"] = fprd(s0, WATCHDOG_COUNTER_PDI, 1)[0]
         if pdi_expired_seen and al(s0)[0] & STATE_MASK == pysoem.INIT_STATE:
             out["after_restart"] = al(s0)
             break
@@ -150,7 +163,7 @@ def main():
         time.sleep(0.01)
     # `attach` polls the interface's flags: the drive answers again once it saw the link back.
     out["after_interface_down"] = al_once_answering(s0)
-    s0._fpwr(AL_CONTROL, struct.pack("<H", pysoem.SAFEOP_STATE | ACK))
+    fpwr(s0, AL_CONTROL, struct.pack("<H", pysoem.SAFEOP_STATE | ACK))
     time.sleep(0.05)
     out["op_after_interface_down"] = to_op(m)
     out["final_after_interface_down"] = al(s0)

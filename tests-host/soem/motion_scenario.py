@@ -35,6 +35,8 @@ REV = 1 << 20
 # The motion, in revolutions of the motor.
 SEARCH, CREEP, SPEED, ACCEL = 1.0, 0.5, 10.0, 100.0
 PP_REVOLUTIONS = 2
+# Cycles of PP commanded before 6061h is read, and at most before the mode counts as not taken.
+MODE_SETTLE_CYCLES, MODE_WAIT_CYCLES = 20, 1000
 
 
 @dataclass(frozen=True)
@@ -229,8 +231,12 @@ def main():
     if rx_mode is None:
         s.sdo_write(0x6060, 0, struct.pack("<b", PP))
     pp_cw = 0x0F | drive.absolute_bit6 << 6
-    for _ in range(20):
+    # The drive takes the mode in the cycle it sees it; a master that is not real time (this one,
+    # on a loaded machine) may need more cycles for the round trip: wait for 6061h, up to 1 s.
+    for k in range(MODE_WAIT_CYCLES):
         sw, actual = cycle(pp_cw, pp_target, PP)
+        if k >= MODE_SETTLE_CYCLES and display() == PP:
+            break
     out["pp_display"] = display()
     out["pp_controlword"] = pp_cw | 0x10
     acknowledged = False
