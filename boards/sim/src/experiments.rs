@@ -230,11 +230,15 @@ pub struct StepResponse {
 /// The CSV set-point steps from standstill to `rpm` in one bus cycle; the trace starts at the
 /// start of that cycle.
 pub fn velocity_step(rpm: f64) -> StepResponse {
-    let mut servo = running_servo(
-        PlantConfig::servo_400w(),
-        &Tuning::default(),
-        ControlMode::Velocity,
-    );
+    velocity_step_of(PlantConfig::servo_400w(), rpm)
+}
+
+/// [`velocity_step`] on another plant (e.g. the same servo at another [`Fidelity`]), with the
+/// default tuning.
+///
+/// [`Fidelity`]: crate::plant::Fidelity
+pub fn velocity_step_of(plant: PlantConfig, rpm: f64) -> StepResponse {
+    let mut servo = running_servo(plant, &Tuning::default(), ControlMode::Velocity);
     for _ in 0..20 {
         servo.publish(csv(0.0));
         servo.run_periods(PERIODS_PER_CYCLE);
@@ -273,11 +277,12 @@ pub struct DisturbanceResponse {
 
 /// Runs at `rpm` (CSV), then applies `load_nm` as a step.
 pub fn load_step(rpm: f64, load_nm: f64) -> DisturbanceResponse {
-    let mut servo = running_servo(
-        PlantConfig::servo_400w(),
-        &Tuning::default(),
-        ControlMode::Velocity,
-    );
+    load_step_of(PlantConfig::servo_400w(), rpm, load_nm)
+}
+
+/// [`load_step`] on another plant, with the default tuning.
+pub fn load_step_of(plant: PlantConfig, rpm: f64, load_nm: f64) -> DisturbanceResponse {
+    let mut servo = running_servo(plant, &Tuning::default(), ControlMode::Velocity);
     let counts = (rpm / 60.0 * cpr(&servo)) as f32;
     for _ in 0..200 {
         servo.publish(csv(counts));

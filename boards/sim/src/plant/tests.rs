@@ -4,6 +4,25 @@
 use super::*;
 use std::f64::consts::TAU;
 
+/// Both fidelities: the physical laws below hold for each (module doc, "Fidelity").
+const FIDELITIES: [Fidelity; 2] = [Fidelity::PwmResolved, Fidelity::Averaged];
+
+/// The default servo at the given fidelity.
+fn servo_at(fidelity: Fidelity) -> PlantConfig {
+    PlantConfig {
+        fidelity,
+        ..PlantConfig::servo_400w()
+    }
+}
+
+/// [`ideal`] at the given fidelity.
+fn ideal_at(fidelity: Fidelity) -> PlantConfig {
+    PlantConfig {
+        fidelity,
+        ..ideal()
+    }
+}
+
 /// The default servo with every non-ideality that would blur an exact check removed.
 fn ideal() -> PlantConfig {
     let mut c = PlantConfig::servo_400w();
@@ -51,20 +70,22 @@ fn measured_dq(p: &Plant) -> (f64, f64) {
 
 #[test]
 fn locked_rotor_steady_state_current_is_v_over_r() {
-    let c = ideal();
-    let r = c.motor.r_ohm;
-    let mut p = plant(c);
-    p.set_driven_speed(Some(0.0));
-    p.set_rotor_position(0.3); // an arbitrary, non-aligned angle
-    let (vd, vq) = (1.2, -0.6);
-    let duties = duties_for(&p, vd, vq);
-    let n = periods_for(&p, 0.15); // ≈ 40 electrical time constants
-    run(&mut p, duties, true, n);
-    let (id, iq) = measured_dq(&p);
-    // Only the PWM ripple (sampled at its centre) and the f32 duties separate the sample from
-    // the average; both are far below 1e-4 relative.
-    assert!((id - vd / r).abs() < 1e-4 * (vd / r), "id {id}");
-    assert!((iq - vq / r).abs() < 1e-4 * (vd / r), "iq {iq}");
+    for fidelity in FIDELITIES {
+        let c = ideal_at(fidelity);
+        let r = c.motor.r_ohm;
+        let mut p = plant(c);
+        p.set_driven_speed(Some(0.0));
+        p.set_rotor_position(0.3); // an arbitrary, non-aligned angle
+        let (vd, vq) = (1.2, -0.6);
+        let duties = duties_for(&p, vd, vq);
+        let n = periods_for(&p, 0.15); // ≈ 40 electrical time constants
+        run(&mut p, duties, true, n);
+        let (id, iq) = measured_dq(&p);
+        // Only the PWM ripple (sampled at its centre) and the f32 duties separate the sample from
+        // the average; both are far below 1e-4 relative.
+        assert!((id - vd / r).abs() < 1e-4 * (vd / r), "id {id}");
+        assert!((iq - vq / r).abs() < 1e-4 * (vd / r), "iq {iq}");
+    }
 }
 
 /// Time at which `values` (one per period from t = 0) first reach `level`, interpolated.
@@ -80,144 +101,152 @@ fn crossing_time(values: &[f64], level: f64, ts: f64) -> f64 {
 
 #[test]
 fn current_step_response_has_time_constant_l_over_r() {
-    for axis in ["d", "q"] {
-        let c = ideal();
-        let (r, l) = if axis == "d" {
-            (c.motor.r_ohm, c.motor.ld_h)
-        } else {
-            (c.motor.r_ohm, c.motor.lq_h)
-        };
-        let mut p = plant(c);
-        p.set_driven_speed(Some(0.0));
-        let v = 1.0;
-        let duties = if axis == "d" {
-            duties_for(&p, v, 0.0)
-        } else {
-            duties_for(&p, 0.0, v)
-        };
-        let mut values = vec![0.0];
-        let n = periods_for(&p, 5.0 * l / r);
-        for _ in 0..n {
-            p.run_period(duties, true);
-            let (id, iq) = measured_dq(&p);
-            values.push(if axis == "d" { id } else { iq });
+    for fidelity in FIDELITIES {
+        for axis in ["d", "q"] {
+            let c = ideal_at(fidelity);
+            let (r, l) = if axis == "d" {
+                (c.motor.r_ohm, c.motor.ld_h)
+            } else {
+                (c.motor.r_ohm, c.motor.lq_h)
+            };
+            let mut p = plant(c);
+            p.set_driven_speed(Some(0.0));
+            let v = 1.0;
+            let duties = if axis == "d" {
+                duties_for(&p, v, 0.0)
+            } else {
+                duties_for(&p, 0.0, v)
+            };
+            let mut values = vec![0.0];
+            let n = periods_for(&p, 5.0 * l / r);
+            for _ in 0..n {
+                p.run_period(duties, true);
+                let (id, iq) = measured_dq(&p);
+                values.push(if axis == "d" { id } else { iq });
+            }
+            let tau = crossing_time(&values, (1.0 - (-1.0f64).exp()) * v / r, p.period_s());
+            assert!(
+                (tau - l / r).abs() < 0.02 * l / r,
+                "{axis}: tau {tau} vs {}",
+                l / r
+            );
         }
-        let tau = crossing_time(&values, (1.0 - (-1.0f64).exp()) * v / r, p.period_s());
-        assert!(
-            (tau - l / r).abs() < 0.02 * l / r,
-            "{axis}: tau {tau} vs {}",
-            l / r
-        );
     }
 }
 
 #[test]
 fn short_circuit_current_at_speed_matches_back_emf_and_cross_coupling() {
-    // All low sides on (duty 0) = three-phase short: vd = vq = 0 in the voltage equations,
-    // so the steady state is set by the back-EMF ωe·ψ and the ωe·L cross-coupling only.
-    let c = ideal();
-    let m = c.motor;
-    let mut p = plant(c);
-    let omega_m = 100.0;
-    p.set_driven_speed(Some(omega_m));
-    run_s(&mut p, [0.0; 3], true, 0.08);
-    let we = f64::from(m.pole_pairs) * omega_m;
-    let den = m.r_ohm * m.r_ohm + we * we * m.ld_h * m.lq_h;
-    let iq_expected = -we * m.flux_wb * m.r_ohm / den;
-    let id_expected = -we * we * m.lq_h * m.flux_wb / den;
-    let (id, iq) = measured_dq(&p);
-    assert!(
-        (id - id_expected).abs() < 1e-3 * id_expected.abs(),
-        "id {id} vs {id_expected}"
-    );
-    assert!(
-        (iq - iq_expected).abs() < 1e-3 * iq_expected.abs(),
-        "iq {iq} vs {iq_expected}"
-    );
-    // Power balance, with saliency (id ≠ 0): the shaft power is all dissipated in the copper.
-    let p_mech = p.electromagnetic_torque_nm() * omega_m;
-    let p_cu = 1.5 * m.r_ohm * (id * id + iq * iq);
-    assert!((p_mech + p_cu).abs() < 1e-3 * p_cu, "{p_mech} vs {p_cu}");
+    for fidelity in FIDELITIES {
+        // All low sides on (duty 0) = three-phase short: vd = vq = 0 in the voltage equations,
+        // so the steady state is set by the back-EMF ωe·ψ and the ωe·L cross-coupling only.
+        let c = ideal_at(fidelity);
+        let m = c.motor;
+        let mut p = plant(c);
+        let omega_m = 100.0;
+        p.set_driven_speed(Some(omega_m));
+        run_s(&mut p, [0.0; 3], true, 0.08);
+        let we = f64::from(m.pole_pairs) * omega_m;
+        let den = m.r_ohm * m.r_ohm + we * we * m.ld_h * m.lq_h;
+        let iq_expected = -we * m.flux_wb * m.r_ohm / den;
+        let id_expected = -we * we * m.lq_h * m.flux_wb / den;
+        let (id, iq) = measured_dq(&p);
+        assert!(
+            (id - id_expected).abs() < 1e-3 * id_expected.abs(),
+            "id {id} vs {id_expected}"
+        );
+        assert!(
+            (iq - iq_expected).abs() < 1e-3 * iq_expected.abs(),
+            "iq {iq} vs {iq_expected}"
+        );
+        // Power balance, with saliency (id ≠ 0): the shaft power is all dissipated in the copper.
+        let p_mech = p.electromagnetic_torque_nm() * omega_m;
+        let p_cu = 1.5 * m.r_ohm * (id * id + iq * iq);
+        assert!((p_mech + p_cu).abs() < 1e-3 * p_cu, "{p_mech} vs {p_cu}");
+    }
 }
 
 #[test]
 fn gates_off_no_current_below_the_rectifier_threshold_braking_above() {
-    let c = PlantConfig::servo_400w();
-    let m = c.motor;
-    let threshold_we =
-        (c.inverter.bus_voltage_v + 2.0 * c.inverter.device_drop_v) / (3f64.sqrt() * m.flux_wb);
-    let threshold_wm = threshold_we / f64::from(m.pole_pairs);
+    for fidelity in FIDELITIES {
+        let c = servo_at(fidelity);
+        let m = c.motor;
+        let threshold_we =
+            (c.inverter.bus_voltage_v + 2.0 * c.inverter.device_drop_v) / (3f64.sqrt() * m.flux_wb);
+        let threshold_wm = threshold_we / f64::from(m.pole_pairs);
 
-    let mut below = plant(c.clone());
-    below.set_driven_speed(Some(0.97 * threshold_wm));
-    for _ in 0..periods_for(&below, 0.02) {
-        below.run_period([0.0; 3], false);
-        assert_eq!(below.phase_currents(), [0.0; 3]);
-        assert_eq!(below.electromagnetic_torque_nm(), 0.0);
-    }
-
-    let mut above = plant(c);
-    above.set_driven_speed(Some(1.1 * threshold_wm));
-    let mut torque_sum = 0.0;
-    let mut one_floating = 0;
-    let n = periods_for(&above, 0.02);
-    for _ in 0..n {
-        above.run_period([0.0; 3], false);
-        torque_sum += above.electromagnetic_torque_nm();
-        let i = above.phase_currents();
-        assert!((i[0] + i[1] + i[2]).abs() < 1e-9);
-        if i.iter().filter(|&&x| x == 0.0).count() == 1 {
-            one_floating += 1;
+        let mut below = plant(c.clone());
+        below.set_driven_speed(Some(0.97 * threshold_wm));
+        for _ in 0..periods_for(&below, 0.02) {
+            below.run_period([0.0; 3], false);
+            assert_eq!(below.phase_currents(), [0.0; 3]);
+            assert_eq!(below.electromagnetic_torque_nm(), 0.0);
         }
+
+        let mut above = plant(c);
+        above.set_driven_speed(Some(1.1 * threshold_wm));
+        let mut torque_sum = 0.0;
+        let mut one_floating = 0;
+        let n = periods_for(&above, 0.02);
+        for _ in 0..n {
+            above.run_period([0.0; 3], false);
+            torque_sum += above.electromagnetic_torque_nm();
+            let i = above.phase_currents();
+            assert!((i[0] + i[1] + i[2]).abs() < 1e-9);
+            if i.iter().filter(|&&x| x == 0.0).count() == 1 {
+                one_floating += 1;
+            }
+        }
+        assert!(torque_sum / (n as f64) < -0.01, "rectifier must brake");
+        assert!(
+            one_floating > 0,
+            "diode bridge commutates through one-phase-open intervals"
+        );
     }
-    assert!(torque_sum / (n as f64) < -0.01, "rectifier must brake");
-    assert!(
-        one_floating > 0,
-        "diode bridge commutates through one-phase-open intervals"
-    );
 }
 
 #[test]
 fn gates_off_currents_decay_to_exactly_zero_without_oscillation() {
-    for speed in [0.0, 150.0] {
-        let mut p = plant(PlantConfig::servo_400w());
-        p.set_driven_speed(Some(speed));
-        // Build up about 10 A (the default motor at standstill: 1.2 V / 0.12 Ω).
-        for _ in 0..periods_for(&p, 0.03) {
-            let d = duties_for(&p, 1.2, 0.8);
-            p.run_period(d, true);
+    for fidelity in FIDELITIES {
+        for speed in [0.0, 150.0] {
+            let mut p = plant(servo_at(fidelity));
+            p.set_driven_speed(Some(speed));
+            // Build up about 10 A (the default motor at standstill: 1.2 V / 0.12 Ω).
+            for _ in 0..periods_for(&p, 0.03) {
+                let d = duties_for(&p, 1.2, 0.8);
+                p.run_period(d, true);
+            }
+            let mut prev = p.phase_currents();
+            assert!(prev.iter().any(|i| i.abs() > 5.0));
+            let mut zero_from = None;
+            for k in 0..400 {
+                p.run_period([0.5; 3], false);
+                let i = p.phase_currents();
+                for ph in 0..3 {
+                    // Never changes sign, never grows: diodes only let it decay.
+                    assert!(i[ph] * prev[ph] >= 0.0, "phase {ph} reversed at {k}");
+                    assert!(
+                        i[ph].abs() <= prev[ph].abs() + 1e-9,
+                        "phase {ph} grew at {k}"
+                    );
+                }
+                if i == [0.0; 3] && zero_from.is_none() {
+                    zero_from = Some(k);
+                }
+                if zero_from.is_some() {
+                    assert_eq!(i, [0.0; 3], "stays exactly zero");
+                }
+                prev = i;
+            }
+            // L·i/V ≈ 0.46 mH·10 A / 48 V ≈ 0.1 ms ≈ 4 periods; allow some margin.
+            assert!(zero_from.is_some_and(|k| k < 20), "{zero_from:?}");
         }
-        let mut prev = p.phase_currents();
-        assert!(prev.iter().any(|i| i.abs() > 5.0));
-        let mut zero_from = None;
-        for k in 0..400 {
-            p.run_period([0.5; 3], false);
-            let i = p.phase_currents();
-            for ph in 0..3 {
-                // Never changes sign, never grows: diodes only let it decay.
-                assert!(i[ph] * prev[ph] >= 0.0, "phase {ph} reversed at {k}");
-                assert!(
-                    i[ph].abs() <= prev[ph].abs() + 1e-9,
-                    "phase {ph} grew at {k}"
-                );
-            }
-            if i == [0.0; 3] && zero_from.is_none() {
-                zero_from = Some(k);
-            }
-            if zero_from.is_some() {
-                assert_eq!(i, [0.0; 3], "stays exactly zero");
-            }
-            prev = i;
-        }
-        // L·i/V ≈ 0.46 mH·10 A / 48 V ≈ 0.1 ms ≈ 4 periods; allow some margin.
-        assert!(zero_from.is_some_and(|k| k < 20), "{zero_from:?}");
     }
 }
 
 /// Releases a locked rotor carrying (id, iq) and compares J·Δω with ∫Te dt from the measured
 /// phase currents.
-fn measured_vs_formula_torque(id_ref: f64, iq_ref: f64) -> (f64, f64, f64) {
-    let c = ideal();
+fn measured_vs_formula_torque(fidelity: Fidelity, id_ref: f64, iq_ref: f64) -> (f64, f64, f64) {
+    let c = ideal_at(fidelity);
     let m = c.motor;
     let j = c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2;
     let mut p = plant(c);
@@ -242,120 +271,132 @@ fn measured_vs_formula_torque(id_ref: f64, iq_ref: f64) -> (f64, f64, f64) {
 
 #[test]
 fn torque_is_kt_times_iq_and_shows_the_reluctance_term() {
-    let (impulse, full, magnet) = measured_vs_formula_torque(0.0, 8.0);
-    assert!(
-        (impulse - magnet).abs() < 5e-3 * magnet,
-        "{impulse} vs {magnet}"
-    );
-    assert!(
-        (full - magnet).abs() < 1e-3 * magnet,
-        "id ≈ 0: no reluctance torque"
-    );
+    for fidelity in FIDELITIES {
+        let (impulse, full, magnet) = measured_vs_formula_torque(fidelity, 0.0, 8.0);
+        assert!(
+            (impulse - magnet).abs() < 5e-3 * magnet,
+            "{impulse} vs {magnet}"
+        );
+        assert!(
+            (full - magnet).abs() < 1e-3 * magnet,
+            "id ≈ 0: no reluctance torque"
+        );
 
-    // Ld < Lq and id < 0: the reluctance term adds ≈ 3.6 % here.
-    let (impulse, full, magnet) = measured_vs_formula_torque(-8.0, 6.0);
-    assert!((impulse - full).abs() < 5e-3 * full, "{impulse} vs {full}");
-    assert!(
-        impulse - magnet > 0.02 * magnet,
-        "reluctance torque missing"
-    );
+        // Ld < Lq and id < 0: the reluctance term adds ≈ 3.6 % here.
+        let (impulse, full, magnet) = measured_vs_formula_torque(fidelity, -8.0, 6.0);
+        assert!((impulse - full).abs() < 5e-3 * full, "{impulse} vs {full}");
+        assert!(
+            impulse - magnet > 0.02 * magnet,
+            "reluctance torque missing"
+        );
+    }
 }
 
 #[test]
 fn load_torque_accelerates_at_t_over_j() {
-    let c = ideal();
-    let j = c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2;
-    let mut p = plant(c);
-    p.set_load_torque(-0.1);
-    run_s(&mut p, [0.0; 3], false, 0.1);
-    let expected = 0.1 / j * p.time_s();
-    assert!((p.mech_speed_rad_s() - expected).abs() < 1e-9 * expected);
+    for fidelity in FIDELITIES {
+        let c = ideal_at(fidelity);
+        let j = c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2;
+        let mut p = plant(c);
+        p.set_load_torque(-0.1);
+        run_s(&mut p, [0.0; 3], false, 0.1);
+        let expected = 0.1 / j * p.time_s();
+        assert!((p.mech_speed_rad_s() - expected).abs() < 1e-9 * expected);
+    }
 }
 
 #[test]
 fn coulomb_stiction_holds_below_breakaway_and_moves_above() {
-    let mut c = ideal();
-    c.mechanics.coulomb_nm = 0.02;
-    let j = c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2;
-    let mut p = plant(c.clone());
-    p.set_load_torque(-0.019);
-    run(&mut p, [0.0; 3], false, 2000);
-    assert_eq!(p.mech_angle_rad(), 0.0);
-    assert_eq!(p.mech_speed_rad_s(), 0.0);
+    for fidelity in FIDELITIES {
+        let mut c = ideal_at(fidelity);
+        c.mechanics.coulomb_nm = 0.02;
+        let j = c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2;
+        let mut p = plant(c.clone());
+        p.set_load_torque(-0.019);
+        run(&mut p, [0.0; 3], false, 2000);
+        assert_eq!(p.mech_angle_rad(), 0.0);
+        assert_eq!(p.mech_speed_rad_s(), 0.0);
 
-    let mut p = plant(c);
-    p.set_load_torque(-0.03);
-    run(&mut p, [0.0; 3], false, 2000);
-    let expected = 0.01 / j * p.time_s();
-    assert!((p.mech_speed_rad_s() - expected).abs() < 1e-9 * expected);
+        let mut p = plant(c);
+        p.set_load_torque(-0.03);
+        run(&mut p, [0.0; 3], false, 2000);
+        let expected = 0.01 / j * p.time_s();
+        assert!((p.mech_speed_rad_s() - expected).abs() < 1e-9 * expected);
+    }
 }
 
 #[test]
 fn viscous_friction_decays_with_time_constant_j_over_b() {
-    let mut c = ideal();
-    c.mechanics.viscous_nm_per_rad_s = 5e-4;
-    let tau = (c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2)
-        / c.mechanics.viscous_nm_per_rad_s;
-    let mut p = plant(c);
-    p.set_driven_speed(Some(100.0));
-    p.set_driven_speed(None);
-    run_s(&mut p, [0.0; 3], false, tau);
-    let expected = 100.0 * (-1.0f64).exp();
-    assert!((p.mech_speed_rad_s() - expected).abs() < 1e-6 * expected);
+    for fidelity in FIDELITIES {
+        let mut c = ideal_at(fidelity);
+        c.mechanics.viscous_nm_per_rad_s = 5e-4;
+        let tau = (c.motor.rotor_inertia_kgm2 + c.mechanics.load_inertia_kgm2)
+            / c.mechanics.viscous_nm_per_rad_s;
+        let mut p = plant(c);
+        p.set_driven_speed(Some(100.0));
+        p.set_driven_speed(None);
+        run_s(&mut p, [0.0; 3], false, tau);
+        let expected = 100.0 * (-1.0f64).exp();
+        assert!((p.mech_speed_rad_s() - expected).abs() < 1e-6 * expected);
+    }
 }
 
 #[test]
 fn end_stop_stops_the_rotor_and_the_motor_cannot_push_through() {
-    let mut c = ideal();
-    c.mechanics.end_stops_rad = Some((-0.5, 0.5));
-    let mut p = plant(c);
-    p.set_load_torque(-0.05);
-    run_s(&mut p, [0.0; 3], false, 0.1);
-    assert_eq!(p.mech_angle_rad(), 0.5);
-    assert_eq!(p.mech_speed_rad_s(), 0.0);
-    // Motor torque pushing into the stop (about 0.5 N·m): it stays there.
-    p.set_load_torque(0.0);
-    for _ in 0..periods_for(&p, 0.02) {
-        let d = duties_for(&p, 0.0, 0.8);
-        p.run_period(d, true);
+    for fidelity in FIDELITIES {
+        let mut c = ideal_at(fidelity);
+        c.mechanics.end_stops_rad = Some((-0.5, 0.5));
+        let mut p = plant(c);
+        p.set_load_torque(-0.05);
+        run_s(&mut p, [0.0; 3], false, 0.1);
         assert_eq!(p.mech_angle_rad(), 0.5);
+        assert_eq!(p.mech_speed_rad_s(), 0.0);
+        // Motor torque pushing into the stop (about 0.5 N·m): it stays there.
+        p.set_load_torque(0.0);
+        for _ in 0..periods_for(&p, 0.02) {
+            let d = duties_for(&p, 0.0, 0.8);
+            p.run_period(d, true);
+            assert_eq!(p.mech_angle_rad(), 0.5);
+        }
+        assert!(p.electromagnetic_torque_nm() > 0.3);
     }
-    assert!(p.electromagnetic_torque_nm() > 0.3);
 }
 
 #[test]
 fn dead_time_shifts_the_mean_phase_voltage_by_bus_td_over_ts() {
-    // At θe = 0 with id > 0: ia > 0, ib = ic < 0. Each leg loses sign(i)·Vbus·td/Ts, so
-    // v_an loses (4/3)·Vbus·td/Ts and so does vd: id = (vd − (4/3)·Vbus·td/Ts)/R.
-    let mut c = ideal();
-    c.inverter.dead_time_s = 200e-9;
-    let (r, bus, ts) = (
-        c.motor.r_ohm,
-        c.inverter.bus_voltage_v,
-        1.0 / c.inverter.pwm_hz,
-    );
-    let err = bus * c.inverter.dead_time_s / ts;
-    let mut p = plant(c);
-    p.set_driven_speed(Some(0.0));
-    let vd = 1.2;
-    let d = duties_for(&p, vd, 0.0);
-    run_s(&mut p, d, true, 0.1);
-    let expected = (vd - 4.0 / 3.0 * err) / r;
-    let (id, iq) = measured_dq(&p);
-    assert!(
-        (id - expected).abs() < 1e-3 * expected,
-        "id {id} vs {expected}"
-    );
-    assert!(iq.abs() < 1e-3);
-    // Same law for the device drop: every leg loses sign(i)·Vdrop.
-    let mut c = ideal();
-    c.inverter.device_drop_v = 0.3;
-    let mut p = plant(c);
-    p.set_driven_speed(Some(0.0));
-    let d = duties_for(&p, vd, 0.0);
-    run_s(&mut p, d, true, 0.1);
-    let expected = (vd - 4.0 / 3.0 * 0.3) / r;
-    assert!((p.currents_dq().0 - expected).abs() < 1e-3 * expected);
+    for fidelity in FIDELITIES {
+        // At θe = 0 with id > 0: ia > 0, ib = ic < 0. Each leg loses sign(i)·Vbus·td/Ts, so
+        // v_an loses (4/3)·Vbus·td/Ts and so does vd: id = (vd − (4/3)·Vbus·td/Ts)/R.
+        let mut c = ideal_at(fidelity);
+        c.inverter.dead_time_s = 200e-9;
+        let (r, bus, ts) = (
+            c.motor.r_ohm,
+            c.inverter.bus_voltage_v,
+            1.0 / c.inverter.pwm_hz,
+        );
+        let err = bus * c.inverter.dead_time_s / ts;
+        let mut p = plant(c);
+        p.set_driven_speed(Some(0.0));
+        let vd = 1.2;
+        let d = duties_for(&p, vd, 0.0);
+        run_s(&mut p, d, true, 0.1);
+        let expected = (vd - 4.0 / 3.0 * err) / r;
+        let (id, iq) = measured_dq(&p);
+        assert!(
+            (id - expected).abs() < 1e-3 * expected,
+            "id {id} vs {expected}"
+        );
+        assert!(iq.abs() < 1e-3);
+        // Same law for the device drop: every leg loses sign(i)·Vdrop.
+        let mut c = ideal_at(fidelity);
+        c.inverter.device_drop_v = 0.3;
+        let mut p = plant(c);
+        p.set_driven_speed(Some(0.0));
+        let d = duties_for(&p, vd, 0.0);
+        run_s(&mut p, d, true, 0.1);
+        let expected = (vd - 4.0 / 3.0 * 0.3) / r;
+        assert!((p.currents_dq().0 - expected).abs() < 1e-3 * expected);
+    }
 }
 
 #[test]
