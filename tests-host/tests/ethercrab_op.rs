@@ -5,6 +5,7 @@
 use std::time::Duration;
 
 use board_sim::demo::{self, cw, Report, Scenario};
+use board_sim::plant::Fidelity;
 use tests_host::{block_on, expected_identity};
 
 /// CiA402 statusword bits 0..3, 5, 6 identify the PDS state (CiA402 Table 30).
@@ -24,6 +25,7 @@ fn run_with(drives: usize, cycle: Duration, cycles: u32, dc: bool) -> Report {
         cycle,
         cycles,
         dc,
+        ..Scenario::default()
     };
     block_on(demo::run(&scenario, &mut |_| {})).unwrap_or_else(|e| panic!("scenario failed: {e}"))
 }
@@ -191,6 +193,21 @@ fn one_drive_holds_a_31_25us_dc_cycle_for_100000_cycles() {
         last.1,
         last.3
     );
+}
+
+/// The averaged plant (`sim-drive demo --plant averaged`): the same bus behaviour and the same
+/// following as the PWM-resolved plant, for a line of drives.
+#[test]
+fn three_drives_on_the_averaged_plant_reach_op_and_follow() {
+    let scenario = Scenario {
+        drives: 3,
+        plant: Fidelity::Averaged,
+        ..Scenario::default()
+    };
+    let report = block_on(demo::run(&scenario, &mut |_| {}))
+        .unwrap_or_else(|e| panic!("scenario failed: {e}"));
+    check(&report, 3, scenario.cycles);
+    assert_eq!(report.sync_parameters, vec![(2, 1_000_000); 3]);
 }
 
 #[test]

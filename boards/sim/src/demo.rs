@@ -27,6 +27,7 @@ use firmware::slave::esm::sync::{SyncConfig, SyncMode};
 use hal::esc::regs;
 
 use crate::inproc::{InProcess, Shared};
+use crate::plant::Fidelity;
 use crate::segment::Segment;
 
 /// Most drives a demo group holds.
@@ -61,6 +62,8 @@ pub struct Scenario {
     pub cycles: u32,
     /// DC SYNC0 (true) or free run (false).
     pub dc: bool,
+    /// How finely every drive's plant resolves its inverter.
+    pub plant: Fidelity,
 }
 
 impl Scenario {
@@ -78,6 +81,7 @@ impl Default for Scenario {
             cycle: Duration::from_millis(1),
             cycles: 1000,
             dc: true,
+            plant: Fidelity::PwmResolved,
         }
     }
 }
@@ -180,6 +184,19 @@ pub struct Report {
     pub frames: u64,
     /// Simulated time at the end, ns.
     pub sim_time_ns: u64,
+    /// Simulated time of the cyclic exchange in OP, ns: [`Scenario::cycles`] cycles.
+    pub cyclic_sim_ns: u64,
+    /// Host (wall-clock) time the cyclic exchange in OP took.
+    pub cyclic_wall: Duration,
+}
+
+impl Report {
+    /// Simulated time over host time of the cyclic exchange in OP (start-up excluded): how
+    /// many times faster than real time the line ran; `None` before any cycle.
+    pub fn real_time_factor(&self) -> Option<f64> {
+        let wall = self.cyclic_wall.as_secs_f64();
+        (self.cyclic_sim_ns > 0 && wall > 0.0).then(|| self.cyclic_sim_ns as f64 * 1e-9 / wall)
+    }
 }
 
 /// A drive's account of the synchronisation after the cyclic exchange (ETG.1020 §5.1, the SM
@@ -250,6 +267,7 @@ macro_rules! operate {
             "OP; 1C32h sync mode / cycle time per drive: {:?}",
             $report.sync_parameters
         ));
+        let cyclic_start = std::time::Instant::now();
         for i in 0..$s.cycles {
             let (controlword, target) = set_points(i, $cycle_ns);
             for (sd, io) in $group.iter($md).zip(&$ios) {
@@ -271,6 +289,8 @@ macro_rules! operate {
             });
             $shared.advance($cycle_ns);
         }
+        $report.cyclic_wall = cyclic_start.elapsed();
+        $report.cyclic_sim_ns = u64::from($s.cycles) * $cycle_ns;
         for sd in $group.iter($md) {
             let health = SyncHealth {
                 al_status: Command::fprd(sd.configured_address(), regs::AL_STATUS.addr)
@@ -523,7 +543,7 @@ pub async fn run_line<S: AsRef<str>>(
     log: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn std::error::Error>> {
     let profiles: Vec<String> = profiles.iter().map(|p| p.as_ref().to_string()).collect();
-    let segment = Segment::line(&profiles)?;
+    let segment = Segment::line_with_plant(&profiles, s.plant)?;
     check_sync_modes(&profiles, s.dc)?;
     let cycle_ns = u64::try_from(s.cycle.as_nanos()).unwrap_or(u64::MAX);
     for p in &profiles {

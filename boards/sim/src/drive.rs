@@ -11,7 +11,7 @@ use hal::pdi::EscSignals;
 use crate::domains::SimDomainStore;
 use crate::esc::Et1100;
 use crate::leds::SimLeds;
-use crate::plant::PlantConfig;
+use crate::plant::{Fidelity, PlantConfig};
 use crate::servo::{axis_config, SimServo, Tuning};
 use crate::storage::SimStorage;
 use firmware::params::{max_record_len, Loaded, ParamError, ParamStore};
@@ -88,10 +88,11 @@ pub struct SimDrive {
 }
 
 /// The simulated drive's motor of axis `axis` (0 = the first): the 400 W servo with the default
-/// tuning; each axis' plant has its own noise seed.
-fn new_servo(axis: usize) -> SimServo {
+/// tuning, its plant at `fidelity`; each axis' plant has its own noise seed.
+fn new_servo(axis: usize, fidelity: Fidelity) -> SimServo {
     let mut plant = PlantConfig::servo_400w();
     plant.seed = plant.seed.wrapping_add(axis as u64);
+    plant.fidelity = fidelity;
     let cfg = axis_config(&plant, &Tuning::default());
     match SimServo::new(plant, cfg) {
         Ok(servo) => servo,
@@ -108,6 +109,16 @@ impl SimDrive {
         Self::with_storage(profile, sii, storage)
     }
 
+    /// [`Self::new`] with the plants of its axes at `plant` fidelity.
+    pub fn with_plant(
+        profile: &'static DriveProfile,
+        sii: &[u8],
+        plant: Fidelity,
+    ) -> Result<Self, SlaveError> {
+        let storage = SimStorage::for_record(max_record_len(&profile.od));
+        Self::build(profile, sii, storage, plant)
+    }
+
     /// A drive whose parameter storage holds `storage`; the stored parameters are loaded at
     /// power-on, before the firmware starts (see `firmware::params`).
     pub fn with_storage(
@@ -115,11 +126,22 @@ impl SimDrive {
         sii: &[u8],
         storage: SimStorage,
     ) -> Result<Self, SlaveError> {
+        Self::build(profile, sii, storage, Fidelity::default())
+    }
+
+    fn build(
+        profile: &'static DriveProfile,
+        sii: &[u8],
+        storage: SimStorage,
+        plant: Fidelity,
+    ) -> Result<Self, SlaveError> {
         let mut esc = Et1100::new(sii);
         let mut params = ParamStore::new(storage);
         let mut slave = Box::new(firmware::new_slave(profile)?);
         let loaded = slave.load_parameters(&mut params);
-        let servos: Vec<SimServo> = (0..profile.axes.len()).map(new_servo).collect();
+        let servos: Vec<SimServo> = (0..profile.axes.len())
+            .map(|axis| new_servo(axis, plant))
+            .collect();
         attach_servos(&mut slave, &servos);
         // The simulated PDI never fails (its error type only reports out-of-range accesses,
         // which the firmware does not make); a failure here would be a firmware bug.

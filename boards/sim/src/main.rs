@@ -6,12 +6,13 @@
 //!     homed, moved in profile position, then streamed in cyclic synchronous position by the
 //!     built-in ethercrab master; prints every statusword change and writes a plot of position,
 //!     speed and current (default target/sim-drive/tour.svg)
-//! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
+//! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run] [--plant F]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
-//!     exchange, back to INIT, and print what happened; US may have up to three decimals
-//!     (31.25) and must be a cycle every drive of the line accepts (its profile's DC or
-//!     free-run range, step and fixed cycles: the error says which)
-//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [FAULTS] [MACHINE]
+//!     exchange, back to INIT, and print what happened (with the real-time factor of the
+//!     cyclic exchange); US may have up to three decimals (31.25) and must be a cycle every
+//!     drive of the line accepts (its profile's DC or free-run range, step and fixed cycles:
+//!     the error says which)
+//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--plant F] [FAULTS] [MACHINE]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
@@ -24,6 +25,12 @@
 //! LINE, the drives in ring order (default: one drive of the standard profile), either
 //!     [--profile NAME] [--drives N]      N drives (default 1) of one profile, or
 //!     --drive NAME [--drive NAME ...]    one drive per --drive, profiles mixed in that order
+//!
+//! --plant F, how finely every drive's plant resolves its inverter:
+//!     pwm (the default)                  every PWM period in 20 substeps: current ripple,
+//!                                        dead time within the period
+//!     averaged                           one step per PWM period with the period's average
+//!                                        voltages: no ripple, a fraction of the cost
 //!
 //! MACHINE, switches around the motor of every axis (in motor revolutions; the rotor starts at 0):
 //!     --home-switch-rev X                a home switch, active from X revolutions upward
@@ -49,17 +56,19 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use board_sim::demo::{self, Scenario};
-use board_sim::plant::SwitchParams;
+use board_sim::plant::{Fidelity, SwitchParams};
 use board_sim::{rawsock, Segment};
 
 const USAGE: &str = "usage: sim-drive [tour] [--plot FILE]
-       sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run]
-       sim-drive attach --iface IFNAME [LINE] [--seconds S] [FAULTS] [MACHINE]
+       sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run] [--plant F]
+       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--plant F] [FAULTS] [MACHINE]
        sim-drive list-profiles
        sim-drive plots [--out DIR]
 LINE (the drives in ring order; default one standard drive):
        [--profile NAME] [--drives N]     N drives of one profile
        --drive NAME [--drive NAME ...]   one drive per --drive, in that order (profiles may differ)
+--plant F (demo, attach): the plant's fidelity, `pwm` (the default: every PWM period in 20
+       substeps) or `averaged` (one step per PWM period with its average voltages)
 MACHINE (attach; switches around every axis's motor, in revolutions, the rotor starting at 0):
        --home-switch-rev X               a home switch, active from X revolutions upward
        --limit-switches-rev N,P          limits: negative at or below N, positive at or above P,
@@ -104,6 +113,10 @@ struct Args {
     home_switch_rev: Option<f64>,
     /// `--limit-switches-rev`: the negative and positive limit switches, in revolutions.
     limit_switches_rev: Option<(f64, f64)>,
+    /// `--plant`: the fidelity of every drive's plant.
+    plant: Fidelity,
+    /// `--plant` was given.
+    plant_given: bool,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -126,6 +139,8 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         line_given: false,
         home_switch_rev: None,
         limit_switches_rev: None,
+        plant: Fidelity::default(),
+        plant_given: false,
     };
     let mut profile: Option<String> = None;
     let mut drives: Option<usize> = None;
@@ -146,6 +161,14 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--cycles" => a.cycles = number(&value("--cycles")?, "--cycles")?,
             "--iface" => a.iface = Some(value("--iface")?),
             "--free-run" => a.free_run = true,
+            "--plant" => {
+                let name = value("--plant")?;
+                a.plant = Fidelity::by_name(&name).ok_or_else(|| {
+                    let names: Vec<&str> = Fidelity::NAMES.iter().map(|(n, _)| *n).collect();
+                    format!("--plant {name:?}: the plant is one of {}", names.join(", "))
+                })?;
+                a.plant_given = true;
+            }
             "--drop-mailbox-read" => {
                 a.drop_mailbox_read = Some(number(
                     &value("--drop-mailbox-read")?,
@@ -254,6 +277,9 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             return Err("--halt-mcu-at-ms and --halt-mcu-for-ms go together".into())
         }
         _ => {}
+    }
+    if a.plant_given && a.command != "demo" && a.command != "attach" {
+        return Err("--plant is an option of `demo` and `attach`".into());
     }
     if a.command != "attach" && a.machine().is_some() {
         return Err("--home-switch-rev and --limit-switches-rev are options of `attach`".into());
@@ -423,7 +449,7 @@ fn plots(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
 fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     // `parse` made sure it is there.
     let iface = args.iface.as_deref().unwrap_or_default();
-    let mut segment = Segment::line(&args.line)?;
+    let mut segment = Segment::line_with_plant(&args.line, args.plant)?;
     if let Some(switches) = args.machine() {
         for servo in segment
             .drives_mut()
@@ -457,13 +483,15 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         cycle: Duration::from_nanos(args.cycle_ns),
         cycles: args.cycles,
         dc: !args.free_run,
+        plant: args.plant,
     };
     println!(
-        "sim-drive demo: {} simulated drive(s) [{}], built-in ethercrab master, {} cycle {} µs",
+        "sim-drive demo: {} simulated drive(s) [{}], built-in ethercrab master, {} cycle {} µs, {} plant",
         args.line.len(),
         args.line.join(", "),
         if scenario.dc { "DC SYNC0" } else { "free-run" },
-        args.cycle_ns as f64 / 1e3
+        args.cycle_ns as f64 / 1e3,
+        args.plant.name()
     );
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_time()
@@ -478,6 +506,15 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         report.sim_time_ns as f64 / 1e6,
         report.firmware_cycles
     );
+    if let Some(factor) = report.real_time_factor() {
+        // The line's speed on this host, start-up excluded: above 1 it keeps up with a real
+        // master's clock (`attach`), below it would fall behind.
+        println!(
+            "cyclic exchange: {:.1} ms simulated in {:.1} ms of host time, {factor:.2} × real time",
+            report.cyclic_sim_ns as f64 / 1e6,
+            report.cyclic_wall.as_secs_f64() * 1e3
+        );
+    }
     if report.wkc_errors > 0 {
         return Err(format!("{} cycles had a wrong working counter", report.wkc_errors).into());
     }
@@ -540,6 +577,24 @@ mod tests {
             "{e}"
         );
         args("demo --profile sdv3-e --free-run --cycle-us 2000").expect("2 ms");
+    }
+
+    #[test]
+    fn the_plant_fidelity_is_named_and_only_for_demo_and_attach() {
+        assert_eq!(args("demo").expect("demo").plant, Fidelity::PwmResolved);
+        assert_eq!(
+            args("demo --plant averaged").expect("averaged").plant,
+            Fidelity::Averaged
+        );
+        assert_eq!(
+            args("attach --iface veth0 --plant pwm").expect("pwm").plant,
+            Fidelity::PwmResolved
+        );
+        let e = refused("demo --plant exact");
+        assert!(e.contains("the plant is one of pwm, averaged"), "{e}");
+        assert!(refused("demo --plant").contains("--plant needs a value"));
+        assert!(refused("tour --plant averaged")
+            .contains("--plant is an option of `demo` and `attach`"));
     }
 
     #[test]

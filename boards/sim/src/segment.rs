@@ -9,6 +9,7 @@ use firmware::profile::DriveProfile;
 
 use crate::drive::SimDrive;
 use crate::esc::{self, Et1100};
+use crate::plant::Fidelity;
 use crate::record::Recorder;
 
 /// Time a frame of `len` bytes spends on a 100 Mbit/s wire, plus the fixed forwarding latency
@@ -103,6 +104,14 @@ impl Segment {
     /// 0x1001 with SOEM). Each drive runs its own profile: its own object dictionary, SII
     /// (identity, SM layout) and default PDO mapping.
     pub fn line<S: AsRef<str>>(profiles: &[S]) -> Result<Self, SegmentError> {
+        Self::line_with_plant(profiles, Fidelity::default())
+    }
+
+    /// [`Self::line`] with every drive's plant at the given fidelity.
+    pub fn line_with_plant<S: AsRef<str>>(
+        profiles: &[S],
+        plant: Fidelity,
+    ) -> Result<Self, SegmentError> {
         // Each profile is resolved (and its SII built) once, however often it occurs.
         let mut loaded: Vec<(&str, &'static DriveProfile, Vec<u8>)> = Vec::new();
         let mut drives = Vec::with_capacity(profiles.len());
@@ -117,7 +126,7 @@ impl Segment {
                 }
             };
             let (_, fw_profile, sii) = &loaded[at];
-            drives.push(SimDrive::new(fw_profile, sii).map_err(SegmentError::Slave)?);
+            drives.push(SimDrive::with_plant(fw_profile, sii, plant).map_err(SegmentError::Slave)?);
         }
         Ok(Self::from_devices(drives))
     }

@@ -122,6 +122,14 @@ impl Fidelity {
         ("averaged", Fidelity::Averaged),
     ];
 
+    /// The fidelity's name in [`Self::NAMES`].
+    pub fn name(self) -> &'static str {
+        Self::NAMES
+            .iter()
+            .find(|(_, f)| *f == self)
+            .map_or("", |(n, _)| n)
+    }
+
     /// The fidelity called `name` in [`Self::NAMES`].
     pub fn by_name(name: &str) -> Option<Fidelity> {
         Self::NAMES
