@@ -201,7 +201,11 @@ async fn soak(cycles: u64, seed: u64) -> Result<Report, String> {
         ..Report::default()
     };
     let started = std::time::Instant::now();
-    let (m, transport) = master_for(Segment::new(PROFILE, DRIVES).map_err(|e| e.to_string())?);
+    let mut segment = Segment::new(PROFILE, DRIVES).map_err(|e| e.to_string())?;
+    for drive in segment.drives_mut() {
+        drive.measure_host_times = true;
+    }
+    let (m, transport) = master_for(segment);
     tokio::task::spawn_local(transport);
     let md: &MainDevice<'_> = &m.maindevice;
     let (outputs, inputs) = vendor::VELOCITY_MAPPING;

@@ -454,6 +454,9 @@ pub struct Plant {
     resistance_scale: f64,
     /// Touch-probe inputs as of the last substep, with their edges since the last sample.
     probes: [ProbeReading; 2],
+    /// The last electrical angle whose sine and cosine were taken, with them: the sample at a
+    /// period boundary and the first substep after it need the same pair.
+    trig: (f64, (f64, f64)),
 }
 
 impl Plant {
@@ -488,6 +491,7 @@ impl Plant {
             enable_input: true,
             resistance_scale: 1.0,
             probes: [ProbeReading::default(); 2],
+            trig: (0.0, 0.0f64.sin_cos()),
             cfg,
         })
     }
@@ -568,6 +572,15 @@ impl Plant {
         }
     }
 
+    /// The sine and cosine of the present electrical angle (cached in `trig`).
+    fn electrical_sin_cos(&mut self) -> (f64, f64) {
+        let theta = self.electrical_angle_rad();
+        if theta != self.trig.0 {
+            self.trig = (theta, theta.sin_cos());
+        }
+        self.trig.1
+    }
+
     fn omega_e(&self) -> f64 {
         f64::from(self.cfg.motor.pole_pairs) * self.mech.omega_rad_s
     }
@@ -591,7 +604,7 @@ impl Plant {
     fn switching_substep(&mut self, duties: [f64; 3], t0: f64, t1: f64) {
         let h = t1 - t0;
         let omega_e = self.omega_e();
-        let start = self.electrical_angle_rad().sin_cos();
+        let start = self.electrical_sin_cos();
         let (alpha, beta) = inverse_park_at(self.id, self.iq, start);
         let currents = inverse_clarke(alpha, beta);
         let legs = self.leg_timing().average_voltages(duties, t0, t1, currents);
@@ -771,7 +784,8 @@ impl Plant {
     /// What the ADC and encoder interface latch at the present period boundary. Draws three
     /// Gaussian noise values from the PRNG (one per phase) on every call.
     pub fn sample(&mut self) -> Sample {
-        let i = self.phase_currents();
+        let trig = self.electrical_sin_cos();
+        let i = self.phase_currents_at(trig);
         let noise_rms = self.cfg.sensing.noise_a_rms;
         let mut counts = [0u16; 3];
         for (k, c) in counts.iter_mut().enumerate() {
@@ -952,6 +966,11 @@ impl Plant {
     /// True phase currents in A (positive out of the inverter leg into the motor); exactly
     /// zero in a phase that does not conduct.
     pub fn phase_currents(&self) -> [f64; 3] {
+        self.phase_currents_at(self.electrical_angle_rad().sin_cos())
+    }
+
+    /// [`Self::phase_currents`] with the sine and cosine of the present electrical angle.
+    fn phase_currents_at(&self, trig: (f64, f64)) -> [f64; 3] {
         match self.conduction {
             Conduction::Idle => [0.0; 3],
             Conduction::Loop { p, n, i } => {
@@ -961,7 +980,7 @@ impl Plant {
                 abc
             }
             Conduction::Switching | Conduction::Diodes { .. } => {
-                let (a, b) = inverse_park(self.id, self.iq, self.electrical_angle_rad());
+                let (a, b) = inverse_park_at(self.id, self.iq, trig);
                 inverse_clarke(a, b)
             }
         }
