@@ -1,7 +1,8 @@
 //! SOEM (pysoem, over a veth pair) brings a line of every vendor profile (and the standard
 //! drive) to OP together: each drive shows the identity and name of its profile in the SII and
 //! in 1018h, maps its profile's default PDOs, and exchanges process data at a 1 ms DC cycle
-//! with the working counter of the whole line.
+//! with the working counter of the whole line. The drives run on the averaged plant
+//! (`--plant averaged`, see `tests_host::soem::run_line`): the bus behaviour is the same.
 
 use serde_json::Value;
 use tests_host::soem::run_line;

@@ -170,6 +170,9 @@ pub const MII_MANAGEMENT: Reg = Reg::new(0x0510, 12);
 pub const ET1100_FMMUS: u8 = 8;
 /// Number of SyncManagers an ET1100 implements.
 pub const ET1100_SMS: u8 = 8;
+/// Most SyncManagers an ESC has room for (0x0800–0x087F, ETG.1000.4 Table 59); an ESC reports
+/// how many it implements in [`SM_COUNT`].
+pub const MAX_SMS: u8 = 16;
 /// Start of the FMMU block (16 bytes per FMMU).
 pub const FMMU_BASE: u16 = 0x0600;
 /// Size of one FMMU register block.
@@ -191,6 +194,13 @@ pub const fn fmmu(n: u8) -> Reg {
 #[allow(clippy::arithmetic_side_effects)]
 pub const fn sm(n: u8) -> Reg {
     Reg::new(SM_BASE + SM_LEN * n as u16, SM_LEN)
+}
+
+/// Activate byte of SyncManager `n` (reading it acknowledges the SM-activation event for it).
+// Cannot overflow: at most 0x0800 + 8 × 255 + 6 = 0x0FFE.
+#[allow(clippy::arithmetic_side_effects)]
+pub const fn sm_activate(n: u8) -> u16 {
+    sm(n).addr + sm_offset::ACTIVATE
 }
 
 /// Byte offsets inside one SyncManager block.

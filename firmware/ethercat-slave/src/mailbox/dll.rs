@@ -22,6 +22,11 @@
 //! re-activated from the PDI side, as for a repeat), put back at the head of the queue with its
 //! counter, and the response goes out first. The repeat backup is always the last frame
 //! actually posted (an emergency too) and is dropped only together with a withdrawn emergency.
+//!
+//! SM1's event (AL event bit 9, "the master read SM1") stays pending until the next frame is
+//! written to SM1, so it is in the AL event mask only while a frame waits for SM1 to empty (a
+//! response, the next fragment, an emergency): an idle mailbox releases the IRQ line, and the
+//! next event (a request in SM0, AL control, SM2) gives it a new edge.
 
 use hal::esc::{regs, AlEvent, AlState, SmActivate, SmPdiControl, SmStatus};
 use hal::pdi::EscPdi;
@@ -64,6 +69,8 @@ pub struct Mailbox {
     /// The emergency posted last while SM1 may still hold it unread, with the send counter
     /// before it (to withdraw it when a request arrives).
     emcy_in_sm1: Option<(Emergency, u8)>,
+    /// SM1's event is in the AL event mask (`SlaveCore::start` leaves it out).
+    sm1_event_enabled: bool,
 }
 
 impl Default for Mailbox {
@@ -86,6 +93,7 @@ impl Mailbox {
             coe: CoeServer::new(),
             emcy: EmcyQueue::new(),
             emcy_in_sm1: None,
+            sm1_event_enabled: false,
         }
     }
 
@@ -132,6 +140,44 @@ impl Mailbox {
     /// [`Self::service`] with a hook run on every committed SDO download before its response
     /// is posted (see [`CoeServer::handle_with`]).
     pub fn service_with<P: EscPdi, H: DownloadHook + ?Sized>(
+        &mut self,
+        pdi: &mut P,
+        device: &DeviceInfo,
+        od: &mut Dictionary<'_>,
+        state: AlState,
+        events: AlEvent,
+        hook: &mut H,
+    ) -> Result<(), P::Error> {
+        self.serve_frames(pdi, device, od, state, events, hook)?;
+        self.update_sm1_event(pdi)
+    }
+
+    /// Whether a frame waits for SM1 to empty: a response not yet posted, the next fragment of
+    /// a fragmented one, a queued emergency.
+    fn waits_for_sm1(&self) -> bool {
+        (self.out_len > 0 && !self.out_posted)
+            || (self.out_posted && self.coe.fragment_pending())
+            || !self.emcy.is_empty()
+    }
+
+    /// Puts SM1's event in the AL event mask while a frame waits for SM1, takes it out when
+    /// none does (a read-modify-write of 0x0204 on each change only; no other context writes
+    /// the mask after start-up).
+    fn update_sm1_event<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        let wanted = self.waits_for_sm1();
+        if wanted == self.sm1_event_enabled {
+            return Ok(());
+        }
+        let mask = pdi.read_u32(regs::AL_EVENT_MASK.addr)?;
+        let bit = AlEvent::sm(SM_MAILBOX_IN);
+        let mask = if wanted { mask | bit } else { mask & !bit };
+        pdi.write_u32(regs::AL_EVENT_MASK.addr, mask)?;
+        self.sm1_event_enabled = wanted;
+        Ok(())
+    }
+
+    /// The transfers of one round (see [`Self::service_with`]).
+    fn serve_frames<P: EscPdi, H: DownloadHook + ?Sized>(
         &mut self,
         pdi: &mut P,
         device: &DeviceInfo,

@@ -80,6 +80,10 @@ pub struct SlaveCore<const RAM: usize, A: Application = NoApplication> {
     emcy_out: Deque<Emergency, EMCY_QUEUE_LEN>,
     /// The mailbox must start afresh (INIT was entered); the mailbox side takes it.
     mailbox_reset: bool,
+    /// SyncManagers the ESC implements (its register 0x0005, read at [`Self::start`]; at most
+    /// [`regs::MAX_SMS`]): an SM-activation event is acknowledged by reading each one's
+    /// activate byte.
+    esc_sms: u8,
     rx_plan: PdoPlan,
     /// Counts the changes of [`Self::rx_plan`], so that the mailbox side copies its OD RAM
     /// ranges only when they change.
@@ -184,6 +188,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             code: AlStatusCode::NoError,
             emcy_out: Deque::new(),
             mailbox_reset: false,
+            esc_sms: regs::MAX_SMS,
             rx_plan: PdoPlan::default(),
             rx_plan_generation: 0,
             tx_plan: PdoPlan::default(),
@@ -223,13 +228,16 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// If the ESC still shows a state above INIT (the MCU restarted without the ESC), INIT with
     /// the error indication and 0x0060 instead.
     pub fn start<P: EscPdi>(&mut self, pdi: &mut P) -> Result<(), P::Error> {
+        // SM1's event (the master read the slave's mailbox) is enabled by the mailbox side only
+        // while it has a frame waiting for SM1 (`mailbox::dll`): otherwise it would hold the
+        // IRQ line asserted from one mailbox exchange to the next.
         let mask = AlEvent::AL_CONTROL
             | AlEvent::SM_ACTIVATION
             | AlEvent::WATCHDOG_PD
             | AlEvent::sm(0)
-            | AlEvent::sm(1)
             | AlEvent::sm(SM_OUTPUTS);
         pdi.write_u32(regs::AL_EVENT_MASK.addr, mask)?;
+        self.esc_sms = pdi.read_u8(regs::SM_COUNT.addr)?.min(regs::MAX_SMS);
         if let Some(alias) = self.alias_from_parameter() {
             // The ESC loaded SII word 4 into 0x0012 before; the PDI may overwrite the register.
             pdi.write_u16(regs::STATION_ALIAS.addr, alias)?;
@@ -372,6 +380,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         }
         if events.any(AlEvent::SM_ACTIVATION) {
             self.revalidate_sms(pdi)?;
+            self.acknowledge_sm_activation(pdi)?;
         }
         if events.any(AlEvent::WATCHDOG_PD) {
             self.check_watchdog(pdi)?;

@@ -62,6 +62,23 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         self.raise_fault(pdi, fallback, code, ErrorIndication::InvalidConfiguration)
     }
 
+    /// Acknowledges the SM-activation event (AL event bit 4) for the SMs the slave does not
+    /// use: the ESC clears the event only when the activate byte of every SM the master wrote
+    /// has been read (ET1100 datasheet, 0x0220 bit 4), and a master's start-up clears all of
+    /// them (SOEM and ethercrab write zeros over the SM block). Left pending, the event would
+    /// hold the IRQ line asserted for good: an edge-triggered board would see no later event,
+    /// a level-triggered one would run event rounds back to back. SM0..SM3 are read again here
+    /// too: their revalidation above reads them only in the states where they matter.
+    pub(in crate::slave) fn acknowledge_sm_activation<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+    ) -> Result<(), P::Error> {
+        for n in 0..self.esc_sms {
+            pdi.read_u8(regs::sm_activate(n))?;
+        }
+        Ok(())
+    }
+
     /// Profile rule (`[esm] link_loss_error`): the input port (port 0, DL status 0x0110) lost
     /// its link in PREOP or above: the application raises the profile's error (603Fh; its EMCY
     /// cannot reach the master) and the slave goes to INIT with AL status code 0x0000.
