@@ -94,6 +94,30 @@ fn build_sim_drive() -> Result<(), String> {
         .clone()
 }
 
+/// Runs `sim-drive attach --iface lo` plus `args` alone (no master) in a private user + network
+/// namespace and returns what it printed (standard output and error).
+pub fn attach_without_master(args: &[&str]) -> Result<String, String> {
+    build_sim_drive()?;
+    let sim = target_dir().join("release/sim-drive");
+    let out = Command::new("unshare")
+        .args(["--user", "--map-root-user", "--net", "sh", "-c"])
+        .arg(r#"ip link set lo up && exec "$0" attach --iface lo "$@""#)
+        .arg(&sim)
+        .args(args)
+        .output()
+        .map_err(|e| format!("unshare: {e}"))?;
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if out.status.success() {
+        Ok(text)
+    } else {
+        Err(format!("sim-drive attach failed ({}):\n{text}", out.status))
+    }
+}
+
 /// Runs the SOEM scenario against `drives` simulated drives of `profile`; returns SOEM's
 /// observations (see `tests-host/soem/scenario.py`) and the simulator's log.
 pub fn run_scenario(profile: &str, drives: usize) -> Result<(serde_json::Value, String), String> {

@@ -31,13 +31,13 @@ use crate::plant::Fidelity;
 use crate::segment::Segment;
 
 /// Most drives a demo group holds.
-pub const MAX_DRIVES: usize = 16;
-/// Process-data image size of the group. It fits one frame of the in-process master (with
-/// the DC PDU): ethercrab splits a larger image over several LRWs and sums their working
-/// counters, which the demo's expected working counter does not model. 16 drives of the
-/// standard profile (14 bytes each) or 14 of sigma-v-sd-2axis (72 bytes) fit; ethercrab
-/// refuses a larger line in PRE-OP.
-pub const MAX_PDI: usize = 1024;
+pub const MAX_DRIVES: usize = 128;
+/// Process-data image size of the group. It fits one frame of the in-process master with
+/// the DC PDU (`inproc`'s frame size, 100 bytes above it): ethercrab splits a larger image
+/// over several LRWs and sums their working counters, which the demo's expected working
+/// counter does not model. 128 drives of the standard profile (14 bytes each) or 26 of
+/// sigma-v-sd-2axis (72 bytes) fit; ethercrab refuses a larger line in PRE-OP.
+pub const MAX_PDI: usize = 1900;
 
 /// Controlword commands of CiA402 Table 5 used to enable the drive.
 pub mod cw {
@@ -64,6 +64,8 @@ pub struct Scenario {
     pub dc: bool,
     /// How finely every drive's plant resolves its inverter.
     pub plant: Fidelity,
+    /// Threads the simulation of the line may use ([`Segment::set_threads`]).
+    pub threads: usize,
 }
 
 impl Scenario {
@@ -82,6 +84,7 @@ impl Default for Scenario {
             cycles: 1000,
             dc: true,
             plant: Fidelity::PwmResolved,
+            threads: 1,
         }
     }
 }
@@ -543,7 +546,8 @@ pub async fn run_line<S: AsRef<str>>(
     log: &mut dyn FnMut(String),
 ) -> Result<Report, Box<dyn std::error::Error>> {
     let profiles: Vec<String> = profiles.iter().map(|p| p.as_ref().to_string()).collect();
-    let segment = Segment::line_with_plant(&profiles, s.plant)?;
+    let mut segment = Segment::line_with_plant(&profiles, s.plant)?;
+    segment.set_threads(s.threads);
     check_sync_modes(&profiles, s.dc)?;
     let cycle_ns = u64::try_from(s.cycle.as_nanos()).unwrap_or(u64::MAX);
     for p in &profiles {

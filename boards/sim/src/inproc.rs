@@ -18,8 +18,11 @@ use crate::segment::{Segment, SimDevice};
 
 /// Frames in flight in the master's PDU loop.
 const MAX_FRAMES: usize = 16;
-/// Largest PDU payload per frame.
-const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
+/// Largest PDU payload per frame. The in-process transport is not an Ethernet wire: its frames
+/// carry up to 2000 bytes of PDUs (an EtherCAT frame's length field has 11 bits, up to 2047),
+/// so that the process image of a 128-drive line (`demo::MAX_PDI`) goes in one LRW beside the
+/// DC PDU. On a wire a master splits such an image over two frames.
+const MAX_PDU_DATA: usize = PduStorage::element_size(2000);
 
 /// The simulated time as ethercrab reads it (`init_single_group(clock.now_fn())`).
 #[derive(Clone, Copy)]

@@ -6,13 +6,13 @@
 //!     homed, moved in profile position, then streamed in cyclic synchronous position by the
 //!     built-in ethercrab master; prints every statusword change and writes a plot of position,
 //!     speed and current (default target/sim-drive/tour.svg)
-//! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run] [--plant F]
+//! sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run] [--plant F] [--threads N]
 //!     run the drive(s) with the built-in ethercrab master: INIT → OP with DC SYNC0, cyclic
 //!     exchange, back to INIT, and print what happened (with the real-time factor of the
 //!     cyclic exchange); US may have up to three decimals (31.25) and must be a cycle every
 //!     drive of the line accepts (its profile's DC or free-run range, step and fixed cycles:
 //!     the error says which)
-//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--plant F] [FAULTS] [MACHINE]
+//! sim-drive attach --iface IFNAME [LINE] [--seconds S] [--plant F] [--threads N] [FAULTS] [MACHINE]
 //!     attach the drive(s) to a network interface with a raw socket so that any external
 //!     master (TwinCAT, SOEM, IgH, ethercrab) can drive them
 //! sim-drive list-profiles
@@ -25,6 +25,9 @@
 //! LINE, the drives in ring order (default: one drive of the standard profile), either
 //!     [--profile NAME] [--drives N]      N drives (default 1) of one profile, or
 //!     --drive NAME [--drive NAME ...]    one drive per --drive, profiles mixed in that order
+//!
+//! --threads N (demo, attach): the simulation of the line may use N threads (default: 1 for
+//!     demo, every core for attach); each thread gets at least 4 drives
 //!
 //! --plant F, how finely every drive's plant resolves its inverter:
 //!     pwm (the default)                  every PWM period in 20 substeps: current ripple,
@@ -60,13 +63,15 @@ use board_sim::plant::{Fidelity, SwitchParams};
 use board_sim::{rawsock, Segment};
 
 const USAGE: &str = "usage: sim-drive [tour] [--plot FILE]
-       sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run] [--plant F]
-       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--plant F] [FAULTS] [MACHINE]
+       sim-drive demo [LINE] [--cycle-us US] [--cycles N] [--free-run] [--plant F] [--threads N]
+       sim-drive attach --iface IFNAME [LINE] [--seconds S] [--plant F] [--threads N] [FAULTS] [MACHINE]
        sim-drive list-profiles
        sim-drive plots [--out DIR]
 LINE (the drives in ring order; default one standard drive):
        [--profile NAME] [--drives N]     N drives of one profile
        --drive NAME [--drive NAME ...]   one drive per --drive, in that order (profiles may differ)
+--threads N (demo, attach): threads for the simulation of the line (default: demo 1, attach
+       every core; at least 4 drives per thread)
 --plant F (demo, attach): the plant's fidelity, `pwm` (the default: every PWM period in 20
        substeps) or `averaged` (one step per PWM period with its average voltages)
 MACHINE (attach; switches around every axis's motor, in revolutions, the rotor starting at 0):
@@ -117,6 +122,8 @@ struct Args {
     plant: Fidelity,
     /// `--plant` was given.
     plant_given: bool,
+    /// `--threads`, if given.
+    threads: Option<usize>,
 }
 
 fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
@@ -141,6 +148,7 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         limit_switches_rev: None,
         plant: Fidelity::default(),
         plant_given: false,
+        threads: None,
     };
     let mut profile: Option<String> = None;
     let mut drives: Option<usize> = None;
@@ -161,6 +169,13 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--cycles" => a.cycles = number(&value("--cycles")?, "--cycles")?,
             "--iface" => a.iface = Some(value("--iface")?),
             "--free-run" => a.free_run = true,
+            "--threads" => {
+                let n = number(&value("--threads")?, "--threads")?;
+                if n == 0 {
+                    return Err("--threads must be at least 1".into());
+                }
+                a.threads = Some(n);
+            }
             "--plant" => {
                 let name = value("--plant")?;
                 a.plant = Fidelity::by_name(&name).ok_or_else(|| {
@@ -280,6 +295,9 @@ fn parse(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     }
     if a.plant_given && a.command != "demo" && a.command != "attach" {
         return Err("--plant is an option of `demo` and `attach`".into());
+    }
+    if a.threads.is_some() && a.command != "demo" && a.command != "attach" {
+        return Err("--threads is an option of `demo` and `attach`".into());
     }
     if a.command != "attach" && a.machine().is_some() {
         return Err("--home-switch-rev and --limit-switches-rev are options of `attach`".into());
@@ -450,6 +468,9 @@ fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     // `parse` made sure it is there.
     let iface = args.iface.as_deref().unwrap_or_default();
     let mut segment = Segment::line_with_plant(&args.line, args.plant)?;
+    segment.set_threads(args.threads.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    }));
     if let Some(switches) = args.machine() {
         for servo in segment
             .drives_mut()
@@ -484,6 +505,7 @@ fn run_demo(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
         cycles: args.cycles,
         dc: !args.free_run,
         plant: args.plant,
+        threads: args.threads.unwrap_or(1),
     };
     println!(
         "sim-drive demo: {} simulated drive(s) [{}], built-in ethercrab master, {} cycle {} µs, {} plant",

@@ -3,6 +3,10 @@
 //!
 //! Simulated time follows the host's monotonic clock here, so SYNC0 and watchdogs run in real
 //! time. Replies go out on the same interface; on a veth pair the master sits on the peer end.
+//!
+//! A line too long for the host cannot keep that pace: simulating a millisecond takes longer
+//! than a millisecond, and each drive's SYNC0 and timers run late. That is reported (missed
+//! deadlines, [`Lag`]) rather than left for the master to puzzle over.
 
 use std::io;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -14,6 +18,65 @@ use crate::segment::Segment;
 const ETHERTYPE_ETHERCAT: u16 = 0x88A4;
 /// Largest frame we receive (standard Ethernet MTU plus header).
 const MAX_FRAME: usize = 1518;
+/// How far behind the wall clock the simulation may run its events before they count as a
+/// missed deadline: a frame's worth of scheduling noise of an ordinary process.
+pub const DEADLINE_SLACK: Duration = Duration::from_millis(1);
+/// Fewest time between two reports of a simulation that runs late.
+const LAG_REPORT_PERIOD: Duration = Duration::from_secs(1);
+
+/// Whether the simulation keeps the wall clock's pace: after advancing to simulated time `t`
+/// the host clock should not be past `t +` [`DEADLINE_SLACK`].
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Lag {
+    /// Times the simulation ran its events more than the slack late.
+    pub missed: u64,
+    /// The longest lag seen.
+    pub worst: Duration,
+    /// Missed deadlines not yet reported, and when the last report was.
+    unreported: u64,
+    last_report: Option<Duration>,
+}
+
+impl Lag {
+    /// The simulation reached `simulated`, the host clock then showed `wall`. Returns a line
+    /// to print when deadlines were missed and the last report is a while ago.
+    pub fn observe(&mut self, simulated: Duration, wall: Duration) -> Option<String> {
+        let behind = wall.saturating_sub(simulated);
+        if behind <= DEADLINE_SLACK {
+            return None;
+        }
+        self.missed += 1;
+        self.unreported += 1;
+        self.worst = self.worst.max(behind);
+        if self
+            .last_report
+            .is_some_and(|last| wall.saturating_sub(last) < LAG_REPORT_PERIOD)
+        {
+            return None;
+        }
+        self.last_report = Some(wall);
+        let line = format!(
+            "sim-drive: {:.1} ms behind real time, {} missed deadline(s) since the last report: \
+             the host cannot simulate this line at the wall clock's pace (fewer drives, \
+             --plant averaged or more --threads)",
+            behind.as_secs_f64() * 1e3,
+            self.unreported
+        );
+        self.unreported = 0;
+        Some(line)
+    }
+
+    /// The summary for the end of a run.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} missed deadline(s) (events run more than {} ms late; longest lag {:.1} ms)",
+            self.missed,
+            DEADLINE_SLACK.as_millis(),
+            self.worst.as_secs_f64() * 1e3
+        )
+    }
+}
+
 /// Longest wait for a frame when no simulated event is due (keeps the stop flag responsive).
 const IDLE_WAIT: Duration = Duration::from_millis(10);
 /// How often the interface's link state is read.
@@ -288,9 +351,13 @@ pub fn serve_with_faults(
         "sim-drive: {} drive(s) on {interface}, waiting for a master (Ctrl-C stops)",
         states.len()
     );
+    let mut lag = Lag::default();
     while !STOP.load(Ordering::SeqCst) && duration.is_none_or(|d| start.elapsed() < d) {
         let now = start.elapsed().as_nanos() as u64;
         segment.advance_to(now);
+        if let Some(line) = lag.observe(Duration::from_nanos(now), start.elapsed()) {
+            println!("{line}");
+        }
         let next = segment
             .drives()
             .iter()
@@ -376,8 +443,9 @@ pub fn serve_with_faults(
         }
     }
     println!(
-        "sim-drive: stopped after {frames} frames ({} lost by fault injection)",
-        injector.lost()
+        "sim-drive: stopped after {frames} frames ({} lost by fault injection); {}",
+        injector.lost(),
+        lag.summary()
     );
     Ok(frames)
 }
@@ -394,6 +462,36 @@ mod tests {
         f.extend_from_slice(&(14u16 | 0x1000).to_le_bytes());
         f.extend_from_slice(&[command, 0, 0, 0, 0, 0, 2, 0, 0, 0, 0, 0, 0, 0]);
         f
+    }
+
+    #[test]
+    fn a_simulation_behind_the_wall_clock_counts_missed_deadlines_and_reports_once_a_second() {
+        let ms = Duration::from_millis;
+        let mut lag = Lag::default();
+        assert_eq!(lag.observe(ms(10), ms(10)), None, "on time");
+        assert_eq!(lag.observe(ms(10), ms(11)), None, "within the slack");
+        assert_eq!(lag.missed, 0);
+        let first = lag.observe(ms(20), ms(25)).expect("reported");
+        assert!(
+            first.contains("5.0 ms behind real time, 1 missed"),
+            "{first}"
+        );
+        // Within the next second: counted, not reported.
+        assert_eq!(lag.observe(ms(30), ms(40)), None);
+        assert_eq!(lag.observe(ms(40), ms(43)), None);
+        assert_eq!(lag.missed, 3);
+        let second = lag.observe(ms(1030), ms(1032)).expect("a second later");
+        assert!(
+            second.contains("3 missed deadline(s) since the last report"),
+            "{second}"
+        );
+        assert_eq!(lag.worst, ms(10));
+        assert!(
+            lag.summary().starts_with("4 missed deadline(s)"),
+            "{}",
+            lag.summary()
+        );
+        assert!(lag.summary().contains("longest lag 10.0 ms"));
     }
 
     #[test]

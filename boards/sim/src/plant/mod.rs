@@ -527,6 +527,7 @@ impl Plant {
             let te1 = self.electromagnetic_torque_nm();
             let theta_prev = self.mech.theta_rad;
             self.mech_substep(0.5 * (te0 + te1), t1 - t0);
+            self.carry_trig(theta_prev);
             self.encoder
                 .record(t_start + t1, theta_prev, self.mech.theta_rad);
             self.time_probe_edges(t_start + t0, t_start + t1, theta_prev);
@@ -570,6 +571,25 @@ impl Plant {
             bus_v: self.bus_v,
             drop_v: self.cfg.inverter.device_drop_v,
         }
+    }
+
+    /// Carries the cached sine and cosine of the electrical angle from a substep's start
+    /// (mechanical angle `theta_prev`) to its end: the rotor turned a small angle, [`rotated`]
+    /// instead of a `sin_cos`. The sample at each period boundary takes them afresh, so the
+    /// rounding of at most a period's substeps accumulates.
+    fn carry_trig(&mut self, theta_prev: f64) {
+        let pole_pairs = f64::from(self.cfg.motor.pole_pairs);
+        let (from, to) = (pole_pairs * theta_prev, self.electrical_angle_rad());
+        if self.trig.0 == from && to != from {
+            self.trig = (to, rotated(self.trig.1, to - from));
+        }
+    }
+
+    /// The sine and cosine of the present electrical angle, exact (and cached in `trig`).
+    fn exact_sin_cos(&mut self) -> (f64, f64) {
+        let theta = self.electrical_angle_rad();
+        self.trig = (theta, theta.sin_cos());
+        self.trig.1
     }
 
     /// The sine and cosine of the present electrical angle (cached in `trig`).
@@ -673,6 +693,13 @@ impl Plant {
         let drop = self.cfg.inverter.device_drop_v;
         if self.conduction == Conduction::Idle {
             // From rest, current starts when the line back-EMF exceeds the bus plus two drops.
+            // The largest line back-EMF at any angle is √3·ψ·|ωe|: below the threshold there
+            // is nothing to evaluate (a drive standing with its gates off, the common case).
+            let peak_line_emf = 3f64.sqrt() * self.cfg.motor.flux_wb * omega_e.abs();
+            if peak_line_emf <= bus + 2.0 * drop {
+                self.enter_idle();
+                return;
+            }
             let e = self.cfg.motor.back_emf(theta_e, omega_e);
             let (mut hi, mut lo) = (0, 0);
             for k in 1..3 {
@@ -784,7 +811,7 @@ impl Plant {
     /// What the ADC and encoder interface latch at the present period boundary. Draws three
     /// Gaussian noise values from the PRNG (one per phase) on every call.
     pub fn sample(&mut self) -> Sample {
-        let trig = self.electrical_sin_cos();
+        let trig = self.exact_sin_cos();
         let i = self.phase_currents_at(trig);
         let noise_rms = self.cfg.sensing.noise_a_rms;
         let mut counts = [0u16; 3];
