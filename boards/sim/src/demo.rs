@@ -571,7 +571,17 @@ pub async fn run_line<S: AsRef<str>>(
     let transport = tokio::task::spawn_local(transport);
     let md = &*master.maindevice;
     let mut report = Report::default();
-    let outcome = operate_line(md, &master.shared, &profiles, s, &mut report, log).await;
+    // On the heap: a group of `MAX_DRIVES` drives in each of its typestates would overflow the
+    // stack of a test thread (2 MiB).
+    let outcome = Box::pin(operate_line(
+        md,
+        &master.shared,
+        &profiles,
+        s,
+        &mut report,
+        log,
+    ))
+    .await;
     if let Err(e) = outcome {
         // Say where each drive stopped: the AL status and AL status code registers.
         let mut states = Vec::new();
