@@ -234,10 +234,13 @@ impl<D: SimDevice> Segment<D> {
     /// ESC has its own clock, so N drives have N different SYNC0 instants.)
     pub fn advance_to(&mut self, t_ns: u64) {
         let (from, to) = (self.now_ns, t_ns.max(self.now_ns));
-        let threads = self
-            .threads
-            .min(self.drives.len() / MIN_DRIVES_PER_THREAD)
-            .max(1);
+        let threads = if to - from < MIN_PARALLEL_SPAN_NS {
+            1
+        } else {
+            self.threads
+                .min(self.drives.len() / MIN_DRIVES_PER_THREAD)
+                .max(1)
+        };
         if threads == 1 {
             for d in &mut self.drives {
                 advance_drive(d, from, to);
@@ -268,6 +271,9 @@ impl<D: SimDevice> Segment<D> {
 /// Fewest drives worth a thread of their own in [`Segment::advance_to`] (starting a thread
 /// costs about as much as a few PWM periods of one drive).
 pub const MIN_DRIVES_PER_THREAD: usize = 4;
+/// Shortest advance [`Segment::advance_to`] spreads over threads: a frame's wire time (a few
+/// µs) is not worth starting one; a bus cycle is.
+pub const MIN_PARALLEL_SPAN_NS: u64 = 100_000;
 
 /// Runs `d`'s events from `from_ns` up to `to_ns` in order, then brings it to `to_ns`.
 fn advance_drive<D: SimDevice>(d: &mut D, from_ns: u64, to_ns: u64) {
