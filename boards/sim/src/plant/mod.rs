@@ -605,29 +605,12 @@ impl Plant {
         f64::from(self.cfg.motor.pole_pairs) * self.mech.omega_rad_s
     }
 
-    /// Advances the dq currents by one substep with the given average leg voltages.
-    fn step_with_leg_voltages(&mut self, legs: [f64; 3], h: f64) {
+    /// Advances the dq currents by one substep of length `h` with the given average leg
+    /// voltages; `start`: the sine and cosine of the electrical angle at the substep's start
+    /// (the voltages act at its middle, the start angle turned by half the substep,
+    /// [`rotated`]).
+    fn step_with_leg_voltages(&mut self, legs: [f64; 3], h: f64, start: (f64, f64)) {
         let omega_e = self.omega_e();
-        // Clarke discards the zero sequence: this is v_an = v_a0 − mean(v_x0).
-        let (va, vb) = clarke(legs);
-        let theta_mid = self.electrical_angle_rad() + 0.5 * omega_e * h;
-        let v = park(va, vb, theta_mid);
-        (self.id, self.iq) = self
-            .cfg
-            .motor
-            .step_dq(self.r(), (self.id, self.iq), v, omega_e, h);
-    }
-
-    /// [`Self::phase_currents`] and [`Self::step_with_leg_voltages`] of a switching substep with
-    /// one `sin_cos`: the currents at the substep's start angle, the voltages at its middle
-    /// (the start angle turned by half the substep, [`rotated`]).
-    fn switching_substep(&mut self, duties: [f64; 3], t0: f64, t1: f64) {
-        let h = t1 - t0;
-        let omega_e = self.omega_e();
-        let start = self.electrical_sin_cos();
-        let (alpha, beta) = inverse_park_at(self.id, self.iq, start);
-        let currents = inverse_clarke(alpha, beta);
-        let legs = self.leg_timing().average_voltages(duties, t0, t1, currents);
         // Clarke discards the zero sequence: this is v_an = v_a0 − mean(v_x0).
         let (va, vb) = clarke(legs);
         let v = park_at(va, vb, rotated(start, 0.5 * omega_e * h));
@@ -635,6 +618,17 @@ impl Plant {
             .cfg
             .motor
             .step_dq(self.r(), (self.id, self.iq), v, omega_e, h);
+    }
+
+    /// A switching substep with one `sin_cos` (or none, [`Self::carry_trig`]): the phase
+    /// currents at the substep's start angle decide the dead-time intervals of the legs'
+    /// average voltages, which then drive [`Self::step_with_leg_voltages`].
+    fn switching_substep(&mut self, duties: [f64; 3], t0: f64, t1: f64) {
+        let start = self.electrical_sin_cos();
+        let (alpha, beta) = inverse_park_at(self.id, self.iq, start);
+        let currents = inverse_clarke(alpha, beta);
+        let legs = self.leg_timing().average_voltages(duties, t0, t1, currents);
+        self.step_with_leg_voltages(legs, t1 - t0, start);
     }
 
     /// Conduction state when the gates turn off: every phase with current keeps it flowing
@@ -769,7 +763,8 @@ impl Plant {
         let drop = self.cfg.inverter.device_drop_v;
         let legs = dirs.map(|d| inverter::diode_leg_voltage(d, bus, drop));
         let theta_end = self.electrical_angle_rad() + self.omega_e() * h;
-        self.step_with_leg_voltages(legs, h);
+        let start = self.electrical_sin_cos();
+        self.step_with_leg_voltages(legs, h, start);
         let (a, b) = inverse_park(self.id, self.iq, theta_end);
         let i = inverse_clarke(a, b);
         let ended: Vec<usize> = (0..3)

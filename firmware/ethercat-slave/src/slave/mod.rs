@@ -379,8 +379,8 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             self.handle_al_control(pdi, control, now_ns)?;
         }
         if events.any(AlEvent::SM_ACTIVATION) {
-            self.revalidate_sms(pdi)?;
-            self.acknowledge_sm_activation(pdi)?;
+            let read = self.revalidate_sms(pdi)?;
+            self.acknowledge_sm_activation(pdi, read)?;
         }
         if events.any(AlEvent::WATCHDOG_PD) {
             self.check_watchdog(pdi)?;

@@ -12,28 +12,33 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// SM activation changed: the master rewrote an SM. In PREOP and above the mailbox SMs must
     /// still match (else INIT + 0x0016, as on INIT → PREOP); in SAFEOP and OP also SM2/SM3, with
     /// the resulting states of ETG.1000.6 Table 11: 0x001D → SAFEOP + error, 0x001E → PREOP +
-    /// error.
+    /// error. Returns how many SMs, from SM0 on, it read (reading them acknowledged their
+    /// activation change, see [`Self::acknowledge_sm_activation`]).
     pub(in crate::slave) fn revalidate_sms<P: EscPdi>(
         &mut self,
         pdi: &mut P,
-    ) -> Result<(), P::Error> {
+    ) -> Result<u8, P::Error> {
+        // SMs read: the mailbox pair SM0/SM1 (all before SM_OUTPUTS), then SM2/SM3 as well.
+        const MAILBOX_SMS: u8 = SM_OUTPUTS;
+        const ALL_SMS: u8 = SM_INPUTS + 1;
         let state = self.status.state;
         let device = self.profile.device;
         if esm::state_rank(state) < 1 || state == AlState::Boot {
-            return Ok(());
+            return Ok(0);
         }
         let sm0 = read_sm(pdi, 0)?;
         let sm1 = read_sm(pdi, 1)?;
         if let Err(code) = sm_check::check_mailbox(sm0, sm1, &device) {
-            return self.raise_fault(
+            self.raise_fault(
                 pdi,
                 AlState::Init,
                 code,
                 ErrorIndication::InvalidConfiguration,
-            );
+            )?;
+            return Ok(MAILBOX_SMS);
         }
         if esm::state_rank(state) < 2 {
-            return Ok(());
+            return Ok(MAILBOX_SMS);
         }
         let sm2 = read_sm(pdi, SM_OUTPUTS)?;
         let sm3 = read_sm(pdi, SM_INPUTS)?;
@@ -52,14 +57,15 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             AlStatusCode::InvalidInputConfig,
         ));
         let Err(code) = result else {
-            return Ok(());
+            return Ok(ALL_SMS);
         };
         let fallback = if code == AlStatusCode::InvalidOutputConfig {
             AlState::SafeOp
         } else {
             AlState::PreOp
         };
-        self.raise_fault(pdi, fallback, code, ErrorIndication::InvalidConfiguration)
+        self.raise_fault(pdi, fallback, code, ErrorIndication::InvalidConfiguration)?;
+        Ok(ALL_SMS)
     }
 
     /// Acknowledges the SM-activation event (AL event bit 4) for the SMs the slave does not
@@ -67,13 +73,15 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     /// has been read (ET1100 datasheet, 0x0220 bit 4), and a master's start-up clears all of
     /// them (SOEM and ethercrab write zeros over the SM block). Left pending, the event would
     /// hold the IRQ line asserted for good: an edge-triggered board would see no later event,
-    /// a level-triggered one would run event rounds back to back. SM0..SM3 are read again here
-    /// too: their revalidation above reads them only in the states where they matter.
+    /// a level-triggered one would run event rounds back to back. `from`: the SMs before it
+    /// were read already ([`Self::revalidate_sms`] reads SM0..SM3 only in the states where they
+    /// matter), so a round in OP reads the four the slave does not use, one byte each.
     pub(in crate::slave) fn acknowledge_sm_activation<P: EscPdi>(
         &mut self,
         pdi: &mut P,
+        from: u8,
     ) -> Result<(), P::Error> {
-        for n in 0..self.esc_sms {
+        for n in from..self.esc_sms {
             pdi.read_u8(regs::sm_activate(n))?;
         }
         Ok(())
