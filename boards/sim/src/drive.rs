@@ -109,8 +109,7 @@ impl SimDrive {
     /// A drive running `profile` with the SII image `sii` in its EEPROM, and erased parameter
     /// storage sized for the profile's largest record.
     pub fn new(profile: &'static DriveProfile, sii: &[u8]) -> Result<Self, SlaveError> {
-        let storage = SimStorage::for_record(max_record_len(&profile.od));
-        Self::with_storage(profile, sii, storage)
+        Self::with_plant(profile, sii, Fidelity::default())
     }
 
     /// [`Self::new`] with the plants of its axes at `plant` fidelity.

@@ -285,13 +285,12 @@ pub const MIN_PARALLEL_SPAN_NS: u64 = 100_000;
 
 /// Runs `d`'s events from `from_ns` up to `to_ns` in order, then brings it to `to_ns`.
 fn advance_drive<D: SimDevice>(d: &mut D, from_ns: u64, to_ns: u64) {
-    while let Some(e) = d.next_event_ns() {
-        if e > to_ns || e < from_ns {
-            break;
-        }
+    let mut next = d.next_event_ns();
+    while let Some(e) = next.filter(|e| (from_ns..=to_ns).contains(e)) {
         d.run_until(e);
+        next = d.next_event_ns();
         // Guard against an event source that does not move on.
-        if d.next_event_ns() == Some(e) {
+        if next == Some(e) {
             break;
         }
     }

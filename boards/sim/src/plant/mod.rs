@@ -455,7 +455,8 @@ pub struct Plant {
     /// Touch-probe inputs as of the last substep, with their edges since the last sample.
     probes: [ProbeReading; 2],
     /// The last electrical angle whose sine and cosine were taken, with them: the sample at a
-    /// period boundary and the first substep after it need the same pair.
+    /// period boundary and the first substep after it need the same pair, and each substep
+    /// carries it to the next ([`Plant::carry_trig`]).
     trig: (f64, (f64, f64)),
 }
 
@@ -594,9 +595,8 @@ impl Plant {
 
     /// The sine and cosine of the present electrical angle (cached in `trig`).
     fn electrical_sin_cos(&mut self) -> (f64, f64) {
-        let theta = self.electrical_angle_rad();
-        if theta != self.trig.0 {
-            self.trig = (theta, theta.sin_cos());
+        if self.electrical_angle_rad() != self.trig.0 {
+            return self.exact_sin_cos();
         }
         self.trig.1
     }
