@@ -113,8 +113,11 @@ struct Probe {
     armed: [bool; 2],
     /// A position is stored for the rising / falling edge.
     stored: [bool; 2],
-    /// The latch counts already looked at: input rising, input falling, index.
+    /// The latch counts already looked at: input rising, input falling, index (after a step,
+    /// those of its inputs).
     seen: [u16; 3],
+    /// The input level of the last step.
+    level: bool,
     toggle: bool,
     /// Latched positions (rising, falling) and counters.
     values: [i64; 2],
@@ -126,6 +129,7 @@ impl Probe {
         use function::*;
         let was = self.previous_function;
         self.previous_function = f;
+        self.level = input.level;
         let counts = [input.rising.count, input.falling.count, index.count];
         if f & ENABLE == 0 {
             self.armed = [false; 2];
@@ -243,6 +247,7 @@ impl TouchProbes {
             armed: [false; 2],
             stored: [false; 2],
             seen: [0; 3],
+            level: false,
             toggle: false,
             values: [0; 2],
             counters: [0; 2],
@@ -256,6 +261,37 @@ impl TouchProbes {
         // SYNC0 handler.
         let [p1, p2] = &self.probes;
         (p1.previous_function | p2.previous_function) & function::ENABLE != 0
+    }
+
+    /// One cycle whose probe inputs and index are those of the last [`step`](Self::step) (no
+    /// edge, pulse or level change since): the same as `step` with them, without the caller
+    /// copying them in (the drive skips its read of the axis' captures when they did not
+    /// change).
+    pub fn step_unchanged(&mut self, function: u16, homing: bool, rules: &Rules) -> Output {
+        // Positions are only taken at a new count, and these are the counts seen: none is.
+        let signal = |p: &Probe| SwitchSignal {
+            level: p.level,
+            rising: Edges {
+                count: p.seen[0],
+                position: 0,
+            },
+            falling: Edges {
+                count: p.seen[1],
+                position: 0,
+            },
+        };
+        let [p1, p2] = &self.probes;
+        let inputs = Inputs {
+            function,
+            probes: [signal(p1), signal(p2)],
+            // Both probes saw the same index count.
+            index: Edges {
+                count: p1.seen[2],
+                position: 0,
+            },
+            homing,
+        };
+        self.step(&inputs, rules)
     }
 
     /// One cycle.
@@ -461,5 +497,62 @@ mod tests {
             (0x0003, 700),
             "the input latched"
         );
+    }
+
+    #[test]
+    fn a_step_with_unchanged_captures_is_the_step_with_the_last_inputs() {
+        // Two drives side by side: one steps with its inputs every cycle, the other passes them
+        // only when an edge, pulse or level changed. Scripted functions (enable, disable,
+        // single, continuous, index source, both probes) and edges between them; every output
+        // must be the same, under every bit 7 rule (the RSE shows the input level).
+        let functions: [u16; 12] = [
+            0,
+            TP1_SINGLE_BOTH,
+            TP1_SINGLE_BOTH,
+            (ENABLE | CONTINUOUS | RISING) as u16,
+            (ENABLE | SOURCE_INDEX | RISING | FALLING) as u16,
+            0,
+            u16::from_le_bytes([ENABLE | RISING, ENABLE | FALLING]),
+            u16::from_le_bytes([ENABLE | CONTINUOUS | FALLING, ENABLE | RISING]),
+            TP1_SINGLE_BOTH,
+            0x0100 | TP1_SINGLE_BOTH,
+            0,
+            TP1_SINGLE_BOTH,
+        ];
+        for bit7 in [Bit7::None, Bit7::ToggleOnStore, Bit7::InputLevel] {
+            // Probe 2 off while homing (the GHA-E switches both off, the Σ-V-SD probe 1).
+            let rules = Rules {
+                bit7,
+                off_while_homing: [false, true],
+                ..CIA402
+            };
+            let mut every = Bench::default();
+            let mut lazy = TouchProbes::new();
+            let mut passed = every.inputs;
+            for cycle in 0..240usize {
+                let function = functions[(cycle / 5) % functions.len()];
+                // An edge on some cycles only, both probes and the index in turn.
+                match cycle % 7 {
+                    0 => every.edge(cycle % 2, cycle % 3 == 0, cycle as i64 * 10),
+                    3 => every.index(cycle as i64 * 10 + 1),
+                    _ => {}
+                }
+                let homing = cycle % 11 < 2;
+                every.inputs.homing = homing;
+                let expected = every.step(function, &rules);
+                let changed =
+                    every.inputs.probes != passed.probes || every.inputs.index != passed.index;
+                let got = if changed {
+                    passed = every.inputs;
+                    lazy.step(&every.inputs, &rules)
+                } else {
+                    lazy.step_unchanged(function, homing, &rules)
+                };
+                assert_eq!(
+                    got, expected,
+                    "{bit7:?}, cycle {cycle}, function {function:#06x}"
+                );
+            }
+        }
     }
 }

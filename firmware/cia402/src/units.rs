@@ -414,10 +414,10 @@ impl Polarity {
 }
 
 /// A 32-bit target position object (607Ah, user units) as increments: extended to 64 bits
-/// relative to the actual position in user units (so it is right across wraps of the 32-bit
-/// object), then scaled.
-pub fn target_position(target: i32, actual_increments: i64, ratio: Ratio) -> i64 {
-    let actual_user = ratio.position_from_internal(actual_increments);
+/// relative to the actual position in user units (`actual_user`, the actual increments through
+/// [`Ratio::position_from_internal`]; so it is right across wraps of the 32-bit object), then
+/// scaled. The caller converts the actual position once per cycle: 6064h shows it too.
+pub fn target_position(target: i32, actual_user: i64, ratio: Ratio) -> i64 {
     ratio.position_to_internal(extend_position(target, actual_user))
 }
 
@@ -706,13 +706,14 @@ mod tests {
     fn target_positions_extend_in_user_units() {
         let r = Ratio::new(1000, 1);
         // Actual 5 000 000 increments = 5000 units; a target of 5010 units is 10 units ahead.
-        assert_eq!(target_position(5010, 5_000_000, r), 5_010_000);
+        let actual = |increments| r.position_from_internal(increments);
+        assert_eq!(target_position(5010, actual(5_000_000), r), 5_010_000);
         // The nearest unit.
         assert_eq!(actual_position(5_000_499, r), 5000);
         assert_eq!(actual_position(5_000_500, r), 5001);
         // Across the wrap of the 32-bit user object.
         let near = (i64::from(i32::MAX) - 1) * 1000;
-        assert_eq!(target_position(i32::MIN, near, r), near + 2000);
+        assert_eq!(target_position(i32::MIN, actual(near), r), near + 2000);
         assert_eq!(target_position(7, 7, Ratio::ONE), 7);
     }
 

@@ -214,6 +214,33 @@ impl<T: Copy> FeedbackHandoff<T> {
         self.read_with(|data| unsafe { ptr::read_volatile(data.cast::<MaybeUninit<T>>()) })
     }
 
+    /// The newest value if a write completed or began since the read that returned
+    /// `last_sequence`; `None` otherwise, without copying `T` (for a value written rarely and
+    /// read every cycle: the reader keeps what it derived from the last one). Reader side, as
+    /// [`read`](Self::read).
+    ///
+    /// Timing: about 6 instructions when nothing was written, else as [`read`](Self::read).
+    #[inline]
+    pub fn read_if_new(&self, last_sequence: u32) -> Option<(T, u32)> {
+        if !self.written_since(last_sequence) {
+            return None;
+        }
+        let (value, sequence) = self.read();
+        // Every attempt overlapped by a write gives the last good value: nothing new yet.
+        (sequence != last_sequence).then_some((value, sequence))
+    }
+
+    /// Whether a write completed or began since the read that returned `last_sequence` (then
+    /// [`read_if_new`](Self::read_if_new) copies). Reader side.
+    ///
+    /// Timing: about 5 instructions.
+    #[inline]
+    pub fn written_since(&self, last_sequence: u32) -> bool {
+        // No data is read on this path, so no ordering is needed for the load.
+        let state = self.sequence.load(Ordering::Relaxed);
+        state & 1 != 0 || state >> 1 != last_sequence
+    }
+
     /// The reader with its copy step supplied by the caller (tests run the writer half-way).
     #[inline]
     fn read_with(&self, mut copy: impl FnMut(*const T) -> MaybeUninit<T>) -> (T, u32) {
@@ -346,6 +373,31 @@ mod tests {
             }
         });
         assert_eq!(h.read(), ([6; WORDS], 1));
+    }
+
+    #[test]
+    fn feedback_read_if_new_copies_only_after_a_write() {
+        // SAFETY: single thread.
+        let h = unsafe { FeedbackHandoff::<Block>::new([1; WORDS]) };
+        assert!(!h.written_since(0));
+        assert_eq!(h.read_if_new(0), None, "the initial value is sequence 0");
+        assert_eq!(
+            h.read_if_new(7),
+            Some(([1; WORDS], 0)),
+            "another reader's number"
+        );
+        h.write([2; WORDS]);
+        assert_eq!(h.read_if_new(0), Some(([2; WORDS], 1)));
+        assert_eq!(h.read_if_new(1), None);
+        h.write_in_steps(|data| {
+            // A write under way: written since, but nothing consistent is new yet (the old
+            // value is sequence 1).
+            assert!(h.written_since(1));
+            assert_eq!(h.read_if_new(1), None);
+            // SAFETY: `data` is valid for `Block`.
+            unsafe { *data = [3; WORDS] };
+        });
+        assert_eq!(h.read_if_new(1), Some(([3; WORDS], 2)));
     }
 
     #[test]

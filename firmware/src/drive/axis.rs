@@ -78,6 +78,9 @@ pub(super) struct AxisPort {
     results_written: bool,
 }
 
+/// No captures seen yet: not a sequence number (they have 31 bits), so the first read copies.
+const NO_CAPTURES_SEEN: u32 = u32::MAX;
+
 /// The CiA402 side of one axis.
 #[derive(Clone)]
 pub struct DriveAxis {
@@ -149,6 +152,9 @@ pub struct DriveAxis {
     /// 60B8h as last seen (a write that enables a probe on an unassigned input is an error,
     /// `Cia402Rules::touch_probe_inputs`).
     probe_function_seen: u16,
+    /// The sequence number of the axis' captures the touch probes last stepped with
+    /// ([`NO_CAPTURES_SEEN`] before the first, and after an axis is attached).
+    captures_seen: u32,
     /// Interpolated position: how long the axis has been inside the position window of the
     /// unchanged set-point (statusword bit 10).
     ip_target_timer: WindowTimer,
@@ -272,6 +278,7 @@ impl DriveAxis {
             position_demand: 0,
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             probe_function_seen: 0,
+            captures_seen: NO_CAPTURES_SEEN,
             homing_failure_raised: false,
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
@@ -333,6 +340,8 @@ impl DriveAxis {
             self.latched_units = Some(self.vars.unit_ratios(ram, counts_per_rev));
         }
         self.port = Some(port);
+        // Another link numbers its captures afresh.
+        self.captures_seen = NO_CAPTURES_SEEN;
         // The conversions depend on the motor's encoder: everything is read again.
         self.units_cache = None;
         self.settings_due = Groups::ALL;
@@ -926,17 +935,23 @@ impl DriveAxis {
         cycle_ns: u32,
         mut due: Groups,
     ) {
-        // Taken out for the cycle (so that `self.fault` can borrow `self`), put back at the end.
-        let Some(mut port) = self.port.take() else {
+        // The port's constants for the cycle; its bookkeeping is updated in place (short
+        // borrows, so that `self.fault` can borrow `self`: not a copy of the port out and back).
+        let Some((link, counts_per_rev, absolute, trips_seen)) = self
+            .port
+            .as_ref()
+            .map(|p| (p.link, p.counts_per_rev, p.absolute, p.trips_seen))
+        else {
             return;
         };
         let shift = self.position_shift;
         // In drive positions from here on (the caller's later uses take no position).
         feedback.position = feedback.position.saturating_add(shift);
         let vars = self.vars;
-        let link = port.link;
-        let new_fault = if feedback.trips != port.trips_seen {
-            port.trips_seen = feedback.trips;
+        let new_fault = if feedback.trips != trips_seen {
+            if let Some(port) = self.port.as_mut() {
+                port.trips_seen = feedback.trips;
+            }
             feedback
                 .fault
                 .map(|f| profile::motor_fault_report(self.fault_codes, f))
@@ -960,7 +975,9 @@ impl DriveAxis {
         if matches!(motion, Motion::Off) || feedback.state == AxisState::Identified {
             // The axis takes a new model only in these states (not while it runs): checked
             // only then.
-            sync_motor_model(&mut port, vars, ram);
+            if let Some(port) = self.port.as_mut() {
+                sync_motor_model(port, vars, ram);
+            }
         }
         let identifying = matches!(mode, Mode::Identification);
         // The results are read only where they are taken (not in every cycle).
@@ -969,8 +986,11 @@ impl DriveAxis {
             .flatten();
         match (feedback.state, identified) {
             (AxisState::Identified, Some(result)) => {
-                if !port.results_written {
-                    port.results_written = true;
+                let written = self
+                    .port
+                    .as_mut()
+                    .map(|p| core::mem::replace(&mut p.results_written, true));
+                if written == Some(false) {
                     let object = |x: f32, unit: f32| units::to_object_units(x, unit).to_le_bytes();
                     write_bytes(
                         ram,
@@ -990,14 +1010,18 @@ impl DriveAxis {
                 }
             }
             (AxisState::Identified, _) => {}
-            _ => port.results_written = false,
+            _ => {
+                if let Some(port) = self.port.as_mut() {
+                    port.results_written = false;
+                }
+            }
         }
         // The profile's user units (e.g. 6091h gear ratio): a master's change applies in the
         // next cycle.
         // Only the two ratios every cycle needs are copied out of the cache; the whole set
         // only when settings are due (a copy of `UnitRatios` costs some 20 instructions).
         let (position_ratio, velocity_ratio) =
-            self.cycle_unit_ratios(ram, port.counts_per_rev, &mut due);
+            self.cycle_unit_ratios(ram, counts_per_rev, &mut due);
         if matches!(motion, Motion::Off) {
             // 607Eh: a new polarity is taken while nothing moves.
             let polarity = read_bytes::<1>(ram, vars.polarity)
@@ -1009,7 +1033,7 @@ impl DriveAxis {
         }
         let pol = self.polarity;
         if !due.is_empty() {
-            let units = self.unit_ratios(ram, port.counts_per_rev, &mut due);
+            let units = self.unit_ratios(ram, counts_per_rev, &mut due);
             self.settings
                 .refresh(ram, vars, (&units, pol), self.rules, due);
         }
@@ -1020,7 +1044,7 @@ impl DriveAxis {
         // 607Ch changes; the Σ-V-SD's with an absolute encoder, 607Ch as it was at power-on.
         let added_offset = if self.rules.home_offset_added {
             Some(read_i32(ram, vars.home_offset).unwrap_or(0))
-        } else if self.rules.home_offset_added_absolute && port.absolute {
+        } else if self.rules.home_offset_added_absolute && absolute {
             Some(self.home_offset_at_power_on)
         } else {
             None
@@ -1051,12 +1075,24 @@ impl DriveAxis {
         };
         // Only the targets the mode takes are read (each read and conversion costs).
         let used = mode.targets_used();
+        // A position target extends to 64 bits around the actual position in user units;
+        // converted once, as 6064h shows it too (unless homing moves the reference between).
+        let actual = (used.position || used.interpolation).then(|| {
+            (
+                feedback.position,
+                position_ratio.position_from_internal(feedback.position),
+            )
+        });
+        let actual_user = |at: i64| match actual {
+            Some((converted, user)) if converted == at => user,
+            _ => position_ratio.position_from_internal(at),
+        };
         let mut targets = Targets {
             position: used
                 .position
                 .then(|| position_in(vars.target_position))
                 .flatten()
-                .map(|t| units::target_position(t, feedback.position, position_ratio)),
+                .map(|t| units::target_position(t, actual_user(feedback.position), position_ratio)),
             velocity: if used.velocity {
                 velocity_in(vars.target_velocity)
             } else {
@@ -1087,7 +1123,7 @@ impl DriveAxis {
                 && cw & interpolated_position::ENABLE_INTERPOLATION != 0)
                 .then(|| position_in(vars.interpolation_data))
                 .flatten()
-                .map(|t| units::target_position(t, feedback.position, position_ratio)),
+                .map(|t| units::target_position(t, actual_user(feedback.position), position_ratio)),
         };
         if self.csp_extrapolation {
             let active = matches!(mode, Mode::CyclicPosition) && matches!(motion, Motion::Run);
@@ -1119,7 +1155,7 @@ impl DriveAxis {
         // Software position limits (607Dh), in drive increments; not while homing looks for
         // its references, not where the profile switched them off or they wait for a
         // referenced position.
-        let referenced = self.homed || port.absolute;
+        let referenced = self.homed || absolute;
         let limits = self.settings.software_limits.filter(|_| {
             !matches!(mode, Mode::Homing)
                 && !self.software_limits_off
@@ -1137,17 +1173,17 @@ impl DriveAxis {
             );
             inputs.position_range = limits;
             if matches!(mode, Mode::ProfileVelocity) {
-                inputs.velocity_threshold = self.speed_zero_threshold(port.counts_per_rev);
+                inputs.velocity_threshold = self.speed_zero_threshold(counts_per_rev);
             }
             inputs.target_position = pol.position(inputs.target_position);
             if matches!(mode, Mode::Homing) {
                 // Read only where needed: a seqlock read of the captures.
-                let captures = shifted_captures(link.captures(), self.position_shift);
-                let (threshold, _) = self.speed_zero_threshold(port.counts_per_rev);
+                let captures = link.captures();
+                let (threshold, _) = self.speed_zero_threshold(counts_per_rev);
                 if let Some(homing) = inputs.homing.as_mut() {
                     homing.method = read_bytes::<1>(ram, vars.homing_method)
                         .and_then(|[m]| self.rules.homing_reference(m as i8));
-                    homing.signals = homing_signals(&captures);
+                    homing.signals = homing_signals(&captures, self.position_shift);
                     homing.disabled = matches!(motion, Motion::Off);
                     homing.speed_zero = feedback.velocity.abs() <= threshold;
                     homing.rules = self.rules.homing;
@@ -1369,7 +1405,7 @@ impl DriveAxis {
                 (mode, motion, software_limited),
                 &set_point,
                 feedback,
-                (cycle_ns, port.counts_per_rev),
+                (cycle_ns, counts_per_rev),
                 (position_ratio, torque_levels),
             );
             mode_statusword = status.apply(mode_statusword, extra);
@@ -1418,10 +1454,11 @@ impl DriveAxis {
             ))
         };
         let torque_out = |t: f32| pol.torque(units::torque_to_permille(t, object_rated_nm));
+        let demand_position = position_out(set_point.position);
         write_bytes(
             ram,
             vars.position_demand_value,
-            position_out(set_point.position).to_le_bytes(),
+            demand_position.to_le_bytes(),
         );
         write_bytes(
             ram,
@@ -1438,11 +1475,8 @@ impl DriveAxis {
             vars.torque_demand,
             torque_out(torque_demand).to_le_bytes(),
         );
-        write_bytes(
-            ram,
-            vars.position_actual_value,
-            position_out(feedback.position).to_le_bytes(),
-        );
+        let actual_object = pol.position(units::position_object(actual_user(feedback.position)));
+        write_bytes(ram, vars.position_actual_value, actual_object.to_le_bytes());
         write_bytes(
             ram,
             vars.velocity_actual_value,
@@ -1462,10 +1496,9 @@ impl DriveAxis {
             feedback,
             &set_point,
             (torque_demand, rated_nm),
-            position_out(set_point.position),
+            demand_position,
             (enable, cycle_ns),
         );
-        self.port = Some(port);
     }
 
     /// Keeps what an alarm record shows of this cycle (a few stores; the speed ring every ms).
@@ -1570,7 +1603,8 @@ impl DriveAxis {
 
     /// The touch probes: 60B8h in, 60B9h, the positions 60BAh–60BDh (user units) and the
     /// counters 60D5h–60D8h out. The axis' captures are read only while a probe is in use (or
-    /// the profile shows the input level in 60B9h).
+    /// the profile shows the input level in 60B9h), and copied only when they changed since
+    /// the probes last stepped with them.
     fn touch_probe(&mut self, ram: &mut [u8], link: &AxisLink, ratio: units::Ratio) {
         let vars = self.vars;
         let Some(function) = read_u16(ram, vars.touch_probe_function) else {
@@ -1589,16 +1623,28 @@ impl DriveAxis {
         if function == 0 && rules.bit7 != Bit7::InputLevel && !self.touch_probes.enabled() {
             return;
         }
-        let c = shifted_captures(link.captures(), self.position_shift);
-        let out = self.touch_probes.step(
-            &touch_probe::Inputs {
-                function,
-                probes: c.probes.map(switch_signal),
-                index: edges(c.index),
-                homing: self.profile_modes.homing_running(),
-            },
-            rules,
-        );
+        let homing = self.profile_modes.homing_running();
+        let out = match link.captures_if_new(self.captures_seen) {
+            Some((c, sequence)) => {
+                self.captures_seen = sequence;
+                let shift = self.position_shift;
+                let [p1, p2] = &c.probes;
+                self.touch_probes.step(
+                    &touch_probe::Inputs {
+                        function,
+                        probes: [
+                            shifted_switch_signal(p1, shift),
+                            shifted_switch_signal(p2, shift),
+                        ],
+                        index: shifted_edges(&c.index, shift),
+                        homing,
+                    },
+                    rules,
+                )
+            }
+            // No edge, pulse or level change since the last step: the probes know its inputs.
+            None => self.touch_probes.step_unchanged(function, homing, rules),
+        };
         write_u16(ram, vars.touch_probe_status, out.status);
         let positions = [
             vars.touch_probe_1_positive,
@@ -1798,49 +1844,32 @@ fn unassigned_probe_input(function: u16, rule: &ProbeInputAssignment, ram: &[u8]
         })
 }
 
-/// The axis' switch and index captures as homing sees them.
-fn homing_signals(c: &Captures) -> homing::Signals {
+/// The axis' switch and index captures as homing sees them, in drive positions (`shift`
+/// added to every position).
+fn homing_signals(c: &Captures, shift: i64) -> homing::Signals {
     homing::Signals {
-        negative_limit: switch_signal(c.negative_limit),
-        positive_limit: switch_signal(c.positive_limit),
-        home: switch_signal(c.home),
-        index: edges(c.index),
+        negative_limit: shifted_switch_signal(&c.negative_limit, shift),
+        positive_limit: shifted_switch_signal(&c.positive_limit, shift),
+        home: shifted_switch_signal(&c.home, shift),
+        index: shifted_edges(&c.index, shift),
     }
 }
 
-/// A latch of the axis as CiA402 sees it.
-fn edges(l: Latch) -> homing::Edges {
+/// A latch of the axis as CiA402 sees it, in drive positions (`shift` added).
+fn shifted_edges(l: &Latch, shift: i64) -> homing::Edges {
     homing::Edges {
         count: l.count,
-        position: l.position,
+        position: l.position.saturating_add(shift),
     }
 }
 
-/// A switch capture of the axis as CiA402 sees it.
-fn switch_signal(s: SwitchCapture) -> homing::SwitchSignal {
+/// A switch capture of the axis as CiA402 sees it, in drive positions (`shift` added).
+fn shifted_switch_signal(s: &SwitchCapture, shift: i64) -> homing::SwitchSignal {
     homing::SwitchSignal {
         level: s.level,
-        rising: edges(s.rising),
-        falling: edges(s.falling),
+        rising: shifted_edges(&s.rising, shift),
+        falling: shifted_edges(&s.falling, shift),
     }
-}
-
-/// The axis' `captures` in drive positions (`shift` added to every position).
-fn shifted_captures(mut c: Captures, shift: i64) -> Captures {
-    let to_drive = |p: i64| p.saturating_add(shift);
-    let [p1, p2] = &mut c.probes;
-    for s in [
-        &mut c.negative_limit,
-        &mut c.positive_limit,
-        &mut c.home,
-        p1,
-        p2,
-    ] {
-        s.rising.position = to_drive(s.rising.position);
-        s.falling.position = to_drive(s.falling.position);
-    }
-    c.index.position = to_drive(c.index.position);
-    c
 }
 
 /// Hands the commissioned motor data (stored parameters, identification results, SDO writes)

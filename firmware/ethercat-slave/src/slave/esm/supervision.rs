@@ -188,6 +188,11 @@ fn on_period(interval: u64, cycle: u64) -> bool {
     let Some(divisor) = NonZeroU64::new(cycle) else {
         return true;
     };
+    // The usual case, one cycle (k = 1 below), without the 64-bit division (a library call on
+    // the Cortex-M4): within the tolerance of one cycle, the nearest whole number is 1.
+    if interval.abs_diff(cycle) <= cycle / PLL_TOLERANCE_DIVISOR {
+        return true;
+    }
     // The nearest whole number of cycles; saturation only for intervals near 2^64 ns, far
     // off any period anyway.
     let k = (interval.saturating_add(cycle / 2) / divisor).max(1);
@@ -345,6 +350,26 @@ mod tests {
         assert!(s.pll_lost(), "good SYNC0 events do not clear it");
         s.reset();
         assert!(!s.pll_lost());
+    }
+
+    #[test]
+    fn an_interval_is_on_period_within_a_tenth_of_a_cycle_of_a_whole_number() {
+        let c = u64::from(CYCLE);
+        let tolerance = c / PLL_TOLERANCE_DIVISOR;
+        for k in 1..=3 {
+            for (interval, on) in [
+                (k * c, true),
+                (k * c - tolerance, true),
+                (k * c + tolerance, true),
+                (k * c - tolerance - 1, false),
+                (k * c + tolerance + 1, false),
+            ] {
+                assert_eq!(on_period(interval, c), on, "{interval} ns, k = {k}");
+            }
+        }
+        assert!(!on_period(c / 2, c), "half a cycle");
+        assert!(!on_period(0, c));
+        assert!(on_period(12_345, 0), "no cycle: nothing to compare");
     }
 
     #[test]
