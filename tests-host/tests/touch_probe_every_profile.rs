@@ -400,3 +400,59 @@ fn sigma_v_sd_2axis_axis_2_touch_probes_latch_on_input_and_phase_c() {
         bit6_source: false,
     });
 }
+
+/// GHA-E §5.7.3: positions are in instruction units, increments = units × 6091h:01 / 6091h:02.
+/// A stored touch-probe position is an encoder position: a new gear ratio shows it in the new
+/// units at once (CiA402 60BAh is a position value in user units), though no edge happened
+/// since. Probe 1 latches its sensor's rising edge; 6091h:02 is then doubled by SDO (half as
+/// many increments per unit), and 60BAh must read twice its value within the rounding.
+#[test]
+fn gha_e_stored_probe_positions_follow_a_new_gear_ratio() {
+    let profile = od_gen::builtin("gha-e").expect("profile");
+    block_on(async {
+        let (m, transport) = master_for(board_sim::Segment::new("gha-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        vendor::place_probe_sensors(&m, 0, [PROBE1, PROBE2]);
+        let setup = [Sdo::U16(0x60B8, 0, ENABLE | RISING)];
+        let group = vendor::into_op_dc_velocity(&m, md, (0, &setup), CSV, CYCLE_NS).await;
+        for cw in vendor::enable_sequence(20) {
+            cycle(&m, md, &group, cw, 0).await;
+        }
+        let velocity = units::velocity(&profile, SPEED_REV_S) as i32;
+        let rotor = |m: &InProcess| {
+            m.shared.segment().drives()[0].servos[0]
+                .plant
+                .mech_angle_rad()
+                / TAU
+        };
+        let mut cycles = 0;
+        while rotor(&m) < PROBE1.1 {
+            cycles += 1;
+            assert!(cycles < 5_000, "the motor did not get past the sensor");
+            cycle(&m, md, &group, vendor::ENABLE_OPERATION, velocity).await;
+        }
+        cycle(&m, md, &group, vendor::ENABLE_OPERATION, 0).await;
+        let sd = group.subdevice(md, 0).expect("drive");
+        let before: i32 = sd.sdo_read(0x60BA, 0).await.expect("60BAh");
+        let per_unit = units::increments_per_unit(&profile);
+        let off = f64::from(before) * per_unit - PROBE1.0 * units::COUNTS_PER_REV;
+        assert!(
+            off.abs() <= 1.0 + per_unit,
+            "60BAh {before}: {off:.1} increments off the edge"
+        );
+        let denominator: u32 = sd.sdo_read(0x6091, 2).await.expect("6091h:02");
+        sd.sdo_write(0x6091, 2, 2 * denominator)
+            .await
+            .expect("6091h:02");
+        for _ in 0..2 {
+            cycle(&m, md, &group, vendor::ENABLE_OPERATION, 0).await;
+        }
+        let after: i32 = sd.sdo_read(0x60BA, 0).await.expect("60BAh");
+        assert!(
+            (i64::from(after) - 2 * i64::from(before)).abs() <= 1,
+            "60BAh {before} before, {after} with 6091h:02 doubled: expected about {}",
+            2 * before
+        );
+    });
+}

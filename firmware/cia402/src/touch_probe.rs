@@ -116,9 +116,11 @@ struct Probe {
     /// The latch counts already looked at: input rising, input falling, index (after a step,
     /// those of its inputs).
     seen: [u16; 3],
-    /// The input level of the last step.
-    level: bool,
-    toggle: bool,
+    /// What bit 7 shows under the profile's rule: the toggle of every store
+    /// ([`Bit7::ToggleOnStore`]) or the input level of the last step ([`Bit7::InputLevel`],
+    /// which [`TouchProbes::step_unchanged`] passes on). One field for both: a profile has one
+    /// rule, and a probe is 8 bytes smaller than with two.
+    bit7: bool,
     /// Latched positions (rising, falling) and counters.
     values: [i64; 2],
     counters: [u16; 2],
@@ -129,13 +131,15 @@ impl Probe {
         use function::*;
         let was = self.previous_function;
         self.previous_function = f;
-        self.level = input.level;
+        if rules.bit7 == Bit7::InputLevel {
+            self.bit7 = input.level;
+        }
         let counts = [input.rising.count, input.falling.count, index.count];
         if f & ENABLE == 0 {
             self.armed = [false; 2];
             self.stored = [false; 2];
             self.seen = counts;
-            return self.level_bit(input, rules);
+            return self.level_bit(rules);
         }
         let newly = |bit: u8| f & bit != 0 && (was & bit == 0 || was & ENABLE == 0);
         if was & ENABLE == 0 {
@@ -178,7 +182,9 @@ impl Probe {
                 *c = c.wrapping_add(1);
             }
             self.set_stored(edge, true);
-            self.toggle = !self.toggle;
+            if rules.bit7 == Bit7::ToggleOnStore {
+                self.bit7 = !self.bit7;
+            }
             if !continuous {
                 self.set_armed(edge, false);
             }
@@ -193,7 +199,7 @@ impl Probe {
         if rules.bit6_shows_source && f & SOURCE_MASK == SOURCE_INDEX {
             s |= status::BIT6;
         }
-        s | self.level_bit(input, rules)
+        s | self.level_bit(rules)
     }
 
     fn set_armed(&mut self, edge: usize, on: bool) {
@@ -208,13 +214,8 @@ impl Probe {
         }
     }
 
-    fn level_bit(&self, input: SwitchSignal, rules: &Rules) -> u8 {
-        let on = match rules.bit7 {
-            Bit7::None => false,
-            Bit7::ToggleOnStore => self.toggle,
-            Bit7::InputLevel => input.level,
-        };
-        if on {
+    fn level_bit(&self, rules: &Rules) -> u8 {
+        if rules.bit7 != Bit7::None && self.bit7 {
             status::BIT7
         } else {
             0
@@ -231,6 +232,9 @@ pub struct Output {
     pub values: [i64; 4],
     /// 60D5h, 60D6h, 60D7h, 60D8h.
     pub counters: [u16; 4],
+    /// A position was stored in this step: `values` and `counters` changed (they change only
+    /// then).
+    pub stored: bool,
 }
 
 /// Both touch probes of a drive.
@@ -247,8 +251,7 @@ impl TouchProbes {
             armed: [false; 2],
             stored: [false; 2],
             seen: [0; 3],
-            level: false,
-            toggle: false,
+            bit7: false,
             values: [0; 2],
             counters: [0; 2],
         };
@@ -264,13 +267,14 @@ impl TouchProbes {
     }
 
     /// One cycle whose probe inputs and index are those of the last [`step`](Self::step) (no
-    /// edge, pulse or level change since): the same as `step` with them, without the caller
-    /// copying them in (the drive skips its read of the axis' captures when they did not
-    /// change).
+    /// edge, pulse or level change since), with the same `rules`: the same as `step` with
+    /// them, without the caller copying them in (the drive skips its read of the axis'
+    /// captures when they did not change).
     pub fn step_unchanged(&mut self, function: u16, homing: bool, rules: &Rules) -> Output {
         // Positions are only taken at a new count, and these are the counts seen: none is.
         let signal = |p: &Probe| SwitchSignal {
-            level: p.level,
+            // Only bit 7 under the input-level rule reads it.
+            level: p.bit7,
             rising: Edges {
                 count: p.seen[0],
                 position: 0,
@@ -301,9 +305,12 @@ impl TouchProbes {
         let gate = |f: u8, off: bool| if off { f & !function::ENABLE } else { f };
         let [p1, p2] = &mut self.probes;
         let [in1, in2] = i.probes;
+        // Every store counts (wrapping): a changed counter is a stored position.
+        let counted = [p1.counters, p2.counters];
         let s1 = p1.step(gate(low, off1), in1, i.index, rules);
         let s2 = p2.step(gate(high, off2), in2, i.index, rules);
         Output {
+            stored: counted != [p1.counters, p2.counters],
             status: u16::from_le_bytes([s1, s2]),
             values: [p1.values[0], p1.values[1], p2.values[0], p2.values[1]],
             counters: [
@@ -529,6 +536,8 @@ mod tests {
             let mut every = Bench::default();
             let mut lazy = TouchProbes::new();
             let mut passed = every.inputs;
+            let mut previous = Output::default();
+            let mut stores = 0;
             for cycle in 0..240usize {
                 let function = functions[(cycle / 5) % functions.len()];
                 // An edge on some cycles only, both probes and the index in turn.
@@ -552,7 +561,23 @@ mod tests {
                     got, expected,
                     "{bit7:?}, cycle {cycle}, function {function:#06x}"
                 );
+                // What the drive relies on to write 60BAh–60BDh and 60D5h–60D8h only on a store.
+                if expected.stored {
+                    stores += 1;
+                    assert_ne!(expected.counters, previous.counters, "a store counts");
+                } else {
+                    assert_eq!(
+                        (expected.values, expected.counters),
+                        (previous.values, previous.counters),
+                        "{bit7:?}, cycle {cycle}: nothing stored, nothing changed"
+                    );
+                }
+                previous = expected;
             }
+            assert!(
+                stores > 10,
+                "{bit7:?}: the script stores positions ({stores})"
+            );
         }
     }
 }

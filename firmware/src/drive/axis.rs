@@ -155,6 +155,8 @@ pub struct DriveAxis {
     /// The sequence number of the axis' captures the touch probes last stepped with
     /// ([`NO_CAPTURES_SEEN`] before the first, and after an axis is attached).
     captures_seen: u32,
+    /// 60BAh–60BDh hold positions converted with unit factors or a polarity no longer in force.
+    probe_positions_stale: bool,
     /// Interpolated position: how long the axis has been inside the position window of the
     /// unchanged set-point (statusword bit 10).
     ip_target_timer: WindowTimer,
@@ -279,6 +281,7 @@ impl DriveAxis {
             sync_type_at: ram_offset(&profile.od, SM_OUTPUT_PARAMETER, SUB_SYNC_TYPE),
             probe_function_seen: 0,
             captures_seen: NO_CAPTURES_SEEN,
+            probe_positions_stale: true,
             homing_failure_raised: false,
             ip_target_timer: WindowTimer::new(),
             ip_last_set_point: None,
@@ -365,7 +368,49 @@ impl DriveAxis {
         let units = self.unit_ratios(ram, counts_per_rev, &mut due);
         self.settings
             .refresh(ram, self.vars, (&units, self.polarity), self.rules, due);
+        if due.has(Groups::POSITION_LIMITS) {
+            self.position_settings_refreshed(ram, units.position);
+        }
         self.settings_due = Groups::NONE;
+    }
+
+    /// The position limits' group was read again (the unit factors, the polarity, 607Ch or
+    /// 607Dh may have changed): the home offset's shift follows ([`Self::refresh_home_offset`],
+    /// whose result this returns), and the touch probes' stored positions are converted again
+    /// at their next step.
+    fn position_settings_refreshed(&mut self, ram: &[u8], ratio: units::Ratio) -> i64 {
+        self.probe_positions_stale = true;
+        self.refresh_home_offset(ram, ratio)
+    }
+
+    /// The shift the home offset asks for where the profile adds it to every position
+    /// (`Cia402Rules::home_offset_added`: 607Ch; `home_offset_added_absolute`: 607Ch at
+    /// power-on), in increments with `ratio` and the polarity in force. A setting of the
+    /// position limits' group (which the unit factors, the polarity, an SDO download or its
+    /// mapping make due): converted then, not in every cycle.
+    /// The offset is part of the drive positions' shift, so every position object (targets,
+    /// limits, probes, demand, actual) carries it: a change moves them all, at once. Returns
+    /// how far (increments), for the caller's copies of drive positions.
+    // Rarely called (when the group is due): kept out of the cycle's code.
+    #[inline(never)]
+    fn refresh_home_offset(&mut self, ram: &[u8], ratio: units::Ratio) -> i64 {
+        let absolute = self.port.as_ref().is_some_and(|p| p.absolute);
+        let offset = if self.rules.home_offset_added {
+            read_i32(ram, self.vars.home_offset).unwrap_or(0)
+        } else if self.rules.home_offset_added_absolute && absolute {
+            self.home_offset_at_power_on
+        } else {
+            return 0;
+        };
+        let wanted = ratio.position_to_internal(i64::from(self.polarity.position(offset)));
+        let delta = wanted.saturating_sub(self.home_offset_shift);
+        if delta != 0 {
+            self.home_offset_shift = wanted;
+            self.position_shift = self.position_shift.saturating_add(delta);
+            self.position_demand = self.position_demand.saturating_add(delta);
+            self.profile_modes.rebase(delta);
+        }
+        delta
     }
 
     /// The unit conversions this cycle: the factors in force (latched where the profile makes
@@ -1036,32 +1081,17 @@ impl DriveAxis {
             let units = self.unit_ratios(ram, counts_per_rev, &mut due);
             self.settings
                 .refresh(ram, vars, (&units, pol), self.rules, due);
+            if due.has(Groups::POSITION_LIMITS) {
+                // In drive positions, as the home offset's shift moved them.
+                let delta = self.position_settings_refreshed(ram, units.position);
+                feedback.position = feedback.position.saturating_add(delta);
+            }
         }
         let rated_nm = self.settings.rated_nm;
         // The torque objects' unit.
         let object_rated_nm = self.settings.object_rated_nm;
         // The GHA-E's 6064h = position from the home + 607Ch, before homing too and at once when
         // 607Ch changes; the Σ-V-SD's with an absolute encoder, 607Ch as it was at power-on.
-        let added_offset = if self.rules.home_offset_added {
-            Some(read_i32(ram, vars.home_offset).unwrap_or(0))
-        } else if self.rules.home_offset_added_absolute && absolute {
-            Some(self.home_offset_at_power_on)
-        } else {
-            None
-        };
-        if let Some(offset) = added_offset {
-            // The offset is part of the drive positions' shift, so every position object
-            // (targets, limits, probes, demand, actual) carries it.
-            let wanted = position_ratio.position_to_internal(i64::from(pol.position(offset)));
-            let delta = wanted.saturating_sub(self.home_offset_shift);
-            if delta != 0 {
-                self.home_offset_shift = wanted;
-                self.position_shift = self.position_shift.saturating_add(delta);
-                self.position_demand = self.position_demand.saturating_add(delta);
-                self.profile_modes.rebase(delta);
-                feedback.position = feedback.position.saturating_add(delta);
-            }
-        }
         // Every object value passes the polarity where it enters or leaves (its own inverse).
         let position_in = |at| read_i32(ram, at).map(|v| pol.position(v));
         let velocity_in = |at| {
@@ -1646,6 +1676,12 @@ impl DriveAxis {
             None => self.touch_probes.step_unchanged(function, homing, rules),
         };
         write_u16(ram, vars.touch_probe_status, out.status);
+        // The stored positions and their counters change only with a store; the positions'
+        // objects also with the unit factors or the polarity.
+        if !(out.stored || self.probe_positions_stale) {
+            return;
+        }
+        self.probe_positions_stale = false;
         let positions = [
             vars.touch_probe_1_positive,
             vars.touch_probe_1_negative,
