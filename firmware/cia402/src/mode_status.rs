@@ -237,12 +237,15 @@ pub const fn shown_in(overrides: &[Override], c: Shows) -> bool {
     false
 }
 
-/// The statusword bits 10–13 of the mode the drive runs, resolved once when the mode changes.
+/// The statusword bits 10–13 of the mode the drive runs, resolved once when the mode changes
+/// into the masks [`Self::apply`] needs (every cycle), rather than the layouts themselves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModeStatus {
-    /// CiA402's layout of the mode (how the mode's code sets the bits).
-    standard: Option<Layout>,
-    layout: Layout,
+    /// Per bit 10–13 as CiA402's layout sets it: the bits of the profile's layout that show
+    /// the same condition (bit k of the mask = statusword bit 10 + k).
+    moves_to: [u8; 4],
+    /// Per bit 10–13 of the profile's layout: the condition it shows ([`Shows::flag`]).
+    shows: [u16; 4],
     /// The layout differs from CiA402's for the mode.
     relayout: bool,
     /// The conditions the layout shows that CiA402's does not.
@@ -259,9 +262,19 @@ impl ModeStatus {
         for c in own.bits {
             extra.set(c, !standard.is_some_and(|l| l.shows(c)));
         }
+        let mut moves_to = [0; 4];
+        if let Some(standard) = standard {
+            for (to, from) in moves_to.iter_mut().zip(standard.bits) {
+                for (bit, shows) in own.bits.iter().enumerate() {
+                    if from != Shows::Nothing && *shows == from {
+                        *to |= 1 << bit;
+                    }
+                }
+            }
+        }
         Some(Self {
-            standard,
-            layout: own,
+            moves_to,
+            shows: own.bits.map(Shows::flag),
             relayout: standard != Some(own),
             extra,
         })
@@ -279,13 +292,22 @@ impl ModeStatus {
     }
 
     /// The mode's bits 10–13 (`statusword`, as CiA402's layout has them) in the profile's
-    /// layout, with the `extra` conditions the drive worked out.
+    /// layout, with the `extra` conditions the drive worked out: the same as [`relayout`].
+    /// Timing: a few instructions per bit, no search of the layouts.
     pub fn apply(&self, statusword: u16, extra: Conditions) -> u16 {
-        if self.relayout {
-            moved(self.standard.as_ref(), statusword, &self.layout, extra)
-        } else {
-            statusword
+        if !self.relayout {
+            return statusword;
         }
+        let mut bits = 0;
+        for (k, (moves_to, shows)) in self.moves_to.iter().zip(self.shows).enumerate() {
+            if statusword & (FIRST_BIT << k) != 0 {
+                bits |= moves_to;
+            }
+            if extra.0 & shows != 0 {
+                bits |= 1 << k;
+            }
+        }
+        (statusword & !MODE_BITS) | u16::from(bits) << FIRST_BIT.trailing_zeros()
     }
 }
 
@@ -446,5 +468,45 @@ mod tests {
         assert!(!can_show(CST, TargetReached));
         assert!(!can_show(CSV, FollowingError));
         assert!(!can_show(CSP, SetPointAcknowledge));
+    }
+
+    #[test]
+    fn apply_moves_the_bits_as_relayout_does_for_any_layout() {
+        // Layouts drawn from every condition (each bit a different one, or the same one twice),
+        // every mode, every combination of bits 10-13 and of the extra conditions.
+        let modes = [0, PP, PV, PT, HM, IP, CSP, CSV, CST, -1];
+        let mut layouts = 0;
+        for a in 0..ALL.len() {
+            for shift in 1..ALL.len() {
+                let pick = |k: usize| ALL[(a + k * shift) % ALL.len()];
+                let layout = Layout {
+                    bits: [pick(0), pick(1), pick(2), pick(2 + shift % 2)],
+                };
+                for mode in modes {
+                    let overrides = [Override { mode, layout }];
+                    let Some(status) = ModeStatus::of(mode, &overrides) else {
+                        continue;
+                    };
+                    layouts += 1;
+                    for bits in 0..16u16 {
+                        let sw = 0x8237 | bits << 10;
+                        for extra_bits in [0u16, 0x00FF, 0x1F00, 0xAAAA, 0x5555, u16::MAX] {
+                            let extra = Conditions(extra_bits);
+                            let expected = if cia402(mode) == Some(layout) {
+                                sw
+                            } else {
+                                relayout(mode, sw, &layout, extra)
+                            };
+                            assert_eq!(
+                                status.apply(sw, extra),
+                                expected,
+                                "mode {mode}, {layout:?}, sw {sw:#06x}, extra {extra_bits:#06x}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(layouts > 500, "{layouts} layouts");
     }
 }
