@@ -16,13 +16,14 @@
 //! return, minus the baseline's, gave the same counts for every operation (after dropping the
 //! trace's repeated lines of a block QEMU re-enters when the icount budget runs out).
 //!
-//! Three modes, chosen by the command line (QEMU `-append`):
+//! Four modes, chosen by the command line (QEMU `-append`):
 //!
 //! | mode | a measurement | returns |
 //! |---|---|---|
 //! | (none) | [`ITERATIONS`] calls counted with the SysTick, as above | instructions per call |
 //! | `trace` | one call between the markers [`bench_span_begin`] and [`bench_span_end`], for an instruction trace (`-singlestep -d exec,nochain`) that `benchmarks/cycle-model` turns into a value per span | 0 |
 //! | `replay FILE` | one call | the next line of the host file FILE: the span's value from the trace |
+//! | `profile` | as `trace`, each span named by a `SPAN` record, the count-only benchmarks included: `benchmarks/profile` attributes each span's instructions to the functions that executed them | 0 |
 //!
 //! The benchmarks run the same code in every mode, so the spans come in the same order, and a
 //! replay derives its rows from the span values exactly as the counting run does from its
@@ -38,6 +39,7 @@
 //! | `BENCH` | name, instructions (the max over its inputs), budget (`-` if none; `N*` a target not yet met, not enforced), description |
 //! | `CASE` | name, input, instructions: one input of a benchmark measured over a set |
 //! | `SPREAD` | name, min, median, max, number of inputs (after a set's `CASE` records) |
+//! | `SPAN` | name (mode `profile`: the measurement of the next traced span) |
 //! | `FAIL` | name, reason |
 //! | `DONE` | `ok` or `failed` |
 
@@ -98,6 +100,7 @@ const CALIBRATION_NOPS: u32 = 100;
 enum Mode {
     Count,
     Trace,
+    Profile,
     /// The values to replay, one decimal number per line.
     Replay(HostFile),
 }
@@ -150,6 +153,7 @@ impl Harness {
         let (mode, bad_mode) = match (words.next(), words.next()) {
             (None, _) => (Mode::Count, false),
             (Some("trace"), None) => (Mode::Trace, false),
+            (Some("profile"), None) => (Mode::Profile, false),
             (Some("replay"), Some(path)) => match HostFile::open(path) {
                 Some(file) => (Mode::Replay(file), false),
                 None => (Mode::Count, true),
@@ -166,7 +170,9 @@ impl Harness {
         if bad_mode {
             harness.fail(
                 "mode",
-                format_args!("arguments: none, `trace`, or `replay FILE` (a readable file)"),
+                format_args!(
+                    "arguments: none, `trace`, `profile`, or `replay FILE` (a readable file)"
+                ),
             );
         }
         match harness.mode {
@@ -175,7 +181,7 @@ impl Harness {
                 None => harness.fail("baseline", format_args!("the SysTick overflowed")),
             },
             // The baseline is the first span; its value, the others' reference, is 0.
-            Mode::Trace | Mode::Replay(_) => {
+            Mode::Trace | Mode::Profile | Mode::Replay(_) => {
                 if harness.instructions(&mut empty) != Some(0) {
                     harness.fail("baseline", format_args!("the replayed baseline is not 0"));
                 }
@@ -191,6 +197,11 @@ impl Harness {
     /// Whether this run counts instructions (the default mode, not `trace` or `replay`).
     pub fn counting(&self) -> bool {
         matches!(self.mode, Mode::Count)
+    }
+
+    /// Whether this run traces every benchmark for a profile (mode `profile`).
+    pub fn profiling(&self) -> bool {
+        matches!(self.mode, Mode::Profile)
     }
 
     /// Checks the method: an operation of [`CALIBRATION_NOPS`] NOPs must cost exactly that many
@@ -214,7 +225,7 @@ impl Harness {
             Display(measured)
         ));
         // A trace run measures nothing (its values come from the trace afterwards).
-        if !matches!(self.mode, Mode::Trace) && measured != Some(CALIBRATION_NOPS) {
+        if !matches!(self.mode, Mode::Trace | Mode::Profile) && measured != Some(CALIBRATION_NOPS) {
             self.fail(
                 "calibration",
                 format_args!("{CALIBRATION_NOPS} NOPs did not measure {CALIBRATION_NOPS}"),
@@ -240,6 +251,9 @@ impl Harness {
     /// measurements, printed with [`report`](Self::report)). Returns the cost of one call, or
     /// `None` after reporting the failure as benchmark `name`.
     pub fn measure(&mut self, name: &str, op: &mut dyn FnMut()) -> Option<u32> {
+        if self.profiling() {
+            self.record(format_args!("SPAN\t{name}"));
+        }
         let cost = self.instructions(op);
         if cost.is_none() {
             self.fail(
@@ -410,7 +424,7 @@ impl Harness {
     fn instructions(&mut self, op: &mut dyn FnMut()) -> Option<u32> {
         match self.mode {
             Mode::Count => self.counted(op),
-            Mode::Trace => {
+            Mode::Trace | Mode::Profile => {
                 bench_span_begin();
                 repeat(black_box(1), black_box(op));
                 bench_span_end();

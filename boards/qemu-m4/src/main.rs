@@ -30,7 +30,7 @@ fn main() -> ! {
     for bench in benches::ALL {
         bench(&mut harness);
     }
-    if harness.counting() {
+    if harness.counting() || harness.profiling() {
         for bench in benches::COUNT_ONLY {
             bench(&mut harness);
         }

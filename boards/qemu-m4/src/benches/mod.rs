@@ -41,8 +41,8 @@ pub const ALL: &[fn(&mut Harness)] = &[
 ];
 
 /// The benchmarks counted only (no cycle estimate), after [`ALL`] in the report: their setups
-/// run hundreds of millions of instructions (every profile brought to OP with running axes),
-/// too many to trace.
+/// (every profile brought to OP with running axes) are too long to trace in every run of
+/// `benchmarks/run`; `benchmarks/profile` traces them too (harness mode `profile`).
 pub const COUNT_ONLY: &[fn(&mut Harness)] = &[sync0_profiles::run];
 
 /// Reads `N` bytes of the OD RAM at the offset of an application variable.
