@@ -576,16 +576,10 @@ impl AxisLink {
         self.captures.read().0
     }
 
-    /// SYNC0 side: whether the captures changed since the read ([`Self::captures_if_new`])
-    /// that returned `last_sequence`. The axis publishes them only when an edge, index pulse or
-    /// level change happened, so most cycles cost this compare instead of a copy.
-    pub fn captures_changed_since(&self, last_sequence: u32) -> bool {
-        self.captures.written_since(last_sequence)
-    }
-
     /// SYNC0 side: the captures if they changed since the read that returned `last_sequence`
     /// (the second value: the sequence number to pass next time), `None` without copying them
-    /// otherwise.
+    /// otherwise. The axis publishes them only when an edge, index pulse or level change
+    /// happened, so most cycles cost a compare instead of a copy.
     pub fn captures_if_new(&self, last_sequence: u32) -> Option<(Captures, u32)> {
         self.captures.read_if_new(last_sequence)
     }

@@ -235,7 +235,7 @@ impl<T: Copy> FeedbackHandoff<T> {
     ///
     /// Timing: about 5 instructions.
     #[inline]
-    pub fn written_since(&self, last_sequence: u32) -> bool {
+    fn written_since(&self, last_sequence: u32) -> bool {
         // No data is read on this path, so no ordering is needed for the load.
         let state = self.sequence.load(Ordering::Relaxed);
         state & 1 != 0 || state >> 1 != last_sequence

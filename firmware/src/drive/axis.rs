@@ -383,15 +383,16 @@ impl DriveAxis {
         self.refresh_home_offset(ram, ratio)
     }
 
-    /// The shift the home offset asks for where the profile adds it to every position
+    /// Takes the home offset where the profile adds it to every position
     /// (`Cia402Rules::home_offset_added`: 607Ch; `home_offset_added_absolute`: 607Ch at
-    /// power-on), in increments with `ratio` and the polarity in force. A setting of the
-    /// position limits' group (which the unit factors, the polarity, an SDO download or its
-    /// mapping make due): converted then, not in every cycle.
-    /// The offset is part of the drive positions' shift, so every position object (targets,
-    /// limits, probes, demand, actual) carries it: a change moves them all, at once. Returns
-    /// how far (increments), for the caller's copies of drive positions.
-    // Rarely called (when the group is due): kept out of the cycle's code.
+    /// power-on) into the drive positions' shift, in increments with `ratio` and the polarity
+    /// in force, so that every position object (targets, limits, probes, demand, actual)
+    /// carries it and a change moves them all at once. Returns how far (increments), for the
+    /// caller's copies of drive positions.
+    ///
+    /// A setting of the position limits' group (which the unit factors, the polarity, an SDO
+    /// download or its mapping make due): called then, not in every cycle, and kept out of the
+    /// cycle's code.
     #[inline(never)]
     fn refresh_home_offset(&mut self, ram: &[u8], ratio: units::Ratio) -> i64 {
         let absolute = self.port.as_ref().is_some_and(|p| p.absolute);

@@ -348,8 +348,9 @@ fn span_mut(buf: &mut [u8], at: usize, n: usize) -> Option<&mut [u8]> {
 /// words, not through the library `memcpy` call a slice copy of unknown length becomes (its
 /// call and size dispatch cost more than the copy of a few bytes): 4 to 8 bytes as two words
 /// that overlap where the length is below 8 (the first and the last four bytes), 2 or 3 bytes
-/// as two half-words likewise, 9 to 16 bytes as four words likewise. Branches on ranges rather than on each size: fewer
-/// instructions than the jump table a `match` on the sizes becomes.
+/// as two half-words likewise, 9 to 16 bytes as four words likewise. Branches on ranges
+/// rather than on each size: fewer instructions than the jump table a `match` on the sizes
+/// becomes.
 #[inline(always)]
 fn copy_bytes(from: &[u8], to: &mut [u8]) {
     /// Copies `N` bytes at `at` (nothing if out of range).
