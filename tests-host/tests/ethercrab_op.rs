@@ -227,3 +227,32 @@ fn one_drive_reaches_op_in_free_run() {
         "1C32h:01 = free run (ETG.1020)"
     );
 }
+
+/// A line simulated on several threads (`sim-drive demo --threads N`) behaves exactly as on one:
+/// the drives interact only through frames, so spreading their advances and their ESC event
+/// rounds (every drive raises one per cyclic frame: more than the segment spreads from) over
+/// threads changes nothing a master can see, down to the last position of the last drive.
+#[test]
+fn a_line_on_three_threads_gives_the_results_of_one_thread() {
+    let on = |threads| {
+        let scenario = Scenario {
+            drives: 2 * board_sim::segment::MIN_PARALLEL_EVENT_ROUNDS,
+            cycles: 60,
+            plant: Fidelity::Averaged,
+            threads,
+            ..Scenario::default()
+        };
+        block_on(demo::run(&scenario, &mut |_| {}))
+            .unwrap_or_else(|e| panic!("scenario on {threads} thread(s) failed: {e}"))
+    };
+    let (one, three) = (on(1), on(3));
+    check_bus(&one, one.drives.len(), 60);
+    assert_eq!(three.samples, one.samples);
+    assert_eq!(three.last_inputs, one.last_inputs);
+    assert_eq!(three.firmware_cycles, one.firmware_cycles);
+    assert_eq!(three.sync_health, one.sync_health);
+    assert_eq!(
+        (three.frames, three.sim_time_ns),
+        (one.frames, one.sim_time_ns)
+    );
+}

@@ -551,7 +551,7 @@ pub async fn run_line<S: AsRef<str>>(
 ) -> Result<Report, Box<dyn std::error::Error>> {
     let profiles: Vec<String> = profiles.iter().map(|p| p.as_ref().to_string()).collect();
     let mut segment = Segment::line_with_plant(&profiles, s.plant)?;
-    segment.set_threads(s.threads);
+    segment.set_threads(s.threads)?;
     check_sync_modes(&profiles, s.dc)?;
     let cycle_ns = u64::try_from(s.cycle.as_nanos()).unwrap_or(u64::MAX);
     for p in &profiles {

@@ -3,7 +3,8 @@
 //! ([`segment`]), reachable by real masters in process ([`inproc`], ethercrab) or over a network
 //! interface ([`rawsock`], any master). [`storage`] is the board's parameter storage; [`axis_io`]
 //! its axis hardware (the `hal` power, encoder and input drivers over the [`plant`]), which
-//! [`servo`] wires to the firmware's control interrupt.
+//! [`servo`] wires to the firmware's control interrupt; [`workers`] are the helper threads a
+//! segment spreads its drives over.
 
 pub mod axis_io;
 pub mod demo;
@@ -21,5 +22,6 @@ pub mod segment;
 pub mod servo;
 pub mod storage;
 pub mod tour;
+pub mod workers;
 
 pub use segment::{Segment, SegmentError, SimDevice};

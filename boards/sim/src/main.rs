@@ -470,7 +470,7 @@ fn attach(args: &Args) -> Result<(), Box<dyn std::error::Error>> {
     let mut segment = Segment::line_with_plant(&args.line, args.plant)?;
     segment.set_threads(args.threads.unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
-    }));
+    }))?;
     if let Some(switches) = args.machine() {
         for servo in segment
             .drives_mut()

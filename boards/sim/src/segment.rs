@@ -5,12 +5,15 @@
 //! or when the caller advances it. A test can therefore run thousands of 250 µs cycles as fast
 //! as the host allows and still see every SYNC0 at its exact time.
 
+use std::sync::{Mutex, PoisonError};
+
 use firmware::profile::DriveProfile;
 
 use crate::drive::SimDrive;
 use crate::esc::{self, Et1100};
 use crate::plant::Fidelity;
 use crate::record::Recorder;
+use crate::workers::Workers;
 
 /// Time a frame of `len` bytes spends on a 100 Mbit/s wire, plus the fixed forwarding latency
 /// of the master's NIC (a few µs on a PC); both only need to be plausible, not exact.
@@ -88,8 +91,8 @@ pub struct Segment<D: SimDevice = SimDrive> {
     now_ns: u64,
     /// The master's frames, recorded for the fuzzers' seeds (`SIM_RECORD_FRAMES`).
     recorder: Option<Recorder>,
-    /// Threads [`Segment::advance_to`] may use.
-    threads: usize,
+    /// The `threads` − 1 helper threads, started once ([`crate::workers`]).
+    workers: Option<Workers>,
 }
 
 impl Segment {
@@ -155,7 +158,7 @@ impl<D: SimDevice> Segment<D> {
             drives: devices,
             now_ns: 0,
             recorder,
-            threads: 1,
+            workers: None,
         };
         segment.wire_ports();
         segment
@@ -212,11 +215,10 @@ impl<D: SimDevice> Segment<D> {
         }
         let mut reply = frame.to_vec();
         esc::process_frame(&mut reply, self.drives.iter_mut().map(|d| d.esc_mut())).ok()?;
-        // On the caller's thread: spreading the event rounds of one frame over threads cost
-        // more than it saved (measured with 128 drives: most frames raise no event).
-        for d in &mut self.drives {
-            d.service_irq(t);
-        }
+        // Most frames raise an event in a few drives at most (a mailbox poll, an AL control):
+        // those run on the caller's thread. A cyclic frame raises one in every drive.
+        let events = self.drives.iter().filter(|d| d.esc().irq_line()).count();
+        self.each_drive(events >= MIN_PARALLEL_EVENT_ROUNDS, |d| d.service_irq(t));
         Some(reply)
     }
 
@@ -236,52 +238,55 @@ impl<D: SimDevice> Segment<D> {
     /// ESC has its own clock, so N drives have N different SYNC0 instants.)
     pub fn advance_to(&mut self, t_ns: u64) {
         let (from, to) = (self.now_ns, t_ns.max(self.now_ns));
-        self.each_drive(to - from >= MIN_PARALLEL_SPAN_NS, |d| {
-            advance_drive(d, from, to)
-        });
+        let work = (to - from).saturating_mul(self.drives.len() as u64);
+        self.each_drive(work >= MIN_PARALLEL_WORK, |d| advance_drive(d, from, to));
         self.now_ns = to;
     }
 
-    /// Runs `f` on every drive: when `worth_threads`, on up to [`Segment::set_threads`]
-    /// threads (at least [`MIN_DRIVES_PER_THREAD`] drives each), else on the caller's. The
-    /// drives are independent of each other, so the results are the same either way.
+    /// Runs `f` on every drive: when `worth_threads`, on the caller's thread and the helpers
+    /// of [`Segment::set_threads`], each taking [`DRIVES_PER_TAKE`] drives at a time until
+    /// none is left, else on the caller's alone. The drives are independent of each other, so
+    /// the results are the same either way.
     fn each_drive(&mut self, worth_threads: bool, f: impl Fn(&mut D) + Sync) {
-        let threads = if worth_threads {
-            self.threads
-                .min(self.drives.len() / MIN_DRIVES_PER_THREAD)
-                .max(1)
-        } else {
-            1
-        };
-        if threads == 1 {
-            self.drives.iter_mut().for_each(f);
-            return;
-        }
-        let per_thread = self.drives.len().div_ceil(threads);
-        let f = &f;
-        std::thread::scope(|scope| {
-            let mut parts = self.drives.chunks_mut(per_thread);
-            let own = parts.next();
-            for part in parts {
-                scope.spawn(move || part.iter_mut().for_each(f));
+        match &self.workers {
+            Some(workers) if worth_threads && self.drives.len() > DRIVES_PER_TAKE => {
+                let queue = Mutex::new(self.drives.chunks_mut(DRIVES_PER_TAKE));
+                let take = || queue.lock().unwrap_or_else(PoisonError::into_inner).next();
+                workers.run(&|| {
+                    while let Some(part) = take() {
+                        part.iter_mut().for_each(&f);
+                    }
+                });
             }
-            own.into_iter().flatten().for_each(f);
-        });
+            _ => self.drives.iter_mut().for_each(f),
+        }
     }
 
-    /// Lets [`Segment::advance_to`] spread the drives over up to `threads` threads (1, the
-    /// default: all on the caller's); a thread gets at least [`MIN_DRIVES_PER_THREAD`] drives.
-    pub fn set_threads(&mut self, threads: usize) {
-        self.threads = threads.max(1);
+    /// Lets [`Segment::advance_to`] and the ESC event rounds after a frame spread the drives
+    /// over `threads` threads (1, the default: all on the caller's). The `threads` − 1 helper
+    /// threads are started here and live as long as the segment (or the next call); each
+    /// spins for [`crate::workers::SPIN_BEFORE_PARK`] after a job before it sleeps.
+    pub fn set_threads(&mut self, threads: usize) -> std::io::Result<()> {
+        let threads = threads.max(1);
+        self.workers = None;
+        if threads > 1 {
+            self.workers = Some(Workers::new(threads - 1)?);
+        }
+        Ok(())
     }
 }
 
-/// Fewest drives worth a thread of their own in [`Segment::advance_to`] (starting a thread
-/// costs about as much as a few PWM periods of one drive).
-pub const MIN_DRIVES_PER_THREAD: usize = 4;
-/// Shortest advance [`Segment::advance_to`] spreads over threads: a frame's wire time (a few
-/// µs) is not worth starting one; a bus cycle is.
-pub const MIN_PARALLEL_SPAN_NS: u64 = 100_000;
+/// Drives a thread takes from the line at a time in [`Segment::advance_to`]: small, so that a
+/// helper that wakes up late still finds a share.
+pub const DRIVES_PER_TAKE: usize = 2;
+/// Least simulated drive time (drives × the advance, in ns) [`Segment::advance_to`] spreads
+/// over threads: a hand-over to spinning helpers costs about a µs of host time, about what
+/// one drive with the averaged plant simulates in 40 µs (a 128-drive line spreads even a
+/// short frame's wire time, a 4-drive line advances of 100 µs and more).
+pub const MIN_PARALLEL_WORK: u64 = 400_000;
+/// Fewest ESC event rounds after a frame worth spreading over threads (one round is a few
+/// hundred ns to a few µs of host time).
+pub const MIN_PARALLEL_EVENT_ROUNDS: usize = 16;
 
 /// Runs `d`'s events from `from_ns` up to `to_ns` in order, then brings it to `to_ns`.
 fn advance_drive<D: SimDevice>(d: &mut D, from_ns: u64, to_ns: u64) {

@@ -414,7 +414,7 @@ impl core::fmt::Debug for Et1100 {
 
 impl EscSignals for Et1100 {
     fn irq_asserted(&mut self) -> bool {
-        self.al_event() & self.u32_at(regs::AL_EVENT_MASK.addr) != 0
+        self.irq_line()
     }
 
     fn take_sync0(&mut self) -> bool {
@@ -431,5 +431,10 @@ impl Et1100 {
     /// AL event request register 0x0220 (no side effects).
     pub fn al_event_request(&self) -> AlEvent {
         AlEvent(self.al_event())
+    }
+
+    /// The IRQ output: an AL event request that the AL event mask (0x0204) lets through.
+    pub fn irq_line(&self) -> bool {
+        self.al_event() & self.u32_at(regs::AL_EVENT_MASK.addr) != 0
     }
 }

@@ -94,7 +94,17 @@ impl LegTiming {
         if span <= 0.0 {
             return [0.0; 3];
         }
-        let inverse_span = 1.0 / span;
+        self.average_voltages_over(duties, (t0, t1, 1.0 / span), currents_a)
+    }
+
+    /// [`Self::average_voltages`] over `[t0, t1]` (t1 > t0) with `inverse_span` = 1 / (t1 − t0)
+    /// (a plant whose substeps repeat divides once).
+    pub fn average_voltages_over(
+        &self,
+        duties: [f64; 3],
+        (t0, t1, inverse_span): (f64, f64, f64),
+        currents_a: [f64; 3],
+    ) -> [f64; 3] {
         [0, 1, 2]
             .map(|k| self.average_voltage_over(duties[k], (t0, t1, inverse_span), currents_a[k]))
     }

@@ -110,10 +110,41 @@ fn phi(x: f64) -> f64 {
     }
 }
 
+/// The parts of a mechanical step that depend only on its length, the inertia and the viscous
+/// friction: a plant whose steps repeat computes them once ([`MechParams::step_by`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MechStep {
+    /// Step length `h`, s.
+    pub h: f64,
+    /// `h/J`.
+    pub h_over_j: f64,
+    /// `φ(hB/J)`, the exact speed update's factor.
+    pub phi: f64,
+}
+
+impl MechStep {
+    /// The step of length `h` with total inertia `inertia_kgm2` under `params`' friction.
+    pub fn new(params: &MechParams, inertia_kgm2: f64, h: f64) -> Self {
+        let h_over_j = h / inertia_kgm2;
+        Self {
+            h,
+            h_over_j,
+            phi: phi(h_over_j * params.viscous_nm_per_rad_s),
+        }
+    }
+}
+
 impl MechParams {
     /// Advances `s` by `h` seconds under the net external torque `torque_nm` (`Te − T_load`)
     /// with total inertia `inertia_kgm2`.
     pub fn step(&self, s: MechState, torque_nm: f64, inertia_kgm2: f64, h: f64) -> MechState {
+        self.step_by(s, torque_nm, &MechStep::new(self, inertia_kgm2, h))
+    }
+
+    /// [`Self::step`] with the step's constants computed beforehand (`step` made them with
+    /// these parameters' viscous friction).
+    pub fn step_by(&self, s: MechState, torque_nm: f64, step: &MechStep) -> MechState {
+        let MechStep { h, h_over_j, phi } = *step;
         let w0 = s.omega_rad_s;
         if w0 == 0.0 && torque_nm.abs() <= self.coulomb_nm {
             return s; // stiction
@@ -125,8 +156,7 @@ impl MechParams {
         };
         let b = self.viscous_nm_per_rad_s;
         let net = torque_nm - self.coulomb_nm * dir - b * w0;
-        let h_over_j = h / inertia_kgm2;
-        let mut w1 = w0 + net * h_over_j * phi(h_over_j * b);
+        let mut w1 = w0 + net * h_over_j * phi;
         if w1 * dir < 0.0 {
             // Friction cannot reverse the motion: the rotor stops within this step.
             w1 = 0.0;

@@ -84,7 +84,7 @@ pub use sensing::SensingParams;
 use encoder::EncoderModel;
 use firmware::motor::servo::{EncoderSpec, SERVO_400W};
 use inverter::LegTiming;
-use mechanics::MechState;
+use mechanics::{MechState, MechStep};
 use pmsm::{
     clarke, inverse_clarke, inverse_park, inverse_park_at, park, park_at, rotated, CurrentLoop,
 };
@@ -418,6 +418,46 @@ enum Conduction {
     Diodes { dirs: [i8; 3] },
 }
 
+/// One substep of a PWM period and the constants that depend only on its length.
+#[derive(Debug, Clone, Copy)]
+struct Substep {
+    /// Start and end, s from the period's start.
+    t0: f64,
+    t1: f64,
+    /// `1 / (t1 − t0)`.
+    inverse_span: f64,
+    /// The mechanics' step over it.
+    mech: MechStep,
+}
+
+impl Substep {
+    /// The `steps` substeps of a period `ts` (the last one ends exactly at `ts`) for total
+    /// inertia `inertia` under the friction of `mechanics`.
+    fn of_period(ts: f64, steps: u32, mechanics: &MechParams, inertia: f64) -> Vec<Substep> {
+        let h = ts / f64::from(steps);
+        (0..steps)
+            .map(|j| {
+                let t0 = f64::from(j) * h;
+                let t1 = if j + 1 == steps {
+                    ts
+                } else {
+                    f64::from(j + 1) * h
+                };
+                Substep {
+                    t0,
+                    t1,
+                    inverse_span: 1.0 / (t1 - t0),
+                    mech: MechStep::new(mechanics, inertia, t1 - t0),
+                }
+            })
+            .collect()
+    }
+
+    fn h(&self) -> f64 {
+        self.mech.h
+    }
+}
+
 /// The phase of `[0, 1, 2]` that is neither `a` nor `b`.
 fn third_phase(a: usize, b: usize) -> usize {
     3 - a - b
@@ -431,18 +471,18 @@ pub struct Plant {
     encoder: EncoderModel,
     /// Completed PWM periods (time = periods·Ts, exact at boundaries).
     periods: u64,
-    /// Integration steps per PWM period (the fidelity's).
-    steps: u32,
-    /// PWM period and substep length, s.
+    /// PWM period, s.
     ts: f64,
-    h: f64,
+    /// The substeps of a period (the fidelity's number), with what depends only on their
+    /// lengths and the inertia (computed once).
+    substeps: Vec<Substep>,
+    /// `(1/Ld, 1/Lq)` of the motor.
+    inverse_l: (f64, f64),
     /// Rotor-frame currents, A.
     id: f64,
     iq: f64,
     conduction: Conduction,
     mech: MechState,
-    /// Total inertia (rotor + load), kg·m².
-    inertia: f64,
     /// Prescribed mechanical speed (dynamometer), overriding the torque balance.
     driven_speed: Option<f64>,
     load_torque_nm: f64,
@@ -469,20 +509,19 @@ impl Plant {
             Fidelity::PwmResolved => cfg.substeps_per_period,
             Fidelity::Averaged => 1,
         };
-        let h = ts / f64::from(steps);
         let history = ENCODER_HISTORY_PERIODS * steps as usize + 1;
+        let inertia = cfg.motor.rotor_inertia_kgm2 + cfg.mechanics.load_inertia_kgm2;
         Ok(Plant {
             rng: Rng::new(cfg.seed),
             encoder: EncoderModel::new(cfg.encoder, history, 0.0, 0.0),
             periods: 0,
-            steps,
             ts,
-            h,
+            substeps: Substep::of_period(ts, steps, &cfg.mechanics, inertia),
+            inverse_l: cfg.motor.inverse_inductances(),
             id: 0.0,
             iq: 0.0,
             conduction: Conduction::Idle,
             mech: MechState::default(),
-            inertia: cfg.motor.rotor_inertia_kgm2 + cfg.mechanics.load_inertia_kgm2,
             driven_speed: None,
             load_torque_nm: 0.0,
             bus_v: cfg.inverter.bus_voltage_v,
@@ -509,29 +548,27 @@ impl Plant {
         } else if self.conduction == Conduction::Switching {
             self.conduction = self.freewheel_start();
         }
-        let n = self.steps;
         let t_start = self.time_s();
-        for j in 0..n {
-            let t0 = f64::from(j) * self.h;
-            // The last substep ends exactly at Ts.
-            let t1 = if j + 1 == n {
-                self.ts
-            } else {
-                f64::from(j + 1) * self.h
+        // The torque at a substep's end is the next one's start torque: the currents do not
+        // change in between.
+        let mut te0 = self.electromagnetic_torque_nm();
+        for j in 0..self.substeps.len() {
+            let Some(&sub) = self.substeps.get(j) else {
+                break;
             };
-            let te0 = self.electromagnetic_torque_nm();
             if self.conduction == Conduction::Switching {
-                self.switching_substep(duties, t0, t1);
+                self.switching_substep(duties, &sub);
             } else {
-                self.freewheel_substep(t1 - t0);
+                self.freewheel_substep(sub.h());
             }
             let te1 = self.electromagnetic_torque_nm();
             let theta_prev = self.mech.theta_rad;
-            self.mech_substep(0.5 * (te0 + te1), t1 - t0);
+            self.mech_substep(0.5 * (te0 + te1), &sub.mech);
+            te0 = te1;
             self.carry_trig(theta_prev);
             self.encoder
-                .record(t_start + t1, theta_prev, self.mech.theta_rad);
-            self.time_probe_edges(t_start + t0, t_start + t1, theta_prev);
+                .record(t_start + sub.t1, theta_prev, self.mech.theta_rad);
+            self.time_probe_edges(t_start + sub.t0, t_start + sub.t1, theta_prev);
         }
         self.periods += 1;
     }
@@ -614,21 +651,29 @@ impl Plant {
         // Clarke discards the zero sequence: this is v_an = v_a0 − mean(v_x0).
         let (va, vb) = clarke(legs);
         let v = park_at(va, vb, rotated(start, 0.5 * omega_e * h));
-        (self.id, self.iq) = self
-            .cfg
-            .motor
-            .step_dq(self.r(), (self.id, self.iq), v, omega_e, h);
+        (self.id, self.iq) = self.cfg.motor.step_dq_with(
+            self.r(),
+            (self.id, self.iq),
+            v,
+            omega_e,
+            h,
+            self.inverse_l,
+        );
     }
 
     /// A switching substep with one `sin_cos` (or none, [`Self::carry_trig`]): the phase
     /// currents at the substep's start angle decide the dead-time intervals of the legs'
     /// average voltages, which then drive [`Self::step_with_leg_voltages`].
-    fn switching_substep(&mut self, duties: [f64; 3], t0: f64, t1: f64) {
+    fn switching_substep(&mut self, duties: [f64; 3], sub: &Substep) {
         let start = self.electrical_sin_cos();
         let (alpha, beta) = inverse_park_at(self.id, self.iq, start);
         let currents = inverse_clarke(alpha, beta);
-        let legs = self.leg_timing().average_voltages(duties, t0, t1, currents);
-        self.step_with_leg_voltages(legs, t1 - t0, start);
+        let legs = self.leg_timing().average_voltages_over(
+            duties,
+            (sub.t0, sub.t1, sub.inverse_span),
+            currents,
+        );
+        self.step_with_leg_voltages(legs, sub.h(), start);
     }
 
     /// Conduction state when the gates turn off: every phase with current keeps it flowing
@@ -793,14 +838,14 @@ impl Plant {
         };
     }
 
-    fn mech_substep(&mut self, te: f64, h: f64) {
+    fn mech_substep(&mut self, te: f64, step: &MechStep) {
         if let Some(w) = self.driven_speed {
-            self.mech.theta_rad += w * h;
+            self.mech.theta_rad += w * step.h;
             self.mech.omega_rad_s = w;
             return;
         }
         let torque = te - self.load_torque_nm;
-        self.mech = self.cfg.mechanics.step(self.mech, torque, self.inertia, h);
+        self.mech = self.cfg.mechanics.step_by(self.mech, torque, step);
     }
 
     /// What the ADC and encoder interface latch at the present period boundary. Draws three

@@ -78,14 +78,21 @@ pub fn inverse_park_at(d: f64, q: f64, (s, c): (f64, f64)) -> (f64, f64) {
 /// The sine and cosine of `θ + δ` from those of `θ`, `(s, c)`: for the small angles a plant
 /// substep turns (|δ| ≤ 0.01 rad) by the Taylor series of sin δ and cos δ to δ⁵ and δ⁶ (the
 /// terms left out are below 2·10⁻¹⁸), else by `sin_cos`. Saves the second `sin_cos` of a
-/// substep, the simulation's largest single cost.
+/// substep, the simulation's largest single cost. The series' coefficients are multiplied, not
+/// divided by: a division is the longest instruction on the substep's dependency chain.
 pub fn rotated((s, c): (f64, f64), delta: f64) -> (f64, f64) {
     const SERIES_LIMIT: f64 = 0.01;
+    // 1/3!, 1/5! and 1/2!, 1/4!, 1/6!.
+    const SIN_3: f64 = 1.0 / 6.0;
+    const SIN_5: f64 = 1.0 / 120.0;
+    const COS_2: f64 = 0.5;
+    const COS_4: f64 = 1.0 / 24.0;
+    const COS_6: f64 = 1.0 / 720.0;
     let (sd, cd) = if delta.abs() <= SERIES_LIMIT {
         let d2 = delta * delta;
         (
-            delta * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0)),
-            1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0)),
+            delta * (1.0 - d2 * (SIN_3 - d2 * SIN_5)),
+            1.0 - d2 * (COS_2 - d2 * (COS_4 - d2 * COS_6)),
         )
     } else {
         delta.sin_cos()
@@ -145,6 +152,11 @@ impl MotorParams {
         (did, diq)
     }
 
+    /// `(1/Ld, 1/Lq)`, for [`Self::step_dq_with`].
+    pub fn inverse_inductances(&self) -> (f64, f64) {
+        (1.0 / self.ld_h, 1.0 / self.lq_h)
+    }
+
     /// One Heun (RK2) step of length `h` of the dq currents with constant dq voltages and speed.
     pub fn step_dq(
         &self,
@@ -154,7 +166,20 @@ impl MotorParams {
         omega_e: f64,
         h: f64,
     ) -> (f64, f64) {
-        let inverse_l = (1.0 / self.ld_h, 1.0 / self.lq_h);
+        self.step_dq_with(r_ohm, i, v, omega_e, h, self.inverse_inductances())
+    }
+
+    /// [`Self::step_dq`] with `inverse_l` from [`Self::inverse_inductances`] (a plant divides
+    /// once, not every step).
+    pub fn step_dq_with(
+        &self,
+        r_ohm: f64,
+        i: (f64, f64),
+        v: (f64, f64),
+        omega_e: f64,
+        h: f64,
+        inverse_l: (f64, f64),
+    ) -> (f64, f64) {
         let k1 = self.current_derivative(r_ohm, i, v, omega_e, inverse_l);
         let ip = (i.0 + h * k1.0, i.1 + h * k1.1);
         let k2 = self.current_derivative(r_ohm, ip, v, omega_e, inverse_l);
