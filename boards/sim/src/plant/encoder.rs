@@ -322,13 +322,15 @@ impl EncoderModel {
         if t <= t_first {
             return th_first - omega * (t_first - t);
         }
-        let mut prev = (t_first, th_first);
-        for &(tk, thk) in self.history.iter().skip(1) {
-            if tk >= t {
-                let frac = (t - prev.0) / (tk - prev.0);
-                return prev.1 + frac * (thk - prev.1);
+        // The entries (t_{k-1}, t_k] that hold t, searched from the newest: the latch delay is
+        // a small part of the history.
+        let mut next = (t_last, th_last);
+        for &(tk, thk) in self.history.iter().rev().skip(1) {
+            if tk < t {
+                let frac = (t - tk) / (next.0 - tk);
+                return thk + frac * (next.1 - thk);
             }
-            prev = (tk, thk);
+            next = (tk, thk);
         }
         th_last
     }

@@ -26,9 +26,30 @@ pub fn full_scale(bits: u32) -> f64 {
     ((1u32 << bits) - 1) as f64
 }
 
+/// `x.round()` (to nearest, halves away from zero), without the library call that `round`
+/// is on the x86-64 baseline (no SSE4.1): the simulation quantises four ADC readings every PWM
+/// period of every axis. The same result for every `x` but the sign of a zero.
+fn round_to_nearest(x: f64) -> f64 {
+    /// From 2^52 on every `f64` is a whole number.
+    const WHOLE_FROM: f64 = 4_503_599_627_370_496.0;
+    if x.is_nan() || x.abs() >= WHOLE_FROM {
+        return x;
+    }
+    // Truncation toward zero; x − t is exact (t has x's sign and at most its exponent).
+    let t = x as i64 as f64;
+    let fraction = x - t;
+    if fraction >= 0.5 {
+        t + 1.0
+    } else if fraction <= -0.5 {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
 /// Quantises `value / per_count + zero` to an ADC code, rounding to nearest and saturating.
 pub fn quantise(value: f64, per_count: f64, zero: u16, bits: u32) -> u16 {
-    let code = (f64::from(zero) + value / per_count).round();
+    let code = round_to_nearest(f64::from(zero) + value / per_count);
     if code.is_nan() {
         return zero; // not reachable with validated parameters; never panic
     }
@@ -80,6 +101,39 @@ mod tests {
             assert_eq!(p.current_counts(0, i - 0.49 * 0.02, 0.0), expected);
         }
         assert_eq!(p.current_counts(0, 0.51 * 0.02, 0.0), 2049);
+    }
+
+    #[test]
+    fn rounding_is_that_of_f64_round() {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut values = vec![
+            0.5,
+            -0.5,
+            1.5,
+            -2.5,
+            0.499_999_999_999_999_94,
+            -0.499_999_999_999_999_94,
+            4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            -9.1e18,
+            1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+        ];
+        for _ in 0..100_000 {
+            // xorshift64: bit patterns of every magnitude, and values near halves.
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            values.push(f64::from_bits(x));
+            values.push((x % 100_000) as f64 * 0.5 - 25_000.0);
+            values.push((x % 1_000_000) as f64 * 1e-3 - 500.0);
+        }
+        for v in values.into_iter().filter(|v| !v.is_nan()) {
+            assert_eq!(round_to_nearest(v), v.round(), "{v:e}");
+        }
+        assert!(round_to_nearest(f64::NAN).is_nan());
     }
 
     #[test]
