@@ -651,14 +651,10 @@ impl Plant {
         // Clarke discards the zero sequence: this is v_an = v_a0 − mean(v_x0).
         let (va, vb) = clarke(legs);
         let v = park_at(va, vb, rotated(start, 0.5 * omega_e * h));
-        (self.id, self.iq) = self.cfg.motor.step_dq_with(
-            self.r(),
-            (self.id, self.iq),
-            v,
-            omega_e,
-            h,
-            self.inverse_l,
-        );
+        (self.id, self.iq) =
+            self.cfg
+                .motor
+                .step_dq(self.r(), (self.id, self.iq), v, omega_e, h, self.inverse_l);
     }
 
     /// A switching substep with one `sin_cos` (or none, [`Self::carry_trig`]): the phase

@@ -152,26 +152,14 @@ impl MotorParams {
         (did, diq)
     }
 
-    /// `(1/Ld, 1/Lq)`, for [`Self::step_dq_with`].
+    /// `(1/Ld, 1/Lq)`, for [`Self::step_dq`].
     pub fn inverse_inductances(&self) -> (f64, f64) {
         (1.0 / self.ld_h, 1.0 / self.lq_h)
     }
 
-    /// One Heun (RK2) step of length `h` of the dq currents with constant dq voltages and speed.
+    /// One Heun (RK2) step of length `h` of the dq currents with constant dq voltages and speed;
+    /// `inverse_l` from [`Self::inverse_inductances`] (a plant divides once, not every step).
     pub fn step_dq(
-        &self,
-        r_ohm: f64,
-        i: (f64, f64),
-        v: (f64, f64),
-        omega_e: f64,
-        h: f64,
-    ) -> (f64, f64) {
-        self.step_dq_with(r_ohm, i, v, omega_e, h, self.inverse_inductances())
-    }
-
-    /// [`Self::step_dq`] with `inverse_l` from [`Self::inverse_inductances`] (a plant divides
-    /// once, not every step).
-    pub fn step_dq_with(
         &self,
         r_ohm: f64,
         i: (f64, f64),
