@@ -216,9 +216,12 @@ impl<D: SimDevice> Segment<D> {
         let mut reply = frame.to_vec();
         esc::process_frame(&mut reply, self.drives.iter_mut().map(|d| d.esc_mut())).ok()?;
         // Most frames raise an event in a few drives at most (a mailbox poll, an AL control):
-        // those run on the caller's thread. A cyclic frame raises one in every drive.
-        let events = self.drives.iter().filter(|d| d.esc().irq_line()).count();
-        self.each_drive(events >= MIN_PARALLEL_EVENT_ROUNDS, |d| d.service_irq(t));
+        // those run on the caller's thread. A cyclic frame raises one in every drive. (The
+        // lines are counted only where there are helpers to share the rounds with.)
+        let spread = self.workers.is_some()
+            && self.drives.iter().filter(|d| d.esc().irq_line()).count()
+                >= MIN_PARALLEL_EVENT_ROUNDS;
+        self.each_drive(spread, |d| d.service_irq(t));
         Some(reply)
     }
 
