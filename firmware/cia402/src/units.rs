@@ -250,16 +250,21 @@ fn mul_high(a: u64, b: u64) -> u64 {
 /// magnitude < 2⁶⁴), so at most two corrections by the remainder. `None` if a correction is
 /// still due after two (which the bound excludes).
 #[inline]
-fn divide_by_reciprocal(magnitude: u64, divisor: u64, inv: u64) -> Option<u64> {
+fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
+    let divisor = u64::from(divisor);
     let mut quotient = mul_high(magnitude, inv);
     // quotient ≤ magnitude / divisor: the remainder is magnitude − quotient·divisor ≥ 0 and
-    // < 3·divisor < 2³⁴, exact in wrapping arithmetic.
+    // < 3·divisor < 2³⁴, exact in wrapping arithmetic (the divisor's high half known to be 0,
+    // the product is one UMULL and one MLA).
     let mut remainder = magnitude.wrapping_sub(quotient.wrapping_mul(divisor));
-    for _ in 0..2 {
-        if remainder >= divisor {
-            quotient = quotient.wrapping_add(1);
-            remainder = remainder.wrapping_sub(divisor);
-        }
+    // The two corrections written out: the optimiser for size keeps a loop of two as a loop.
+    if remainder >= divisor {
+        quotient = quotient.wrapping_add(1);
+        remainder = remainder.wrapping_sub(divisor);
+    }
+    if remainder >= divisor {
+        quotient = quotient.wrapping_add(1);
+        remainder = remainder.wrapping_sub(divisor);
     }
     if remainder >= divisor {
         return None;
@@ -278,11 +283,34 @@ fn divide_by_reciprocal(magnitude: u64, divisor: u64, inv: u64) -> Option<u64> {
 /// survive the round trip through the other unit (truncating both ways loses a unit whenever
 /// the increments of a target have a fraction).
 fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
+    // The common case (a drive's positions and the factors of its ratios): |value|, the
+    // multiplier and the divisor within 32 bits and a reciprocal, so the product is one
+    // 32 × 32 → 64-bit multiplication that cannot overflow. Computed from the low halves
+    // before the range check, not after it: behind the check the optimiser drops the
+    // truncations as redundant and multiplies 64-bit values.
+    let magnitude = value.unsigned_abs();
+    // Both factors < 2³²: the product < 2⁶⁴ (wrapping only to say so to the lint).
+    let product = u64::from(magnitude as u32).wrapping_mul(u64::from(multiplier as u32));
+    let narrow = divide_by_reciprocal(product, divisor as u32, inv);
+    let fits = (magnitude | multiplier | divisor) >> 32 == 0 && inv != 0;
+    match narrow.filter(|_| fits).and_then(|q| i64::try_from(q).ok()) {
+        // q ≥ 0 and ≤ i64::MAX: its negation fits.
+        Some(q) if value < 0 => q.wrapping_neg(),
+        Some(q) => q,
+        None => scale_general(value, multiplier, divisor, inv),
+    }
+}
+
+/// [`scale`] beyond [`scale_narrow`]'s 32-bit operands: a separate function, so that the
+/// optimiser does not merge its 64 × 64-bit product into the common case.
+#[inline(never)]
+fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     let product = i64::try_from(multiplier)
         .ok()
         .and_then(|m| value.checked_mul(m));
-    if let (Some(product), true) = (product, inv != 0) {
-        let quotient = divide_by_reciprocal(product.unsigned_abs(), divisor, inv)
+    let divisor32 = u32::try_from(divisor).ok().filter(|_| inv != 0);
+    if let (Some(product), Some(d)) = (product, divisor32) {
+        let quotient = divide_by_reciprocal(product.unsigned_abs(), d, inv)
             .and_then(|q| i64::try_from(q).ok());
         if let Some(q) = quotient {
             // q ≥ 0 and ≤ i64::MAX: its negation fits.
@@ -541,6 +569,11 @@ mod tests {
             -987_654_321,
             i64::from(i32::MAX),
             i64::from(i32::MIN),
+            // The ends of the 32-bit fast path and just beyond.
+            i64::from(u32::MAX),
+            -i64::from(u32::MAX),
+            i64::from(u32::MAX) + 1,
+            -i64::from(u32::MAX) - 1,
             1 << 40,
             -(1 << 40),
             i64::MAX / 3,

@@ -107,10 +107,11 @@ impl EscPdi for RamEsc {
     }
 }
 
-/// The data of a PDI access: what the board's SPI transfer (DMA) does, which the budget
-/// excludes. Transfers of up to 8 bytes (the default process-data images, registers) are
-/// fixed-size copies instead of the library `memcpy` call, so that the stand-in costs next to
-/// nothing.
+/// The data of a PDI access: what the board's SPI transfer does, which the budget excludes
+/// (the board's load counts the transfer as its bus time). Transfers of up to 8 bytes (the
+/// default process-data images of most profiles, registers) are fixed-size copies, longer ones
+/// a copy of 4-byte words (unaligned accesses are allowed on the Cortex-M4), not the library
+/// `memcpy`, which copies an unaligned image byte by byte: the stand-in costs little.
 fn transfer(from: &[u8], to: &mut [u8]) {
     fn fixed<const N: usize>(from: &[u8], to: &mut [u8]) {
         if let (Ok(from), Ok(to)) = (<&[u8; N]>::try_from(from), <&mut [u8; N]>::try_from(to)) {
@@ -126,7 +127,20 @@ fn transfer(from: &[u8], to: &mut [u8]) {
         6 => fixed::<6>(from, to),
         7 => fixed::<7>(from, to),
         8 => fixed::<8>(from, to),
-        _ => to.copy_from_slice(from),
+        _ => {
+            let mut to_words = to.chunks_exact_mut(4);
+            let mut from_words = from.chunks_exact(4);
+            for (t, f) in (&mut to_words).zip(&mut from_words) {
+                fixed::<4>(f, t);
+            }
+            for (t, f) in to_words
+                .into_remainder()
+                .iter_mut()
+                .zip(from_words.remainder())
+            {
+                *t = *f;
+            }
+        }
     }
 }
 
