@@ -10,6 +10,7 @@ mod board_control;
 mod board_esc_event;
 mod board_sync0;
 mod motor;
+mod pdo_copy;
 mod process_data;
 mod sdo;
 mod sync0_handler;
@@ -31,6 +32,7 @@ const TARGET_POSITION: i32 = 0x0012_3456;
 /// mode, so their setups must stay short: the trace has a line per executed instruction).
 pub const ALL: &[fn(&mut Harness)] = &[
     process_data::run,
+    pdo_copy::run,
     sync0_handler::run,
     sync0_with_axis::run,
     sdo::run,
@@ -122,10 +124,22 @@ fn map_max(
     first: &[(u16, u8, u16)],
     exclude: Option<(u16, u8)>,
 ) -> usize {
+    map_most(od, profile, direction, first, exclude, usize::MAX)
+}
+
+/// [`map_max`] with at most `most` entries.
+fn map_most(
+    od: &mut Dictionary<'_>,
+    profile: &Profile,
+    direction: Direction,
+    first: &[(u16, u8, u16)],
+    exclude: Option<(u16, u8)>,
+    most: usize,
+) -> usize {
     let Some(mapping) = od.object(first_mapping(direction)) else {
         return 0;
     };
-    let slots = mapping.entries.len().saturating_sub(1);
+    let slots = mapping.entries.len().saturating_sub(1).min(most);
     let limit_bits = 8 * usize::from(profile.device.max_process_bytes).min(MAX_IMAGE);
     let candidates = profile.objects.iter().rev().flat_map(|o| {
         o.entries.iter().rev().filter_map(move |e| {

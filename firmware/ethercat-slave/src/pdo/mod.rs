@@ -2,8 +2,9 @@
 //! plan between the process-data image (SM2/SM3 buffers) and the OD RAM.
 //!
 //! The plan is built once at PREOP → SAFEOP; the cycle then runs [`PdoPlan::unpack`] and
-//! [`PdoPlan::pack`], which do no lookups: one `copy_from_slice` per byte-aligned entry, a bit
-//! copy only for entries that are not byte-aligned. [`rules`] holds what an SDO write to the
+//! [`PdoPlan::pack`], which do no lookups: one copy per run of byte-aligned entries (adjacent
+//! entries merged into one run; a plan of many runs copies them grouped by length, a loop per
+//! length), a bit copy only for entries that are not byte-aligned. [`rules`] holds what an SDO write to the
 //! PDO objects must satisfy; both read the object indices defined there.
 
 use hal::esc::AlStatusCode;
@@ -118,11 +119,25 @@ struct ByteRun {
     len: u16,
 }
 
+/// The run lengths copied by a loop of their own ([`PdoPlan::unpack`], [`PdoPlan::pack`]):
+/// the object sizes of nearly every mapping (UDINT/DINT, UINT/INT, USINT/SINT). A loop of
+/// one length copies with one load and one store and no dispatch on the length.
+const CLASS_LENGTHS: [u16; 3] = [4, 2, 1];
+
+/// Fewest runs a plan copies in groups by length: each group's loop costs its set-up, which
+/// the plans of a few runs (the default mappings: adjacent entries merge) do not win back.
+const GROUPED_FROM_RUNS: usize = 4;
+
 /// The copy plan of one direction: the byte runs, then the entries that need a bit copy or
 /// come from a constant.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct PdoPlan {
+    /// Grouped by length when the plan is built ([`PdoPlan::group_runs`]): the runs of each
+    /// of [`CLASS_LENGTHS`] in turn, then the others; in mapping order within each group.
     runs: Vec<ByteRun, MAX_MAPPED_ENTRIES>,
+    /// How many runs each group of [`CLASS_LENGTHS`] holds, in turn from the start of `runs`
+    /// (the others follow).
+    class_counts: [u8; CLASS_LENGTHS.len()],
     steps: Vec<CopyStep, MAX_MAPPED_ENTRIES>,
     /// Mapped entries (padding excluded).
     entries: usize,
@@ -152,7 +167,43 @@ impl PdoPlan {
         if plan.byte_len() > max_bytes {
             return Err(bad);
         }
+        plan.group_runs();
         Ok(plan)
+    }
+
+    /// Orders the runs by [`CLASS_LENGTHS`] (stable: mapping order within each group) and
+    /// counts each group, when the plan has at least [`GROUPED_FROM_RUNS`] runs. Not when two
+    /// runs share OD RAM bytes (an object mapped twice): then the runs stay in mapping order,
+    /// all as others, so that an RxPDO's later copy still wins as mapped.
+    fn group_runs(&mut self) {
+        self.class_counts = [0; CLASS_LENGTHS.len()];
+        let runs = self.runs.as_slice();
+        if runs.len() < GROUPED_FROM_RUNS {
+            return;
+        }
+        let shared = runs.iter().enumerate().any(|(i, a)| {
+            runs.iter()
+                .skip(i.saturating_add(1))
+                .any(|b| any_overlaps([(a.ram, a.len)], b.ram, b.len))
+        });
+        if shared {
+            return;
+        }
+        let mut grouped: Vec<ByteRun, MAX_MAPPED_ENTRIES> = Vec::new();
+        for (count, &len) in self.class_counts.iter_mut().zip(&CLASS_LENGTHS) {
+            let mut n = 0u8;
+            for run in runs.iter().filter(|r| r.len == len) {
+                // As many runs as before: the pushes fit.
+                let _ = grouped.push(*run);
+                // At most MAX_MAPPED_ENTRIES (< 256) runs.
+                n = n.saturating_add(1);
+            }
+            *count = n;
+        }
+        for run in runs.iter().filter(|r| !CLASS_LENGTHS.contains(&r.len)) {
+            let _ = grouped.push(*run);
+        }
+        self.runs = grouped;
     }
 
     fn add_pdo(
@@ -271,7 +322,15 @@ impl PdoPlan {
 
     /// Copies an RxPDO image (SM2 content) into the OD RAM.
     pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
-        for run in &self.runs {
+        let [words, halves, bytes] = self.class_counts;
+        let mut runs = self.runs.iter();
+        // Few runs are never grouped (one comparison, not the groups' loops).
+        if self.runs.len() >= GROUPED_FROM_RUNS {
+            copy_group::<4, true>(&mut runs, words, image, ram);
+            copy_group::<2, true>(&mut runs, halves, image, ram);
+            copy_group::<1, true>(&mut runs, bytes, image, ram);
+        }
+        for run in runs {
             let (i, r, n) = run.span();
             if let (Some(from), Some(to)) = (span(image, i, n), span_mut(ram, r, n)) {
                 copy_bytes(from, to);
@@ -295,7 +354,15 @@ impl PdoPlan {
 
     /// Copies the mapped TxPDO values from the OD RAM into an image (SM3 content).
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
-        for run in &self.runs {
+        let [words, halves, bytes] = self.class_counts;
+        let mut runs = self.runs.iter();
+        // Few runs are never grouped (one comparison, not the groups' loops).
+        if self.runs.len() >= GROUPED_FROM_RUNS {
+            copy_group::<4, false>(&mut runs, words, ram, image);
+            copy_group::<2, false>(&mut runs, halves, ram, image);
+            copy_group::<1, false>(&mut runs, bytes, ram, image);
+        }
+        for run in runs {
             let (i, r, n) = run.span();
             if let (Some(from), Some(to)) = (span(ram, r, n), span_mut(image, i, n)) {
                 copy_bytes(from, to);
@@ -329,6 +396,26 @@ impl ByteRun {
             usize::from(self.ram),
             usize::from(self.len),
         )
+    }
+}
+
+/// Copies the next `count` of `runs` (all `N` bytes long) from `from` to `to`: image to OD
+/// RAM when `UNPACK`, else OD RAM to image. A run out of range is skipped.
+#[inline(always)]
+fn copy_group<'a, const N: usize, const UNPACK: bool>(
+    runs: &mut impl Iterator<Item = &'a ByteRun>,
+    count: u8,
+    from: &[u8],
+    to: &mut [u8],
+) {
+    for run in runs.take(usize::from(count)) {
+        let (image, ram) = (usize::from(run.image), usize::from(run.ram));
+        let (f, t) = if UNPACK { (image, ram) } else { (ram, image) };
+        let src = from.get(f..).and_then(|s| s.first_chunk::<N>());
+        let dst = to.get_mut(t..).and_then(|d| d.first_chunk_mut::<N>());
+        if let (Some(src), Some(dst)) = (src, dst) {
+            *dst = *src;
+        }
     }
 }
 
@@ -527,6 +614,74 @@ mod tests {
         assert_eq!(&ram[2..6], &[0x78, 0x56, 0x34, 0x12]);
     }
 
+    /// A plan of many runs copies them grouped by length (a loop per length), each still to
+    /// and from its own place; a plan of few runs keeps them in mapping order.
+    #[test]
+    fn runs_grouped_by_length_copy_each_entry_to_its_place() {
+        // (ram, image, len), none adjacent on both sides, lengths mixed.
+        let spans = [
+            (40, 0, 2),
+            (10, 2, 4),
+            (30, 6, 1),
+            (0, 7, 4),
+            (20, 11, 3),
+            (50, 14, 1),
+        ];
+        let runs = spans.map(|(ram, image, len)| ByteRun { ram, image, len });
+        let mut plan = PdoPlan {
+            runs: Vec::from_slice(&runs).unwrap(),
+            ..PdoPlan::default()
+        };
+        plan.group_runs();
+        assert_eq!(plan.class_counts, [2, 1, 2], "4-, 2- and 1-byte runs");
+        let lens: Vec<u16, 8> = plan.runs.iter().map(|r| r.len).collect();
+        assert_eq!(
+            lens.as_slice(),
+            &[4, 4, 2, 1, 1, 3],
+            "grouped, the others last"
+        );
+        let image: [u8; 15] = core::array::from_fn(|i| 0x80 + i as u8);
+        let mut ram = [0u8; 64];
+        plan.unpack(&image, &mut ram);
+        for (r, i, n) in spans.map(|(r, i, n)| (usize::from(r), usize::from(i), usize::from(n))) {
+            assert_eq!(&ram[r..r + n], &image[i..i + n], "run at image {i}");
+        }
+        let mut back = [0u8; 15];
+        plan.pack(&ram, &mut back);
+        assert_eq!(back, image, "packed back where it was mapped");
+
+        let mut few = PdoPlan {
+            runs: Vec::from_slice(&runs[..GROUPED_FROM_RUNS - 1]).unwrap(),
+            ..PdoPlan::default()
+        };
+        few.group_runs();
+        assert_eq!(few.class_counts, [0, 0, 0]);
+        assert_eq!(
+            few.runs.as_slice(),
+            &runs[..GROUPED_FROM_RUNS - 1],
+            "in mapping order"
+        );
+    }
+
+    /// Runs that share OD RAM bytes (an object mapped twice, here a 2-byte run and then a
+    /// 4-byte run over the same bytes) stay in mapping order, so that the later copy wins as
+    /// mapped: grouped, the 4-byte run would be copied first.
+    #[test]
+    fn runs_sharing_ram_keep_the_mapping_order() {
+        let spans = [(0, 0, 2), (0, 2, 4), (10, 6, 1), (20, 7, 1)];
+        let mut plan = PdoPlan {
+            runs: Vec::from_slice(&spans.map(|(ram, image, len)| ByteRun { ram, image, len }))
+                .unwrap(),
+            ..PdoPlan::default()
+        };
+        plan.group_runs();
+        assert_eq!(plan.class_counts, [0, 0, 0], "not grouped");
+        let mut ram = [0u8; 24];
+        plan.unpack(&[1, 1, 2, 2, 2, 2, 3, 4], &mut ram);
+        assert_eq!(&ram[0..4], &[2, 2, 2, 2], "the later run's bytes");
+        assert_eq!((ram[10], ram[20]), (3, 4));
+    }
+
     #[test]
     fn entries_adjacent_in_image_and_ram_are_one_copy() {
         let mut ram = [0u8; 31];
@@ -620,6 +775,7 @@ mod tests {
     #[test]
     fn pack_copies_constants_and_ram() {
         let plan = PdoPlan {
+            class_counts: [0; CLASS_LENGTHS.len()],
             runs: Vec::from_slice(&[ByteRun {
                 ram: 2,
                 image: 2,
