@@ -291,8 +291,16 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     let magnitude = value.unsigned_abs();
     // Both factors < 2³²: the product < 2⁶⁴ (wrapping only to say so to the lint).
     let product = u64::from(magnitude as u32).wrapping_mul(u64::from(multiplier as u32));
-    let narrow = divide_by_reciprocal(product, divisor as u32, inv);
-    let fits = (magnitude | multiplier | divisor) >> 32 == 0 && inv != 0;
+    let divisor32 = divisor as u32;
+    // A power-of-two divisor (an encoder's resolution, a factor of 2ⁿ) needs no reciprocal:
+    // the quotient is a shift.
+    let shift = divisor32.is_power_of_two();
+    let narrow = if shift {
+        Some(shift_rounded(product, divisor32.trailing_zeros()))
+    } else {
+        divide_by_reciprocal(product, divisor32, inv)
+    };
+    let fits = (magnitude | multiplier | divisor) >> 32 == 0 && (shift || inv != 0);
     match narrow.filter(|_| fits).and_then(|q| i64::try_from(q).ok()) {
         // q ≥ 0 and ≤ i64::MAX: its negation fits.
         Some(q) if value < 0 => q.wrapping_neg(),
@@ -301,8 +309,21 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     }
 }
 
-/// [`scale`] beyond [`scale_narrow`]'s 32-bit operands: a separate function, so that the
-/// optimiser does not merge its 64 × 64-bit product into the common case.
+/// `magnitude / 2^k` rounded to the nearest (halves up): the shifted value plus the last bit
+/// shifted out. `k` < 32 (a `u32` divisor's), so the shifts do not wrap.
+#[inline]
+fn shift_rounded(magnitude: u64, k: u32) -> u64 {
+    match k.checked_sub(1) {
+        None => magnitude,
+        // k ≥ 1: the shifted value < 2⁶³, adding 1 cannot overflow.
+        Some(below) => magnitude
+            .wrapping_shr(k)
+            .wrapping_add(magnitude.wrapping_shr(below) & 1),
+    }
+}
+
+/// [`scale`] beyond its 32-bit operands: a separate function, so that the optimiser does not
+/// merge its 64 × 64-bit product into the common case.
 #[inline(never)]
 fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     let product = i64::try_from(multiplier)
@@ -617,6 +638,31 @@ mod tests {
             let v = (x as i64) >> (x % 48);
             let r = Ratio::new(n, d).prepared();
             assert_eq!(r.position_to_internal(v), reference(v, n, d), "{v}·{n}/{d}");
+        }
+    }
+
+    /// A power-of-two divisor: the shift rounds to the nearest, halves up, at every shift and
+    /// up to the largest magnitudes (the exact quotient in 128 bits as the reference).
+    #[test]
+    fn a_power_of_two_divisor_shifts_and_rounds_halves_up() {
+        for k in 0..32u32 {
+            let d = 1u64 << k;
+            for m in [
+                0,
+                1,
+                2,
+                3,
+                d - 1,
+                d,
+                d + d / 2,
+                3 * d / 2 + 1,
+                u64::MAX - 1,
+                u64::MAX,
+            ] {
+                let half = u128::from(d / 2);
+                let expected = (u128::from(m) + half) >> k;
+                assert_eq!(u128::from(shift_rounded(m, k)), expected, "{m} / 2^{k}");
+            }
         }
     }
 

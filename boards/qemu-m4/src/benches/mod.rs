@@ -16,6 +16,7 @@ mod sdo;
 mod sync0_handler;
 mod sync0_profiles;
 mod sync0_with_axis;
+mod units;
 
 use firmware::od::{Dictionary, Object, Profile, Value};
 use firmware::pdo::{Direction, MAX_IMAGE};
@@ -36,6 +37,7 @@ pub const ALL: &[fn(&mut Harness)] = &[
     sync0_handler::run,
     sync0_with_axis::run,
     sdo::run,
+    units::run,
     motor::run,
     board_control::run,
     board_sync0::run,
