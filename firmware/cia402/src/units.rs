@@ -244,13 +244,13 @@ fn mul_high(a: u64, b: u64) -> u64 {
         .wrapping_add(mid >> 32)
 }
 
-/// `magnitude / divisor` rounded to the nearest (halves up) through `inv` =
+/// `magnitude / divisor` rounded down, with the remainder, through `inv` =
 /// ⌊(2⁶⁴ − 1) / divisor⌋, divisor in 1..=`u32::MAX`: the estimate ⌊magnitude · inv / 2⁶⁴⌋ is
 /// the quotient or at most 2 below it (inv is at most 1 + 1/divisor below 2⁶⁴/divisor, and
 /// magnitude < 2⁶⁴), so at most two corrections by the remainder. `None` if a correction is
 /// still due after two (which the bound excludes).
 #[inline]
-fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
+fn divide_floor(magnitude: u64, divisor: u32, inv: u64) -> Option<(u64, u64)> {
     let divisor = u64::from(divisor);
     let mut quotient = mul_high(magnitude, inv);
     // quotient ≤ magnitude / divisor: the remainder is magnitude − quotient·divisor ≥ 0 and
@@ -266,14 +266,19 @@ fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
         quotient = quotient.wrapping_add(1);
         remainder = remainder.wrapping_sub(divisor);
     }
-    if remainder >= divisor {
-        return None;
-    }
+    (remainder < divisor).then_some((quotient, remainder))
+}
+
+/// `magnitude / divisor` rounded to the nearest (halves up) through `inv` ([`divide_floor`]).
+#[inline]
+fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
+    let (quotient, remainder) = divide_floor(magnitude, divisor, inv)?;
     // Halves away from zero (on the magnitude: up). remainder < divisor ≤ 2³²: no overflow.
-    if remainder.wrapping_mul(2) >= divisor {
-        quotient = quotient.wrapping_add(1);
-    }
-    Some(quotient)
+    Some(if remainder.wrapping_mul(2) >= u64::from(divisor) {
+        quotient.wrapping_add(1)
+    } else {
+        quotient
+    })
 }
 
 /// `value × multiplier / divisor` (`divisor` > 0) rounded to the nearest (halves away from
@@ -352,16 +357,16 @@ fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
                 quotient
             })
         });
-    narrow.unwrap_or_else(|| scale_wide(value, multiplier, divisor))
+    narrow.unwrap_or_else(|| scale_wide(value, multiplier, divisor, inv))
 }
 
 /// [`scale`] when the product does not fit 64 bits: the 128-bit product magnitude as two
-/// 64-bit halves and a restoring division, one quotient bit per step (64 steps; positions
-/// this large are rare, and a 128-bit division would link some 800 bytes of library code).
-/// Saturates at the i64 range; a divisor of 0 (the callers never pass one) gives 0.
-#[cold]
+/// 64-bit halves, divided in two steps of 32 quotient bits each by the divisor's reciprocal
+/// `inv` when it has one (a divisor within 32 bits), else by a restoring division, one
+/// quotient bit per step (64 steps; a 128-bit division would link some 800 bytes of library
+/// code). Saturates at the i64 range; a divisor of 0 (the callers never pass one) gives 0.
 #[inline(never)]
-fn scale_wide(value: i64, multiplier: u64, divisor: u64) -> i64 {
+fn scale_wide(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     if divisor == 0 {
         return 0;
     }
@@ -375,18 +380,12 @@ fn scale_wide(value: i64, multiplier: u64, divisor: u64) -> i64 {
     if high >= divisor {
         return saturated;
     }
-    let (mut quotient, mut remainder) = (0u64, high);
-    for bit in (0..u64::BITS).rev() {
-        // remainder < divisor: doubling it plus the next bit stays below 2·divisor, which
-        // may carry out of 64 bits (then it certainly exceeds the divisor).
-        let carry = remainder >> (u64::BITS - 1);
-        remainder = (remainder << 1) | ((low >> bit) & 1);
-        quotient <<= 1;
-        if carry != 0 || remainder >= divisor {
-            remainder = remainder.wrapping_sub(divisor);
-            quotient |= 1;
-        }
-    }
+    let divided = u32::try_from(divisor)
+        .ok()
+        .filter(|_| inv != 0)
+        .and_then(|d| divide_wide(high, low, d, inv))
+        .unwrap_or_else(|| restoring_division(high, low, divisor));
+    let (mut quotient, remainder) = divided;
     // Halves away from zero (on the magnitude: up); remainder < divisor.
     if remainder >= divisor.wrapping_sub(remainder) {
         let Some(rounded) = quotient.checked_add(1) else {
@@ -400,6 +399,39 @@ fn scale_wide(value: i64, multiplier: u64, divisor: u64) -> i64 {
     } else {
         i64::try_from(quotient).unwrap_or(i64::MAX)
     }
+}
+
+/// `(high · 2⁶⁴ + low) / divisor` rounded down, with the remainder, for `high` < `divisor` ≤
+/// `u32::MAX` (the quotient fits 64 bits): long division in two 32-bit digits, each a 64-bit
+/// by 32-bit division through the reciprocal `inv` ([`divide_floor`]). `None` if a step
+/// fails its bound (which `high` < `divisor` excludes).
+fn divide_wide(high: u64, low: u64, divisor: u32, inv: u64) -> Option<(u64, u64)> {
+    // high < divisor ≤ 2³² − 1: shifted by 32 bits with the next digit it stays below
+    // divisor · 2³² < 2⁶⁴, and so does each remainder's.
+    let upper = (high << 32) | (low >> 32);
+    let (q1, r1) = divide_floor(upper, divisor, inv)?;
+    let lower = (r1 << 32) | (low & 0xFFFF_FFFF);
+    let (q0, r0) = divide_floor(lower, divisor, inv)?;
+    // q1 < 2³² (upper < divisor · 2³²), q0 < 2³²: the quotient is their digits side by side.
+    Some(((q1 << 32) | q0, r0))
+}
+
+/// `(high · 2⁶⁴ + low) / divisor` rounded down, with the remainder, for `high` < `divisor`
+/// (any divisor): one quotient bit per step.
+fn restoring_division(high: u64, low: u64, divisor: u64) -> (u64, u64) {
+    let (mut quotient, mut remainder) = (0u64, high);
+    for bit in (0..u64::BITS).rev() {
+        // remainder < divisor: doubling it plus the next bit stays below 2·divisor, which
+        // may carry out of 64 bits (then it certainly exceeds the divisor).
+        let carry = remainder >> (u64::BITS - 1);
+        remainder = (remainder << 1) | ((low >> bit) & 1);
+        quotient <<= 1;
+        if carry != 0 || remainder >= divisor {
+            remainder = remainder.wrapping_sub(divisor);
+            quotient |= 1;
+        }
+    }
+    (quotient, remainder)
 }
 
 /// Polarity 607Eh (CiA402): bit 7 multiplies the position objects by −1, bit 6 the velocity
@@ -548,9 +580,44 @@ mod tests {
             (i64::MAX, 1 << 63, 1),
         ];
         for (v, m, d) in cases {
-            assert_eq!(scale_wide(v, m, d), reference(v, m, d), "{v}·{m}/{d}");
+            // By the restoring division, and by the reciprocal where the divisor has one.
+            assert_eq!(scale_wide(v, m, d, 0), reference(v, m, d), "{v}·{m}/{d}");
+            let inv = reciprocal(d);
+            assert_eq!(
+                scale_wide(v, m, d, inv),
+                reference(v, m, d),
+                "{v}·{m}/{d}, inv"
+            );
         }
-        assert_eq!(scale_wide(5, 3, 0), 0);
+        assert_eq!(scale_wide(5, 3, 0, 0), 0);
+    }
+
+    /// Products beyond 64 bits divided by 32-bit divisors through the reciprocal (two steps of
+    /// 32 quotient bits) give the exact quotient, pseudo-random and at the divisors' ends.
+    #[test]
+    fn the_wide_path_divides_by_the_reciprocal_exactly() {
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        let ends = [
+            1u64,
+            2,
+            3,
+            7,
+            10_000,
+            (1 << 31) + 1,
+            u64::from(u32::MAX) - 1,
+            u64::from(u32::MAX),
+        ];
+        for i in 0..20_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let d = ends.get(i as usize).copied().unwrap_or((x >> 32).max(1));
+            let m = x | (1 << 40);
+            let v = (x.rotate_left(17) as i64) >> (x % 20);
+            let inv = reciprocal(d);
+            assert_ne!(inv, 0);
+            assert_eq!(scale_wide(v, m, d, inv), reference(v, m, d), "{v}·{m}/{d}");
+        }
     }
 
     #[test]

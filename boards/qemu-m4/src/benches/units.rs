@@ -4,8 +4,9 @@
 //! measured over inputs that cover the conversion's branches: a ratio of one (no arithmetic),
 //! a divisor that is a power of two (a shift), one that is not (multiplications by its
 //! reciprocal), a position beyond 32 bits (the 64-bit product with its overflow check), a
-//! product beyond 64 bits (the 128-bit restoring division). Each cost includes the copy of
-//! the ratio into the call.
+//! product beyond 64 bits (two 64-bit steps by the reciprocal), a divisor beyond 32 bits (no
+//! reciprocal: the library's 64-bit division, or beyond 64 bits the restoring division, a bit
+//! per step). Each cost includes the copy of the ratio into the call.
 
 use core::hint::black_box;
 
@@ -16,12 +17,26 @@ use crate::harness::{Cases, Harness};
 const NAME: &str = "position-conversion";
 
 /// (label, numerator, denominator, position in user units) of each input.
-const INPUTS: [(&str, u64, u64, i64); 5] = [
+const INPUTS: [(&str, u64, u64, i64); 7] = [
     ("power-of-two divisor", 10_000, 1 << 17, -123_456_789),
     ("32-bit divisor", 1 << 17, 10_000, -123_456_789),
     ("a ratio of one", 10_000, 10_000, 987_654),
     ("position beyond 32 bits", 1 << 17, 10_000, 1 << 40),
     ("product beyond 64 bits", (1 << 32) - 1, 10_000, 1 << 40),
+    // Factors beyond 32 bits (a product of ratios, e.g. a gear ratio times a feed constant):
+    // no reciprocal.
+    (
+        "divisor beyond 32 bits",
+        1 << 20,
+        (1 << 33) + 1,
+        -123_456_789,
+    ),
+    (
+        "divisor and product beyond",
+        1 << 40,
+        (1 << 33) + 1,
+        -123_456_789,
+    ),
 ];
 
 /// `value × n / d` rounded to the nearest, halves away from zero, saturated (the reference
