@@ -320,22 +320,32 @@ impl PdoPlan {
         (self.bits as usize).div_ceil(8)
     }
 
-    /// Copies an RxPDO image (SM2 content) into the OD RAM.
-    pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
+    /// Copies the byte runs from `from` to `to`: image to OD RAM when `UNPACK`, else OD RAM
+    /// to image. A plan of few runs copies them in mapping order with a dispatch on each
+    /// run's length ([`copy_bytes`]); one of [`GROUPED_FROM_RUNS`] or more, its groups by
+    /// length first ([`Self::group_runs`]), then the others.
+    #[inline(always)]
+    fn copy_runs<const UNPACK: bool>(&self, from: &[u8], to: &mut [u8]) {
         let [words, halves, bytes] = self.class_counts;
         let mut runs = self.runs.iter();
         // Few runs are never grouped (one comparison, not the groups' loops).
         if self.runs.len() >= GROUPED_FROM_RUNS {
-            copy_group::<4, true>(&mut runs, words, image, ram);
-            copy_group::<2, true>(&mut runs, halves, image, ram);
-            copy_group::<1, true>(&mut runs, bytes, image, ram);
+            copy_group::<4, UNPACK>(&mut runs, words, from, to);
+            copy_group::<2, UNPACK>(&mut runs, halves, from, to);
+            copy_group::<1, UNPACK>(&mut runs, bytes, from, to);
         }
         for run in runs {
-            let (i, r, n) = run.span();
-            if let (Some(from), Some(to)) = (span(image, i, n), span_mut(ram, r, n)) {
-                copy_bytes(from, to);
+            let (image, ram, n) = run.span();
+            let (f, t) = if UNPACK { (image, ram) } else { (ram, image) };
+            if let (Some(src), Some(dst)) = (span(from, f, n), span_mut(to, t, n)) {
+                copy_bytes(src, dst);
             }
         }
+    }
+
+    /// Copies an RxPDO image (SM2 content) into the OD RAM.
+    pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
+        self.copy_runs::<true>(image, ram);
         for step in &self.steps {
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
             if let Slot::Ram(offset) = step.slot {
@@ -354,20 +364,7 @@ impl PdoPlan {
 
     /// Copies the mapped TxPDO values from the OD RAM into an image (SM3 content).
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
-        let [words, halves, bytes] = self.class_counts;
-        let mut runs = self.runs.iter();
-        // Few runs are never grouped (one comparison, not the groups' loops).
-        if self.runs.len() >= GROUPED_FROM_RUNS {
-            copy_group::<4, false>(&mut runs, words, ram, image);
-            copy_group::<2, false>(&mut runs, halves, ram, image);
-            copy_group::<1, false>(&mut runs, bytes, ram, image);
-        }
-        for run in runs {
-            let (i, r, n) = run.span();
-            if let (Some(from), Some(to)) = (span(ram, r, n), span_mut(image, i, n)) {
-                copy_bytes(from, to);
-            }
-        }
+        self.copy_runs::<false>(ram, image);
         for step in &self.steps {
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
             let src = match step.slot {
