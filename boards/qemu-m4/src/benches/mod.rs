@@ -118,19 +118,8 @@ fn entry_at(profile: &Profile, at: Option<u16>) -> Option<(u16, u8, u16)> {
 /// needs), then as many other mappable OD RAM entries of `profile` as its subindices, the
 /// process image and the profile's `max_process_bytes` allow (`exclude` left out), from the
 /// highest index down so that no two are adjacent in the OD RAM in mapping order (each is its
-/// own copy); returns how many.
+/// own copy), at most `most` of them; returns how many.
 fn map_max(
-    od: &mut Dictionary<'_>,
-    profile: &Profile,
-    direction: Direction,
-    first: &[(u16, u8, u16)],
-    exclude: Option<(u16, u8)>,
-) -> usize {
-    map_most(od, profile, direction, first, exclude, usize::MAX)
-}
-
-/// [`map_max`] with at most `most` entries.
-fn map_most(
     od: &mut Dictionary<'_>,
     profile: &Profile,
     direction: Direction,

@@ -16,7 +16,7 @@ use firmware::od::Dictionary;
 use firmware::pdo::{Direction, PdoPlan, MAX_IMAGE};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
 
-use super::map_most;
+use super::map_max;
 use crate::harness::{Cases, Harness};
 
 /// Issue 13: the PDO copy, per mapped entry.
@@ -48,7 +48,7 @@ fn plan(ram: &mut [u8; RAM_SIZE], direction: Direction, most: usize) -> Option<(
     *ram = [0; RAM_SIZE];
     let mut od = Dictionary::new(&PROFILE.od, ram);
     od.load_defaults();
-    let entries = map_most(&mut od, &PROFILE.od, direction, &[], None, most);
+    let entries = map_max(&mut od, &PROFILE.od, direction, &[], None, most);
     let plan = PdoPlan::build(&od, direction).ok()?;
     (plan.entries() == entries && plan.copies() == entries).then_some((plan, entries))
 }

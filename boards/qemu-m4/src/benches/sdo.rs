@@ -210,6 +210,7 @@ pub fn run(h: &mut Harness) {
         Direction::Rx,
         &[],
         Some(MAPPABLE_PARAMETER),
+        usize::MAX,
     );
     let rx_outputs = match PdoPlan::build(&Dictionary::new(&PROFILE.od, &mut ram), Direction::Rx) {
         Ok(plan) if plan.entries() == entries => plan.ram_ranges(),

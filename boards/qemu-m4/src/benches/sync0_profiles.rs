@@ -288,7 +288,7 @@ fn largest_mapping(od: &mut Dictionary<'_>, profile: &DriveProfile) -> Result<()
         {
             return Err("the PDO assignment is not writable");
         }
-        if map_max(od, &profile.od, direction, first, None) < first.len() {
+        if map_max(od, &profile.od, direction, first, None, usize::MAX) < first.len() {
             return Err("the largest mapping lacks what the master needs");
         }
         if !set(od, assignment, 0, 1) {
