@@ -7,3 +7,7 @@
 //! always agree.
 
 include!(concat!(env!("OUT_DIR"), "/profiles.rs"));
+
+// Every profile's OD RAM must fit what the mailbox side tracks (the slave refuses a larger
+// one at start-up; this says so at build time).
+const _: () = assert!(MAX_RAM_SIZE <= ethercat_slave::od::dirty::MAX_TRACKED_RAM);

@@ -93,11 +93,16 @@ impl Groups {
     }
 
     /// The groups that read the variable at OD RAM offset `at`.
+    /// Timing: one comparison per variable, no list built (the ESC-event round calls this for
+    /// every committed download, under the lock the SYNC0 interrupt shares).
     pub fn of_offset(vars: &AppVars, at: u16) -> Self {
-        members(vars)
-            .into_iter()
-            .filter(|m| m.at == Some(at))
-            .fold(Self::NONE, |a, m| a | m.group)
+        let mut groups = Self::NONE;
+        for_each_member(vars, |m| {
+            if m.at == Some(at) {
+                groups |= m.group;
+            }
+        });
+        groups
     }
 }
 
@@ -122,73 +127,65 @@ struct Member {
     len: u16,
 }
 
-/// The most variables of all groups ([`members`]).
-const MEMBERS: usize = 42;
-
-/// Every variable each group reads (a variable may serve several groups).
-fn members(vars: &AppVars) -> [Member; MEMBERS] {
+/// Calls `visit` with every variable each group reads (a variable may serve several groups),
+/// one call after the other: inlined into a caller, a chain of comparisons with no list in
+/// memory.
+#[inline(always)]
+fn for_each_member(vars: &AppVars, mut visit: impl FnMut(Member)) {
     let m = |group, at, len| Member { group, at, len };
-    let unit = |o: Option<(u16, u8)>| Member {
-        group: Groups::UNITS,
-        at: o.map(|(at, _)| at),
-        len: o.map_or(0, |(_, len)| u16::from(len)),
-    };
-    let [u0, u1, u2, u3, u4, u5, u6, u7, u8, u9] = vars.unit_factor_objects();
     use Groups as G;
-    [
-        m(G::OPTIONS, vars.quick_stop_option_code, 2),
-        m(G::OPTIONS, vars.shutdown_option_code, 2),
-        m(G::OPTIONS, vars.disable_operation_option_code, 2),
-        m(G::OPTIONS, vars.halt_option_code, 2),
-        m(G::OPTIONS, vars.fault_reaction_option_code, 2),
-        m(G::TORQUE, vars.motor_rated_torque, 4),
-        m(G::TORQUE, vars.max_torque, 2),
-        m(G::TORQUE, vars.positive_torque_limit, 2),
-        m(G::TORQUE, vars.negative_torque_limit, 2),
-        m(G::TORQUE, vars.torque_slope, 4),
-        m(G::RAMPS, vars.max_profile_velocity, 4),
-        m(G::RAMPS, vars.max_motor_speed, 4),
-        m(G::RAMPS, vars.profile_velocity, 4),
-        m(G::RAMPS, vars.profile_acceleration, 4),
-        m(G::RAMPS, vars.profile_deceleration, 4),
-        m(G::RAMPS, vars.quick_stop_deceleration, 4),
-        m(G::WINDOWS, vars.position_window, 4),
-        m(G::WINDOWS, vars.position_window_time, 2),
-        m(G::WINDOWS, vars.velocity_window, 2),
-        m(G::WINDOWS, vars.velocity_window_time, 2),
-        m(G::WINDOWS, vars.velocity_threshold, 2),
-        m(G::WINDOWS, vars.velocity_threshold_time, 2),
-        m(G::HOMING, vars.homing_speed_switch, 4),
-        m(G::HOMING, vars.homing_speed_zero, 4),
-        m(G::HOMING, vars.homing_acceleration, 4),
-        // Without 609Ah homing accelerates on 6083h.
-        m(G::HOMING, vars.profile_acceleration, 4),
-        m(G::HOMING, vars.homing_timeout, 2),
-        m(G::POSITION_LIMITS, vars.software_position_limit_min, 4),
-        m(G::POSITION_LIMITS, vars.software_position_limit_max, 4),
-        // Where 607Dh is relative to the machine home.
-        m(G::POSITION_LIMITS, vars.home_offset, 4),
-        m(G::FOLLOWING_ERROR, vars.following_error_window, 4),
-        m(G::FOLLOWING_ERROR, vars.following_error_timeout, 2),
-        unit(u0),
-        unit(u1),
-        unit(u2),
-        unit(u3),
-        unit(u4),
-        unit(u5),
-        unit(u6),
-        unit(u7),
-        unit(u8),
-        unit(u9),
-    ]
+    visit(m(G::OPTIONS, vars.quick_stop_option_code, 2));
+    visit(m(G::OPTIONS, vars.shutdown_option_code, 2));
+    visit(m(G::OPTIONS, vars.disable_operation_option_code, 2));
+    visit(m(G::OPTIONS, vars.halt_option_code, 2));
+    visit(m(G::OPTIONS, vars.fault_reaction_option_code, 2));
+    visit(m(G::TORQUE, vars.motor_rated_torque, 4));
+    visit(m(G::TORQUE, vars.max_torque, 2));
+    visit(m(G::TORQUE, vars.positive_torque_limit, 2));
+    visit(m(G::TORQUE, vars.negative_torque_limit, 2));
+    visit(m(G::TORQUE, vars.torque_slope, 4));
+    visit(m(G::RAMPS, vars.max_profile_velocity, 4));
+    visit(m(G::RAMPS, vars.max_motor_speed, 4));
+    visit(m(G::RAMPS, vars.profile_velocity, 4));
+    visit(m(G::RAMPS, vars.profile_acceleration, 4));
+    visit(m(G::RAMPS, vars.profile_deceleration, 4));
+    visit(m(G::RAMPS, vars.quick_stop_deceleration, 4));
+    visit(m(G::WINDOWS, vars.position_window, 4));
+    visit(m(G::WINDOWS, vars.position_window_time, 2));
+    visit(m(G::WINDOWS, vars.velocity_window, 2));
+    visit(m(G::WINDOWS, vars.velocity_window_time, 2));
+    visit(m(G::WINDOWS, vars.velocity_threshold, 2));
+    visit(m(G::WINDOWS, vars.velocity_threshold_time, 2));
+    visit(m(G::HOMING, vars.homing_speed_switch, 4));
+    visit(m(G::HOMING, vars.homing_speed_zero, 4));
+    visit(m(G::HOMING, vars.homing_acceleration, 4));
+    // Without 609Ah homing accelerates on 6083h.
+    visit(m(G::HOMING, vars.profile_acceleration, 4));
+    visit(m(G::HOMING, vars.homing_timeout, 2));
+    visit(m(G::POSITION_LIMITS, vars.software_position_limit_min, 4));
+    visit(m(G::POSITION_LIMITS, vars.software_position_limit_max, 4));
+    // Where 607Dh is relative to the machine home.
+    visit(m(G::POSITION_LIMITS, vars.home_offset, 4));
+    visit(m(G::FOLLOWING_ERROR, vars.following_error_window, 4));
+    visit(m(G::FOLLOWING_ERROR, vars.following_error_timeout, 2));
+    for o in vars.unit_factor_objects() {
+        visit(Member {
+            group: G::UNITS,
+            at: o.map(|(at, _)| at),
+            len: o.map_or(0, |(_, len)| u16::from(len)),
+        });
+    }
 }
 
 /// The groups with a variable the RxPDO `plan` writes: read in every cycle.
 pub(super) fn live_groups(vars: &AppVars, plan: &PdoPlan) -> Groups {
-    members(vars)
-        .into_iter()
-        .filter(|m| m.at.is_some_and(|at| plan.writes_ram(at, m.len)))
-        .fold(Groups::NONE, |a, m| a | m.group)
+    let mut groups = Groups::NONE;
+    for_each_member(vars, |m| {
+        if m.at.is_some_and(|at| plan.writes_ram(at, m.len)) {
+            groups |= m.group;
+        }
+    });
+    groups
 }
 
 /// The settings in drive units (increments, increments/s, N·m), as of the last refresh of

@@ -3,15 +3,25 @@
 
 use core::ops::Range;
 
-/// Largest OD RAM whose writes can be tracked, in bytes.
-pub const MAX_TRACKED_RAM: usize = 8192;
+/// Largest OD RAM whose writes can be tracked, in bytes (the slave refuses a larger RAM; the
+/// largest profile's is some 2.3 KiB). The map takes one bit per byte of it.
+pub const MAX_TRACKED_RAM: usize = 4096;
 const BITS: usize = u32::BITS as usize;
 const WORDS: usize = MAX_TRACKED_RAM / BITS;
+// The marked words' bounds are kept as u16.
+const _: () = assert!(WORDS <= u16::MAX as usize);
 
 /// One bit per OD RAM byte: set when [`super::Dictionary::set_value`] wrote it.
+///
+/// The map also keeps the range of words that hold marks, so that clearing it and copying the
+/// marked bytes visit only those words (an event round writes one entry; the ESC-event round
+/// clears and copies under the lock the SYNC0 interrupt shares).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DirtyMap {
     words: [u32; WORDS],
+    /// Every word with a mark lies in `first..end` (`first == end`: no marks).
+    first: u16,
+    end: u16,
 }
 
 impl Default for DirtyMap {
@@ -23,47 +33,78 @@ impl Default for DirtyMap {
 impl DirtyMap {
     /// Nothing written.
     pub const fn new() -> Self {
-        Self { words: [0; WORDS] }
+        Self {
+            words: [0; WORDS],
+            first: 0,
+            end: 0,
+        }
     }
 
     /// Marks `bytes` written (bytes beyond [`MAX_TRACKED_RAM`] are not tracked; the slave
     /// refuses a larger RAM).
     pub fn mark(&mut self, bytes: Range<usize>) {
-        for b in bytes.take_while(|&b| b < MAX_TRACKED_RAM) {
+        let end = bytes.end.min(MAX_TRACKED_RAM);
+        let Some(last) = end.checked_sub(1).filter(|&last| last >= bytes.start) else {
+            return; // nothing within the tracked size
+        };
+        for b in bytes.start..end {
             if let Some(w) = self.words.get_mut(b / BITS) {
                 *w |= 1 << (b % BITS);
             }
+        }
+        // Both below WORDS ≤ u16::MAX (the assertion above), the end at most WORDS.
+        let (first, past) = (
+            (bytes.start / BITS) as u16,
+            (last / BITS).wrapping_add(1) as u16,
+        );
+        if self.first == self.end {
+            (self.first, self.end) = (first, past);
+        } else {
+            (self.first, self.end) = (self.first.min(first), self.end.max(past));
         }
     }
 
     /// Whether anything was written.
     pub fn any(&self) -> bool {
-        self.words.iter().any(|&w| w != 0)
+        self.marked_words().iter().any(|&w| w != 0)
     }
 
-    /// Forgets every mark.
+    /// Forgets every mark (visits only the words that may hold one).
     pub fn clear(&mut self) {
-        self.words = [0; WORDS];
+        let span = self.span();
+        if let Some(words) = self.words.get_mut(span) {
+            words.fill(0);
+        }
+        (self.first, self.end) = (0, 0);
+    }
+
+    /// The words that may hold marks.
+    fn span(&self) -> Range<usize> {
+        usize::from(self.first)..usize::from(self.end)
+    }
+
+    fn marked_words(&self) -> &[u32] {
+        self.words.get(self.span()).unwrap_or(&[])
     }
 
     /// Copies every marked byte of `from` to `to` (same layout), then clears the marks. Only the
-    /// words that cover `from` are visited, so the work is bounded by the OD RAM, not by
-    /// [`MAX_TRACKED_RAM`] (writes never mark bytes beyond the RAM they went to); marked bytes
-    /// outside `to` are skipped.
+    /// words that hold marks are visited, so the work is bounded by what was written, not by
+    /// the RAM or [`MAX_TRACKED_RAM`]; marked bytes outside `from` or `to` are skipped.
     pub fn copy_marked(&mut self, from: &[u8], to: &mut [u8]) {
-        // Word i covers the chunk i of BITS bytes on both sides.
-        let mut to_chunks = to.chunks_mut(BITS);
-        for (word, src) in self.words.iter_mut().zip(from.chunks(BITS)) {
+        let span = self.span();
+        (self.first, self.end) = (0, 0);
+        let Some(words) = self.words.get_mut(span.clone()) else {
+            return;
+        };
+        for (index, word) in span.zip(words.iter_mut()) {
             let mut w = core::mem::take(word);
-            let Some(dst) = to_chunks.next() else {
-                continue; // beyond `to`: only the marks are cleared
-            };
+            // index < WORDS: the byte offsets stay below MAX_TRACKED_RAM.
+            let base = index.wrapping_mul(BITS);
             while w != 0 {
-                let bit = w.trailing_zeros();
-                // Clears the bit just found (below 32, as `w` is not 0).
-                w ^= 1 << bit;
-                let at = bit as usize;
-                if let (Some(&v), Some(d)) = (src.get(at), dst.get_mut(at)) {
+                let at = base.wrapping_add(w.trailing_zeros() as usize);
+                // Clears the lowest mark (w ≠ 0).
+                w &= w.wrapping_sub(1);
+                if let (Some(&v), Some(d)) = (from.get(at), to.get_mut(at)) {
                     *d = v;
                 }
             }
@@ -74,6 +115,9 @@ impl DirtyMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+    extern crate std;
+    use std::vec;
+    use std::vec::Vec;
 
     #[test]
     fn only_marked_bytes_are_copied_and_the_marks_clear() {
@@ -104,5 +148,50 @@ mod tests {
         let mut to = [0u8; 8];
         d.copy_marked(&from, &mut to);
         assert_eq!(to, [0; 8]);
+        assert!(!d.any(), "copying clears the marks outside the slices too");
+    }
+
+    #[test]
+    fn marks_far_apart_are_all_copied_and_cleared() {
+        let mut d = DirtyMap::new();
+        d.mark(3000..3004);
+        d.mark(5..6);
+        d.mark(1000..1002);
+        let from: Vec<u8> = (0..MAX_TRACKED_RAM).map(|i| (i % 251) as u8 + 1).collect();
+        let mut to = vec![0u8; MAX_TRACKED_RAM];
+        d.copy_marked(&from, &mut to);
+        for (i, &b) in to.iter().enumerate() {
+            let marked = (3000..3004).contains(&i) || i == 5 || (1000..1002).contains(&i);
+            assert_eq!(b, if marked { from[i] } else { 0 }, "byte {i}");
+        }
+        assert!(!d.any());
+        // Nothing left behind for the next round.
+        let mut again = vec![0u8; MAX_TRACKED_RAM];
+        d.copy_marked(&from, &mut again);
+        assert!(again.iter().all(|&b| b == 0));
+    }
+
+    #[test]
+    fn clearing_forgets_every_mark() {
+        let mut d = DirtyMap::new();
+        d.mark(0..1);
+        d.mark(MAX_TRACKED_RAM - 2..MAX_TRACKED_RAM);
+        assert!(d.any());
+        d.clear();
+        assert!(!d.any());
+        let from = vec![7u8; MAX_TRACKED_RAM];
+        let mut to = vec![0u8; MAX_TRACKED_RAM];
+        d.copy_marked(&from, &mut to);
+        assert!(to.iter().all(|&b| b == 0));
+        assert_eq!(d, DirtyMap::new());
+    }
+
+    #[test]
+    fn empty_and_untracked_ranges_mark_nothing() {
+        let mut d = DirtyMap::new();
+        d.mark(10..10);
+        d.mark(MAX_TRACKED_RAM..MAX_TRACKED_RAM + 4);
+        assert!(!d.any());
+        assert_eq!(d, DirtyMap::new());
     }
 }
