@@ -314,16 +314,18 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     }
 }
 
-/// `magnitude / 2^k` rounded to the nearest (halves up): the shifted value plus the last bit
-/// shifted out. `k` < 32 (a `u32` divisor's), so the shifts do not wrap.
+/// `magnitude / 2^k` rounded to the nearest (halves up): with `h = ⌊m / 2^(k−1)⌋`, the quotient
+/// `h / 2` plus the last bit shifted out, `h & 1` (one 64-bit shift by a variable amount, the
+/// other by one). `k` < 32 (a `u32` divisor's), so the shifts do not wrap.
 #[inline]
 fn shift_rounded(magnitude: u64, k: u32) -> u64 {
     match k.checked_sub(1) {
         None => magnitude,
-        // k ≥ 1: the shifted value < 2⁶³, adding 1 cannot overflow.
-        Some(below) => magnitude
-            .wrapping_shr(k)
-            .wrapping_add(magnitude.wrapping_shr(below) & 1),
+        Some(below) => {
+            let halves = magnitude.wrapping_shr(below);
+            // halves / 2 < 2⁶³: adding one bit cannot overflow.
+            (halves >> 1).wrapping_add(halves & 1)
+        }
     }
 }
 
