@@ -298,7 +298,7 @@ impl Drive {
         {
             return;
         }
-        if let Some(at) = ram::ram_offset(self.od, index, subindex) {
+        if let Some(at) = ram::ram_offset_of(self.od, index, subindex) {
             if let Some(axis) = self
                 .axes
                 .iter_mut()

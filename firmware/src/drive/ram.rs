@@ -26,6 +26,15 @@ pub(super) const fn ram_offset(od: &Profile, index: u16, subindex: u8) -> Option
     None
 }
 
+/// [`ram_offset`] at run time: the object found by a binary search (the profile's objects are
+/// sorted by index), not by the linear walk a const fn is limited to.
+pub(super) fn ram_offset_of(od: &Profile, index: u16, subindex: u8) -> Option<u16> {
+    match od.object(index)?.entry(subindex)?.value {
+        Value::Ram(at) => Some(at),
+        _ => None,
+    }
+}
+
 // Offsets are u16 (from the generated profile) and N ≤ 4: `at + N` cannot overflow a usize.
 pub(super) fn read_bytes<const N: usize>(ram: &[u8], at: Option<u16>) -> Option<[u8; N]> {
     let at = usize::from(at?);
@@ -58,4 +67,39 @@ pub(super) fn read_u16(ram: &[u8], at: Option<u16>) -> Option<u16> {
 
 pub(super) fn write_u16(ram: &mut [u8], at: Option<u16>, v: u16) {
     write_bytes(ram, at, v.to_le_bytes());
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The run-time lookup finds what the const walk finds, for every entry of every profile
+    /// and for indices and subindices that are not there.
+    #[test]
+    fn the_run_time_lookup_agrees_with_the_const_walk() {
+        for profile in crate::profiles::ALL {
+            let od = &profile.od;
+            let mut ram_entries = 0;
+            for object in od.objects {
+                for entry in object.entries {
+                    let (index, sub) = (object.index, entry.subindex);
+                    let found = ram_offset_of(od, index, sub);
+                    assert_eq!(found, ram_offset(od, index, sub), "{index:04X}:{sub}");
+                    ram_entries += usize::from(found.is_some());
+                }
+                let last = object.entries.iter().map(|e| e.subindex).max().unwrap_or(0);
+                if let Some(beyond) = last.checked_add(1) {
+                    assert_eq!(ram_offset_of(od, object.index, beyond), None);
+                }
+            }
+            assert!(ram_entries > 0);
+            for index in [0x0000, 0x1001, 0x5FFF, 0xFFFF] {
+                assert_eq!(
+                    ram_offset_of(od, index, 0),
+                    ram_offset(od, index, 0),
+                    "{index:04X}"
+                );
+            }
+        }
+    }
 }

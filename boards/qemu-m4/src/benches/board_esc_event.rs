@@ -1,8 +1,10 @@
 //! The STM32G474 board's ESC-event round as the board runs it: `stm32g4_axis`'s
 //! [`EventSide::esc_event_round`] (the core's event steps, the mailbox loaded, served and stored
 //! back, the digital outputs) on the slave in OP, the ESC an image in memory reached through
-//! the drive lock in 32-byte transfers ([`stm32g4_axis::event::DrivePdi`]), serving the most
-//! expensive mailbox request measured: an expedited SDO download of 2F00h.
+//! the drive lock in 32-byte transfers ([`stm32g4_axis::event::DrivePdi`]), over the mailbox
+//! requests whose rounds differ: a download of a plain parameter (2F00h), a download of a
+//! setting (6081h: checked against the RxPDO plan, its settings group read again in the round),
+//! an expedited upload (6041h) and a normal upload whose response carries a string (1008h).
 //!
 //! Each call puts the request into the image (SM0 full, the SM0 event) and runs the round; the
 //! request's setup alone is measured and subtracted. The image does not model the SM status
@@ -22,10 +24,11 @@ use stm32g4_axis::inputs::BrakeOutput;
 use stm32g4_axis::regs::OutputPins;
 
 use super::sdo::{
-    command, mailbox_frame, request, FRAME_LEN, USER_PARAMETER, USER_PARAMETER_VALUE,
+    command, mailbox_frame, request, FRAME_LEN, MAPPABLE_PARAMETER, MAPPABLE_PARAMETER_VALUE,
+    STATUSWORD, USER_PARAMETER, USER_PARAMETER_VALUE,
 };
 use super::sync0_handler::{RamEsc, Setup};
-use crate::harness::Harness;
+use crate::harness::{Cases, Harness};
 
 const NAME: &str = "board-esc-event";
 /// Parameter-store record capacity (no storage here: 1010h is not used).
@@ -49,13 +52,42 @@ impl SharedDrive<RAM_SIZE, RamEsc, NoPins> for Direct {
     }
 }
 
-/// The mailbox frame of the request.
-fn frame() -> [u8; MAILBOX_HEADER_LEN + FRAME_LEN] {
-    mailbox_frame(&request(
-        command::DOWNLOAD_REQUEST_U32,
-        USER_PARAMETER,
-        USER_PARAMETER_VALUE.to_le_bytes(),
-    ))
+/// Device name 1008h: a string longer than the 4 bytes of an expedited upload.
+const DEVICE_NAME: (u16, u8) = (0x1008, 0);
+
+/// The requests measured: label, mailbox frame, the command byte of the expected response.
+fn requests() -> [(&'static str, [u8; MAILBOX_HEADER_LEN + FRAME_LEN], u8); 4] {
+    let frame = |command, object, data| mailbox_frame(&request(command, object, data));
+    [
+        (
+            "download of a parameter (2F00h)",
+            frame(
+                command::DOWNLOAD_REQUEST_U32,
+                USER_PARAMETER,
+                USER_PARAMETER_VALUE.to_le_bytes(),
+            ),
+            command::DOWNLOAD_RESPONSE,
+        ),
+        (
+            "download of a setting (6081h)",
+            frame(
+                command::DOWNLOAD_REQUEST_U32,
+                MAPPABLE_PARAMETER,
+                MAPPABLE_PARAMETER_VALUE.to_le_bytes(),
+            ),
+            command::DOWNLOAD_RESPONSE,
+        ),
+        (
+            "expedited upload (6041h)",
+            frame(command::UPLOAD_REQUEST, STATUSWORD, [0; 4]),
+            command::UPLOAD_RESPONSE_U16,
+        ),
+        (
+            "upload of a string (1008h)",
+            frame(command::UPLOAD_REQUEST, DEVICE_NAME, [0; 4]),
+            command::UPLOAD_RESPONSE_SIZED,
+        ),
+    ]
 }
 
 /// Puts the request into SM0 and raises its event, as the master's frame leaves them.
@@ -78,7 +110,7 @@ pub fn run(h: &mut Harness) {
     let Setup {
         core, esc, mailbox, ..
     } = setup;
-    let mut drive = Direct(CycleSide {
+    let drive = Direct(CycleSide {
         core,
         pdi: esc,
         brake: BrakeOutput::new(NoPins),
@@ -88,43 +120,48 @@ pub fn run(h: &mut Harness) {
         mailbox,
         params: ParamStore::new(NoStorage),
     };
-    let frame = frame();
-    // The round answers the download in SM1 and the value reaches the core.
-    post(&mut drive.0.pdi, &frame);
-    let served = event.esc_event_round(&mut drive, 0);
     let response_at = usize::from(PROFILE.od.device.mailbox_in.start) + MAILBOX_HEADER_LEN;
-    let answered = matches!(served, Some(Ok(())))
-        && drive.0.pdi.byte(response_at + COE_HEADER_LEN) == Some(command::DOWNLOAD_RESPONSE);
-    if !answered {
-        h.fail(
-            NAME,
-            format_args!("the SDO download was not answered in SM1"),
-        );
-        return;
-    }
     // Both operations reach the drive through the cell (the same borrow cost in each).
     let drive = RefCell::new(drive);
-    let Some((cost, with_setup, setup_cost)) = h.measure_net(
-        NAME,
-        &mut || post(&mut drive.borrow_mut().0.pdi, black_box(&frame)),
-        &mut || {
+    let mut cases = Cases::new(NAME);
+    for (label, frame, response) in requests() {
+        // The round answers the request in SM1 (and a download's value reaches the core).
+        let served = {
             let mut drive = drive.borrow_mut();
-            post(&mut drive.0.pdi, black_box(&frame));
-            let _ = event.esc_event_round(&mut *drive, black_box(0));
-        },
-    ) else {
-        return;
-    };
-    h.report(
-        NAME,
-        cost,
+            post(&mut drive.0.pdi, &frame);
+            let served = event.esc_event_round(&mut *drive, 0);
+            matches!(served, Some(Ok(())))
+                && drive.0.pdi.byte(response_at + COE_HEADER_LEN) == Some(response)
+        };
+        if !served {
+            h.fail(
+                NAME,
+                format_args!("{label}: not answered in SM1 as expected"),
+            );
+            return;
+        }
+        let Some((cost, _, _)) = h.measure_net(
+            NAME,
+            &mut || post(&mut drive.borrow_mut().0.pdi, black_box(&frame)),
+            &mut || {
+                let mut drive = drive.borrow_mut();
+                post(&mut drive.0.pdi, black_box(&frame));
+                let _ = event.esc_event_round(&mut *drive, black_box(0));
+            },
+        ) else {
+            return;
+        };
+        h.case(&mut cases, label, cost);
+    }
+    h.report_cases(
+        &cases,
         None,
         format_args!(
             "the STM32G474 board's ESC-event round (stm32g4_axis EventSide::esc_event_round: \
              event begin, mailbox load/serve/store, event end, outputs; the PDI through the \
-             drive lock in 32-byte transfers, ESC as a RAM image: bus time excluded) serving an \
-             expedited SDO download of 2F00h in OP ({with_setup} with the request's setup − \
-             {setup_cost} setup)"
+             drive lock in 32-byte transfers, ESC as a RAM image: bus time excluded) serving \
+             one mailbox request in OP, over the requests whose rounds differ (the request's \
+             setup measured alone and subtracted)"
         ),
     );
 }

@@ -24,16 +24,16 @@ use crate::harness::Harness;
 /// The EtherCAT state the requests are served in.
 const STATE: AlState = AlState::Op;
 /// Statusword 6041h (CiA402) and the user parameter 2F00h (UDINT, not PDO-mapped), subindex 0.
-const STATUSWORD: (u16, u8) = (0x6041, 0);
+pub(super) const STATUSWORD: (u16, u8) = (0x6041, 0);
 pub(super) const USER_PARAMETER: (u16, u8) = (0x2F00, 0);
 /// The value the download writes; any value other than the default 0.
 pub(super) const USER_PARAMETER_VALUE: u32 = 0x1234_5678;
 /// Profile velocity 6081h (UDINT, RxPDO-mappable, not in the default RxPDO 1600h): a download
 /// to it is checked against the OD RAM the RxPDO plan writes before it is allowed (the
 /// `blocked` rule), the most expensive check of an expedited download.
-const MAPPABLE_PARAMETER: (u16, u8) = (0x6081, 0);
+pub(super) const MAPPABLE_PARAMETER: (u16, u8) = (0x6081, 0);
 /// The value written to 6081h (increments/s, inside its range).
-const MAPPABLE_PARAMETER_VALUE: u32 = 1_000_000;
+pub(super) const MAPPABLE_PARAMETER_VALUE: u32 = 1_000_000;
 /// Budget of an expedited SDO download (issue 13: ≤ 1,000 instructions).
 const SDO_DOWNLOAD_BUDGET: u32 = 1_000;
 /// Largest response buffer the benchmark provides (the standard profile's mailbox is 256 bytes).
@@ -57,6 +57,8 @@ pub(super) mod command {
     pub const UPLOAD_REQUEST: u8 = 2 << SPECIFIER_SHIFT;
     /// Initiate upload response (scs 2), expedited, 2 bytes.
     pub const UPLOAD_RESPONSE_U16: u8 = (2 << SPECIFIER_SHIFT) | EXPEDITED_U16;
+    /// Initiate upload response (scs 2), normal: the size in the data bytes, the value after.
+    pub const UPLOAD_RESPONSE_SIZED: u8 = (2 << SPECIFIER_SHIFT) | SIZE_INDICATED;
     /// Initiate download request (ccs 1), expedited, 4 bytes.
     pub const DOWNLOAD_REQUEST_U32: u8 = (1 << SPECIFIER_SHIFT) | EXPEDITED_U32;
     /// Initiate download request (ccs 1), normal (segmented), the size in the data bytes.
