@@ -79,7 +79,7 @@ impl Groups {
     /// The groups with an entry of object `index` (any subindex: a complete-access download
     /// names only its first) among `vars`, in `od`.
     pub fn of_object(vars: &AppVars, od: &Profile, index: u16) -> Self {
-        let Some(object) = od.objects.iter().find(|o| o.index == index) else {
+        let Some(object) = od.object(index) else {
             return Self::NONE;
         };
         object
