@@ -45,7 +45,7 @@ use crate::profile::{
     self, AccelerationUnit, AppVars, Cia402Rules, DriveProfile, Factor, Operand,
     ProbeInputAssignment, RatioRange, UnitRatios, MOTOR_FAULT_COUNT,
 };
-use ethercat_slave::od::Profile;
+use ethercat_slave::od::Object;
 use ethercat_slave::pdo::PdoPlan;
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
@@ -454,10 +454,10 @@ impl DriveAxis {
         (units.position, units.velocity)
     }
 
-    /// An SDO download to object `index` of `od` was committed: the settings it belongs to
-    /// are due ([`Self::refresh_settings`]).
-    pub(super) fn downloaded(&mut self, od: &Profile, index: u16) {
-        self.settings_due |= Groups::of_object(self.vars, od, index);
+    /// An SDO download to `object` was committed: the settings it belongs to are due
+    /// ([`Self::refresh_settings`]).
+    pub(super) fn downloaded(&mut self, object: &Object) {
+        self.settings_due |= Groups::of_object(self.vars, object);
     }
 
     /// The drive wrote the OD RAM entry at `at` (e.g. a split value's other form): the

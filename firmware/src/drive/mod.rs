@@ -284,7 +284,8 @@ impl Drive {
 impl Drive {
     /// What a download to `index:subindex` does beyond setting a value: a store, the alarm
     /// log's commands, the unit factors taking effect, an adjusting service's request.
-    fn act_on_download(&mut self, ram: &mut [u8], index: u16, subindex: u8) {
+    /// `at`: the entry's OD RAM offset, if it is a RAM variable.
+    fn act_on_download(&mut self, ram: &mut [u8], (index, subindex): (u16, u8), at: Option<u16>) {
         if index == STORE_PARAMETERS {
             // A store that succeeded (a refused one is not committed).
             for axis in self.axes.iter_mut().flatten() {
@@ -298,7 +299,7 @@ impl Drive {
         {
             return;
         }
-        if let Some(at) = ram::ram_offset_of(self.od, index, subindex) {
+        if let Some(at) = at {
             if let Some(axis) = self
                 .axes
                 .iter_mut()
@@ -475,11 +476,16 @@ impl Application for Drive {
 
     fn downloaded(&mut self, ram: &mut [u8], index: u16, subindex: u8, now_ns: u64) {
         self.now_ns = now_ns;
-        for axis in self.axes.iter_mut().flatten() {
-            axis.downloaded(self.od, index);
+        // Searched once for all that follows.
+        let object = self.od.object(index);
+        if let Some(object) = object {
+            for axis in self.axes.iter_mut().flatten() {
+                axis.downloaded(object);
+            }
         }
         self.sync_split_values(ram, false, false);
-        self.act_on_download(ram, index, subindex);
+        let at = object.and_then(|o| ram::ram_offset_in(o, subindex));
+        self.act_on_download(ram, (index, subindex), at);
         // The settings the download changed, in drive units before the next cycle uses them.
         for axis in self.axes.iter_mut().flatten() {
             axis.refresh_settings(ram);

@@ -24,7 +24,7 @@ use cia402::limits::SoftwareLimits;
 use cia402::stop::{OptionCodes, Reactions};
 use cia402::units::{self, Polarity};
 
-use ethercat_slave::od::{Profile, Value};
+use ethercat_slave::od::{Object, Value};
 use ethercat_slave::pdo::PdoPlan;
 
 use super::ram::{read_i16, read_i32, read_u16, read_u32};
@@ -76,12 +76,9 @@ impl Groups {
         self.0 == 0
     }
 
-    /// The groups with an entry of object `index` (any subindex: a complete-access download
-    /// names only its first) among `vars`, in `od`.
-    pub fn of_object(vars: &AppVars, od: &Profile, index: u16) -> Self {
-        let Some(object) = od.object(index) else {
-            return Self::NONE;
-        };
+    /// The groups with an entry of `object` (any subindex: a complete-access download names
+    /// only its first) among `vars`.
+    pub fn of_object(vars: &AppVars, object: &Object) -> Self {
         object
             .entries
             .iter()
@@ -473,7 +470,12 @@ mod tests {
 
     #[test]
     fn a_download_makes_the_groups_of_its_object_due() {
-        let of = |index| Groups::of_object(vars(), &PROFILE.od, index);
+        let of = |index| {
+            PROFILE
+                .od
+                .object(index)
+                .map_or(Groups::NONE, |o| Groups::of_object(vars(), o))
+        };
         assert_eq!(of(0x605A), Groups::OPTIONS);
         assert_eq!(of(0x6072), Groups::TORQUE);
         assert_eq!(of(0x6081), Groups::RAMPS);

@@ -7,7 +7,9 @@ use hal::esc::AlState;
 use crate::od::index::sm_parameter::SUB_SHIFT_TIME;
 use crate::od::index::SM_INPUT_PARAMETER;
 use crate::od::value::{as_u32, check_length, check_range, check_value_list};
-use crate::od::{AbortCode, Access, DataType, Dictionary, Entry, ObjectCode, StoreError, Value};
+use crate::od::{
+    AbortCode, Access, DataType, Dictionary, Entry, Object, ObjectCode, StoreError, Value,
+};
 use crate::pdo::rules as pdo_rules;
 
 /// Kind of access.
@@ -40,17 +42,19 @@ pub(crate) fn find_entry(
     object.entry(subindex).ok_or(AbortCode::SubindexNotFound)
 }
 
-/// The entry of a download request, if it exists and may be written now.
+/// The object and entry of a download request, if the entry exists and may be written now
+/// (the object is handed on to [`write_found`]: one search of the dictionary per request).
 pub(crate) fn find_writable(
     od: &Dictionary<'_>,
     state: AlState,
     index: u16,
     subindex: u8,
-) -> Result<&'static Entry, AbortCode> {
-    let entry = find_entry(od, index, subindex)?;
+) -> Result<(&'static Object, &'static Entry), AbortCode> {
+    let object = od.object(index).ok_or(AbortCode::ObjectNotFound)?;
+    let entry = object.entry(subindex).ok_or(AbortCode::SubindexNotFound)?;
     check_access(entry.access, state, AccessKind::Write)?;
     pdo_rules::check_rx_mapped(od, state, entry, index, subindex)?;
-    Ok(entry)
+    Ok((object, entry))
 }
 
 /// Checks the entry's access rights: never readable/writable gives 0x06010001/0x06010002, not in
@@ -95,8 +99,8 @@ pub(crate) fn write_entry(
     subindex: u8,
     data: &[u8],
 ) -> Result<(), AbortCode> {
-    let entry = find_writable(od, state, index, subindex)?;
-    write_found(od, entry, index, subindex, data)
+    let (object, entry) = find_writable(od, state, index, subindex)?;
+    write_found(od, (object, entry), index, subindex, data)
 }
 
 /// The checks of [`write_entry`] that follow [`find_writable`], and the store: for a request
@@ -104,13 +108,13 @@ pub(crate) fn write_entry(
 /// single-frame download), so that access and RxPDO mapping are not checked twice.
 pub(crate) fn write_found(
     od: &mut Dictionary<'_>,
-    entry: &Entry,
+    (object, entry): (&Object, &Entry),
     index: u16,
     subindex: u8,
     data: &[u8],
 ) -> Result<(), AbortCode> {
     check_length(entry, data.len())?;
-    check_subindex0(od, index, subindex, data)?;
+    check_subindex0(object, subindex, data)?;
     pdo_rules::check_write(od, index, subindex, data)?;
     check_range(entry, data)?;
     check_value_list(od.profile().value_list(index, subindex), entry, data)?;
@@ -137,15 +141,7 @@ fn check_input_shift_step(
 }
 
 /// Subindex 0 of an ARRAY or RECORD may not exceed the highest existing subindex (0x06090031).
-fn check_subindex0(
-    od: &Dictionary<'_>,
-    index: u16,
-    subindex: u8,
-    data: &[u8],
-) -> Result<(), AbortCode> {
-    let Some(object) = od.object(index) else {
-        return Err(AbortCode::ObjectNotFound);
-    };
+fn check_subindex0(object: &Object, subindex: u8, data: &[u8]) -> Result<(), AbortCode> {
     if subindex != 0 || object.code == ObjectCode::Var {
         return Ok(());
     }

@@ -35,7 +35,7 @@ use super::CoeError;
 use crate::od::value::check_length;
 use crate::od::AbortCode;
 use crate::od::DomainStore;
-use crate::od::{Dictionary, Entry, Value};
+use crate::od::{Dictionary, Entry, Object, Value};
 
 /// Capacity in bytes of the buffer that holds a segmented download until its last segment (and
 /// the snapshot of a segmented upload of a RAM value). A segmented download larger than this is
@@ -336,7 +336,7 @@ impl SdoServer {
             self.download_init_complete(od, state, rq).map_err(abort)?;
             return Ok(write_download_init_response(resp, index, subindex));
         }
-        let entry = find_writable(od, state, index, subindex).map_err(abort)?;
+        let (object, entry) = find_writable(od, state, index, subindex).map_err(abort)?;
         if let Value::Domain(id) = entry.value {
             self.download_init_domain(rq, id, domains).map_err(abort)?;
             return Ok(write_download_init_response(resp, index, subindex));
@@ -351,7 +351,7 @@ impl SdoServer {
                 .get(INIT_DATA_OFFSET..)
                 .and_then(|d| d.get(..len))
                 .unwrap_or_default();
-            self.commit_found(od, entry, index, subindex, data)
+            self.commit_found(od, (object, entry), index, subindex, data)
                 .map_err(abort)?;
         } else {
             let size = read_size(req);
@@ -359,7 +359,7 @@ impl SdoServer {
             let data = req.get(NORMAL_DATA_OFFSET..).unwrap_or_default();
             match data.get(..size) {
                 Some(data) => self
-                    .commit_found(od, entry, index, subindex, data)
+                    .commit_found(od, (object, entry), index, subindex, data)
                     .map_err(abort)?,
                 None => self
                     .start_download(index, subindex, size, data, false)
@@ -601,17 +601,17 @@ impl SdoServer {
         Ok(())
     }
 
-    /// Writes `data` to `entry` (`index:subindex`, just returned by `find_writable` in this
-    /// request) after the remaining checks, and records the write.
+    /// Writes `data` to the entry `found` (`index:subindex` with its object, just returned by
+    /// `find_writable` in this request) after the remaining checks, and records the write.
     fn commit_found(
         &mut self,
         od: &mut Dictionary<'_>,
-        entry: &Entry,
+        found: (&Object, &Entry),
         index: u16,
         subindex: u8,
         data: &[u8],
     ) -> Result<(), AbortCode> {
-        write_found(od, entry, index, subindex, data)?;
+        write_found(od, found, index, subindex, data)?;
         self.last_write = Some((index, subindex));
         Ok(())
     }
