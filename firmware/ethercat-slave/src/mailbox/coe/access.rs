@@ -38,8 +38,19 @@ pub(crate) fn find_entry(
     index: u16,
     subindex: u8,
 ) -> Result<&'static Entry, AbortCode> {
+    find_object_entry(od, index, subindex).map(|(_, entry)| entry)
+}
+
+/// [`find_entry`] with the object it is in.
+#[inline]
+fn find_object_entry(
+    od: &Dictionary<'_>,
+    index: u16,
+    subindex: u8,
+) -> Result<(&'static Object, &'static Entry), AbortCode> {
     let object = od.object(index).ok_or(AbortCode::ObjectNotFound)?;
-    object.entry(subindex).ok_or(AbortCode::SubindexNotFound)
+    let entry = object.entry(subindex).ok_or(AbortCode::SubindexNotFound)?;
+    Ok((object, entry))
 }
 
 /// The object and entry of a download request, if the entry exists and may be written now
@@ -50,8 +61,7 @@ pub(crate) fn find_writable(
     index: u16,
     subindex: u8,
 ) -> Result<(&'static Object, &'static Entry), AbortCode> {
-    let object = od.object(index).ok_or(AbortCode::ObjectNotFound)?;
-    let entry = object.entry(subindex).ok_or(AbortCode::SubindexNotFound)?;
+    let (object, entry) = find_object_entry(od, index, subindex)?;
     check_access(entry.access, state, AccessKind::Write)?;
     pdo_rules::check_rx_mapped(od, state, entry, index, subindex)?;
     Ok((object, entry))
