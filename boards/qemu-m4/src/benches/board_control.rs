@@ -5,15 +5,18 @@
 //! the register accesses differ from the board: they go to memory here (volatile, like the
 //! peripheral registers), through the same register traits.
 //!
-//! Measured in the worst period: running in CSP at rest with a new set-point every period (loop
-//! divider 1). The board's incremental encoder is aligned after each enable; the measurement
+//! Measured in the loop period (loop divider 1, a new set-point every period) over the inputs
+//! whose interrupts differ in CSP: at rest, following, and a step that drives the current to
+//! its limit and the voltage to its circle, each from the axis running at rest (a copy of it
+//! restored before every call, the restore measured alone and subtracted). The board's
+//! incremental encoder is aligned after each enable; the measurement
 //! gives the alignment's result as the commissioned commutation offset, so that the axis is in
 //! closed loop from the start (the same code runs after an alignment).
 
 use core::hint::black_box;
 use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
 
-use firmware::motor::axis::{Axis, AxisCommand, AxisLink, AxisState};
+use firmware::motor::axis::{Axis, AxisCommand, AxisFeedback, AxisLink, AxisState};
 use firmware::motor::servo::{axis_config, Tuning};
 use stm32g4_axis::board::{
     BOOTSTRAP_PRECHARGE_PERIODS, CORE_CLOCK_HZ, COUNTS_PER_REV, FRONT_END, PDI_SPI_CLOCK_HZ,
@@ -27,7 +30,7 @@ use stm32g4_axis::quadrature::QuadratureEncoder;
 use stm32g4_axis::regs::{Conversions, EncoderCounter, InjectedAdcs, InputPins, PwmTimer};
 use stm32g4_axis::sensing;
 
-use crate::harness::Harness;
+use crate::harness::{Cases, Harness};
 
 /// TIM1's auto-reload on the board.
 const ARR: u16 = PWM_PERIOD.auto_reload;
@@ -199,44 +202,126 @@ fn running(hw: &mut Board, link: &AxisLink) -> Result<Axis, &'static str> {
         .ok_or("the board's axis is not running at rest with the gates on")
 }
 
+/// One input of the measurement: the command published before the interrupt, and the check
+/// that the interrupt took the input's branch (the axis, its feedback, the compares written).
+struct BoardInput {
+    label: &'static str,
+    command: AxisCommand,
+    branch: fn(&Axis, &AxisFeedback, &[u16; 3]) -> bool,
+}
+
+/// Whether the axis runs with the gates on and no fault.
+fn runs(axis: &Axis, fb: &AxisFeedback) -> bool {
+    axis.state() == AxisState::Running && axis.fault().is_none() && fb.fault.is_none()
+}
+
+/// Whether every compare is at the centre (zero voltage), within a tick.
+fn centred(compares: &[u16; 3]) -> bool {
+    let centre = compare_for_duty(0.5, ARR);
+    compares.iter().all(|&c| c.abs_diff(centre) <= 1)
+}
+
+/// The spread of the compares as a fraction of the period: above 0.8 the voltage vector is at
+/// the circle of the servo's `max_modulation` (see the `control-interrupt` inputs).
+fn compare_span(compares: &[u16; 3]) -> f32 {
+    let (lo, hi) = compares
+        .iter()
+        .fold((u16::MAX, 0), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+    f32::from(hi.saturating_sub(lo)) / f32::from(ARR)
+}
+
+/// The inputs, in CSP with a new set-point every period.
+const INPUTS: [BoardInput; 3] = [
+    BoardInput {
+        label: "CSP at rest",
+        command: COMMAND,
+        branch: |a, fb, c| runs(a, fb) && fb.following_error == 0 && centred(c),
+    },
+    BoardInput {
+        label: "CSP following (1 increment per period)",
+        command: AxisCommand {
+            position: 1,
+            ..COMMAND
+        },
+        // One increment of the board's encoder is a large error for its gains: the current
+        // may reach its limit here already (the step below takes the voltage to its circle).
+        branch: |a, fb, c| runs(a, fb) && !centred(c),
+    },
+    BoardInput {
+        label: "CSP step: torque limit, voltage circle",
+        command: AxisCommand {
+            position: 200_000,
+            ..COMMAND
+        },
+        branch: |a, fb, c| runs(a, fb) && fb.current_limited && compare_span(c) > 0.8,
+    },
+];
+
 /// The benchmark.
 pub fn run(h: &mut Harness) {
     const NAME: &str = "board-control-interrupt";
     // SAFETY: the benchmark runs in one context only.
     let link = unsafe { AxisLink::new() };
     let mut hw = board();
-    let Some(mut axis) = h.ready(NAME, running(&mut hw, &link)) else {
+    let Some(snapshot) = h.ready(NAME, running(&mut hw, &link)) else {
         return;
     };
-    let measured = h.measure_net(NAME, &mut || link.publish(black_box(COMMAND)), &mut || {
-        link.publish(black_box(COMMAND));
-        black_box(hw.control_interrupt(&mut axis, &link));
-    });
-    if axis.state() != AxisState::Running || !hw.inverter.timer().moe {
-        h.fail(
+    let mut cases = Cases::new(NAME);
+    for input in INPUTS {
+        let command = input.command;
+        let mut axis = snapshot.clone();
+        link.publish(command);
+        hw.control_interrupt(&mut axis, &link);
+        let (fb, compares) = (link.feedback(), hw.inverter.timer().ccr);
+        if !hw.inverter.timer().moe || !(input.branch)(&axis, &fb, &compares) {
+            h.fail(
+                NAME,
+                format_args!(
+                    "input \"{}\" did not take its branch: state {:?} following error {} \
+                     current limited {} compares {:?}",
+                    input.label,
+                    axis.state(),
+                    fb.following_error,
+                    fb.current_limited,
+                    compares
+                ),
+            );
+            return;
+        }
+        let mut restored = snapshot.clone();
+        let Some((cost, _, _)) = h.measure_net(
             NAME,
-            format_args!("the axis left Running during the measurement"),
-        );
+            &mut || {
+                restored = black_box(&snapshot).clone();
+                link.publish(black_box(command));
+                black_box(&mut restored);
+            },
+            &mut || {
+                axis = black_box(&snapshot).clone();
+                link.publish(black_box(command));
+                black_box(hw.control_interrupt(&mut axis, &link));
+            },
+        ) else {
+            return;
+        };
+        h.case(&mut cases, input.label, cost);
     }
-    let Some((cost, with_publish, publish)) = measured else {
-        return;
-    };
     // The board's clocks and PWM rate: the interrupt-load section of the report.
     h.meta("board_core_clock_hz", CORE_CLOCK_HZ);
     h.meta("board_pwm_hz", PWM_HZ);
     h.meta("board_pdi_spi_hz", PDI_SPI_CLOCK_HZ);
     // No budget of its own: DESIGN.md §6 budgets the whole control interrupt, drivers included,
     // at 1,500; the report's load section sets this count against the board's time.
-    h.report(
-        NAME,
-        cost,
+    h.report_cases(
+        &cases,
         None,
         format_args!(
             "the STM32G474 board's control interrupt (stm32g4_axis AxisHardware::control_interrupt: \
              period trim, ADC latch and conversion, inputs, encoder, Axis::control_step, compares \
-             and MOE; registers as memory), worst period: CSP at rest, a new set-point every \
-             period ({with_publish} with the SYNC0 publish − {publish} publish); DESIGN.md §6 \
-             budgets the whole interrupt at 1500"
+             and MOE; registers as memory) in its loop period with a new set-point every period \
+             (the SYNC0 publish subtracted), over the CSP inputs whose interrupts differ (at \
+             rest, following, at the torque limit and the voltage circle); DESIGN.md §6 budgets \
+             the whole interrupt at 1500"
         ),
     );
 }
