@@ -181,3 +181,47 @@ fn cycles_run_while_a_segmented_upload_is_half_done() {
         );
     });
 }
+
+/// Statusword 6041h:00.
+const STATUSWORD: u16 = 0x6041;
+/// CiA402 states the power-up sequence passes (statusword & [`STATE_MASK`]): ready to switch
+/// on, switched on, operation enabled (CiA402 Table 30).
+const POWER_UP_STATES: [u16; 3] = [0x0021, 0x0023, OPERATION_ENABLED];
+
+/// The mailbox side copies the OD RAM only for a round that answers a request (the rounds the
+/// process-data cycles start copy nothing): an SDO upload after many such rounds still reads
+/// the value of the moment it is answered, not of the last request.
+#[test]
+fn an_upload_after_rounds_without_a_request_reads_the_present_value() {
+    block_on(async {
+        let (m, transport) = master();
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = md
+            .init_single_group::<4, 64>(m.shared.clock().now_fn())
+            .await
+            .expect("PRE-OP");
+        let group = group.into_safe_op(md).await.expect("SAFE-OP");
+        let group = group.request_into_op(md).await.expect("OP");
+        let sd = group.subdevice(md, 0).expect("drive");
+        let mut seen = Vec::new();
+        for cw in POWER_UP {
+            let mut statusword = 0u16;
+            for _ in 0..10 {
+                sd.outputs_raw_mut()[0..2].copy_from_slice(&cw.to_le_bytes());
+                group.tx_rx(md).await.expect("tx/rx");
+                m.shared.advance(CYCLE_NS);
+                let inputs = sd.inputs_raw();
+                statusword = u16::from_le_bytes([inputs[0], inputs[1]]);
+            }
+            let [i0, i1] = STATUSWORD.to_le_bytes();
+            send_sdo(md, [CCS_UPLOAD_INIT, i0, i1, 0, 0, 0, 0, 0]).await;
+            let response = receive_sdo(md, &m).await;
+            assert_eq!(response[0] & SCS_MASK, SCS_UPLOAD_INIT, "upload response");
+            let uploaded = u16::from_le_bytes([response[4], response[5]]);
+            seen.push((statusword & STATE_MASK, uploaded & STATE_MASK));
+        }
+        let expected: Vec<(u16, u16)> = POWER_UP_STATES.iter().map(|&s| (s, s)).collect();
+        assert_eq!(seen, expected, "(process data, SDO upload) after each step");
+    });
+}

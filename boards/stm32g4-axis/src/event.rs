@@ -143,7 +143,8 @@ pub struct EventSide<const RAM: usize, S, const CAP: usize> {
 
 impl<const RAM: usize, S: NvStorage, const CAP: usize> EventSide<RAM, S, CAP> {
     /// One ESC-event round at `now_ns`: the core's event steps (AL control, SM checks) and the
-    /// mailbox (load the OD RAM, serve, store back) with the drive lock taken per step, then
+    /// mailbox (its emergencies, the transfers, the OD RAM copied for a request to answer,
+    /// the answer, its writes stored back) with the drive lock taken per step, then
     /// the digital outputs (a transition out of OP applies the brake at once). `None` if the
     /// drive was not available.
     pub fn esc_event_round<P: EscPdi, O: OutputPins, D: SharedDrive<RAM, P, O>>(
@@ -156,14 +157,28 @@ impl<const RAM: usize, S: NvStorage, const CAP: usize> EventSide<RAM, S, CAP> {
             Err(e) => return Some(Err(EventError::Pdi(e))),
         };
         drive.with(|d| self.mailbox.load(&mut d.core))?;
-        let served = self.mailbox.serve(
-            &mut DrivePdi::<D, RAM, P, O>::new(drive),
-            job,
-            &mut WithDomains {
-                hook: &mut self.params,
-                domains: &mut NoDomains,
-            },
-        );
+        // The OD RAM is copied (under the lock) only for a request to answer.
+        let received = self
+            .mailbox
+            .receive(&mut DrivePdi::<D, RAM, P, O>::new(drive), job);
+        let served = match received {
+            Ok(request) => {
+                let loaded = match request {
+                    Some(r) => Some(drive.with(|d| self.mailbox.load_dictionary(&d.core, r))?),
+                    None => None,
+                };
+                self.mailbox.answer(
+                    &mut DrivePdi::<D, RAM, P, O>::new(drive),
+                    job,
+                    loaded,
+                    &mut WithDomains {
+                        hook: &mut self.params,
+                        domains: &mut NoDomains,
+                    },
+                )
+            }
+            Err(e) => Err(e),
+        };
         drive.with(|d| self.mailbox.store(&mut d.core))?;
         if let Err(e) = served {
             return Some(Err(e));

@@ -4,7 +4,8 @@
 //! the drive lock in 32-byte transfers ([`stm32g4_axis::event::DrivePdi`]), over the mailbox
 //! requests whose rounds differ: a download of a plain parameter (2F00h), a download of a
 //! setting (6081h: checked against the RxPDO plan, its settings group read again in the round),
-//! an expedited upload (6041h) and a normal upload whose response carries a string (1008h).
+//! an expedited upload (6041h) and a normal upload whose response carries a string (1008h);
+//! and a round with no request (the SM2 event of a DC cycle), which copies no OD RAM.
 //!
 //! Each call puts the request into the image (SM0 full, the SM0 event) and runs the round; the
 //! request's setup alone is measured and subtracted. The image does not model the SM status
@@ -17,6 +18,7 @@ use firmware::mailbox::coe::COE_HEADER_LEN;
 use firmware::mailbox::header::HEADER_LEN as MAILBOX_HEADER_LEN;
 use firmware::params::{NoStorage, ParamStore};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
+use firmware::slave::SM_OUTPUTS;
 use hal::esc::{regs, AlEvent, SmStatus};
 use stm32g4_axis::cycle::CycleSide;
 use stm32g4_axis::event::{EventSide, SharedDrive};
@@ -51,6 +53,9 @@ impl SharedDrive<RAM_SIZE, RamEsc, NoPins> for Direct {
         Some(f(&mut self.0))
     }
 }
+
+/// A byte put in SM1's buffer before the round without a request, found there after it.
+const IDLE_MARK: u8 = 0xA5;
 
 /// Device name 1008h: a string longer than the 4 bytes of an expedited upload.
 const DEVICE_NAME: (u16, u8) = (0x1008, 0);
@@ -153,15 +158,50 @@ pub fn run(h: &mut Harness) {
         };
         h.case(&mut cases, label, cost);
     }
+    // A round with nothing to answer: in DC mode the SM2 event starts one every cycle. SM1
+    // stays untouched and the OD RAM is not copied to the mailbox side.
+    let idle = |esc: &mut RamEsc| {
+        esc.set(regs::sm(0).addr + regs::sm_offset::STATUS, &[0]);
+        esc.set(regs::sm(1).addr + regs::sm_offset::STATUS, &[0]);
+        esc.set(
+            regs::AL_EVENT_REQUEST.addr,
+            &AlEvent::sm(SM_OUTPUTS).to_le_bytes(),
+        );
+    };
+    let untouched = {
+        let mut drive = drive.borrow_mut();
+        let sm1 = PROFILE.od.device.mailbox_in.start;
+        drive.0.pdi.set(sm1, &[IDLE_MARK]);
+        idle(&mut drive.0.pdi);
+        let served = event.esc_event_round(&mut *drive, 0);
+        matches!(served, Some(Ok(()))) && drive.0.pdi.byte(usize::from(sm1)) == Some(IDLE_MARK)
+    };
+    if !untouched {
+        h.fail(NAME, format_args!("a round without a request wrote SM1"));
+        return;
+    }
+    let Some((cost, _, _)) = h.measure_net(
+        NAME,
+        &mut || idle(&mut drive.borrow_mut().0.pdi),
+        &mut || {
+            let mut drive = drive.borrow_mut();
+            idle(&mut drive.0.pdi);
+            let _ = event.esc_event_round(&mut *drive, black_box(0));
+        },
+    ) else {
+        return;
+    };
+    h.case(&mut cases, "no request (a cycle's SM2 event)", cost);
     h.report_cases(
         &cases,
         None,
         format_args!(
             "the STM32G474 board's ESC-event round (stm32g4_axis EventSide::esc_event_round: \
-             event begin, mailbox load/serve/store, event end, outputs; the PDI through the \
-             drive lock in 32-byte transfers, ESC as a RAM image: bus time excluded) serving \
-             one mailbox request in OP, over the requests whose rounds differ (the request's \
-             setup measured alone and subtracted)"
+             event begin, mailbox load, receive, the OD RAM copied for a request, answer, \
+             store, event end, outputs; the PDI through the drive lock in 32-byte transfers, \
+             ESC as a RAM image: bus time excluded) in OP, over the mailbox requests whose \
+             rounds differ and a round without one (the request's setup measured alone and \
+             subtracted)"
         ),
     );
 }

@@ -257,7 +257,9 @@ impl Setup {
             state: AlState::Op,
         };
         self.mailbox.load(&mut self.core);
-        self.mailbox.serve(&mut self.esc, job, &mut ()).ok()?;
+        self.mailbox
+            .serve(&self.core, &mut self.esc, job, &mut ())
+            .ok()?;
         self.mailbox.store(&mut self.core);
         self.esc.set(sm0_status, &[0]);
         self.mailbox.transfer_in_progress().then_some(())

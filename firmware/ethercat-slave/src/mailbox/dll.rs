@@ -52,6 +52,15 @@ const SM1_ACTIVATE: u16 = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::ACTIVA
 /// PDI control register of SM1.
 const SM1_PDI_CONTROL: u16 = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::PDI_CONTROL;
 
+/// A request [`Mailbox::receive`] read from SM0 into the inbox, to be answered with the
+/// dictionary ([`Mailbox::answer`]).
+#[derive(Debug, PartialEq, Eq)]
+#[must_use]
+pub struct Request {
+    /// Bytes read (the SM0 buffer, at most the inbox).
+    len: usize,
+}
+
 /// The mailbox state of one slave.
 pub struct Mailbox {
     inbox: [u8; MAX_MAILBOX],
@@ -148,7 +157,64 @@ impl Mailbox {
         events: AlEvent,
         hook: &mut H,
     ) -> Result<(), P::Error> {
-        self.serve_frames(pdi, device, od, state, events, hook)?;
+        let request = self.receive(pdi, device, events)?;
+        self.answer(pdi, device, od, state, request, hook)
+    }
+
+    /// The transfers of a round that need no object dictionary: a repeat request, a response
+    /// waiting for SM1, the next fragment of a fragmented one, an emergency when idle; then a
+    /// request in SM0 read into the inbox (which hands SM0 back to the master). Returns the
+    /// request if there is one: [`Self::answer`] answers it with the dictionary and ends the
+    /// round (it must be called in every round, with `None` when there is no request).
+    pub fn receive<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        device: &DeviceInfo,
+        events: AlEvent,
+    ) -> Result<Option<Request>, P::Error> {
+        let out = &device.mailbox_out;
+        let inp = &device.mailbox_in;
+        if events.any(AlEvent::SM_ACTIVATION) {
+            self.serve_repeat(pdi, inp)?;
+        }
+        if self.out_len > 0 && !self.out_posted && !self.post(pdi, inp)? {
+            return Ok(None); // SM1 still full: keep the request waiting in SM0
+        }
+        self.post_fragment(pdi, inp)?;
+        let sm0_status = SmStatus(pdi.read_u8(SM0_STATUS)?);
+        if !sm0_status.mailbox_full() {
+            // Idle: no request, no response waiting. Time for an emergency.
+            self.send_emcy(pdi, inp)?;
+            return Ok(None);
+        }
+        self.withdraw_emcy(pdi)?;
+        let len = (out.length as usize).min(MAX_MAILBOX);
+        let Some(inbox) = self.inbox.get_mut(..len) else {
+            return Ok(None);
+        };
+        // Reading up to the last byte hands SM0 back to the master.
+        pdi.read(out.start, inbox)?;
+        Ok(Some(Request { len }))
+    }
+
+    /// Answers the `request` [`Self::receive`] read (with `od`, in `state`; `hook` runs on each
+    /// committed download) and posts the response, then ends the round: SM1's event in the
+    /// mask while a frame waits for SM1.
+    pub fn answer<P: EscPdi, H: DownloadHook + ?Sized>(
+        &mut self,
+        pdi: &mut P,
+        device: &DeviceInfo,
+        od: &mut Dictionary<'_>,
+        state: AlState,
+        request: Option<Request>,
+        hook: &mut H,
+    ) -> Result<(), P::Error> {
+        if let Some(Request { len }) = request {
+            let inp = &device.mailbox_in;
+            if self.process(len, inp.length as usize, od, state, hook) {
+                self.post(pdi, inp)?;
+            }
+        }
         self.update_sm1_event(pdi)
     }
 
@@ -173,43 +239,6 @@ impl Mailbox {
         let mask = if wanted { mask | bit } else { mask & !bit };
         pdi.write_u32(regs::AL_EVENT_MASK.addr, mask)?;
         self.sm1_event_enabled = wanted;
-        Ok(())
-    }
-
-    /// The transfers of one round (see [`Self::service_with`]).
-    fn serve_frames<P: EscPdi, H: DownloadHook + ?Sized>(
-        &mut self,
-        pdi: &mut P,
-        device: &DeviceInfo,
-        od: &mut Dictionary<'_>,
-        state: AlState,
-        events: AlEvent,
-        hook: &mut H,
-    ) -> Result<(), P::Error> {
-        let out = &device.mailbox_out;
-        let inp = &device.mailbox_in;
-        if events.any(AlEvent::SM_ACTIVATION) {
-            self.serve_repeat(pdi, inp)?;
-        }
-        if self.out_len > 0 && !self.out_posted && !self.post(pdi, inp)? {
-            return Ok(()); // SM1 still full: keep the request waiting in SM0
-        }
-        self.post_fragment(pdi, inp)?;
-        let sm0_status = SmStatus(pdi.read_u8(SM0_STATUS)?);
-        if !sm0_status.mailbox_full() {
-            // Idle: no request, no response waiting. Time for an emergency.
-            return self.send_emcy(pdi, inp);
-        }
-        self.withdraw_emcy(pdi)?;
-        let len = (out.length as usize).min(MAX_MAILBOX);
-        let Some(inbox) = self.inbox.get_mut(..len) else {
-            return Ok(());
-        };
-        // Reading up to the last byte hands SM0 back to the master.
-        pdi.read(out.start, inbox)?;
-        if self.process(len, inp.length as usize, od, state, hook) {
-            self.post(pdi, inp)?;
-        }
         Ok(())
     }
 

@@ -6,7 +6,7 @@ pub mod dll;
 pub mod emcy;
 pub mod header;
 
-pub use dll::Mailbox;
+pub use dll::{Mailbox, Request};
 
 /// Largest mailbox the stack buffers (bytes). A profile with a larger mailbox is refused at
 /// INIT → PREOP with 0x0016 (`slave::esm::sm_check`) rather than overflowing a buffer; od-gen

@@ -66,9 +66,10 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
     }
 
     /// One ESC-event round (see [`MailboxSide`]): `core.event_begin`, `mailbox.load`,
-    /// `mailbox.serve`, then `between`, then `mailbox.store` and `core.event_end`. `between`
-    /// runs where a board's SYNC0 may preempt the round: after the mailbox was served on its
-    /// copy, before its writes go back (the simulation injects a cycle there).
+    /// `mailbox.serve` (receive, the OD RAM copied for a request, answer), then `between`, then
+    /// `mailbox.store` and `core.event_end`. `between` runs where a board's SYNC0 may preempt
+    /// the round: after the mailbox was served on its copy, before its writes go back (the
+    /// simulation injects a cycle there).
     pub fn event_round<P: EscPdi, S: NvStorage, const CAP: usize>(
         &mut self,
         pdi: &mut P,
@@ -80,6 +81,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
         let job = self.core.event_begin(pdi, now_ns)?;
         self.mailbox.load(&mut self.core);
         let served = self.mailbox.serve(
+            &self.core,
             pdi,
             job,
             &mut WithDomains {

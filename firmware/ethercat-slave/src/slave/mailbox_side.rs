@@ -2,28 +2,34 @@
 //! never holds what the SYNC0 context needs.
 //!
 //! The mailbox data-link layer and its CoE server work on a *copy* of the OD RAM. One event
-//! round is three steps; only the first and the last touch the [`SlaveCore`], each for a bounded
-//! time that does not depend on the mailbox traffic (on a board: under the lock the SYNC0
-//! interrupt shares, as its priority ceiling):
+//! round is these steps; those with the [`SlaveCore`] each take a bounded time that does not
+//! depend on the mailbox traffic (on a board: under the lock the SYNC0 interrupt shares, as its
+//! priority ceiling):
 //!
-//! 1. [`MailboxSide::load`]: copy the OD RAM (RAM size bytes) and, when the core's RxPDO plan
-//!    changed, the OD RAM ranges it writes; take the emergencies the core raised and a pending
+//! 1. [`MailboxSide::load`] (with the core): take the emergencies the core raised and a pending
 //!    mailbox reset;
-//! 2. [`MailboxSide::serve`]: the mailbox transfers over the PDI and the SDO services, on the
-//!    copy — as long as they take, with no lock: the cycle runs meanwhile;
-//! 3. [`MailboxSide::store`]: copy back exactly the entries the SDO services wrote (a
-//!    [`DirtyMap`] records them), whole entries at a time.
+//! 2. [`MailboxSide::receive`] (no lock): the transfers that need no dictionary (a repeat
+//!    request, a response or fragment waiting for SM1, an emergency when idle) and a request
+//!    in SM0 read into the inbox;
+//! 3. only when there is a request, [`MailboxSide::load_dictionary`] (with the core): copy the
+//!    OD RAM (RAM size bytes) and, when the core's RxPDO plan changed, the OD RAM ranges it
+//!    writes. A round with nothing to answer (in DC mode the SM2/SM3 events start one every
+//!    cycle) copies nothing;
+//! 4. [`MailboxSide::answer`] (no lock): the SDO services on the copy, the response posted —
+//!    as long as they take: the cycle runs meanwhile;
+//! 5. [`MailboxSide::store`] (with the core): copy back exactly the entries the SDO services
+//!    wrote (a [`DirtyMap`] records them), whole entries at a time.
 //!
 //! An entry that both an SDO download and the cycle write in the same round ends with the SDO
 //! value, as if the download came last. Values the cycle writes (statusword, actual values) are
-//! uploaded as they were at step 1. The committed downloads of the round are handed to the
-//! application in step 3 too ([`Application::downloaded`]), after their values are in place.
+//! uploaded as they were at step 3. The committed downloads of the round are handed to the
+//! application in step 5 too ([`Application::downloaded`]), after their values are in place.
 
 use hal::esc::AlState;
 use hal::pdi::EscPdi;
 
 use super::{EventJob, SlaveCore};
-use crate::mailbox::Mailbox;
+use crate::mailbox::{Mailbox, Request};
 use heapless::Vec;
 
 use crate::od::{AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Profile};
@@ -34,6 +40,16 @@ use crate::slave::Application;
 /// commits at most one download (one entry, or one object by complete access); the margin
 /// covers a repeated request served in the same round.
 const DOWNLOADS_PER_ROUND: usize = 4;
+
+/// A request read from SM0 in step 2, waiting for the dictionary (step 3).
+#[derive(Debug)]
+#[must_use]
+pub struct ReceivedRequest(Request);
+
+/// A request with the dictionary loaded for it (step 3), to answer in step 4.
+#[derive(Debug)]
+#[must_use]
+pub struct LoadedRequest(Request);
 
 /// The mailbox with its CoE server and the working copy of the OD RAM.
 pub struct MailboxSide<const RAM: usize> {
@@ -63,8 +79,7 @@ impl<const RAM: usize> MailboxSide<RAM> {
         }
     }
 
-    /// Step 1 (bounded, with the core): the OD RAM as it is now, the emergencies to send, a
-    /// mailbox reset after INIT.
+    /// Step 1 (bounded, with the core): the emergencies to send, a mailbox reset after INIT.
     pub fn load<A: Application>(&mut self, core: &mut SlaveCore<RAM, A>) {
         if core.mailbox_reset {
             core.mailbox_reset = false;
@@ -76,23 +91,49 @@ impl<const RAM: usize> MailboxSide<RAM> {
             }
             core.emcy_out.pop_front();
         }
+        self.dirty.clear();
+        self.downloads.clear();
+    }
+
+    /// Step 2 (no lock): the transfers that need no dictionary, and a request in SM0 read
+    /// (nothing in INIT and BOOT). A request goes on to [`Self::load_dictionary`].
+    pub fn receive<P: EscPdi>(
+        &mut self,
+        pdi: &mut P,
+        job: EventJob,
+    ) -> Result<Option<ReceivedRequest>, P::Error> {
+        if matches!(job.state, AlState::Init | AlState::Boot) {
+            return Ok(None);
+        }
+        let request = self
+            .mailbox
+            .receive(pdi, &self.profile.device, job.events)?;
+        Ok(request.map(ReceivedRequest))
+    }
+
+    /// Step 3 (bounded, with the core), for a request to answer: the OD RAM as it is now and
+    /// the OD RAM the core's RxPDO plan writes.
+    pub fn load_dictionary<A: Application>(
+        &mut self,
+        core: &SlaveCore<RAM, A>,
+        request: ReceivedRequest,
+    ) -> LoadedRequest {
         self.ram = core.ram;
         if self.rx_generation != Some(core.rx_plan_generation) {
             self.rx_outputs = core.rx_plan.ram_ranges();
             self.rx_generation = Some(core.rx_plan_generation);
         }
-        self.dirty.clear();
-        self.downloads.clear();
+        LoadedRequest(request.0)
     }
 
-    /// Step 2 (no lock): serves the mailbox in `job.state` (nothing in INIT and BOOT): repeat
-    /// requests, pending responses, a new request in SM0, emergencies when idle. SDO downloads
-    /// go to the working copy; `hook` runs on each committed download (parameter storage,
-    /// domains).
-    pub fn serve<P: EscPdi, H: DownloadHook + ?Sized>(
+    /// Step 4 (no lock): answers the request loaded in step 3, if any, on the working copy
+    /// (SDO downloads go to it; `hook` runs on each committed download: parameter storage,
+    /// domains), and ends the mailbox's round. Called in every round.
+    pub fn answer<P: EscPdi, H: DownloadHook + ?Sized>(
         &mut self,
         pdi: &mut P,
         job: EventJob,
+        request: Option<LoadedRequest>,
         hook: &mut H,
     ) -> Result<(), P::Error> {
         if matches!(job.state, AlState::Init | AlState::Boot) {
@@ -104,14 +145,27 @@ impl<const RAM: usize> MailboxSide<RAM> {
             hook,
             downloads: &mut self.downloads,
         };
-        self.mailbox.service_with(
+        self.mailbox.answer(
             pdi,
             &self.profile.device,
             &mut od,
             job.state,
-            job.events,
+            request.map(|l| l.0),
             &mut recording,
         )
+    }
+
+    /// Steps 2 to 4 in one, for a caller that holds the core throughout (no lock between).
+    pub fn serve<P: EscPdi, A: Application, H: DownloadHook + ?Sized>(
+        &mut self,
+        core: &SlaveCore<RAM, A>,
+        pdi: &mut P,
+        job: EventJob,
+        hook: &mut H,
+    ) -> Result<(), P::Error> {
+        let received = self.receive(pdi, job)?;
+        let loaded = received.map(|r| self.load_dictionary(core, r));
+        self.answer(pdi, job, loaded, hook)
     }
 
     /// Step 3 (bounded, with the core): the entries the SDO services wrote go back to the core's

@@ -13,7 +13,7 @@
 //! |---|---|
 //! | this module | [`SlaveCore`], construction, the ESC-event steps of the core |
 //! | `composite` | [`Slave`]: core and mailbox side together, a whole ESC-event round |
-//! | `mailbox_side` | [`MailboxSide`]: the mailbox and CoE on a copy of the OD RAM (load / serve / store) |
+//! | `mailbox_side` | [`MailboxSide`]: the mailbox and CoE on a copy of the OD RAM (load / receive / load the dictionary for a request / answer / store) |
 //! | `cycle` | the process-data cycle (cycle context) |
 //! | [`esm`] | the EtherCAT state machine |
 //! | `errors` | EMCY, 1001h and 10F3h bookkeeping of AL and application errors |
@@ -51,10 +51,10 @@ use crate::slave::esm::sync::{SyncConfig, SyncMode as Mode};
 pub use application::{AppEvent, AppEvents, Application, NoApplication, MAX_APP_EVENTS};
 pub use composite::Slave;
 use esm::transitions::read_sm;
-pub use mailbox_side::MailboxSide;
+pub use mailbox_side::{LoadedRequest, MailboxSide, ReceivedRequest};
 
 /// SM channel of the process-data outputs.
-const SM_OUTPUTS: u8 = 2;
+pub const SM_OUTPUTS: u8 = 2;
 /// SM channel of the process-data inputs.
 const SM_INPUTS: u8 = 3;
 use crate::od::index::sm_parameter::{
