@@ -11,7 +11,8 @@
 
 use board_sim::inproc::InProcess;
 use ethercat_slave::od::DomainStore;
-use ethercrab::{Command, MainDevice};
+use ethercrab::subdevice_group::Op;
+use ethercrab::{Command, DefaultLock, MainDevice, SubDeviceGroup};
 use hal::esc::regs;
 use tests_host::{block_on, master, FIRST_STATION};
 
@@ -51,6 +52,16 @@ const OPERATION_ENABLED: u16 = 0x0027;
 
 fn pattern(i: usize) -> u8 {
     (i * 7 + 3) as u8
+}
+
+/// The standard drive taken to OP (free run) as a group.
+async fn into_op(md: &MainDevice<'_>, m: &InProcess) -> SubDeviceGroup<4, 64, DefaultLock, Op> {
+    let group = md
+        .init_single_group::<4, 64>(m.shared.clock().now_fn())
+        .await
+        .expect("PRE-OP");
+    let group = group.into_safe_op(md).await.expect("SAFE-OP");
+    group.request_into_op(md).await.expect("OP")
 }
 
 /// Writes one SDO request (8 bytes after the CoE header) into SM0.
@@ -109,12 +120,7 @@ fn cycles_run_while_a_segmented_upload_is_half_done() {
                 .expect("commit");
             drive.cycle_during_mailbox_transfer = true;
         }
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("PRE-OP");
-        let group = group.into_safe_op(md).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("OP");
+        let group = into_op(md, &m).await;
         let sd = group.subdevice(md, 0).expect("drive");
 
         // Process data: enable the drive and keep exchanging (controlword at byte 0,
@@ -197,12 +203,7 @@ fn an_upload_after_rounds_without_a_request_reads_the_present_value() {
         let (m, transport) = master();
         tokio::task::spawn_local(transport);
         let md: &MainDevice<'_> = &m.maindevice;
-        let group = md
-            .init_single_group::<4, 64>(m.shared.clock().now_fn())
-            .await
-            .expect("PRE-OP");
-        let group = group.into_safe_op(md).await.expect("SAFE-OP");
-        let group = group.request_into_op(md).await.expect("OP");
+        let group = into_op(md, &m).await;
         let sd = group.subdevice(md, 0).expect("drive");
         let mut seen = Vec::new();
         for cw in POWER_UP {
