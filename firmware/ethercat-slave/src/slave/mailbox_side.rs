@@ -168,7 +168,7 @@ impl<const RAM: usize> MailboxSide<RAM> {
         self.answer(pdi, job, loaded, hook)
     }
 
-    /// Step 3 (bounded, with the core): the entries the SDO services wrote go back to the core's
+    /// Step 5 (bounded, with the core): the entries the SDO services wrote go back to the core's
     /// OD RAM, then the application learns which downloads were committed.
     pub fn store<A: Application>(&mut self, core: &mut SlaveCore<RAM, A>) {
         self.dirty.copy_marked(&self.ram, &mut core.ram);
