@@ -107,6 +107,44 @@ fn post(esc: &mut RamEsc, frame: &[u8]) {
     esc.set(regs::AL_EVENT_REQUEST.addr, &AlEvent::sm(0).to_le_bytes());
 }
 
+/// Leaves SM0 empty and raises the SM2 event, as a process-data frame of a DC cycle does.
+fn idle(esc: &mut RamEsc) {
+    esc.set(regs::sm(0).addr + regs::sm_offset::STATUS, &[0]);
+    esc.set(regs::sm(1).addr + regs::sm_offset::STATUS, &[0]);
+    esc.set(
+        regs::AL_EVENT_REQUEST.addr,
+        &AlEvent::sm(SM_OUTPUTS).to_le_bytes(),
+    );
+}
+
+type Event = EventSide<RAM_SIZE, NoStorage, RECORD_CAPACITY>;
+
+/// Puts an input into the image (`setup`) and runs one round: whether it ended without error.
+fn run_round(drive: &RefCell<Direct>, event: &mut Event, setup: &dyn Fn(&mut RamEsc)) -> bool {
+    let mut drive = drive.borrow_mut();
+    setup(&mut drive.0.pdi);
+    matches!(event.esc_event_round(&mut *drive, 0), Some(Ok(())))
+}
+
+/// The cost of one round after `setup`, `setup` measured alone and subtracted.
+fn round_cost(
+    h: &mut Harness,
+    drive: &RefCell<Direct>,
+    event: &mut Event,
+    setup: &dyn Fn(&mut RamEsc),
+) -> Option<u32> {
+    let (cost, _, _) = h.measure_net(
+        NAME,
+        &mut || setup(&mut drive.borrow_mut().0.pdi),
+        &mut || {
+            let mut drive = drive.borrow_mut();
+            setup(&mut drive.0.pdi);
+            let _ = event.esc_event_round(&mut *drive, black_box(0));
+        },
+    )?;
+    Some(cost)
+}
+
 /// The benchmark.
 pub fn run(h: &mut Harness) {
     let Some(setup) = h.ready(NAME, Setup::powered_up()) else {
@@ -121,7 +159,7 @@ pub fn run(h: &mut Harness) {
         brake: BrakeOutput::new(NoPins),
         sync_lock: None,
     });
-    let mut event = EventSide::<RAM_SIZE, _, RECORD_CAPACITY> {
+    let mut event: Event = EventSide {
         mailbox,
         params: ParamStore::new(NoStorage),
     };
@@ -131,64 +169,32 @@ pub fn run(h: &mut Harness) {
     let mut cases = Cases::new(NAME);
     for (label, frame, response) in requests() {
         // The round answers the request in SM1 (and a download's value reaches the core).
-        let served = {
-            let mut drive = drive.borrow_mut();
-            post(&mut drive.0.pdi, &frame);
-            let served = event.esc_event_round(&mut *drive, 0);
-            matches!(served, Some(Ok(())))
-                && drive.0.pdi.byte(response_at + COE_HEADER_LEN) == Some(response)
-        };
-        if !served {
+        let answered = run_round(&drive, &mut event, &|esc| post(esc, &frame))
+            && drive.borrow().0.pdi.byte(response_at + COE_HEADER_LEN) == Some(response);
+        if !answered {
             h.fail(
                 NAME,
                 format_args!("{label}: not answered in SM1 as expected"),
             );
             return;
         }
-        let Some((cost, _, _)) = h.measure_net(
-            NAME,
-            &mut || post(&mut drive.borrow_mut().0.pdi, black_box(&frame)),
-            &mut || {
-                let mut drive = drive.borrow_mut();
-                post(&mut drive.0.pdi, black_box(&frame));
-                let _ = event.esc_event_round(&mut *drive, black_box(0));
-            },
-        ) else {
+        let Some(cost) = round_cost(h, &drive, &mut event, &|esc| post(esc, black_box(&frame)))
+        else {
             return;
         };
         h.case(&mut cases, label, cost);
     }
     // A round with nothing to answer: in DC mode the SM2 event starts one every cycle. SM1
     // stays untouched and the OD RAM is not copied to the mailbox side.
-    let idle = |esc: &mut RamEsc| {
-        esc.set(regs::sm(0).addr + regs::sm_offset::STATUS, &[0]);
-        esc.set(regs::sm(1).addr + regs::sm_offset::STATUS, &[0]);
-        esc.set(
-            regs::AL_EVENT_REQUEST.addr,
-            &AlEvent::sm(SM_OUTPUTS).to_le_bytes(),
-        );
-    };
-    let untouched = {
-        let mut drive = drive.borrow_mut();
-        let sm1 = PROFILE.od.device.mailbox_in.start;
-        drive.0.pdi.set(sm1, &[IDLE_MARK]);
-        idle(&mut drive.0.pdi);
-        let served = event.esc_event_round(&mut *drive, 0);
-        matches!(served, Some(Ok(()))) && drive.0.pdi.byte(usize::from(sm1)) == Some(IDLE_MARK)
-    };
+    let sm1 = PROFILE.od.device.mailbox_in.start;
+    drive.borrow_mut().0.pdi.set(sm1, &[IDLE_MARK]);
+    let untouched = run_round(&drive, &mut event, &idle)
+        && drive.borrow().0.pdi.byte(usize::from(sm1)) == Some(IDLE_MARK);
     if !untouched {
         h.fail(NAME, format_args!("a round without a request wrote SM1"));
         return;
     }
-    let Some((cost, _, _)) = h.measure_net(
-        NAME,
-        &mut || idle(&mut drive.borrow_mut().0.pdi),
-        &mut || {
-            let mut drive = drive.borrow_mut();
-            idle(&mut drive.0.pdi);
-            let _ = event.esc_event_round(&mut *drive, black_box(0));
-        },
-    ) else {
+    let Some(cost) = round_cost(h, &drive, &mut event, &idle) else {
         return;
     };
     h.case(&mut cases, "no request (a cycle's SM2 event)", cost);

@@ -330,9 +330,9 @@ impl PdoPlan {
         let mut runs = self.runs.iter();
         // Few runs are never grouped (one comparison, not the groups' loops).
         if self.runs.len() >= GROUPED_FROM_RUNS {
-            copy_group::<4, UNPACK>(&mut runs, words, from, to);
-            copy_group::<2, UNPACK>(&mut runs, halves, from, to);
-            copy_group::<1, UNPACK>(&mut runs, bytes, from, to);
+            copy_group::<{ CLASS_LENGTHS[0] as usize }, UNPACK>(&mut runs, words, from, to);
+            copy_group::<{ CLASS_LENGTHS[1] as usize }, UNPACK>(&mut runs, halves, from, to);
+            copy_group::<{ CLASS_LENGTHS[2] as usize }, UNPACK>(&mut runs, bytes, from, to);
         }
         for run in runs {
             let (image, ram, n) = run.span();
