@@ -31,7 +31,7 @@ use ethercat_slave::od::index::{sm_parameter::SUB_SYNC_TYPE, SM_OUTPUT_PARAMETER
 use ethercat_slave::slave::SyncMode;
 
 use super::ram::{ram_offset, read_bytes, read_i32, read_u16, read_u32, write_bytes, write_u16};
-use super::settings::{live_groups, Groups, Settings, FOLLOWING_ERROR_OFF};
+use super::settings::{live_groups, Groups, GroupsByOffset, Settings, FOLLOWING_ERROR_OFF};
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
 use crate::alarm_log::{self, next_in_ring, AlarmTable, Conditions, Warning, WarningInputs};
@@ -182,6 +182,8 @@ pub struct DriveAxis {
     settings: Settings,
     /// The setting groups to read again in the next cycle (their objects were written).
     settings_due: Groups,
+    /// Which setting groups read an OD RAM offset (of `vars`).
+    setting_offsets: GroupsByOffset,
     /// The setting groups the RxPDO mapping writes: read in every cycle.
     settings_live: Groups,
     /// Safe torque off holds (the axis' last feedback).
@@ -303,6 +305,7 @@ impl DriveAxis {
             units_cache: None,
             settings: Settings::UNREAD,
             settings_due: Groups::ALL,
+            setting_offsets: GroupsByOffset::of(vars),
             settings_live: Groups::NONE,
             fault_number: None,
             recent: Recent {
@@ -457,14 +460,14 @@ impl DriveAxis {
     /// An SDO download to `object` was committed: the settings it belongs to are due
     /// ([`Self::refresh_settings`]).
     pub(super) fn downloaded(&mut self, object: &Object) {
-        self.settings_due |= Groups::of_object(self.vars, object);
+        self.settings_due |= self.setting_offsets.of_object(object);
     }
 
     /// The drive wrote the OD RAM entry at `at` (e.g. a split value's other form): the
     /// settings it belongs to are due (read in the next cycle, or by
     /// [`Self::refresh_settings`]).
     pub(super) fn written(&mut self, at: u16) {
-        self.settings_due |= Groups::of_offset(self.vars, at);
+        self.settings_due |= self.setting_offsets.of_offset(at);
     }
 
     /// The RxPDO mapping is now `outputs`: the settings it maps are read in every cycle.
