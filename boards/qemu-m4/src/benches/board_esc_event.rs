@@ -7,6 +7,10 @@
 //! an expedited upload (6041h) and a normal upload whose response carries a string (1008h);
 //! and a round with no request (the SM2 event of a DC cycle), which copies no OD RAM.
 //!
+//! The core has the OD RAM of the largest profile (`MAX_RAM_SIZE`): a request's round copies
+//! the whole OD RAM to the mailbox side under the lock, so the board image of that profile
+//! pays the most for it (the other steps depend on the request, not on the profile's size).
+//!
 //! Each call puts the request into the image (SM0 full, the SM0 event) and runs the round; the
 //! request's setup alone is measured and subtracted. The image does not model the SM status
 //! changes of the transfer, so every call serves the request the same way.
@@ -17,7 +21,8 @@ use core::hint::black_box;
 use firmware::mailbox::coe::COE_HEADER_LEN;
 use firmware::mailbox::header::HEADER_LEN as MAILBOX_HEADER_LEN;
 use firmware::params::{NoStorage, ParamStore};
-use firmware::profiles::standard::{PROFILE, RAM_SIZE};
+use firmware::profiles::standard::PROFILE;
+use firmware::profiles::MAX_RAM_SIZE;
 use firmware::slave::SM_OUTPUTS;
 use hal::esc::{regs, AlEvent, SmStatus};
 use stm32g4_axis::cycle::CycleSide;
@@ -43,12 +48,12 @@ impl OutputPins for NoPins {
     fn set_brake_released(&mut self, _: bool) {}
 }
 
-type Side = CycleSide<RAM_SIZE, RamEsc, NoPins>;
+type Side = CycleSide<MAX_RAM_SIZE, RamEsc, NoPins>;
 
 /// The drive lock of a single context: always available.
 struct Direct(Side);
 
-impl SharedDrive<RAM_SIZE, RamEsc, NoPins> for Direct {
+impl SharedDrive<MAX_RAM_SIZE, RamEsc, NoPins> for Direct {
     fn with<R>(&mut self, f: impl FnOnce(&mut Side) -> R) -> Option<R> {
         Some(f(&mut self.0))
     }
@@ -117,7 +122,7 @@ fn idle(esc: &mut RamEsc) {
     );
 }
 
-type Event = EventSide<RAM_SIZE, NoStorage, RECORD_CAPACITY>;
+type Event = EventSide<MAX_RAM_SIZE, NoStorage, RECORD_CAPACITY>;
 
 /// Puts an input into the image (`setup`) and runs one round: whether it ended without error.
 fn run_round(drive: &RefCell<Direct>, event: &mut Event, setup: &dyn Fn(&mut RamEsc)) -> bool {
@@ -147,7 +152,7 @@ fn round_cost(
 
 /// The benchmark.
 pub fn run(h: &mut Harness) {
-    let Some(setup) = h.ready(NAME, Setup::powered_up()) else {
+    let Some(setup) = h.ready(NAME, Setup::<MAX_RAM_SIZE>::powered_up()) else {
         return;
     };
     let Setup {
@@ -204,7 +209,8 @@ pub fn run(h: &mut Harness) {
         format_args!(
             "the STM32G474 board's ESC-event round (stm32g4_axis EventSide::esc_event_round: \
              event begin, mailbox load, receive, the OD RAM copied for a request, answer, \
-             store, event end, outputs; the PDI through the drive lock in 32-byte transfers, \
+             store, event end, outputs; the core sized for the largest profile's OD RAM, \
+             {MAX_RAM_SIZE} B, which a request copies; the PDI through the drive lock in 32-byte transfers, \
              ESC as a RAM image: bus time excluded) in OP, over the mailbox requests whose \
              rounds differ and a round without one (the request's setup measured alone and \
              subtracted)"

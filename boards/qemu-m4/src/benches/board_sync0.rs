@@ -43,7 +43,7 @@ static TRIM: PeriodTrim = PeriodTrim::new();
 /// The benchmark.
 pub fn run(h: &mut Harness) {
     const OVERHEAD: &str = "board-sync0-overhead";
-    let Some(setup) = h.ready(OVERHEAD, Setup::powered_up()) else {
+    let Some(setup) = h.ready(OVERHEAD, <Setup>::powered_up()) else {
         return;
     };
     let Setup { core, esc, .. } = setup;

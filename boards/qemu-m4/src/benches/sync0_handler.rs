@@ -166,15 +166,16 @@ pub(super) fn request_state<const R: usize>(
     (core.al_state() == state).then_some(())
 }
 
-/// The drive's core, its mailbox side and the ESC image.
-pub(super) struct Setup {
-    pub(super) core: DriveCore<RAM_SIZE>,
-    pub(super) mailbox: MailboxSide<RAM_SIZE>,
+/// The drive's core, its mailbox side and the ESC image; the core's OD RAM `R` bytes (the
+/// standard profile's own size unless a benchmark needs a larger one).
+pub(super) struct Setup<const R: usize = RAM_SIZE> {
+    pub(super) core: DriveCore<R>,
+    pub(super) mailbox: MailboxSide<R>,
     pub(super) esc: RamEsc,
     rx: PdoPlan,
 }
 
-impl Setup {
+impl<const R: usize> Setup<R> {
     /// A master's state request, handled as the ESC-event context does.
     fn request(&mut self, state: AlState, events: u32) -> Option<()> {
         request_state(&mut self.core, &mut self.esc, state, events)
@@ -182,7 +183,7 @@ impl Setup {
 
     /// INIT → PREOP → SAFEOP → OP in free run with the profile's mailbox and default mapping.
     pub(super) fn new() -> Option<Self> {
-        let mut ram = [0; RAM_SIZE];
+        let mut ram = [0; R];
         let mut od = Dictionary::new(&PROFILE.od, &mut ram);
         od.load_defaults();
         let rx = PdoPlan::build(&od, Direction::Rx).ok()?;
@@ -231,7 +232,7 @@ impl Setup {
 
     /// Puts the master's side of the RxPDO objects (an OD RAM image) into SM2, packed by the Rx
     /// plan.
-    pub(super) fn set_master(&mut self, master: &[u8; RAM_SIZE]) {
+    pub(super) fn set_master(&mut self, master: &[u8]) {
         let mut image = [0; MAX_IMAGE];
         self.rx.pack(master, &mut image);
         self.esc
@@ -268,7 +269,7 @@ impl Setup {
 
 /// Measures the SYNC0 handler with the mailbox idle and with a transfer pending.
 pub fn run(h: &mut Harness) {
-    let Some(mut s) = h.ready("sync0-handler", Setup::powered_up()) else {
+    let Some(mut s) = h.ready("sync0-handler", <Setup>::powered_up()) else {
         return;
     };
     // The process-data image sizes of the default mapping: the PDI bus time of a cycle.

@@ -71,7 +71,7 @@ struct Bench {
 impl Bench {
     /// The slave in OP ([`Setup::new`]) with its axis attached to a servo axis.
     fn new() -> Result<Self, &'static str> {
-        let mut setup = Setup::new().ok_or("the slave did not reach OP on the ESC image")?;
+        let mut setup = <Setup>::new().ok_or("the slave did not reach OP on the ESC image")?;
         let cfg = servo::axis_config(&SERVO_400W, &tuning(1, 1e-3));
         let axis = Axis::new(cfg).map_err(|_| "the axis configuration was refused")?;
         let (drive, ram) = setup.core.application();
