@@ -157,14 +157,17 @@ impl<const RAM: usize, S: NvStorage, const CAP: usize> EventSide<RAM, S, CAP> {
             Err(e) => return Some(Err(EventError::Pdi(e))),
         };
         drive.with(|d| self.mailbox.load(&mut d.core))?;
-        // The OD RAM is copied (under the lock) only for a request to answer.
+        // The OD RAM is copied (under the lock) only for a request to answer, and only the
+        // part its answer reads or writes.
         let received = self
             .mailbox
             .receive(&mut DrivePdi::<D, RAM, P, O>::new(drive), job);
         let served = match received {
             Ok(request) => {
                 let loaded = match request {
-                    Some(r) => Some(drive.with(|d| self.mailbox.load_dictionary(&d.core, r))?),
+                    Some(r) => Some(
+                        drive.with(|d| self.mailbox.load_dictionary(&d.core, r, &self.params))?,
+                    ),
                     None => None,
                 };
                 self.mailbox.answer(

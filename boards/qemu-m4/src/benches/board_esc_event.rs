@@ -4,12 +4,14 @@
 //! the drive lock in 32-byte transfers ([`stm32g4_axis::event::DrivePdi`]), over the mailbox
 //! requests whose rounds differ: a download of a plain parameter (2F00h), a download of a
 //! setting (6081h: checked against the RxPDO plan, its settings group read again in the round),
-//! an expedited upload (6041h) and a normal upload whose response carries a string (1008h);
-//! and a round with no request (the SM2 event of a DC cycle), which copies no OD RAM.
+//! an expedited upload (6041h), a normal upload whose response carries a string (1008h) and a
+//! store command (1010h:01); and a round with no request (the SM2 event of a DC cycle), which
+//! copies no OD RAM.
 //!
-//! The core has the OD RAM of the largest profile (`MAX_RAM_SIZE`): a request's round copies
-//! the whole OD RAM to the mailbox side under the lock, so the board image of that profile
-//! pays the most for it (the other steps depend on the request, not on the profile's size).
+//! A request's round copies what its answer reads or writes to the mailbox side under the
+//! lock: the entries of the object it names, or the whole OD RAM for 1010h/1011h (the store
+//! reads every parameter), measured with a store command. The core has the OD RAM of the
+//! largest profile (`MAX_RAM_SIZE`), so that copy is the largest profile's.
 //!
 //! Each call puts the request into the image (SM0 full, the SM0 event) and runs the round; the
 //! request's setup alone is measured and subtracted. The image does not model the SM status
@@ -65,8 +67,14 @@ const IDLE_MARK: u8 = 0xA5;
 /// Device name 1008h: a string longer than the 4 bytes of an expedited upload.
 const DEVICE_NAME: (u16, u8) = (0x1008, 0);
 
+/// Store parameters 1010h:01 (all) with its signature "save" (CiA 301 §7.5.2.13): the store
+/// reads every parameter, so the round copies the whole OD RAM. No storage here: refused with
+/// an abort after the copy.
+const STORE_ALL: (u16, u8) = (0x1010, 1);
+const SAVE: u32 = u32::from_le_bytes(*b"save");
+
 /// The requests measured: label, mailbox frame, the command byte of the expected response.
-fn requests() -> [(&'static str, [u8; MAILBOX_HEADER_LEN + FRAME_LEN], u8); 4] {
+fn requests() -> [(&'static str, [u8; MAILBOX_HEADER_LEN + FRAME_LEN], u8); 5] {
     let frame = |command, object, data| mailbox_frame(&request(command, object, data));
     [
         (
@@ -96,6 +104,11 @@ fn requests() -> [(&'static str, [u8; MAILBOX_HEADER_LEN + FRAME_LEN], u8); 4] {
             "upload of a string (1008h)",
             frame(command::UPLOAD_REQUEST, DEVICE_NAME, [0; 4]),
             command::UPLOAD_RESPONSE_SIZED,
+        ),
+        (
+            "store parameters (1010h:01, the whole OD RAM copied)",
+            frame(command::DOWNLOAD_REQUEST_U32, STORE_ALL, SAVE.to_le_bytes()),
+            command::ABORT,
         ),
     ]
 }
@@ -210,7 +223,7 @@ pub fn run(h: &mut Harness) {
             "the STM32G474 board's ESC-event round (stm32g4_axis EventSide::esc_event_round: \
              event begin, mailbox load, receive, the OD RAM copied for a request, answer, \
              store, event end, outputs; the core sized for the largest profile's OD RAM, \
-             {MAX_RAM_SIZE} B, which a request copies; the PDI through the drive lock in 32-byte transfers, \
+             {MAX_RAM_SIZE} B, which a store command copies whole; the PDI through the drive lock in 32-byte transfers, \
              ESC as a RAM image: bus time excluded) in OP, over the mailbox requests whose \
              rounds differ and a round without one (the request's setup measured alone and \
              subtracted)"

@@ -65,6 +65,8 @@ pub(super) mod command {
     pub const DOWNLOAD_REQUEST_SIZED: u8 = (1 << SPECIFIER_SHIFT) | SIZE_INDICATED;
     /// Initiate download response (scs 3).
     pub const DOWNLOAD_RESPONSE: u8 = 3 << SPECIFIER_SHIFT;
+    /// Abort transfer (cs 4): the server's refusal.
+    pub const ABORT: u8 = 4 << SPECIFIER_SHIFT;
 }
 
 /// Length of an expedited request or response: CoE header + SDO frame.

@@ -36,7 +36,7 @@ use super::emcy::{EmcyQueue, Emergency, EMCY_PAYLOAD_LEN};
 use super::header::{
     next_counter, MailboxErrorCode, MailboxHeader, MailboxType, HEADER_LEN, MAILBOX_ERROR_COMMAND,
 };
-use super::MAX_MAILBOX;
+use super::{DictionaryScope, MAX_MAILBOX};
 use crate::od::{DeviceInfo, Dictionary, SmLayout};
 
 /// SyncManager channel of the master → slave mailbox.
@@ -59,6 +59,18 @@ const SM1_PDI_CONTROL: u16 = regs::sm(SM_MAILBOX_IN).addr + regs::sm_offset::PDI
 pub struct Request {
     /// Bytes read (the SM0 buffer, at most the inbox).
     len: usize,
+}
+
+/// A received request as its mailbox header classifies it.
+enum Received {
+    /// Answered with this mailbox error.
+    Malformed(MailboxErrorCode),
+    /// A retry of the request served last (the same counter): not served again.
+    Repeated,
+    /// A protocol this slave does not serve (a mailbox error answers it).
+    Unsupported { counter: u8 },
+    /// A CoE request whose payload ends at inbox byte `payload_end`.
+    Coe { counter: u8, payload_end: usize },
 }
 
 /// The mailbox state of one slave.
@@ -252,24 +264,21 @@ impl Mailbox {
         hook: &mut H,
     ) -> bool {
         let capacity = out_capacity.min(MAX_MAILBOX);
-        let Some(header) = MailboxHeader::parse(&self.inbox) else {
-            return self.error_reply(MailboxErrorCode::Syntax, capacity);
-        };
-        let payload_end = HEADER_LEN
-            .checked_add(usize::from(header.length))
-            .filter(|&end| end <= len);
-        let Some(payload_end) = payload_end else {
-            return self.error_reply(MailboxErrorCode::InvalidSize, capacity);
-        };
-        if header.counter != 0 {
-            if header.counter == self.last_rx_counter {
-                return false; // retry of a request already served
+        let payload_end = match self.classify(len) {
+            Received::Malformed(code) => return self.error_reply(code, capacity),
+            Received::Repeated => return false,
+            Received::Unsupported { counter } => {
+                self.take_counter(counter);
+                return self.error_reply(MailboxErrorCode::UnsupportedProtocol, capacity);
             }
-            self.last_rx_counter = header.counter;
-        }
-        if header.kind != MailboxType::Coe as u8 {
-            return self.error_reply(MailboxErrorCode::UnsupportedProtocol, capacity);
-        }
+            Received::Coe {
+                counter,
+                payload_end,
+            } => {
+                self.take_counter(counter);
+                payload_end
+            }
+        };
         let (Some(request), Some(response)) = (
             self.inbox.get(HEADER_LEN..payload_end),
             self.outbox.get_mut(HEADER_LEN..capacity),
@@ -282,6 +291,52 @@ impl Mailbox {
             Err(e) => {
                 let code = e.mailbox_error_code();
                 self.error_reply_code(code, capacity)
+            }
+        }
+    }
+
+    /// What the `len`-byte request in the inbox is, from its mailbox header (nothing changes).
+    fn classify(&self, len: usize) -> Received {
+        let Some(header) = MailboxHeader::parse(&self.inbox) else {
+            return Received::Malformed(MailboxErrorCode::Syntax);
+        };
+        let payload_end = HEADER_LEN
+            .checked_add(usize::from(header.length))
+            .filter(|&end| end <= len);
+        let Some(payload_end) = payload_end else {
+            return Received::Malformed(MailboxErrorCode::InvalidSize);
+        };
+        if header.counter != 0 && header.counter == self.last_rx_counter {
+            return Received::Repeated;
+        }
+        if header.kind != MailboxType::Coe as u8 {
+            return Received::Unsupported {
+                counter: header.counter,
+            };
+        }
+        Received::Coe {
+            counter: header.counter,
+            payload_end,
+        }
+    }
+
+    /// Remembers a served request's counter (0: the master does not count).
+    fn take_counter(&mut self, counter: u8) {
+        if counter != 0 {
+            self.last_rx_counter = counter;
+        }
+    }
+
+    /// What of the OD RAM answering `request` (received, not yet answered) reads or writes.
+    pub fn scope(&self, request: &Request) -> DictionaryScope {
+        match self.classify(request.len) {
+            Received::Coe { payload_end, .. } => self
+                .inbox
+                .get(HEADER_LEN..payload_end)
+                .map_or(DictionaryScope::Nothing, |payload| self.coe.scope(payload)),
+            // Answered with a mailbox error, or not at all.
+            Received::Malformed(_) | Received::Repeated | Received::Unsupported { .. } => {
+                DictionaryScope::Nothing
             }
         }
     }

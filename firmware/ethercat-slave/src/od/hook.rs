@@ -3,6 +3,7 @@
 
 use super::abort::AbortCode;
 use super::domain::DomainStore;
+use super::model::Profile;
 use super::store::Dictionary;
 
 /// Application action on a committed SDO download, run before the download response is sent
@@ -34,6 +35,16 @@ pub trait DownloadHook {
     /// [`WithDomains`]); `None`: domains are refused as by [`NoDomains`](super::domain::NoDomains).
     fn domains(&mut self) -> Option<&mut dyn DomainStore> {
         None
+    }
+
+    /// Whether [`Self::downloaded`] (or [`Self::downloaded_complete`]) after a download to
+    /// object `index` of `profile` reads or writes OD RAM outside that object's entries: the
+    /// slave's mailbox side then loads the whole OD RAM for the request instead of the
+    /// object's entries alone (`crate::slave::mailbox_side`). Default: yes, the answer that is
+    /// always right.
+    fn reaches_beyond_object(&self, profile: &Profile, index: u16) -> bool {
+        let _ = (profile, index);
+        true
     }
 }
 
@@ -68,11 +79,19 @@ impl<H: DownloadHook + ?Sized> DownloadHook for WithDomains<'_, H> {
     fn domains(&mut self) -> Option<&mut dyn DomainStore> {
         Some(&mut *self.domains)
     }
+
+    fn reaches_beyond_object(&self, profile: &Profile, index: u16) -> bool {
+        self.hook.reaches_beyond_object(profile, index)
+    }
 }
 
 /// No action.
 impl DownloadHook for () {
     fn downloaded(&mut self, _: &mut Dictionary<'_>, _: u16, _: u8) -> Result<(), AbortCode> {
         Ok(())
+    }
+
+    fn reaches_beyond_object(&self, _: &Profile, _: u16) -> bool {
+        false
     }
 }

@@ -98,7 +98,7 @@
 pub mod record;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 #[cfg(test)]
 mod tests_rules;
 
@@ -107,7 +107,7 @@ use core::ops::RangeInclusive;
 use hal::storage::{NvStorage, StorageError};
 
 pub use crate::od::index::{RESTORE_DEFAULTS, STORE_PARAMETERS};
-use crate::od::storable::{any_contains, EntryRange, StorageRules};
+use crate::od::storable::{any_contains, AutoStore, EntryRange, StorageRules};
 pub use crate::od::storable::{is_storable, NOT_STORED, STORED_SM_PARAMETER};
 use crate::od::value::{check_range, check_value_list};
 use crate::od::{AbortCode, DownloadHook};
@@ -554,6 +554,21 @@ impl<S: NvStorage, const CAP: usize> DownloadHook for ParamStore<S, CAP> {
             STORE_PARAMETERS | RESTORE_DEFAULTS => self.command(od, index, first_subindex),
             _ => self.auto_store(od, index, first_subindex..=u8::MAX),
         }
+    }
+
+    /// The 1010h/1011h commands store or restore every parameter. An automatic store reads
+    /// the downloaded object (the rest of its record comes from the stored one) and the test
+    /// of its rule, which may name another object.
+    fn reaches_beyond_object(&self, profile: &Profile, index: u16) -> bool {
+        let tested_elsewhere = |rule: &AutoStore| {
+            rule.unless.is_some_and(|test| test.index != index)
+                && rule
+                    .entries
+                    .iter()
+                    .any(|r| (r.first..=r.last).contains(&index))
+        };
+        matches!(index, STORE_PARAMETERS | RESTORE_DEFAULTS)
+            || profile.storage.auto_store.iter().any(tested_elsewhere)
     }
 }
 

@@ -31,15 +31,15 @@ const SLOT_SIZE: usize = 2048;
 /// Two-slot RAM storage; a write can be cut after a number of bytes (the rest of the slot stays
 /// erased, the write reports a device error as the board would never see it return).
 #[derive(Clone)]
-pub(super) struct TestStorage {
-    pub(super) slots: Vec<Vec<u8>>,
+pub(crate) struct TestStorage {
+    pub(crate) slots: Vec<Vec<u8>>,
     pub(super) cut_after: Option<usize>,
     pub(super) fail: bool,
     pub(super) writes: usize,
 }
 
 impl TestStorage {
-    pub(super) fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             slots: vec![vec![ERASED; SLOT_SIZE]; 2],
             cut_after: None,

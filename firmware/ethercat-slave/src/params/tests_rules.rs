@@ -492,3 +492,30 @@ fn a_complete_access_download_stores_the_auto_stored_entries_it_wrote() {
     assert_eq!(after.get(0x607D, 1), 0x0101_0101);
     assert_eq!(after.get(0x607D, 2), 0x0202_0202);
 }
+
+/// What the store's download hook reads beyond the downloaded object, which the slave's mailbox
+/// side then loads with it: every parameter for 1010h/1011h; for an automatic store, the
+/// entry its rule is tested on, where that lies in another object (the GHA-E stores 2000h-2005h
+/// unless 2000h:2Fh = 1; 607Dh, 607Eh, 6091h without a test).
+#[test]
+fn the_hook_says_which_downloads_read_beyond_their_object() {
+    let store: ParamStore<TestStorage> = ParamStore::new(TestStorage::new());
+    let beyond = |profile: &Profile, index| store.reaches_beyond_object(profile, index);
+    for profile in profiles::ALL {
+        assert!(beyond(profile, 0x1010));
+        assert!(beyond(profile, 0x1011));
+    }
+    let gha_e = &profiles::gha_e::PROFILE;
+    for index in [0x2001, 0x2003, 0x2005] {
+        assert!(beyond(gha_e, index), "{index:04X}");
+    }
+    // Tested on itself, or not tested.
+    for index in [0x2000, 0x607D, 0x607E, 0x6091, 0x6081, 0x2006] {
+        assert!(!beyond(gha_e, index), "{index:04X}");
+    }
+    // No automatic storage.
+    let standard = &profiles::standard::PROFILE;
+    for index in [0x2000, 0x2F00, 0x6081, 0x607D] {
+        assert!(!beyond(standard, index), "{index:04X}");
+    }
+}

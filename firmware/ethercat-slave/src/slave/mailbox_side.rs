@@ -12,9 +12,14 @@
 //!    request, a response or fragment waiting for SM1, an emergency when idle) and a request
 //!    in SM0 read into the inbox;
 //! 3. only when there is a request, [`MailboxSide::load_dictionary`] (with the core): copy the
-//!    OD RAM (RAM size bytes) and, when the core's RxPDO plan changed, the OD RAM ranges it
-//!    writes. A round with nothing to answer (in DC mode the SM2/SM3 events start one every
-//!    cycle) copies nothing;
+//!    OD RAM the answer reads or writes — the entries of the object an SDO request names; the
+//!    whole OD RAM (RAM size bytes) for a download whose hook reaches beyond its object
+//!    (1010h/1011h, which store or restore every parameter; an automatic store tested on
+//!    another object) and for an object of many entries; nothing for a request that reads no
+//!    value (an upload segment, SDO information) — and, when the core's RxPDO plan changed,
+//!    the OD RAM ranges it writes. A round with nothing to answer (in DC mode the SM2/SM3 events start one every
+//!    cycle) copies nothing. The rest of the copy keeps older values, which no answer reads
+//!    and step 5 never writes back;
 //! 4. [`MailboxSide::answer`] (no lock): the SDO services on the copy, the response posted —
 //!    as long as they take: the cycle runs meanwhile;
 //! 5. [`MailboxSide::store`] (with the core): copy back exactly the entries the SDO services
@@ -28,11 +33,14 @@
 use hal::esc::AlState;
 use hal::pdi::EscPdi;
 
+#[cfg(test)]
+mod tests;
+
 use super::{EventJob, SlaveCore};
-use crate::mailbox::{Mailbox, Request};
+use crate::mailbox::{DictionaryScope, Mailbox, Request};
 use heapless::Vec;
 
-use crate::od::{AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Profile};
+use crate::od::{AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Profile, Value};
 use crate::pdo::RamRanges;
 use crate::slave::Application;
 
@@ -40,6 +48,11 @@ use crate::slave::Application;
 /// commits at most one download (one entry, or one object by complete access); the margin
 /// covers a repeated request served in the same round.
 const DOWNLOADS_PER_ROUND: usize = 4;
+
+/// Most entries of an object that step 3 copies one by one ([`load_scope`]);
+/// for an object with more (a large array) it copies the whole OD RAM, which then costs no
+/// more than the entries' copies.
+const MOST_ENTRIES_LOADED_ALONE: usize = 32;
 
 /// A request read from SM0 in step 2, waiting for the dictionary (step 3).
 #[derive(Debug)]
@@ -111,14 +124,19 @@ impl<const RAM: usize> MailboxSide<RAM> {
         Ok(request.map(ReceivedRequest))
     }
 
-    /// Step 3 (bounded, with the core), for a request to answer: the OD RAM as it is now and
-    /// the OD RAM the core's RxPDO plan writes.
-    pub fn load_dictionary<A: Application>(
+    /// Step 3 (bounded, with the core), for a request to answer: the OD RAM the answer reads
+    /// or writes as it is now ([`Mailbox::scope`]: the entries of the object a request names,
+    /// all of it where the answer or `hook`, the hook [`Self::answer`] runs, reaches beyond
+    /// the object, none for a request that reads no value) and the OD RAM the core's RxPDO plan
+    /// writes.
+    pub fn load_dictionary<A: Application, H: DownloadHook + ?Sized>(
         &mut self,
         core: &SlaveCore<RAM, A>,
         request: ReceivedRequest,
+        hook: &H,
     ) -> LoadedRequest {
-        self.ram = core.ram;
+        let scope = self.mailbox.scope(&request.0);
+        load_scope(self.profile, scope, hook, &core.ram, &mut self.ram);
         if self.rx_generation != Some(core.rx_plan_generation) {
             self.rx_outputs = core.rx_plan.ram_ranges();
             self.rx_generation = Some(core.rx_plan_generation);
@@ -164,7 +182,7 @@ impl<const RAM: usize> MailboxSide<RAM> {
         hook: &mut H,
     ) -> Result<(), P::Error> {
         let received = self.receive(pdi, job)?;
-        let loaded = received.map(|r| self.load_dictionary(core, r));
+        let loaded = received.map(|r| self.load_dictionary(core, r, hook));
         self.answer(pdi, job, loaded, hook)
     }
 
@@ -188,6 +206,48 @@ impl<const RAM: usize> MailboxSide<RAM> {
     /// spans mailbox rounds right now.
     pub fn transfer_in_progress(&self) -> bool {
         self.mailbox.transfer_in_progress()
+    }
+}
+
+/// Copies from `core_ram` into `ram` what the answer to a request of `scope` reads or writes
+/// (step 3): the OD RAM entries of the object it names (nothing for an object `profile` does
+/// not have: the answer is an abort), or the whole OD RAM where the download `hook` that
+/// follows the answer reaches beyond the object, or for an object of more than
+/// [`MOST_ENTRIES_LOADED_ALONE`] entries; nothing for [`DictionaryScope::Nothing`].
+pub fn load_scope<const RAM: usize, H: DownloadHook + ?Sized>(
+    profile: &Profile,
+    scope: DictionaryScope,
+    hook: &H,
+    core_ram: &[u8; RAM],
+    ram: &mut [u8; RAM],
+) {
+    let index = match scope {
+        DictionaryScope::Nothing => return,
+        DictionaryScope::Object { index, download }
+            if !(download && hook.reaches_beyond_object(profile, index)) =>
+        {
+            index
+        }
+        DictionaryScope::Object { .. } => {
+            *ram = *core_ram;
+            return;
+        }
+    };
+    let Some(object) = profile.object(index) else {
+        return;
+    };
+    if object.entries.len() > MOST_ENTRIES_LOADED_ALONE {
+        *ram = *core_ram;
+        return;
+    }
+    for entry in object.entries {
+        if let Value::Ram(at) = entry.value {
+            let at = usize::from(at);
+            let bytes = at..at.saturating_add(entry.byte_len());
+            if let (Some(to), Some(from)) = (ram.get_mut(bytes.clone()), core_ram.get(bytes)) {
+                to.copy_from_slice(from);
+            }
+        }
     }
 }
 
@@ -237,5 +297,9 @@ impl<H: DownloadHook + ?Sized> DownloadHook for Recording<'_, H> {
 
     fn domains(&mut self) -> Option<&mut dyn DomainStore> {
         self.hook.domains()
+    }
+
+    fn reaches_beyond_object(&self, profile: &Profile, index: u16) -> bool {
+        self.hook.reaches_beyond_object(profile, index)
     }
 }

@@ -51,7 +51,7 @@ use crate::slave::esm::sync::{SyncConfig, SyncMode as Mode};
 pub use application::{AppEvent, AppEvents, Application, NoApplication, MAX_APP_EVENTS};
 pub use composite::Slave;
 use esm::transitions::read_sm;
-pub use mailbox_side::{LoadedRequest, MailboxSide, ReceivedRequest};
+pub use mailbox_side::{load_scope, LoadedRequest, MailboxSide, ReceivedRequest};
 
 /// SM channel of the process-data outputs.
 pub const SM_OUTPUTS: u8 = 2;

@@ -33,6 +33,7 @@ pub use crate::od::{AbortCode, DomainStore, DownloadHook, NoDomains, RamDomain, 
 pub use sdo::SEGMENT_BUFFER_CAPACITY;
 
 use crate::mailbox::header::MailboxErrorCode;
+use crate::mailbox::DictionaryScope;
 use crate::od::Dictionary;
 
 /// Length of the CoE header in bytes.
@@ -269,6 +270,21 @@ impl CoeServer {
         let n = self.info.handle(od.profile(), request, info_response)?;
         *resp_header = CoeService::SdoInformation.header();
         with_header(n)
+    }
+
+    /// What of the OD RAM [`Self::handle_with`] of `request` (from the CoE header on, as there)
+    /// reads or writes, in the present transfer state; before the request is handled.
+    pub fn scope(&self, request: &[u8]) -> DictionaryScope {
+        let Some((&header, sdo_request)) = request.split_first_chunk::<COE_HEADER_LEN>() else {
+            return DictionaryScope::Nothing;
+        };
+        let service = (u16::from_le_bytes(header) >> SERVICE_SHIFT) as u8;
+        match CoeService::from_bits(service) {
+            Some(CoeService::SdoRequest) => self.sdo.scope(sdo_request),
+            // SDO information reads the profile's tables, no value; the other services are
+            // answered with a mailbox error.
+            _ => DictionaryScope::Nothing,
+        }
     }
 
     /// Whether an SDO transfer spans mailbox rounds right now: a segmented up- or download, or

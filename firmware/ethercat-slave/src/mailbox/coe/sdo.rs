@@ -32,6 +32,7 @@ use super::access::{
 };
 use super::complete_access;
 use super::CoeError;
+use crate::mailbox::DictionaryScope;
 use crate::od::value::check_length;
 use crate::od::AbortCode;
 use crate::od::DomainStore;
@@ -303,6 +304,39 @@ impl SdoServer {
             self.drop_transfer(domains);
             write_abort(resp, abort)
         }))
+    }
+
+    /// What of the OD RAM [`Self::handle`] of `req` (after the CoE header) reads or writes, in
+    /// the present transfer state: the object an upload or a download names (a PDO mapping or
+    /// assignment download too: its checks read the object itself and the profile's tables).
+    pub(super) fn scope(&self, req: &[u8]) -> DictionaryScope {
+        let Some(&[cmd, index_lo, index_hi, ..]) = req.first_chunk::<SDO_FRAME_LEN>() else {
+            return DictionaryScope::Nothing;
+        };
+        let index = u16::from_le_bytes([index_lo, index_hi]);
+        match Command(cmd).specifier() {
+            ccs::UPLOAD_INIT => DictionaryScope::Object {
+                index,
+                download: false,
+            },
+            ccs::DOWNLOAD_INIT => DictionaryScope::Object {
+                index,
+                download: true,
+            },
+            // A segment commits (with its last one) to the object its transfer began on.
+            ccs::DOWNLOAD_SEGMENT => match self.transfer {
+                Transfer::Download { index, .. } | Transfer::DomainDownload { index, .. } => {
+                    DictionaryScope::Object {
+                        index,
+                        download: true,
+                    }
+                }
+                Transfer::Idle | Transfer::Upload { .. } => DictionaryScope::Nothing,
+            },
+            // An upload segment comes from the snapshot (or a constant, or the domain store);
+            // an abort and an unknown command touch nothing.
+            _ => DictionaryScope::Nothing,
+        }
     }
 
     /// Ends the transfer in progress; a domain download is aborted in the store.

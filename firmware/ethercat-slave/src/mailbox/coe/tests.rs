@@ -1258,3 +1258,79 @@ fn allowed_profile_serves_download_to_rx_mapped_entry_in_op() {
     );
     assert_eq!(b.value(0x6040, 0), [0x0F, 0]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// What of the OD RAM a request reads or writes (the slave's mailbox side loads that much)
+// ---------------------------------------------------------------------------------------------
+
+use crate::mailbox::DictionaryScope;
+
+#[test]
+fn an_upload_or_download_names_its_object() {
+    let b = Bench::new();
+    let object = |index, download| DictionaryScope::Object { index, download };
+    assert_eq!(b.coe.scope(&upload(0x2000, 0)), object(0x2000, false));
+    assert_eq!(b.coe.scope(&upload(0x2008, 2)), object(0x2008, false));
+    assert_eq!(
+        b.coe.scope(&download_u16(0x2000, 0, 5)),
+        object(0x2000, true)
+    );
+    // Complete access (CA bit) covers the object too.
+    assert_eq!(
+        b.coe.scope(&download(0x31, 0x2008, 0, [4, 0, 0, 0])),
+        object(0x2008, true)
+    );
+    // A mapping or assignment download is checked on the object itself and the profile's
+    // tables (which entries exist and are mappable).
+    for index in [0x1600, 0x1601, 0x1A00, 0x1C12, 0x1C13] {
+        assert_eq!(b.coe.scope(&download_u8(index, 0, 0)), object(index, true));
+        assert_eq!(b.coe.scope(&upload(index, 1)), object(index, false));
+    }
+}
+
+#[test]
+fn a_request_that_reads_no_value_names_nothing() {
+    let b = Bench::new();
+    // The master's abort, an upload segment (served from the transfer's snapshot), a download
+    // segment with no transfer (answered with an abort).
+    let abort_request = [0x00, 0x20, 0x80, 0x00, 0x20, 0x00, 0, 0, 0, 0];
+    let upload_segment = [0x00, 0x20, 0x60, 0, 0, 0, 0, 0, 0, 0];
+    let download_segment = [0x00, 0x20, 0x00, 1, 2, 3, 4, 5, 6, 7];
+    // SDO information (service 8), an emergency (service 1), a frame shorter than an SDO.
+    let info = [0x00, 0x80, 0x01, 0x00, 0x00, 0x00, 0x01, 0x00];
+    let emergency = [0x00, 0x10, 0, 0, 0, 0, 0, 0, 0, 0];
+    let short = [0x00, 0x20, 0x40, 0x00, 0x20];
+    for request in [
+        &abort_request[..],
+        &upload_segment,
+        &download_segment,
+        &info,
+        &emergency,
+        &short,
+        &[],
+    ] {
+        assert_eq!(
+            b.coe.scope(request),
+            DictionaryScope::Nothing,
+            "{request:02X?}"
+        );
+    }
+}
+
+#[test]
+fn a_download_segment_names_the_object_its_transfer_began_on() {
+    let mut b = Bench::new();
+    let [init, seg1, seg2] = segmented_text_download();
+    assert_eq!(b.coe.scope(&seg1), DictionaryScope::Nothing);
+    assert_eq!(b.small(&init), download_ok(0x2004, 0));
+    let text = DictionaryScope::Object {
+        index: 0x2004,
+        download: true,
+    };
+    assert_eq!(b.coe.scope(&seg1), text);
+    b.small(&seg1);
+    assert_eq!(b.coe.scope(&seg2), text);
+    b.small(&seg2);
+    // Committed: no transfer any more.
+    assert_eq!(b.coe.scope(&seg2), DictionaryScope::Nothing);
+}

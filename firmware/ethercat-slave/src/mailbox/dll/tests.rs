@@ -9,6 +9,7 @@ use hal::pdi::EscPdi;
 use super::Mailbox;
 use crate::mailbox::emcy::{Emergency, EMCY_QUEUE_LEN};
 use crate::mailbox::header::{MailboxHeader, HEADER_LEN};
+use crate::mailbox::DictionaryScope;
 use crate::od::Dictionary;
 use crate::test_profiles::standard;
 
@@ -284,4 +285,54 @@ fn a_repeat_request_reposts_the_last_frame_posted_even_an_emergency() {
     );
     let (_, again) = b.esc.master_reads().expect("backup re-posted");
     assert_eq!(again, first);
+}
+
+/// What of the OD RAM a received request names: its SDO object; nothing for a retry of the
+/// request served last (the same counter: not served again), a protocol the slave does not
+/// serve, or a frame whose mailbox header is malformed (each answered without the dictionary).
+#[test]
+fn a_received_request_names_the_od_ram_its_answer_needs() {
+    let mut b = Bench::new();
+    let device = &standard::PROFILE.device;
+    let scope_of = |b: &mut Bench, frame: &[u8]| {
+        b.esc.master_writes(frame);
+        let request = b
+            .mbx
+            .receive(&mut b.esc, device, AlEvent(0))
+            .expect("infallible")
+            .expect("a request in SM0");
+        let scope = b.mbx.scope(&request);
+        let mut od = Dictionary::new(&standard::PROFILE, &mut b.ram);
+        let Ok(()) = b.mbx.answer(
+            &mut b.esc,
+            device,
+            &mut od,
+            AlState::PreOp,
+            Some(request),
+            &mut (),
+        );
+        b.esc.master_reads();
+        scope
+    };
+    let identity = DictionaryScope::Object {
+        index: 0x1018,
+        download: false,
+    };
+    assert_eq!(scope_of(&mut b, &upload_request(1)), identity);
+    assert_eq!(
+        scope_of(&mut b, &upload_request(1)),
+        DictionaryScope::Nothing
+    );
+    assert_eq!(scope_of(&mut b, &upload_request(2)), identity);
+    // Counter 0: the master does not count, every request is new.
+    assert_eq!(scope_of(&mut b, &upload_request(0)), identity);
+    assert_eq!(scope_of(&mut b, &upload_request(0)), identity);
+    // FoE (type 4) is not served.
+    let mut foe = upload_request(3);
+    foe[5] = 0x04 | (3 << 4);
+    assert_eq!(scope_of(&mut b, &foe), DictionaryScope::Nothing);
+    // A length beyond what SM0 holds.
+    let mut oversized = upload_request(4);
+    oversized[0..2].copy_from_slice(&0x0FFFu16.to_le_bytes());
+    assert_eq!(scope_of(&mut b, &oversized), DictionaryScope::Nothing);
 }
