@@ -1,7 +1,8 @@
 //! The whole SYNC0 handler of every compiled-in profile, as the board runs it: `on_sync0` on
 //! the slave's core in OP with every axis of the profile attached to a running servo axis, CSP
-//! at rest (the master's target equals the actual position), measured with the profile's
-//! default PDO mapping and with the largest mapping it takes.
+//! at rest (the master's target equals the actual position) and following (the target a step
+//! ahead), measured with the profile's default PDO mapping and with the largest mapping it
+//! takes; per profile the more expensive cycle.
 //!
 //! The profile reaches the core at run time: the loop goes through `firmware::profiles::ALL`
 //! behind `black_box`, so the measured code is the generic code reading the profile's tables,
@@ -48,6 +49,11 @@ const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
 /// enabled" among them.
 const STATE_MASK: u16 = 0x006F;
 const OPERATION_ENABLED: u16 = 0x0027;
+/// CSP following: the target this many position units ahead of the actual position (one
+/// cycle's step of a slow move in any profile's unit, within every profile's limits).
+const FOLLOWING_STEP: i32 = 10;
+/// Statusword bit 12 in the cyclic modes: the drive follows the target (IEC 61800-7-201).
+const FOLLOWS_TARGET: u16 = 1 << 12;
 /// Following error at rest, increments: the target is the actual position echoed in the
 /// profile's own position unit, which rounds (a few increments of the 20-bit encoder).
 const MAX_FOLLOWING_ERROR: i64 = 16;
@@ -162,15 +168,21 @@ impl ProfileBench {
     /// position (6064h echoed into 607Ah, in the profile's own position unit). 6060h is also
     /// written into the OD, as the master would by SDO where the mapping lacks it.
     fn outputs(&mut self, cw: u16) -> Result<(), &'static str> {
+        self.outputs_ahead(cw, 0)
+    }
+
+    /// [`Self::outputs`] with the target `ahead` position units beyond the actual position.
+    fn outputs_ahead(&mut self, cw: u16, ahead: i32) -> Result<(), &'static str> {
         let mut master = [0u8; MAX_RAM_SIZE];
         let (_, ram) = self.core.application();
         for vars in self.profile.axes.iter().take(MAX_AXES) {
-            let actual = read::<4>(ram, vars.position_actual_value).unwrap_or([0; 4]);
+            let actual = read::<4>(ram, vars.position_actual_value).map_or(0, i32::from_le_bytes);
+            let target = actual.wrapping_add(ahead);
             let mode = MODE_CYCLIC_SYNC_POSITION.to_le_bytes();
             if !write(&mut master, vars.controlword, &cw.to_le_bytes()) {
                 return Err("an axis has no controlword");
             }
-            write(&mut master, vars.target_position, &actual);
+            write(&mut master, vars.target_position, &target.to_le_bytes());
             write(&mut master, vars.modes_of_operation, &mode);
             write(ram, vars.modes_of_operation, &mode);
         }
@@ -220,6 +232,47 @@ impl ProfileBench {
             }
         }
         Err("the drive did not reach operation enabled with its axes running")
+    }
+
+    /// The SYNC0 handler of a cycle in which every axis follows its target, a step of
+    /// [`FOLLOWING_STEP`] ahead of the actual position: measured from a snapshot of the core
+    /// (restore + handler − restore), as the cost differs from call to call once the drive
+    /// moves. `Ok(None)` after the harness reported a measurement failure.
+    fn following_cost(&mut self, h: &mut Harness, name: &str) -> Result<Option<u32>, &'static str> {
+        self.outputs_ahead(ENABLE_OPERATION, FOLLOWING_STEP)?;
+        let snapshot = self.core.clone();
+        let now_ns = self.now_ns.saturating_add(u64::from(CYCLE_NS));
+        let ProfileBench { core, esc, .. } = self;
+        let Some(restore) = h.measure(name, &mut || {
+            *core = black_box(&snapshot).clone();
+        }) else {
+            return Ok(None);
+        };
+        let Some(both) = h.measure(name, &mut || {
+            *core = black_box(&snapshot).clone();
+            let _ = on_sync0(core, esc, black_box(now_ns));
+        }) else {
+            return Ok(None);
+        };
+        // The cycle the measurement ran: every axis follows its target.
+        if !self.following() {
+            return Err("the drive did not follow the target a step ahead");
+        }
+        both.checked_sub(restore)
+            .map(Some)
+            .ok_or("the restore costs more than restore + handler")
+    }
+
+    /// Every axis: statusword "operation enabled" with CiA402 bit 12 (in the cyclic modes: the
+    /// target is the loop's input) and no fault.
+    fn following(&mut self) -> bool {
+        let profile = self.profile;
+        let (_, ram) = self.core.application();
+        profile.axes.iter().take(MAX_AXES).all(|vars| {
+            read::<2>(ram, vars.statusword)
+                .map(u16::from_le_bytes)
+                .is_some_and(|sw| sw & STATE_MASK == OPERATION_ENABLED && sw & FOLLOWS_TARGET != 0)
+        })
     }
 
     /// Every axis: statusword "operation enabled", the motor axis running without a following
@@ -323,7 +376,7 @@ pub fn run(h: &mut Harness) {
             let ProfileBench {
                 core, esc, now_ns, ..
             } = &mut bench;
-            let Some(cost) = h.measure(name, &mut || {
+            let Some(at_rest) = h.measure(name, &mut || {
                 *now_ns += u64::from(CYCLE_NS);
                 let _ = on_sync0(core, esc, black_box(*now_ns));
             }) else {
@@ -333,7 +386,11 @@ pub fn run(h: &mut Harness) {
                 h.fail(name, format_args!("the measured cycles changed the drive"));
                 continue;
             }
-            h.case(cases, name, cost);
+            match bench.following_cost(h, name) {
+                Ok(Some(following)) => h.case(cases, name, at_rest.max(following)),
+                Ok(None) => {}
+                Err(reason) => h.fail(name, format_args!("{reason}")),
+            }
         }
     }
     h.report_cases_target(
@@ -341,8 +398,11 @@ pub fn run(h: &mut Harness) {
         DEFAULT_MAPPING_BUDGET,
         format_args!(
             "on_sync0 in OP, every profile through the runtime profile, its default mapping, \
-             every axis attached and running, CSP at rest: supervision, SM2 read + unpack, \
-             CiA402 + set-point + axis handoff, pack + SM3 write (PDI bus time excluded)"
+             every axis attached and running, CSP: supervision, SM2 read + unpack, CiA402 + \
+             set-point + axis handoff, pack + SM3 write (PDI bus time excluded); per profile \
+             the more expensive of the cycle at rest and the cycle following a target \
+             {FOLLOWING_STEP} position units ahead (from a snapshot: restore + handler − \
+             restore)"
         ),
     );
     h.report_cases_target(
