@@ -66,7 +66,7 @@
 //! # Automatic storage
 //!
 //! An SDO download (expedited, normal, segmented or complete access; never a PDO write) to an
-//! entry named by an [`AutoStore`](crate::od::AutoStore) rule of the profile is stored at once,
+//! entry named by an [`AutoStore`] rule of the profile is stored at once,
 //! unless the rule's `unless` test holds on the values after the download (e.g. the GHA-E's
 //! Pn046 = 1 "do not save SDO writes": writing Pn046 = 1 is then itself not saved, writing 0
 //! is). The new record holds the downloaded entries' current values and keeps everything else

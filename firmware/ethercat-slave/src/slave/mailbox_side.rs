@@ -212,8 +212,8 @@ impl<const RAM: usize> MailboxSide<RAM> {
 /// Copies from `core_ram` into `ram` what the answer to a request of `scope` reads or writes
 /// (step 3): the OD RAM entries of the object it names (nothing for an object `profile` does
 /// not have: the answer is an abort), or the whole OD RAM where the download `hook` that
-/// follows the answer reaches beyond the object, or for an object of more than
-/// [`MOST_ENTRIES_LOADED_ALONE`] entries; nothing for [`DictionaryScope::Nothing`].
+/// follows the answer reaches beyond the object, or for an object of many entries (a large
+/// array, whose entries' copies would cost more); nothing for [`DictionaryScope::Nothing`].
 pub fn load_scope<const RAM: usize, H: DownloadHook + ?Sized>(
     profile: &Profile,
     scope: DictionaryScope,
