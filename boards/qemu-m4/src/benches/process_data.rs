@@ -3,20 +3,22 @@
 //! drive state machine and the axis), pack the TxPDO image. The images are RAM buffers, so the
 //! PDI bus time is excluded, as the budget says.
 //!
-//! The mappings are the profile's defaults (1C12h → 1600h, 1C13h → 1A00h). The drive is in
-//! "operation enabled" with a steady controlword, the state of a running axis, in which the
-//! step also copies the target position to the actual position.
+//! The mappings are the profile's defaults (1C12h → 1600h, 1C13h → 1A00h). The copies are
+//! measured with the drive in "operation enabled" with a steady controlword, the state of a
+//! running axis, in which the step also copies the target position to the actual position; the
+//! step and the whole cycle in every state the power drive system can hold.
 
 use core::hint::black_box;
 
 use firmware::cia402::pds::{controlword, PdsState};
 use firmware::drive::Drive;
-use firmware::od::Dictionary;
+use firmware::od::{Dictionary, ErrorReport};
 use firmware::pdo::{Direction, PdoPlan, MAX_IMAGE};
 use firmware::profiles::standard::{PROFILE, RAM_SIZE};
+use firmware::slave::Application;
 
 use super::{master_outputs, read, TARGET_POSITION};
-use crate::harness::Harness;
+use crate::harness::{Cases, Harness};
 
 /// DESIGN.md §6: SYNC0 handler (PDO unpack, CiA402, PDO pack; PDI bus time excluded).
 const SYNC0_HANDLER_BUDGET: u32 = 2_000;
@@ -120,9 +122,9 @@ pub fn run(h: &mut Harness) {
         ram,
         rx,
         tx,
-        app,
         rx_image,
         tx_image,
+        ..
     } = &mut c;
     h.bench(
         "pdo-unpack",
@@ -131,28 +133,102 @@ pub fn run(h: &mut Harness) {
         &mut || rx.unpack(black_box(rx_image), ram),
     );
     h.bench(
-        "cia402-step",
-        None,
-        format_args!("Drive::step in operation enabled (CiA402, no axis attached)"),
-        &mut || app.step(ram, black_box(0)),
-    );
-    h.bench(
         "pdo-pack",
         None,
         format_args!("PdoPlan::pack, default TxPDO mapping (1A00h, {tx_bytes} bytes)"),
         &mut || tx.pack(black_box(ram), tx_image),
     );
-    h.bench(
-        "process-data-cycle",
-        Some(SYNC0_HANDLER_BUDGET),
-        format_args!("one SYNC0 cycle: unpack + step + pack (PDI bus time excluded)"),
-        &mut || c.run(),
-    );
-    if c.app.pds_state() != PdsState::OperationEnabled || c.sent_position() != Some(TARGET_POSITION)
-    {
-        h.fail(
-            "process-data-cycle",
-            format_args!("the measured cycles changed the drive's state"),
-        );
+    if let Err(reason) = every_state(h, &mut c) {
+        h.fail("cia402-step", format_args!("{reason}"));
     }
+}
+
+/// The states of the CiA402 power drive system a cycle can find the drive in for good (IEC
+/// 61800-7-201 Figure 6; "not ready to switch on" and "fault reaction active" are left by
+/// themselves within a cycle), in the order the measurement visits them: label, the master's
+/// controlword that holds it, the state.
+const STATES: [(&str, u16, PdsState); 6] = [
+    (
+        "operation enabled",
+        ENABLE_OPERATION,
+        PdsState::OperationEnabled,
+    ),
+    // Quick stop (bit 2 clear) with 605Ah = 6: the quick-stop ramp, then stay.
+    (
+        "quick stop active",
+        controlword::ENABLE_VOLTAGE,
+        PdsState::QuickStopActive,
+    ),
+    ("switch on disabled", 0, PdsState::SwitchOnDisabled),
+    ("ready to switch on", SHUTDOWN, PdsState::ReadyToSwitchOn),
+    ("switched on", SWITCH_ON, PdsState::SwitchedOn),
+    // Entered by an error of the unit; no fault reset in the controlword.
+    ("fault", SWITCH_ON, PdsState::Fault),
+];
+/// Quick stop option code 605Ah (IEC 61800-7-201 Table 26): the quick-stop ramp, then stay in
+/// quick stop active.
+const QUICK_STOP_AND_STAY: u8 = 6;
+const QUICK_STOP_OPTION_CODE: (u16, u8) = (0x605A, 0);
+/// An error of the unit that faults the drive (any code: the fault is what is measured).
+const UNIT_ERROR: u16 = 0xFF00;
+/// Cycles with a controlword before its state is taken as reached.
+const SETTLE_CYCLES: usize = 4;
+
+/// The CiA402 step alone and the whole process-data cycle in every state of [`STATES`].
+fn every_state(h: &mut Harness, c: &mut Cycle) -> Result<(), &'static str> {
+    let mut step = Cases::new("cia402-step");
+    let mut cycle = Cases::new("process-data-cycle");
+    for (label, cw, state) in STATES {
+        match state {
+            PdsState::QuickStopActive => {
+                let mut od = Dictionary::new(&PROFILE.od, &mut c.ram);
+                let (index, subindex) = QUICK_STOP_OPTION_CODE;
+                let entry = od.entry(index, subindex).ok_or("no 605Ah")?;
+                od.set_value(entry, &[QUICK_STOP_AND_STAY, 0])
+                    .map_err(|_| "605Ah not writable")?;
+                // As an SDO download tells the drive.
+                c.app.downloaded(&mut c.ram, index, subindex, 0);
+            }
+            PdsState::Fault => c.app.raise_error(ErrorReport::code(UNIT_ERROR), &mut c.ram),
+            _ => {}
+        }
+        if !c.set_outputs(cw) {
+            return Err("the profile lacks a CiA402 variable");
+        }
+        for _ in 0..SETTLE_CYCLES {
+            c.run();
+        }
+        if c.app.pds_state() != state {
+            return Err("the drive did not reach the state to measure");
+        }
+        let Cycle { ram, app, .. } = &mut *c;
+        let Some(cost) = h.measure("cia402-step", &mut || app.step(ram, black_box(0))) else {
+            return Ok(());
+        };
+        h.case(&mut step, label, cost);
+        let Some(cost) = h.measure("process-data-cycle", &mut || c.run()) else {
+            return Ok(());
+        };
+        h.case(&mut cycle, label, cost);
+        if c.app.pds_state() != state {
+            return Err("the measured cycles changed the drive's state");
+        }
+        if state == PdsState::OperationEnabled && c.sent_position() != Some(TARGET_POSITION) {
+            return Err("operation enabled does not echo the target position");
+        }
+    }
+    h.report_cases(
+        &step,
+        None,
+        format_args!("Drive::step (CiA402, no axis attached) in every state of the PDS state machine a cycle can hold"),
+    );
+    h.report_cases(
+        &cycle,
+        Some(SYNC0_HANDLER_BUDGET),
+        format_args!(
+            "one SYNC0 cycle: unpack + step + pack (PDI bus time excluded), in every state of \
+             the PDS state machine a cycle can hold"
+        ),
+    );
+    Ok(())
 }
