@@ -17,9 +17,9 @@
 //!    (1010h/1011h, which store or restore every parameter; an automatic store tested on
 //!    another object) and for an object of many entries; nothing for a request that reads no
 //!    value (an upload segment, SDO information) — and, when the core's RxPDO plan changed,
-//!    the OD RAM ranges it writes. A round with nothing to answer (in DC mode the SM2/SM3 events start one every
-//!    cycle) copies nothing. The rest of the copy keeps older values, which no answer reads
-//!    and step 5 never writes back;
+//!    the OD RAM ranges it writes. A round with nothing to answer (in DC mode the SM2/SM3
+//!    events start one every cycle) copies nothing. The rest of the copy keeps older values,
+//!    which no answer reads and step 5 never writes back;
 //! 4. [`MailboxSide::answer`] (no lock): the SDO services on the copy, the response posted —
 //!    as long as they take: the cycle runs meanwhile;
 //! 5. [`MailboxSide::store`] (with the core): copy back exactly the entries the SDO services
@@ -125,10 +125,10 @@ impl<const RAM: usize> MailboxSide<RAM> {
     }
 
     /// Step 3 (bounded, with the core), for a request to answer: the OD RAM the answer reads
-    /// or writes as it is now ([`Mailbox::scope`]: the entries of the object a request names,
-    /// all of it where the answer or `hook`, the hook [`Self::answer`] runs, reaches beyond
-    /// the object, none for a request that reads no value) and the OD RAM the core's RxPDO plan
-    /// writes.
+    /// or writes as it is now ([`Mailbox::scope`], [`load_scope`]: the entries of the object a
+    /// request names, all of it where `hook`, the download hook [`Self::answer`] runs, reaches
+    /// beyond the object, none for a request that reads no value) and the OD RAM the core's
+    /// RxPDO plan writes.
     pub fn load_dictionary<A: Application, H: DownloadHook + ?Sized>(
         &mut self,
         core: &SlaveCore<RAM, A>,
