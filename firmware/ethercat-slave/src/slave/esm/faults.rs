@@ -2,7 +2,7 @@
 //! supervision; each drops the state with its AL status code (ETG.1000.6 Table 11).
 
 use super::super::*;
-use crate::od::LostOutputsRule;
+use crate::od::{DeviceInfo, LostOutputsRule};
 use hal::esc::DlStatus;
 
 /// The ESC port that faces the master (ETG.1000.4: frames enter at port 0).
@@ -40,31 +40,17 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if esm::state_rank(state) < 2 {
             return Ok(MAILBOX_SMS);
         }
-        let sm2 = read_sm(pdi, SM_OUTPUTS)?;
-        let sm3 = read_sm(pdi, SM_INPUTS)?;
-        let result = sm_check::check_process_data(
-            sm2,
-            &device.outputs,
-            SmDirection::EcatWrite,
-            self.rx_plan.byte_len() as u16,
-            AlStatusCode::InvalidOutputConfig,
-        )
-        .and(sm_check::check_process_data(
-            sm3,
-            &device.inputs,
-            SmDirection::EcatRead,
-            self.tx_plan.byte_len() as u16,
-            AlStatusCode::InvalidInputConfig,
-        ));
+        let (rx_len, tx_len) = (self.rx_plan.byte_len(), self.tx_plan.byte_len());
+        let result = check_process_data_sms(pdi, &device, rx_len, tx_len)?;
         let Err(code) = result else {
             return Ok(ALL_SMS);
         };
-        let fallback = if code == AlStatusCode::InvalidOutputConfig {
-            AlState::SafeOp
-        } else {
-            AlState::PreOp
-        };
-        self.raise_fault(pdi, fallback, code, ErrorIndication::InvalidConfiguration)?;
+        self.raise_fault(
+            pdi,
+            esm::sm_fault_state(code),
+            code,
+            ErrorIndication::InvalidConfiguration,
+        )?;
         Ok(ALL_SMS)
     }
 
@@ -284,4 +270,30 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         self.error_indication = indication;
         self.apply(pdi, from, esm::fault(from, fallback, code))
     }
+}
+
+/// SM2 and SM3 as the master configured them against the process data of `rx_len` and
+/// `tx_len` bytes: 0x001D for a wrong output SM, 0x001E for a wrong input SM.
+pub(in crate::slave) fn check_process_data_sms<P: EscPdi>(
+    pdi: &mut P,
+    device: &DeviceInfo,
+    rx_len: usize,
+    tx_len: usize,
+) -> Result<Result<(), AlStatusCode>, P::Error> {
+    let sm2 = read_sm(pdi, SM_OUTPUTS)?;
+    let sm3 = read_sm(pdi, SM_INPUTS)?;
+    Ok(sm_check::check_process_data(
+        sm2,
+        &device.outputs,
+        SmDirection::EcatWrite,
+        rx_len as u16,
+        AlStatusCode::InvalidOutputConfig,
+    )
+    .and(sm_check::check_process_data(
+        sm3,
+        &device.inputs,
+        SmDirection::EcatRead,
+        tx_len as u16,
+        AlStatusCode::InvalidInputConfig,
+    )))
 }

@@ -30,7 +30,8 @@ pub(super) mod transitions;
 pub struct Checks {
     /// SM0/SM1 match the device's mailbox layout (INIT → PREOP).
     pub mailbox: Result<(), AlStatusCode>,
-    /// SM2/SM3 and the PDO mapping agree (PREOP → SAFEOP).
+    /// SM2/SM3 and the PDO mapping agree (PREOP → SAFEOP; SAFEOP → OP and an acknowledge
+    /// that stays in SAFEOP or OP: the SMs as the master left them).
     pub process_data: Result<(), AlStatusCode>,
     /// The synchronisation the master configured is supported (PREOP → SAFEOP, SAFEOP → OP).
     pub sync: Result<(), AlStatusCode>,
@@ -111,10 +112,15 @@ pub fn decide(
     let Some(requested) = control.requested() else {
         return Outcome::refused(current, AlStatusCode::UnknownState);
     };
-    if requested == current {
-        return Outcome::ok(current);
-    }
     use AlState::*;
+    if requested == current {
+        // Staying in SAFEOP or OP (an acknowledge) needs the process-data SMs still right:
+        // a wrong one keeps its error (ETG.1000.6 Table 11), it is not acknowledged away.
+        return match (current, checks.process_data) {
+            (SafeOp | Op, Err(code)) => fault(current, sm_fault_state(code), code),
+            _ => Outcome::ok(current),
+        };
+    }
     match (current, requested) {
         // Downward: always allowed.
         (PreOp | SafeOp | Op | Boot, Init) | (SafeOp | Op, PreOp) | (Op, SafeOp) => {
@@ -133,9 +139,9 @@ pub fn decide(
             Ok(()) => Outcome::ok(SafeOp),
             Err(code) => Outcome::refused(PreOp, code),
         },
-        (SafeOp, Op) => match checks.sync {
+        (SafeOp, Op) => match checks.process_data.and(checks.sync) {
             Ok(()) => Outcome::ok(Op),
-            Err(code) => Outcome::refused(SafeOp, code),
+            Err(code) => fault(SafeOp, sm_fault_state(code), code),
         },
         _ => Outcome::refused(current, AlStatusCode::InvalidStateChange),
     }
@@ -164,6 +170,16 @@ pub fn fault(current: AlState, fallback: AlState, code: AlStatusCode) -> Outcome
         current
     };
     Outcome::refused(state, code)
+}
+
+/// The state a wrong process-data SM leaves the slave in (ETG.1000.6 Table 11): SAFEOP for
+/// the outputs (0x001D), PREOP for the inputs (0x001E) and for any other code.
+pub fn sm_fault_state(code: AlStatusCode) -> AlState {
+    if code == AlStatusCode::InvalidOutputConfig {
+        AlState::SafeOp
+    } else {
+        AlState::PreOp
+    }
 }
 
 /// Orders states INIT < PREOP < SAFEOP < OP; BOOT ranks with PREOP (it is entered from INIT only).
@@ -223,6 +239,48 @@ mod tests {
         }
     }
     const OK: AlStatusCode = AlStatusCode::NoError;
+
+    /// ETG.1000.6 Table 11: a wrong output SM (0x001D) leaves SAFEOP + error, a wrong input SM
+    /// (0x001E) PREOP + error; an acknowledge that would stay in SAFEOP or OP with the SM still
+    /// wrong keeps the error (the fuzzed ESM found SAFEOP without error and SM2 disabled after
+    /// an acknowledge), and SAFEOP → OP is refused alike.
+    #[test]
+    fn a_wrong_process_data_sm_is_not_acknowledged_away() {
+        let with = |code| Checks {
+            process_data: Err(code),
+            ..Checks::ALL_OK
+        };
+        let outputs = with(AlStatusCode::InvalidOutputConfig);
+        let inputs = with(AlStatusCode::InvalidInputConfig);
+        for from in [SafeOp, Op] {
+            let o = decide(
+                err(from),
+                AlStatusCode::InvalidOutputConfig,
+                ack(from),
+                &outputs,
+            );
+            assert_eq!((o.status, o.code.code()), (err(SafeOp), 0x001D), "{from:?}");
+            let o = decide(
+                err(from),
+                AlStatusCode::InvalidInputConfig,
+                ack(from),
+                &inputs,
+            );
+            assert_eq!((o.status, o.code.code()), (err(PreOp), 0x001E), "{from:?}");
+            // The SMs right again: the acknowledge clears the error.
+            let o = decide(
+                err(from),
+                AlStatusCode::InvalidOutputConfig,
+                ack(from),
+                &Checks::ALL_OK,
+            );
+            assert_eq!(o, Outcome::ok(from));
+        }
+        let o = decide(st(SafeOp), OK, req(Op), &outputs);
+        assert_eq!((o.status, o.code.code()), (err(SafeOp), 0x001D));
+        let o = decide(st(SafeOp), OK, req(Op), &inputs);
+        assert_eq!((o.status, o.code.code()), (err(PreOp), 0x001E));
+    }
 
     #[test]
     fn esm_init_to_preop_with_valid_mailbox() {

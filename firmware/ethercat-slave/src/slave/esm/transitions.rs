@@ -92,9 +92,11 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 checks.boot_mailbox = sm_check::check_boot_mailbox(sm0, sm1, device);
             }
             (AlState::PreOp, Some(AlState::SafeOp)) | (AlState::SafeOp, Some(AlState::Op)) => {
-                if from == AlState::PreOp {
-                    checks.process_data = self.prepare_process_data(pdi)?;
-                }
+                checks.process_data = if from == AlState::PreOp {
+                    self.prepare_process_data(pdi)?
+                } else {
+                    self.process_data_sms(pdi)?
+                };
                 let sync = self.read_sync(pdi)?;
                 let shift = self.input_shift_ns();
                 checks.sync = sync
@@ -102,9 +104,23 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                     .and_then(|()| sync.check_input_shift(shift, &device.sync));
                 self.sync = sync;
             }
+            // Staying in SAFEOP or OP (an acknowledge): the SMs as the master left them.
+            (AlState::SafeOp, Some(AlState::SafeOp)) | (AlState::Op, Some(AlState::Op)) => {
+                checks.process_data = self.process_data_sms(pdi)?;
+            }
             _ => {}
         }
         Ok(checks)
+    }
+
+    /// SM2/SM3 as the master left them against the copy plans in force.
+    fn process_data_sms<P: EscPdi>(
+        &self,
+        pdi: &mut P,
+    ) -> Result<Result<(), AlStatusCode>, P::Error> {
+        let device = self.profile.device;
+        let (rx_len, tx_len) = (self.rx_plan.byte_len(), self.tx_plan.byte_len());
+        faults::check_process_data_sms(pdi, &device, rx_len, tx_len)
     }
 
     /// Builds both copy plans from the OD and checks SM2/SM3 against them.
@@ -120,22 +136,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
             (Ok(rx), Ok(tx)) => (rx, tx),
             (Err(code), _) | (_, Err(code)) => return Ok(Err(code)),
         };
-        let sm2 = read_sm(pdi, SM_OUTPUTS)?;
-        let sm3 = read_sm(pdi, SM_INPUTS)?;
-        let result = sm_check::check_process_data(
-            sm2,
-            &device.outputs,
-            SmDirection::EcatWrite,
-            rx.byte_len() as u16,
-            AlStatusCode::InvalidOutputConfig,
-        )
-        .and(sm_check::check_process_data(
-            sm3,
-            &device.inputs,
-            SmDirection::EcatRead,
-            tx.byte_len() as u16,
-            AlStatusCode::InvalidInputConfig,
-        ));
+        let result = faults::check_process_data_sms(pdi, &device, rx.byte_len(), tx.byte_len())?;
         if result.is_ok() {
             self.set_rx_plan(rx);
             self.tx_plan = tx;
