@@ -40,9 +40,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         if esm::state_rank(state) < 2 {
             return Ok(MAILBOX_SMS);
         }
-        let (rx_len, tx_len) = (self.rx_plan.byte_len(), self.tx_plan.byte_len());
-        let result = check_process_data_sms(pdi, &device, rx_len, tx_len)?;
-        let Err(code) = result else {
+        let Err(code) = self.process_data_sms(pdi)? else {
             return Ok(ALL_SMS);
         };
         self.raise_fault(

@@ -139,9 +139,10 @@ pub fn decide(
             Ok(()) => Outcome::ok(SafeOp),
             Err(code) => Outcome::refused(PreOp, code),
         },
-        (SafeOp, Op) => match checks.process_data.and(checks.sync) {
-            Ok(()) => Outcome::ok(Op),
-            Err(code) => fault(SafeOp, sm_fault_state(code), code),
+        (SafeOp, Op) => match (checks.process_data, checks.sync) {
+            (Err(code), _) => fault(SafeOp, sm_fault_state(code), code),
+            (Ok(()), Err(code)) => Outcome::refused(SafeOp, code),
+            (Ok(()), Ok(())) => Outcome::ok(Op),
         },
         _ => Outcome::refused(current, AlStatusCode::InvalidStateChange),
     }
@@ -280,6 +281,13 @@ mod tests {
         assert_eq!((o.status, o.code.code()), (err(SafeOp), 0x001D));
         let o = decide(st(SafeOp), OK, req(Op), &inputs);
         assert_eq!((o.status, o.code.code()), (err(PreOp), 0x001E));
+        // A synchronisation the device does not support stays SAFEOP + error, as before.
+        let sync = Checks {
+            sync: Err(AlStatusCode::SyncNotSupported),
+            ..Checks::ALL_OK
+        };
+        let o = decide(st(SafeOp), OK, req(Op), &sync);
+        assert_eq!(o.status, err(SafeOp));
     }
 
     #[test]

@@ -114,7 +114,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     }
 
     /// SM2/SM3 as the master left them against the copy plans in force.
-    fn process_data_sms<P: EscPdi>(
+    pub(in crate::slave) fn process_data_sms<P: EscPdi>(
         &self,
         pdi: &mut P,
     ) -> Result<Result<(), AlStatusCode>, P::Error> {
