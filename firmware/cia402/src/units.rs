@@ -245,28 +245,24 @@ fn mul_high(a: u64, b: u64) -> u64 {
 }
 
 /// `magnitude / divisor` rounded down, with the remainder, through `inv` =
-/// ⌊(2⁶⁴ − 1) / divisor⌋, divisor in 1..=`u32::MAX`: the estimate ⌊magnitude · inv / 2⁶⁴⌋ is
-/// the quotient or at most 2 below it (inv is at most 1 + 1/divisor below 2⁶⁴/divisor, and
-/// magnitude < 2⁶⁴), so at most two corrections by the remainder. `None` if a correction is
-/// still due after two (which the bound excludes).
+/// ⌊(2⁶⁴ − 1) / divisor⌋, divisor in 1..=`u32::MAX`. Since inv ≥ (2⁶⁴ − 1)/divisor −
+/// (divisor − 1)/divisor = 2⁶⁴/divisor − 1 and magnitude < 2⁶⁴, magnitude · inv / 2⁶⁴ is
+/// above magnitude/divisor − 1: the estimate (its floor) is the quotient or 1 below it, and
+/// one correction by the remainder gives the quotient. `None` if a correction is still due
+/// after it (which the bound excludes).
 #[inline]
 fn divide_floor(magnitude: u64, divisor: u32, inv: u64) -> Option<(u64, u64)> {
     let divisor = u64::from(divisor);
-    let mut quotient = mul_high(magnitude, inv);
+    let quotient = mul_high(magnitude, inv);
     // quotient ≤ magnitude / divisor: the remainder is magnitude − quotient·divisor ≥ 0 and
-    // < 3·divisor < 2³⁴, exact in wrapping arithmetic (the divisor's high half known to be 0,
+    // < 2·divisor < 2³³, exact in wrapping arithmetic (the divisor's high half known to be 0,
     // the product is one UMULL and one MLA).
-    let mut remainder = magnitude.wrapping_sub(quotient.wrapping_mul(divisor));
-    // The two corrections written out: the optimiser for size keeps a loop of two as a loop.
-    if remainder >= divisor {
-        quotient = quotient.wrapping_add(1);
-        remainder = remainder.wrapping_sub(divisor);
+    let remainder = magnitude.wrapping_sub(quotient.wrapping_mul(divisor));
+    if remainder < divisor {
+        return Some((quotient, remainder));
     }
-    if remainder >= divisor {
-        quotient = quotient.wrapping_add(1);
-        remainder = remainder.wrapping_sub(divisor);
-    }
-    (remainder < divisor).then_some((quotient, remainder))
+    let remainder = remainder.wrapping_sub(divisor);
+    (remainder < divisor).then_some((quotient.wrapping_add(1), remainder))
 }
 
 /// `magnitude / divisor` rounded to the nearest (halves up) through `inv` ([`divide_floor`]).
@@ -283,50 +279,37 @@ fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
 
 /// `value × multiplier / divisor` (`divisor` > 0) rounded to the nearest (halves away from
 /// zero), saturating at the i64 range: with the divisor's reciprocal `inv` (0: none) when the
-/// product fits 64 bits (the common case: multiplications only), by a 64-bit division when
+/// operands fit 32 bits (the common case: multiplications only), by a 64-bit division when
 /// there is no reciprocal, else in 128 bits. Rounding to the nearest both ways makes a position
 /// survive the round trip through the other unit (truncating both ways loses a unit whenever
 /// the increments of a target have a fraction).
 fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     // The common case (a drive's positions and the factors of its ratios): |value|, the
-    // multiplier and the divisor within 32 bits and a reciprocal, so the product is one
-    // 32 × 32 → 64-bit multiplication that cannot overflow. Computed from the low halves
-    // before the range check, not after it: behind the check the optimiser drops the
-    // truncations as redundant and multiplies 64-bit values.
+    // multiplier and the divisor within 32 bits and a reciprocal. The product is one
+    // 32 × 32 → 64-bit multiplication, and rounding to the nearest is the floor of the product
+    // plus half the divisor (⌊d/2⌋: for an odd divisor no quotient lies on a half), so one
+    // division, by the reciprocal or a shift, gives the result.
     let magnitude = value.unsigned_abs();
-    // Both factors < 2³²: the product < 2⁶⁴ (wrapping only to say so to the lint).
-    let product = u64::from(magnitude as u32).wrapping_mul(u64::from(multiplier as u32));
-    let divisor32 = divisor as u32;
-    // A power-of-two divisor (an encoder's resolution, a factor of 2ⁿ) needs no reciprocal:
-    // the quotient is a shift.
-    let shift = divisor32.is_power_of_two();
-    let narrow = if shift {
-        Some(shift_rounded(product, divisor32.trailing_zeros()))
-    } else {
-        divide_by_reciprocal(product, divisor32, inv)
-    };
-    let fits = (magnitude | multiplier | divisor) >> 32 == 0 && (shift || inv != 0);
-    match narrow.filter(|_| fits).and_then(|q| i64::try_from(q).ok()) {
-        // q ≥ 0 and ≤ i64::MAX: its negation fits.
-        Some(q) if value < 0 => q.wrapping_neg(),
-        Some(q) => q,
-        None => scale_general(value, multiplier, divisor, inv),
-    }
-}
-
-/// `magnitude / 2^k` rounded to the nearest (halves up): with `h = ⌊m / 2^(k−1)⌋`, the quotient
-/// `h / 2` plus the last bit shifted out, `h & 1` (one 64-bit shift by a variable amount, the
-/// other by one). `k` < 32 (a `u32` divisor's), so the shifts do not wrap.
-#[inline]
-fn shift_rounded(magnitude: u64, k: u32) -> u64 {
-    match k.checked_sub(1) {
-        None => magnitude,
-        Some(below) => {
-            let halves = magnitude.wrapping_shr(below);
-            // halves / 2 < 2⁶³: adding one bit cannot overflow.
-            (halves >> 1).wrapping_add(halves & 1)
+    if (magnitude | multiplier | divisor) >> 32 == 0 && inv != 0 {
+        let divisor32 = divisor as u32;
+        // Both factors < 2³²: the product ≤ (2³² − 1)², plus half the divisor < 2⁶⁴ (wrapping
+        // only to say so to the lint).
+        let biased = u64::from(magnitude as u32)
+            .wrapping_mul(u64::from(multiplier as u32))
+            .wrapping_add(u64::from(divisor32 >> 1));
+        // A power-of-two divisor (an encoder's resolution, a factor of 2ⁿ) needs no
+        // reciprocal: the quotient is a shift (by less than 32: no wrap).
+        let quotient = if divisor32.is_power_of_two() {
+            Some(biased.wrapping_shr(divisor32.trailing_zeros()))
+        } else {
+            divide_floor(biased, divisor32, inv).map(|(q, _)| q)
+        };
+        if let Some(q) = quotient.and_then(|q| i64::try_from(q).ok()) {
+            // q ≥ 0 and ≤ i64::MAX: its negation fits.
+            return if value < 0 { q.wrapping_neg() } else { q };
         }
     }
+    scale_general(value, multiplier, divisor, inv)
 }
 
 /// [`scale`] beyond its 32-bit operands: a separate function, so that the optimiser does not
@@ -710,27 +693,85 @@ mod tests {
         }
     }
 
-    /// A power-of-two divisor: the shift rounds to the nearest, halves up, at every shift and
-    /// up to the largest magnitudes (the exact quotient in 128 bits as the reference).
+    /// The 32-bit path against the exact quotient at every power-of-two divisor (the shift)
+    /// and around the halves, up to the largest operands.
     #[test]
-    fn a_power_of_two_divisor_shifts_and_rounds_halves_up() {
+    fn the_32_bit_path_rounds_halves_up_at_every_power_of_two() {
         for k in 0..32u32 {
             let d = 1u64 << k;
+            let inv = reciprocal(d);
+            for m in [1, 2, 3, 1_000, d - 1, d, d + 1, u64::from(u32::MAX)] {
+                for v in [
+                    0i64,
+                    1,
+                    -1,
+                    (d / 2) as i64,
+                    -((d / 2) as i64),
+                    (d + d / 2) as i64,
+                    (3 * d / 2 + 1) as i64,
+                    i64::from(u32::MAX),
+                    -i64::from(u32::MAX),
+                ] {
+                    let m = m.max(1);
+                    assert_eq!(scale(v, m, d, inv), reference(v, m, d), "{v}·{m}/2^{k}");
+                }
+            }
+        }
+    }
+
+    /// Operands anywhere in 32 bits (the path every SYNC0 cycle takes): pseudo-random factors,
+    /// values and signs, both directions of the prepared ratio, against the exact quotient.
+    #[test]
+    fn the_32_bit_path_converts_exactly_over_the_whole_operand_range() {
+        let mut x: u64 = 0xD1B5_4A32_D192_ED03;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let (n, d) = (((x >> 32) >> (x % 31)).max(1), (x & 0xFFFF_FFFF).max(1));
+            let v = (x.rotate_left(23) as u32 as i64) * if x & 1 == 0 { 1 } else { -1 };
+            let r = Ratio::new(n, d).prepared();
+            assert_eq!(r.position_to_internal(v), reference(v, n, d), "{v}·{n}/{d}");
+            assert_eq!(
+                r.position_from_internal(v),
+                reference(v, d, n),
+                "{v}·{d}/{n}"
+            );
+        }
+    }
+
+    /// The reciprocal's estimate needs at most one correction (the bound [`divide_floor`]
+    /// relies on; were it wrong, a conversion would take the slow path, not a wrong result):
+    /// every divisor end, dividends at the top of the range and next to multiples of the
+    /// divisor, and pseudo-random ones.
+    #[test]
+    fn the_reciprocal_division_needs_one_correction_at_most() {
+        let check = |m: u64, d: u64| {
+            let Some((q, r)) = divide_floor(m, d as u32, reciprocal(d)) else {
+                panic!("{m} / {d}: a second correction was due");
+            };
+            assert_eq!((q, r), (m / d, m % d), "{m} / {d}");
+        };
+        let mut x: u64 = 0x8CB9_2BA7_2F3D_8DD7;
+        for i in 0..200_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let d = match i % 4 {
+                0 => (x >> 32).max(1),
+                1 => 1 << (x % 32),
+                2 => u64::from(u32::MAX) - (x % 3),
+                _ => (x >> (32 + x % 32)).max(1),
+            };
             for m in [
-                0,
-                1,
-                2,
-                3,
-                d - 1,
-                d,
-                d + d / 2,
-                3 * d / 2 + 1,
-                u64::MAX - 1,
-                u64::MAX,
+                x,
+                u64::MAX - (x >> 40),
+                (u64::MAX / d) * d,
+                ((u64::MAX / d) * d).wrapping_sub(1),
+                (x / d) * d,
+                ((x / d) * d).wrapping_sub(1),
             ] {
-                let half = u128::from(d / 2);
-                let expected = (u128::from(m) + half) >> k;
-                assert_eq!(u128::from(shift_rounded(m, k)), expected, "{m} / 2^{k}");
+                check(m, d);
             }
         }
     }
