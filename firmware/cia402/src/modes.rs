@@ -109,14 +109,15 @@ pub enum Loop {
 /// increments/s, torque in N·m.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Targets {
-    /// Target position (607Ah, extended to 64 bits), `None` if the profile has none.
+    /// Target position (607Ah, extended to 64 bits), `None` if the profile has none. In CSP
+    /// with the position offset added: 607Ah + 60B0h in user units, converted once (CiA402's
+    /// CSP adds the two before the factor group), so the drive takes [`TargetsUsed`]'s
+    /// `position_offset` into this value.
     pub position: Option<i64>,
     /// Target velocity (60FFh).
     pub velocity: f32,
     /// Target torque (6071h).
     pub torque: f32,
-    /// Position offset 60B0h (increments), added to the CSP target.
-    pub position_offset: i64,
     /// Velocity offset 60B1h: the velocity feed-forward of CSP, added to the CSV target.
     pub velocity_offset: f32,
     /// Torque offset 60B2h (N·m): the torque feed-forward of CSP/CSV, added to the CST target.
@@ -150,7 +151,7 @@ pub struct TargetsUsed {
     pub velocity: bool,
     /// 6071h.
     pub torque: bool,
-    /// 60B0h.
+    /// 60B0h (added to 607Ah in user units: [`Targets::position`]).
     pub position_offset: bool,
     /// 60B1h.
     pub velocity_offset: bool,
@@ -215,9 +216,7 @@ pub fn set_point(mode: Mode, targets: Targets, actual_position: i64) -> SetPoint
     match mode {
         Mode::CyclicPosition => SetPoint {
             control: Loop::Position,
-            position: t
-                .position
-                .map_or(actual_position, |p| p.saturating_add(t.position_offset)),
+            position: t.position.unwrap_or(actual_position),
             velocity: t.velocity_offset,
             torque: t.torque_offset,
         },
@@ -263,7 +262,6 @@ mod tests {
         position: Some(5_000),
         velocity: 1_000.0,
         torque: 0.5,
-        position_offset: 0,
         velocity_offset: 0.0,
         torque_offset: 0.0,
         interpolation: None,
@@ -346,8 +344,8 @@ mod tests {
 
     #[test]
     fn offsets_60b0h_to_60b2h_add_per_mode() {
+        // 60B0h is in the CSP target already (see `Targets::position`).
         let t = Targets {
-            position_offset: 10,
             velocity_offset: 20.0,
             torque_offset: 0.25,
             ..TARGETS
@@ -355,7 +353,7 @@ mod tests {
         let csp = set_point(Mode::CyclicPosition, t, 0);
         assert_eq!(
             (csp.position, csp.velocity, csp.torque),
-            (5_010, 20.0, 0.25)
+            (5_000, 20.0, 0.25)
         );
         let csv = set_point(Mode::CyclicVelocity, t, 0);
         assert_eq!((csv.velocity, csv.torque), (1_020.0, 0.25));
@@ -371,7 +369,6 @@ mod tests {
             position: Some(5_000),
             velocity: 1_000.0,
             torque: 0.5,
-            position_offset: 10,
             velocity_offset: 20.0,
             torque_offset: 0.25,
             interpolation: Some(-7_000),
@@ -395,11 +392,6 @@ mod tests {
                 position: all.position.filter(|_| used.position),
                 velocity: if used.velocity { all.velocity } else { 0.0 },
                 torque: if used.torque { all.torque } else { 0.0 },
-                position_offset: if used.position_offset {
-                    all.position_offset
-                } else {
-                    0
-                },
                 velocity_offset: if used.velocity_offset {
                     all.velocity_offset
                 } else {
@@ -421,12 +413,13 @@ mod tests {
         // The profile modes' generators take theirs: PV the target velocity, PT the torque.
         assert!(Mode::ProfileVelocity.targets_used().velocity);
         assert!(Mode::ProfileTorque.targets_used().torque);
-        // CSP feeds the offsets forward (60B0h-60B2h), CSV 60B1h/60B2h, CST 60B2h.
+        // CSP feeds the offsets forward (60B1h/60B2h; 60B0h is in its target), CSV
+        // 60B1h/60B2h, CST 60B2h.
         assert_eq!(
             set_point(Mode::CyclicPosition, all, 3),
             SetPoint {
                 control: Loop::Position,
-                position: 5_010,
+                position: 5_000,
                 velocity: 20.0,
                 torque: 0.25
             }

@@ -479,12 +479,15 @@ impl Polarity {
     }
 }
 
-/// A 32-bit target position object (607Ah, user units) as increments: extended to 64 bits
+/// A 32-bit target position object (607Ah, user units) plus `offset` (the CSP position offset
+/// 60B0h, user units; 0 where none applies) as increments: the target extended to 64 bits
 /// relative to the actual position in user units (`actual_user`, the actual increments through
-/// [`Ratio::position_from_internal`]; so it is right across wraps of the 32-bit object), then
-/// scaled. The caller converts the actual position once per cycle: 6064h shows it too.
-pub fn target_position(target: i32, actual_user: i64, ratio: Ratio) -> i64 {
-    ratio.position_to_internal(extend_position(target, actual_user))
+/// [`Ratio::position_from_internal`]; so it is right across wraps of the 32-bit object), the
+/// offset added, then scaled once (CiA402's CSP sums the two before the factor group; one
+/// rounding, not two). The caller converts the actual position once per cycle: 6064h shows
+/// it too.
+pub fn target_position(target: i32, offset: i64, actual_user: i64, ratio: Ratio) -> i64 {
+    ratio.position_to_internal(extend_position(target, actual_user).saturating_add(offset))
 }
 
 /// An actual position in increments as its 32-bit object (6064h, user units; wraps).
@@ -896,14 +899,23 @@ mod tests {
         let r = Ratio::new(1000, 1);
         // Actual 5 000 000 increments = 5000 units; a target of 5010 units is 10 units ahead.
         let actual = |increments| r.position_from_internal(increments);
-        assert_eq!(target_position(5010, actual(5_000_000), r), 5_010_000);
+        assert_eq!(target_position(5010, 0, actual(5_000_000), r), 5_010_000);
         // The nearest unit.
         assert_eq!(actual_position(5_000_499, r), 5000);
         assert_eq!(actual_position(5_000_500, r), 5001);
         // Across the wrap of the 32-bit user object.
         let near = (i64::from(i32::MAX) - 1) * 1000;
-        assert_eq!(target_position(i32::MIN, actual(near), r), near + 2000);
-        assert_eq!(target_position(7, 7, Ratio::ONE), 7);
+        assert_eq!(target_position(i32::MIN, 0, actual(near), r), near + 2000);
+        assert_eq!(target_position(7, 0, 7, Ratio::ONE), 7);
+        // The CSP position offset 60B0h joins the target in user units, across the wrap too,
+        // and the sum is rounded once: 1.5 increments per unit, 1 + 1 units are 3 increments
+        // (each rounded on its own, 2 + 2).
+        assert_eq!(target_position(5010, -20, actual(5_000_000), r), 4_990_000);
+        assert_eq!(target_position(i32::MIN, 3, actual(near), r), near + 5000);
+        let half = Ratio::new(3, 2).prepared();
+        assert_eq!(target_position(1, 0, 0, half), 2);
+        assert_eq!(target_position(1, 1, 0, half), 3);
+        assert_eq!(target_position(-1, -1, 0, half), -3);
     }
 
     #[test]

@@ -1126,7 +1126,17 @@ impl DriveAxis {
                 .position
                 .then(|| position_in(vars.target_position))
                 .flatten()
-                .map(|t| units::target_position(t, actual_user(feedback.position), position_ratio)),
+                .map(|t| {
+                    // CSP's position offset 60B0h joins the target in user units (one
+                    // conversion).
+                    let offset = used
+                        .position_offset
+                        .then(|| position_in(vars.position_offset))
+                        .flatten()
+                        .map_or(0, i64::from);
+                    let actual = actual_user(feedback.position);
+                    units::target_position(t, offset, actual, position_ratio)
+                }),
             velocity: if used.velocity {
                 velocity_in(vars.target_velocity)
             } else {
@@ -1137,11 +1147,6 @@ impl DriveAxis {
             } else {
                 0.0
             },
-            position_offset: used
-                .position_offset
-                .then(|| position_in(vars.position_offset))
-                .flatten()
-                .map_or(0, |o| position_ratio.position_to_internal(i64::from(o))),
             velocity_offset: if used.velocity_offset {
                 velocity_in(vars.velocity_offset)
             } else {
@@ -1157,7 +1162,9 @@ impl DriveAxis {
                 && cw & interpolated_position::ENABLE_INTERPOLATION != 0)
                 .then(|| position_in(vars.interpolation_data))
                 .flatten()
-                .map(|t| units::target_position(t, actual_user(feedback.position), position_ratio)),
+                .map(|t| {
+                    units::target_position(t, 0, actual_user(feedback.position), position_ratio)
+                }),
         };
         if self.csp_extrapolation {
             let active = matches!(mode, Mode::CyclicPosition) && matches!(motion, Motion::Run);
