@@ -211,6 +211,29 @@ impl Ratio {
             self.inv_numerator,
         )
     }
+
+    /// The largest distance in increments that [`Self::position_from_internal`] converts to at
+    /// most `user` units (a position window 6067h compared in increments: |d| ≤ the result
+    /// exactly when |d| converted is ≤ `user`, the conversion being odd and monotone), so a
+    /// cycle compares without converting. With the two sides within 32 bits and the ratio
+    /// prepared: round(x·den/num) ≤ w ⟺ 2·den·x < (2w + 1)·num ⟺ x ≤ ⌊((2w + 1)·num − 1) /
+    /// (2·den)⌋ = q₁ + ⌊⌊(2r₁ + num − 1) / 2⌋ / den⌋ with (q₁, r₁) = w·num divided by den: two
+    /// divisions by the reciprocal. `None` for other ratios (the caller converts instead).
+    pub fn increments_within(self, user: u32) -> Option<u64> {
+        if self.is_one() {
+            return Some(u64::from(user));
+        }
+        let (num, den, inv) = (self.numerator, self.denominator, self.inv_denominator);
+        if (num | den) >> 32 != 0 || inv == 0 {
+            return None;
+        }
+        let den32 = den as u32;
+        // w, num < 2³²: the product < 2⁶⁴; r₁ < den < 2³², so 2r₁ + num − 1 < 2³⁴ (num ≥ 1).
+        let (q1, r1) = divide_floor(u64::from(user).wrapping_mul(num), den32, inv)?;
+        let rest = r1.wrapping_mul(2).wrapping_add(num).wrapping_sub(1) >> 1;
+        let (q2, _) = divide_floor(rest, den32, inv)?;
+        Some(q1.saturating_add(q2))
+    }
 }
 
 /// ⌊(2⁶⁴ − 1) / `divisor`⌋ for a divisor in 1..=`u32::MAX` (the reciprocal [`scale`] divides
@@ -777,6 +800,43 @@ mod tests {
                 check(m, d);
             }
         }
+    }
+
+    /// A window in user units as increments: the result converts to at most the window and one
+    /// more increment to beyond it (the boundary, with the conversion's own rounding), for
+    /// pseudo-random 32-bit ratios and windows, and the ratios it leaves to the caller.
+    #[test]
+    fn a_window_in_increments_is_the_boundary_of_the_conversion() {
+        let mut x: u64 = 0x5851_F42D_4C95_7F2D;
+        for i in 0..100_000u32 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let (n, d) = (
+                ((x >> 32) >> (x % 29)).max(1),
+                ((x & 0xFFFF_FFFF) >> (x % 31)).max(1),
+            );
+            let w = match i % 4 {
+                0 => 0,
+                1 => (x >> 7) as u32 & 0xFFFF,
+                2 => u32::MAX - 1,
+                _ => (x >> 3) as u32,
+            };
+            let r = Ratio::new(n, d).prepared();
+            let within = r.increments_within(w).expect("a 32-bit ratio");
+            let at = |inc: u64| i64::try_from(inc).ok().map(|v| r.position_from_internal(v));
+            let fits = |inc| at(inc).is_none_or(|u| u <= i64::from(w));
+            assert!(fits(within), "{w} units at {n}/{d}: {within}");
+            if let Some(beyond) = within.checked_add(1).and_then(at) {
+                assert!(beyond > i64::from(w), "{w} units at {n}/{d}: {within} + 1");
+            }
+        }
+        assert_eq!(Ratio::ONE.increments_within(7), Some(7));
+        let half = Ratio::new(3, 2).prepared();
+        // round(2x/3) ≤ 1 up to x = 2 (1.33), not 3 (2).
+        assert_eq!(half.increments_within(1), Some(2));
+        assert_eq!(Ratio::new(3, 2).increments_within(1), None, "not prepared");
+        assert_eq!(Ratio::new(1 << 40, 3).prepared().increments_within(1), None);
     }
 
     #[test]

@@ -661,7 +661,7 @@ impl DriveAxis {
 
     /// Whether CSP extrapolates over cycles without new outputs (the drive then needs to know
     /// which they are).
-    pub(super) fn extrapolates_lost_cycles(&self) -> bool {
+    pub(super) const fn extrapolates_lost_cycles(&self) -> bool {
         self.csp_extrapolation
     }
 
@@ -671,7 +671,7 @@ impl DriveAxis {
     }
 
     /// Whether the profile shows the synchronisation in a statusword bit.
-    pub(super) fn shows_synchronisation(&self) -> bool {
+    pub(super) const fn shows_synchronisation(&self) -> bool {
         self.shows_synchronisation
     }
 
@@ -748,12 +748,17 @@ impl DriveAxis {
         if status.needs(Shows::TargetReached) {
             let inside = match mode {
                 Mode::CyclicPosition => {
-                    let (window, _) = self.settings.position_window;
-                    // One difference converted (see `motion`'s homing target reached).
-                    let deviation = position_ratio.position_from_internal(
-                        set_point.position.saturating_sub(feedback.position),
-                    );
-                    running && window::inside(deviation, window)
+                    let deviation = set_point.position.saturating_sub(feedback.position);
+                    // In increments where the window converts to them, else the difference
+                    // converted (see `motion`'s homing target reached): the same result.
+                    let inside = match self.settings.position_window_increments {
+                        Some(within) => deviation.unsigned_abs() <= within,
+                        None => window::inside(
+                            position_ratio.position_from_internal(deviation),
+                            self.settings.position_window.0,
+                        ),
+                    };
+                    running && inside
                 }
                 Mode::CyclicVelocity => {
                     let (window, _) = self.settings.velocity_window;

@@ -88,6 +88,9 @@ pub struct Drive {
     any_split_mapped: bool,
     /// The slave runs the cycle in sync (`Application::synchronisation`).
     in_sync: bool,
+    /// Whether an axis needs to know the cycles without new outputs
+    /// ([`Self::watching_missed_outputs`]; kept, not worked out in every cycle).
+    watches_missed_outputs: bool,
 }
 
 /// The most `[[split_value]]` settings a profile has (od-gen checks it).
@@ -113,6 +116,7 @@ impl Drive {
             axes[a] = Some(DriveAxis::new(profile, a as u8, &profile.axes[a]));
             a += 1;
         }
+        let watches_missed_outputs = Self::watching_missed_outputs(&axes);
         Self {
             axes,
             adjusting,
@@ -126,7 +130,25 @@ impl Drive {
             split_mapped: [false; MAX_SPLIT_VALUES],
             any_split_mapped: false,
             in_sync: false,
+            watches_missed_outputs,
         }
+    }
+
+    /// Whether any of `axes` shows the synchronisation or extrapolates CSP over cycles without
+    /// new outputs: a profile constant, but for the SDV3-E's P4.04 taken at power-on.
+    // Bounded by the array's length (a const fn cannot use the iterators).
+    #[allow(clippy::indexing_slicing, clippy::arithmetic_side_effects)]
+    const fn watching_missed_outputs(axes: &[Option<DriveAxis>; MAX_AXES]) -> bool {
+        let mut a = 0;
+        while a < MAX_AXES {
+            if let Some(axis) = &axes[a] {
+                if axis.extrapolates_lost_cycles() || axis.shows_synchronisation() {
+                    return true;
+                }
+            }
+            a += 1;
+        }
+        false
     }
 
     /// Connects the control interrupt of axis `axis`'s motor (0 = the first axis): from now on
@@ -452,6 +474,7 @@ impl Application for Drive {
         for axis in self.axes.iter_mut().flatten() {
             axis.power_on(ram);
         }
+        self.watches_missed_outputs = Self::watching_missed_outputs(&self.axes);
     }
 
     fn raise_error(&mut self, report: ErrorReport, ram: &mut [u8]) {
@@ -493,10 +516,7 @@ impl Application for Drive {
     }
 
     fn watches_missed_outputs(&self) -> bool {
-        self.axes
-            .iter()
-            .flatten()
-            .any(|a| a.extrapolates_lost_cycles() || a.shows_synchronisation())
+        self.watches_missed_outputs
     }
 
     fn outputs_missed(&mut self) {
@@ -661,6 +681,46 @@ mod tests {
         );
         app.downloaded(&mut ram, 0x2000, 8, 0);
         assert_eq!(gear.whole.value(&ram, 0), 130_009);
+    }
+
+    /// The drive reads the SM2 event in a cycle (to tell one without new outputs) exactly where
+    /// an axis needs it: the SDV3-E and OSD-G-E show the synchronisation in the CSP statusword
+    /// (bit 12), the SDV3-E extrapolates with P4.04 = 1 (taken at power-on); CiA402 alone
+    /// (the standard profile) needs neither. The kept flag agrees with its axes before and
+    /// after power-on, with P4.04 either way.
+    #[test]
+    fn missed_outputs_are_watched_where_an_axis_needs_them() {
+        use crate::profiles::{sdv3_e, standard};
+        let by_axes = |app: &Drive| {
+            app.axes
+                .iter()
+                .flatten()
+                .any(|a| a.extrapolates_lost_cycles() || a.shows_synchronisation())
+        };
+        for profile in crate::profiles::ALL {
+            let mut ram = profile.od.defaults.to_vec();
+            let mut app = Drive::new(profile);
+            assert_eq!(app.watches_missed_outputs(), by_axes(&app));
+            app.power_on(&mut ram);
+            assert_eq!(app.watches_missed_outputs(), by_axes(&app));
+        }
+        assert!(!Drive::new(&standard::PROFILE).watches_missed_outputs());
+        let extrapolation = sdv3_e::PROFILE
+            .cia402
+            .csp_extrapolation
+            .expect("the SDV3-E's P4.04");
+        for p404 in [0, 1] {
+            let mut ram = sdv3_e::DEFAULTS.to_vec();
+            extrapolation.write(&mut ram, p404);
+            let mut app = Drive::new(&sdv3_e::PROFILE);
+            app.power_on(&mut ram);
+            let axis = app.axis(0).expect("axis 1");
+            assert_eq!(axis.extrapolates_lost_cycles(), p404 == 1);
+            assert!(
+                app.watches_missed_outputs(),
+                "bit 12 shows the synchronisation"
+            );
+        }
     }
 
     #[test]

@@ -23,6 +23,7 @@
 use cia402::limits::SoftwareLimits;
 use cia402::stop::{OptionCodes, Reactions};
 use cia402::units::{self, Polarity};
+use cia402::window;
 
 use ethercat_slave::od::{Object, Value};
 use ethercat_slave::pdo::PdoPlan;
@@ -274,6 +275,10 @@ pub(super) struct Settings {
     pub quick_stop_deceleration: f32,
     /// 6067h (position units) and 6068h (ms).
     pub position_window: (u32, u16),
+    /// 6067h as the largest distance in increments inside it (`u64::MAX`: the window is off),
+    /// for a comparison without a conversion per cycle; `None` where the position ratio does
+    /// not give it ([`units::Ratio::increments_within`]: compare in position units).
+    pub position_window_increments: Option<u64>,
     /// 606Dh (increments/s) and 606Eh (ms).
     pub velocity_window: (f32, u16),
     /// 606Fh (increments/s) and 6070h (ms); `None` without 606Fh (the drive's standstill
@@ -305,6 +310,7 @@ impl Settings {
         profile_deceleration: 0.0,
         quick_stop_deceleration: 0.0,
         position_window: (0, 0),
+        position_window_increments: Some(0),
         velocity_window: (0.0, 0),
         velocity_threshold: None,
         homing_speeds: (0.0, 0.0, 0.0),
@@ -440,10 +446,13 @@ impl Settings {
                 units.velocity_window.velocity_to_internal(f32::from(v))
             })
         };
-        self.position_window = (
-            read_u32(ram, vars.position_window).unwrap_or(0),
-            time(vars.position_window_time),
-        );
+        let position_window = read_u32(ram, vars.position_window).unwrap_or(0);
+        self.position_window = (position_window, time(vars.position_window_time));
+        self.position_window_increments = if position_window == window::WINDOW_OFF {
+            Some(u64::MAX)
+        } else {
+            units.position.increments_within(position_window)
+        };
         self.velocity_window = (
             window(vars.velocity_window),
             time(vars.velocity_window_time),
