@@ -241,9 +241,10 @@ pub const fn shown_in(overrides: &[Override], c: Shows) -> bool {
 /// into the masks [`Self::apply`] needs (every cycle), rather than the layouts themselves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ModeStatus {
-    /// Per bit 10–13 as CiA402's layout sets it: the bits of the profile's layout that show
-    /// the same condition (bit k of the mask = statusword bit 10 + k).
-    moves_to: [u8; 4],
+    /// Per value of bits 10–13 as CiA402's layout sets them (bit k = statusword bit 10 + k):
+    /// the bits of the profile's layout that show the same conditions (one lookup per cycle
+    /// instead of a test per bit).
+    moved: [u8; 16],
     /// Per bit 10–13 of the profile's layout: the condition it shows ([`Shows::flag`]).
     shows: [u16; 4],
     /// The layout differs from CiA402's for the mode.
@@ -272,8 +273,16 @@ impl ModeStatus {
                 }
             }
         }
+        let mut moved = [0; 16];
+        for (value, to) in moved.iter_mut().enumerate() {
+            for (k, bits) in moves_to.iter().enumerate() {
+                if value & (1 << k) != 0 {
+                    *to |= bits;
+                }
+            }
+        }
         Some(Self {
-            moves_to,
+            moved,
             shows: own.bits.map(Shows::flag),
             relayout: standard != Some(own),
             extra,
@@ -293,16 +302,14 @@ impl ModeStatus {
 
     /// The mode's bits 10–13 (`statusword`, as CiA402's layout has them) in the profile's
     /// layout, with the `extra` conditions the drive worked out: the same as [`relayout`].
-    /// Timing: a few instructions per bit, no search of the layouts.
+    /// Timing: one lookup and a test per bit, no search of the layouts.
     pub fn apply(&self, statusword: u16, extra: Conditions) -> u16 {
         if !self.relayout {
             return statusword;
         }
-        let mut bits = 0;
-        for (k, (moves_to, shows)) in self.moves_to.iter().zip(self.shows).enumerate() {
-            if statusword & (FIRST_BIT << k) != 0 {
-                bits |= moves_to;
-            }
+        let standard = usize::from((statusword & MODE_BITS) >> FIRST_BIT.trailing_zeros());
+        let mut bits = self.moved.get(standard).copied().unwrap_or(0);
+        for (k, shows) in self.shows.iter().enumerate() {
             if extra.0 & shows != 0 {
                 bits |= 1 << k;
             }
