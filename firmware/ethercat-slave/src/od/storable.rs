@@ -61,9 +61,14 @@ impl EntryRange {
         }
     }
 
+    /// Whether the set names entries of object `index` (all of them, or the one subindex).
+    pub const fn touches_object(&self, index: u16) -> bool {
+        self.first <= index && index <= self.last
+    }
+
     /// Whether `index:subindex` is in the set.
     pub const fn contains(&self, index: u16, subindex: u8) -> bool {
-        let in_objects = self.first <= index && index <= self.last;
+        let in_objects = self.touches_object(index);
         match self.subindex {
             Some(s) => in_objects && s == subindex,
             None => in_objects,

@@ -562,10 +562,7 @@ impl<S: NvStorage, const CAP: usize> DownloadHook for ParamStore<S, CAP> {
     fn reaches_beyond_object(&self, profile: &Profile, index: u16) -> bool {
         let tested_elsewhere = |rule: &AutoStore| {
             rule.unless.is_some_and(|test| test.index != index)
-                && rule
-                    .entries
-                    .iter()
-                    .any(|r| (r.first..=r.last).contains(&index))
+                && rule.entries.iter().any(|r| r.touches_object(index))
         };
         matches!(index, STORE_PARAMETERS | RESTORE_DEFAULTS)
             || profile.storage.auto_store.iter().any(tested_elsewhere)

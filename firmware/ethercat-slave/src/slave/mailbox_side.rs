@@ -221,18 +221,13 @@ pub fn load_scope<const RAM: usize, H: DownloadHook + ?Sized>(
     core_ram: &[u8; RAM],
     ram: &mut [u8; RAM],
 ) {
-    let index = match scope {
-        DictionaryScope::Nothing => return,
-        DictionaryScope::Object { index, download }
-            if !(download && hook.reaches_beyond_object(profile, index)) =>
-        {
-            index
-        }
-        DictionaryScope::Object { .. } => {
-            *ram = *core_ram;
-            return;
-        }
+    let DictionaryScope::Object { index, download } = scope else {
+        return;
     };
+    if download && hook.reaches_beyond_object(profile, index) {
+        *ram = *core_ram;
+        return;
+    }
     let Some(object) = profile.object(index) else {
         return;
     };
