@@ -300,6 +300,35 @@ impl Harness {
         }
     }
 
+    /// The cost of `op` on `state` as `snapshot` has it, for an operation whose cost differs
+    /// from call to call (it changes the state): each call restores `state` from `snapshot`
+    /// first, and the restore, measured alone, is subtracted. `None` after reporting a failure
+    /// as benchmark `name`.
+    ///
+    /// `op` is generic, not `dyn`: it inlines into the measured call as the operation would
+    /// run, without an indirect call the restore alone does not have.
+    pub fn measure_from<T: Clone>(
+        &mut self,
+        name: &str,
+        snapshot: &T,
+        state: &mut T,
+        mut op: impl FnMut(&mut T),
+    ) -> Option<u32> {
+        let restore = self.measure(name, &mut || *state = black_box(snapshot).clone())?;
+        let both = self.measure(name, &mut || {
+            *state = black_box(snapshot).clone();
+            op(state);
+        })?;
+        let cost = both.checked_sub(restore);
+        if cost.is_none() {
+            self.fail(
+                name,
+                format_args!("the restore costs more than restore + operation"),
+            );
+        }
+        cost
+    }
+
     /// Prints benchmark `name` with its cost `instructions` (measured by [`bench`](Self::bench)
     /// or derived from [`measure`](Self::measure)d costs) and checks its `budget`.
     pub fn report(

@@ -243,13 +243,7 @@ impl ProfileBench {
         let snapshot = self.core.clone();
         let now_ns = self.now_ns.saturating_add(u64::from(CYCLE_NS));
         let ProfileBench { core, esc, .. } = self;
-        let Some(restore) = h.measure(name, &mut || {
-            *core = black_box(&snapshot).clone();
-        }) else {
-            return Ok(None);
-        };
-        let Some(both) = h.measure(name, &mut || {
-            *core = black_box(&snapshot).clone();
+        let Some(cost) = h.measure_from(name, &snapshot, core, |core| {
             let _ = on_sync0(core, esc, black_box(now_ns));
         }) else {
             return Ok(None);
@@ -258,9 +252,7 @@ impl ProfileBench {
         if !self.following() {
             return Err("the drive did not follow the target a step ahead");
         }
-        both.checked_sub(restore)
-            .map(Some)
-            .ok_or("the restore costs more than restore + handler")
+        Ok(Some(cost))
     }
 
     /// Every axis: statusword "operation enabled" with CiA402 bit 12 (in the cyclic modes: the

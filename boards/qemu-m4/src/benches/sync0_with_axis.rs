@@ -147,7 +147,7 @@ impl Bench {
 }
 
 /// The cost of the SYNC0 handler on the core in `snapshot`'s state with the outputs in the ESC
-/// image: (restore + handler) − restore.
+/// image: (restore + handler) − restore ([`Harness::measure_from`]).
 fn cost_from(
     h: &mut Harness,
     name: &str,
@@ -155,23 +155,9 @@ fn cost_from(
     setup: &mut Setup,
 ) -> Option<u32> {
     let Setup { core, esc, .. } = setup;
-    let restore = h.measure(name, &mut || {
-        *core = black_box(snapshot).clone();
-    })?;
-    let both = h.measure(name, &mut || {
-        *core = black_box(snapshot).clone();
+    h.measure_from(name, snapshot, core, |core| {
         let _ = on_sync0(core, esc, black_box(0));
-    })?;
-    match both.checked_sub(restore) {
-        Some(cost) => Some(cost),
-        None => {
-            h.fail(
-                name,
-                format_args!("the restore costs more than restore + handler"),
-            );
-            None
-        }
-    }
+    })
 }
 
 /// Measures both modes.
