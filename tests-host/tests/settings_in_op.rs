@@ -1,7 +1,8 @@
 //! Settings written while the drive runs take effect at once: the drive keeps its settings
 //! (limits, ramps, windows) in drive units and reads them again when their objects are written,
 //! by an SDO download (before the next cycle) or, where the master maps them into its RxPDO, in
-//! every cycle. (`limits.rs`, `profile_modes.rs` and `stop_reactions.rs` also change settings
+//! the cycle the RxPDO changes one (the slave's plan compares the mapped settings as it copies
+//! them). (`limits.rs`, `profile_modes.rs` and `stop_reactions.rs` also change settings
 //! by SDO in OP.)
 //!
 //! Standard profile, ethercrab, DC SYNC0 at 1 ms:

@@ -31,7 +31,7 @@ use ethercat_slave::od::index::{sm_parameter::SUB_SYNC_TYPE, SM_OUTPUT_PARAMETER
 use ethercat_slave::slave::SyncMode;
 
 use super::ram::{ram_offset, read_bytes, read_i32, read_u16, read_u32, write_bytes, write_u16};
-use super::settings::{live_groups, Groups, GroupsByOffset, Settings, FOLLOWING_ERROR_OFF};
+use super::settings::{self, live_groups, Groups, GroupsByOffset, Settings, FOLLOWING_ERROR_OFF};
 use crate::adjust::service::Refusal;
 use crate::adjust::Action;
 use crate::alarm_log::{self, next_in_ring, AlarmTable, Conditions, Warning, WarningInputs};
@@ -470,9 +470,28 @@ impl DriveAxis {
         self.settings_due |= self.setting_offsets.of_offset(at);
     }
 
-    /// The RxPDO mapping is now `outputs`: the settings it maps are read in every cycle.
+    /// The RxPDO mapping is now `outputs`: the settings it maps are read again whenever it
+    /// changes them ([`Self::mapped_settings_changed`]).
     pub(super) fn outputs_mapped(&mut self, outputs: &PdoPlan) {
         self.settings_live = live_groups(self.vars, outputs);
+    }
+
+    /// The settings in drive units, as of their last refresh.
+    #[cfg(test)]
+    pub(super) fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Whether a setting of this axis reads any of the `len` OD RAM bytes from `at` (the
+    /// RxPDO plan watches them).
+    pub(super) fn reads_setting_from(&self, at: u16, len: u16) -> bool {
+        settings::reads_from(self.vars, at, len)
+    }
+
+    /// The RxPDO unpacked for this cycle changed bytes of the mapped settings: they are read
+    /// in the cycle (which of them changed is not told: every mapped group).
+    pub(super) fn mapped_settings_changed(&mut self) {
+        self.settings_due |= self.settings_live;
     }
 
     /// The parameters were stored with 1010h:`subindex`: where the profile says so, the drive
@@ -816,9 +835,9 @@ impl DriveAxis {
         let previous_cw = core::mem::replace(&mut self.previous_controlword, cw);
         // The axis feedback of this cycle, read once (a seqlock read).
         let mut feedback = self.port.as_ref().map(|port| port.link.feedback());
-        // The settings the RxPDO maps, and any the drive wrote since the last refresh (a split
-        // value's other form, written in the cycle).
-        let due = self.settings_due | self.settings_live;
+        // The settings the RxPDO changed and any the drive wrote since the last refresh (a
+        // split value's other form, written in the cycle).
+        let due = self.settings_due;
         self.settings_due = Groups::NONE;
         if due.has(Groups::OPTIONS) {
             let torque_mode = self.runs_torque_mode();

@@ -530,6 +530,19 @@ impl Application for Drive {
         self.in_sync = in_sync;
     }
 
+    fn watches_outputs(&self, at: u16, len: u16) -> bool {
+        self.axes
+            .iter()
+            .flatten()
+            .any(|axis| axis.reads_setting_from(at, len))
+    }
+
+    fn watched_outputs_changed(&mut self) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.mapped_settings_changed();
+        }
+    }
+
     fn outputs_mapped(&mut self, outputs: &PdoPlan) {
         for axis in self.axes.iter_mut().flatten() {
             axis.outputs_mapped(outputs);
@@ -632,6 +645,87 @@ mod tests {
         }
         set(0x1600, 0, entries.len() as u32);
         PdoPlan::build(&Dictionary::new(&profile.od, ram), Direction::Rx).unwrap()
+    }
+
+    /// The RxPDO plan compares the entries the drive keeps converted settings of (limits,
+    /// ramps, windows, option codes, unit factors), not the process values it reads in every
+    /// cycle anyway; a change it tells makes the mapped settings be read in the next cycle: a
+    /// 6081h the master streams is the next profile-position move's speed.
+    #[test]
+    fn the_rxpdo_watches_the_settings_and_a_change_applies_in_the_next_cycle() {
+        let od = &standard::PROFILE.od;
+        let app = Drive::new(&standard::PROFILE);
+        let watched = |index, sub| {
+            let entry = od.object(index).and_then(|o| o.entry(sub)).unwrap();
+            let ethercat_slave::od::Value::Ram(at) = entry.value else {
+                panic!("{index:#06x} in the OD RAM")
+            };
+            app.watches_outputs(at, entry.byte_len() as u16)
+        };
+        for (index, sub) in [
+            (0x605A, 0),
+            (0x6065, 0),
+            (0x6067, 0),
+            (0x6072, 0),
+            (0x607D, 1),
+            (0x607D, 2),
+            (0x607F, 0),
+            (0x6081, 0),
+            (0x6083, 0),
+            (0x6084, 0),
+            (0x6085, 0),
+        ] {
+            assert!(watched(index, sub), "{index:#06x}:{sub} is a setting");
+        }
+        for (index, sub) in [
+            (0x6040, 0),
+            (0x6060, 0),
+            (0x607A, 0),
+            (0x60FF, 0),
+            (0x6071, 0),
+        ] {
+            assert!(
+                !watched(index, sub),
+                "{index:#06x}:{sub} is a process value"
+            );
+        }
+
+        // SAFETY: the test is the one context that publishes, reads and steps.
+        static LINK: AxisLink = unsafe { AxisLink::new() };
+        let mut ram = standard::DEFAULTS.to_vec();
+        let mut app = Drive::new(&standard::PROFILE);
+        app.power_on(&mut ram);
+        let encoder = crate::motor::servo::EncoderSpec::Incremental {
+            counts_per_rev: 1 << 20,
+        };
+        app.attach_axis(0, &LINK, encoder, &ram).expect("axis 1");
+        app.cycle(&mut ram, 1_000_000, &mut AppEvents::new());
+        let plan = rx_plan(
+            &standard::PROFILE,
+            &mut ram,
+            &[(0x6040, 0, 16), (0x6081, 0, 32)],
+        );
+        app.outputs_mapped(&plan);
+        // The standard profile's velocity unit is the increment/s.
+        let speed = |app: &Drive| {
+            app.axis(0)
+                .expect("axis 1")
+                .settings()
+                .move_limits
+                .get()
+                .velocity
+        };
+        let at = usize::from(ram::ram_offset(od, 0x6081, 0).expect("6081h in the OD RAM"));
+        for (velocity, told) in [(12_345u32, true), (23_456, false)] {
+            let before = speed(&app);
+            ram[at..at + 4].copy_from_slice(&velocity.to_le_bytes());
+            if told {
+                app.watched_outputs_changed();
+            }
+            app.cycle(&mut ram, 1_000_000, &mut AppEvents::new());
+            let expected = if told { velocity as f32 } else { before };
+            assert_eq!(speed(&app), expected, "6081h = {velocity}, told: {told}");
+        }
     }
 
     /// The GHA-E's gear ratio in two forms (6091h:01 = Pn-006 × 10000 + Pn-007): at power-on

@@ -9,16 +9,18 @@
 //!   of every committed download): its groups are read again at once, in the context that
 //!   commits the download, so the next cycle has them and pays nothing for it;
 //! - the drive writes one itself (a split value's other form, also in the cycle);
-//! - the master's RxPDO maps one of its objects: such a group is [`live`](live_groups) and read
-//!   in every cycle, as long as the mapping holds;
+//! - the master's RxPDO maps one of its objects: such a group is [`live`](live_groups); the
+//!   RxPDO plan compares the bytes of the mapped settings as it copies them (a watched entry,
+//!   `PdoPlan::build_watching`) and the live groups are read in a cycle whose outputs changed
+//!   one;
 //! - what its conversion depends on changes: the unit factors ([`Groups::UNIT_DEPENDENT`]), the
 //!   polarity 607Eh (the software limits; taken in the cycle while the power stage is off), the
 //!   motor (attached: everything);
 //! - the parameters are loaded at power-on (everything).
 //!
 //! The groups split the settings along the PDOs a master maps (e.g. 6081h–6084h for profile
-//! position, the torque limits for a press): a mapped object makes only its group be read
-//! every cycle.
+//! position, the torque limits for a press): a mapped object that changes makes only the
+//! mapped groups be read again.
 
 use cia402::limits::SoftwareLimits;
 use cia402::stop::{OptionCodes, Reactions};
@@ -240,7 +242,15 @@ impl GroupsByOffset {
     }
 }
 
-/// The groups with a variable the RxPDO `plan` writes: read in every cycle.
+/// Whether a setting group reads any of the `len` OD RAM bytes from `at`.
+pub(super) fn reads_from(vars: &AppVars, at: u16, len: u16) -> bool {
+    members(vars).iter().any(|m| {
+        m.at.is_some_and(|from| ethercat_slave::pdo::overlaps(&[(from, m.len)], at, len))
+    })
+}
+
+/// The groups with a variable the RxPDO `plan` writes: read again in a cycle whose outputs
+/// changed one.
 pub(super) fn live_groups(vars: &AppVars, plan: &PdoPlan) -> Groups {
     members(vars)
         .iter()

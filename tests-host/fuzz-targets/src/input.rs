@@ -2,6 +2,7 @@
 //! up), so any byte string decodes to some sequence of operations.
 
 /// The rest of a fuzz input.
+#[derive(Clone)]
 pub struct Input<'a> {
     bytes: &'a [u8],
 }

@@ -4,8 +4,11 @@
 //! The plan is built once at PREOP → SAFEOP; the cycle then runs [`PdoPlan::unpack`] and
 //! [`PdoPlan::pack`], which do no lookups: one copy per run of byte-aligned entries (adjacent
 //! entries merged into one run; a plan of many runs copies them grouped by length, a loop per
-//! length), a bit copy only for entries that are not byte-aligned. [`rules`] holds what an SDO write to the
-//! PDO objects must satisfy; both read the object indices defined there.
+//! length), a bit copy only for entries that are not byte-aligned. An RxPDO plan may watch
+//! OD RAM bytes for the application ([`PdoPlan::build_watching`]): their entries are copied
+//! apart and compared, and [`PdoPlan::unpack_watching`] tells when one changed. [`rules`] holds
+//! what an SDO write to the PDO objects must satisfy; both read the object indices defined
+//! there.
 
 use hal::esc::AlStatusCode;
 use heapless::Vec;
@@ -84,6 +87,9 @@ impl Direction {
 enum Slot {
     /// OD RAM byte offset.
     Ram(u16),
+    /// OD RAM byte offset of a watched entry ([`PdoPlan::build_watching`]) that is not on byte
+    /// boundaries in the image: [`PdoPlan::unpack_watching`] compares as it copies.
+    Watched(u16),
     /// A constant (TxPDO only).
     Const(&'static [u8]),
 }
@@ -139,6 +145,14 @@ pub struct PdoPlan {
     /// (the others follow).
     class_counts: [u8; CLASS_LENGTHS.len()],
     steps: Vec<CopyStep, MAX_MAPPED_ENTRIES>,
+    /// How many runs at the end of `runs` write watched bytes ([`PdoPlan::build_watching`]):
+    /// after the others.
+    watched_runs: u8,
+    /// How many of the watched runs each group of [`CLASS_LENGTHS`] holds, in turn from the
+    /// first watched run (the others follow).
+    watched_counts: [u8; CLASS_LENGTHS.len()],
+    /// Whether a run or a step is watched.
+    watches: bool,
     /// Mapped entries (padding excluded).
     entries: usize,
     bits: u16,
@@ -150,8 +164,23 @@ impl PdoPlan {
     /// direction or has another bit length, or a plan beyond the buffer limits or the
     /// profile's `max_process_bytes` gives 0x0025 (outputs) / 0x0024 (inputs).
     pub fn build(od: &Dictionary<'_>, dir: Direction) -> Result<Self, AlStatusCode> {
+        Self::build_watching(od, dir, |_, _| false)
+    }
+
+    /// [`Self::build`], with the OD RAM bytes `watched(offset, length)` names watched: the
+    /// entries that write any of them are copied apart (merged only with each other, after
+    /// the others) and compared as they are copied, so that [`Self::unpack_watching`] tells
+    /// when one of them changed (an application that keeps settings converted from the OD RAM
+    /// reads them again only then).
+    pub fn build_watching(
+        od: &Dictionary<'_>,
+        dir: Direction,
+        watched: impl Fn(u16, u16) -> bool,
+    ) -> Result<Self, AlStatusCode> {
         let bad = dir.invalid_mapping();
         let mut plan = Self::default();
+        // Whether each run is watched (a run holds entries of one kind).
+        let mut kinds: Vec<bool, MAX_MAPPED_ENTRIES> = Vec::new();
         let assign = dir.assign_index();
         let pdo_count = od.read_u32(assign, 0).ok_or(bad)?;
         for n in 1..=pdo_count {
@@ -160,49 +189,55 @@ impl PdoPlan {
             if !dir.mapping_range().contains(&pdo) {
                 return Err(bad);
             }
-            plan.add_pdo(od, dir, pdo)?;
+            plan.add_pdo(od, dir, pdo, (&watched, &mut kinds))?;
         }
         // The profile's limit on the image of one direction (e.g. 32 bytes on the SDV3-E).
         let max_bytes = usize::from(od.profile().device.max_process_bytes).min(MAX_IMAGE);
         if plan.byte_len() > max_bytes {
             return Err(bad);
         }
+        plan.set_watched_last(&kinds);
         plan.group_runs();
+        plan.watches = plan.watched_runs > 0
+            || plan
+                .steps
+                .iter()
+                .any(|s| matches!(s.slot, Slot::Watched(_)));
         Ok(plan)
     }
 
-    /// Orders the runs by [`CLASS_LENGTHS`] (stable: mapping order within each group) and
-    /// counts each group, when the plan has at least [`GROUPED_FROM_RUNS`] runs. Not when two
-    /// runs share OD RAM bytes (an object mapped twice): then the runs stay in mapping order,
-    /// all as others, so that an RxPDO's later copy still wins as mapped.
-    fn group_runs(&mut self) {
-        self.class_counts = [0; CLASS_LENGTHS.len()];
-        let runs = self.runs.as_slice();
-        if runs.len() < GROUPED_FROM_RUNS {
-            return;
-        }
-        let shared = runs.iter().enumerate().any(|(i, a)| {
-            runs.iter()
-                .skip(i.saturating_add(1))
-                .any(|b| any_overlaps([(a.ram, a.len)], b.ram, b.len))
-        });
-        if shared {
-            return;
-        }
-        let mut grouped: Vec<ByteRun, MAX_MAPPED_ENTRIES> = Vec::new();
-        for (count, &len) in self.class_counts.iter_mut().zip(&CLASS_LENGTHS) {
-            let mut n = 0u8;
-            for run in runs.iter().filter(|r| r.len == len) {
+    /// Moves the runs `watched` marks (one flag per run) after the others, each kind in
+    /// mapping order. Runs of the two kinds never share OD RAM bytes (the same bytes are
+    /// watched or not), so that the order between the kinds does not change what an unpack
+    /// leaves.
+    fn set_watched_last(&mut self, watched: &[bool]) {
+        let mut ordered: Vec<ByteRun, MAX_MAPPED_ENTRIES> = Vec::new();
+        let mut count = 0u8;
+        for last in [false, true] {
+            for (run, _) in self.runs.iter().zip(watched).filter(|(_, &w)| w == last) {
                 // As many runs as before: the pushes fit.
-                let _ = grouped.push(*run);
+                let _ = ordered.push(*run);
                 // At most MAX_MAPPED_ENTRIES (< 256) runs.
-                n = n.saturating_add(1);
+                count = count.saturating_add(u8::from(last));
             }
-            *count = n;
         }
-        for run in runs.iter().filter(|r| !CLASS_LENGTHS.contains(&r.len)) {
-            let _ = grouped.push(*run);
-        }
+        self.watched_runs = count;
+        self.runs = ordered;
+    }
+
+    /// Orders the runs by [`CLASS_LENGTHS`] (stable: mapping order within each group) and
+    /// counts each group: the runs copied plainly when there are at least
+    /// [`GROUPED_FROM_RUNS`] of them, the watched ones at the end
+    /// ([`Self::set_watched_last`]) among themselves (their comparison costs more than a
+    /// group's set-up). Not where two runs share OD RAM bytes (an object mapped twice): then
+    /// the runs stay in mapping order, all as others, so that an RxPDO's later copy still
+    /// wins as mapped.
+    fn group_runs(&mut self) {
+        let (plain, watched) = split_watched(&self.runs, self.watched_runs);
+        let mut grouped: Vec<ByteRun, MAX_MAPPED_ENTRIES> = Vec::new();
+        let plain_grouped = plain.len() >= GROUPED_FROM_RUNS && !shares_ram(plain);
+        self.class_counts = append_by_length(plain, plain_grouped, &mut grouped);
+        self.watched_counts = append_by_length(watched, !shares_ram(watched), &mut grouped);
         self.runs = grouped;
     }
 
@@ -211,6 +246,10 @@ impl PdoPlan {
         od: &Dictionary<'_>,
         dir: Direction,
         pdo: u16,
+        (watched, kinds): (
+            &impl Fn(u16, u16) -> bool,
+            &mut Vec<bool, MAX_MAPPED_ENTRIES>,
+        ),
     ) -> Result<(), AlStatusCode> {
         let bad = dir.invalid_mapping();
         let entries = od.read_u32(pdo, 0).ok_or(bad)?;
@@ -251,11 +290,24 @@ impl PdoPlan {
                 image_bit: self.bits,
                 bits,
             };
+            // At most 255 bits: the bytes fit a u16.
+            let watch = match slot {
+                Slot::Ram(ram) => watched(ram, bits.div_ceil(8)),
+                _ => false,
+            };
             match (slot, step.bytes()) {
                 (Slot::Ram(ram), Some((image, len))) => {
                     let image = u16::try_from(image).map_err(|_| bad)?;
                     let len = u16::try_from(len).map_err(|_| bad)?;
-                    self.add_run(ram, image, len).map_err(|_| bad)?;
+                    self.add_run(ram, image, len, (watch, kinds))
+                        .map_err(|_| bad)?;
+                }
+                (Slot::Ram(ram), None) if watch => {
+                    let step = CopyStep {
+                        slot: Slot::Watched(ram),
+                        ..step
+                    };
+                    self.steps.push(step).map_err(|_| bad)?;
                 }
                 _ => self.steps.push(step).map_err(|_| bad)?,
             }
@@ -267,19 +319,29 @@ impl PdoPlan {
         Ok(())
     }
 
-    /// Adds a byte-aligned entry of `len` bytes from OD RAM offset `ram` at image byte `image`:
-    /// to the last run if it continues it on both sides, else as a new run (`Err` when the
-    /// runs are full, which the entry count prevents).
-    fn add_run(&mut self, ram: u16, image: u16, len: u16) -> Result<(), ByteRun> {
-        if let Some(last) = self.runs.last_mut() {
+    /// Adds a byte-aligned entry of `len` bytes from OD RAM offset `ram` at image byte `image`,
+    /// `watched` or not (`kinds`: the flag of each run): to the last run if it continues it on
+    /// both sides and is of its kind, else as a new run (`Err` when the runs are full, which
+    /// the entry count prevents).
+    fn add_run(
+        &mut self,
+        ram: u16,
+        image: u16,
+        len: u16,
+        (watched, kinds): (bool, &mut Vec<bool, MAX_MAPPED_ENTRIES>),
+    ) -> Result<(), ByteRun> {
+        if let (Some(last), Some(&last_watched)) = (self.runs.last_mut(), kinds.last()) {
             let continues = last.ram.checked_add(last.len) == Some(ram)
-                && last.image.checked_add(last.len) == Some(image);
+                && last.image.checked_add(last.len) == Some(image)
+                && last_watched == watched;
             if let (true, Some(merged)) = (continues, last.len.checked_add(len)) {
                 last.len = merged;
                 return Ok(());
             }
         }
-        self.runs.push(ByteRun { ram, image, len })
+        let run = ByteRun { ram, image, len };
+        kinds.push(watched).map_err(|_| run)?;
+        self.runs.push(run)
     }
 
     /// Whether the plan copies into (or out of) any of the `len` OD RAM bytes from offset `at`.
@@ -291,7 +353,7 @@ impl PdoPlan {
     fn ram_spans(&self) -> impl Iterator<Item = (u16, u16)> + '_ {
         let runs = self.runs.iter().map(|r| (r.ram, r.len));
         let steps = self.steps.iter().filter_map(|s| match s.slot {
-            Slot::Ram(ram) => Some((ram, s.bits.div_ceil(8))),
+            Slot::Ram(ram) | Slot::Watched(ram) => Some((ram, s.bits.div_ceil(8))),
             Slot::Const(_) => None,
         });
         runs.chain(steps)
@@ -324,12 +386,14 @@ impl PdoPlan {
     /// to image. A plan of few runs copies them in mapping order with a dispatch on each
     /// run's length ([`copy_bytes`]); one of [`GROUPED_FROM_RUNS`] or more, its groups by
     /// length first ([`Self::group_runs`]), then the others.
+    /// `runs`: all of them, or the first part (the groups by length come first).
     #[inline(always)]
-    fn copy_runs<const UNPACK: bool>(&self, from: &[u8], to: &mut [u8]) {
+    fn copy_runs<const UNPACK: bool>(&self, runs: &[ByteRun], from: &[u8], to: &mut [u8]) {
         let [words, halves, bytes] = self.class_counts;
-        let mut runs = self.runs.iter();
+        let grouped = runs.len() >= GROUPED_FROM_RUNS;
+        let mut runs = runs.iter();
         // Few runs are never grouped (one comparison, not the groups' loops).
-        if self.runs.len() >= GROUPED_FROM_RUNS {
+        if grouped {
             copy_group::<{ CLASS_LENGTHS[0] as usize }, UNPACK>(&mut runs, words, from, to);
             copy_group::<{ CLASS_LENGTHS[1] as usize }, UNPACK>(&mut runs, halves, from, to);
             copy_group::<{ CLASS_LENGTHS[2] as usize }, UNPACK>(&mut runs, bytes, from, to);
@@ -343,32 +407,74 @@ impl PdoPlan {
         }
     }
 
-    /// Copies an RxPDO image (SM2 content) into the OD RAM.
+    /// Copies an RxPDO image (SM2 content) into the OD RAM (the watched entries too, not
+    /// compared: [`Self::unpack_watching`] tells their changes).
     pub fn unpack(&self, image: &[u8], ram: &mut [u8]) {
-        self.copy_runs::<true>(image, ram);
+        self.unpack_tracked::<false>(image, ram);
+    }
+
+    /// Whether the plan has watched entries ([`Self::build_watching`]).
+    pub fn watches(&self) -> bool {
+        self.watches
+    }
+
+    /// [`Self::unpack`], and whether it changed a watched entry ([`Self::build_watching`]).
+    /// Costs a comparison per watched entry: for a plan that [`watches`](Self::watches).
+    pub fn unpack_watching(&self, image: &[u8], ram: &mut [u8]) -> bool {
+        self.unpack_tracked::<true>(image, ram)
+    }
+
+    /// The unpack; when `TRACK`, compares the watched entries as they are copied and returns
+    /// whether one changed (else `false`).
+    #[inline(always)]
+    fn unpack_tracked<const TRACK: bool>(&self, image: &[u8], ram: &mut [u8]) -> bool {
+        let mut changed = false;
+        if TRACK {
+            let (plain, watched) = split_watched(&self.runs, self.watched_runs);
+            self.copy_runs::<true>(plain, image, ram);
+            let [words, halves, bytes] = self.watched_counts;
+            let mut runs = watched.iter();
+            changed |=
+                copy_group_changed::<{ CLASS_LENGTHS[0] as usize }>(&mut runs, words, image, ram);
+            changed |=
+                copy_group_changed::<{ CLASS_LENGTHS[1] as usize }>(&mut runs, halves, image, ram);
+            changed |=
+                copy_group_changed::<{ CLASS_LENGTHS[2] as usize }>(&mut runs, bytes, image, ram);
+            for run in runs {
+                let (from, to, n) = run.span();
+                if let (Some(src), Some(dst)) = (span(image, from, n), span_mut(ram, to, n)) {
+                    changed |= copy_changed(src, dst);
+                }
+            }
+        } else {
+            self.copy_runs::<true>(&self.runs, image, ram);
+        }
         for step in &self.steps {
+            let (offset, watched) = match step.slot {
+                Slot::Ram(offset) => (offset, false),
+                Slot::Watched(offset) => (offset, TRACK),
+                Slot::Const(_) => continue,
+            };
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
-            if let Slot::Ram(offset) = step.slot {
-                if let Some(to) = ram.get_mut(usize::from(offset)..) {
-                    copy_bits(
-                        image,
-                        usize::from(step.image_bit),
-                        to,
-                        0,
-                        usize::from(step.bits),
-                    );
+            if let Some(to) = ram.get_mut(usize::from(offset)..) {
+                let (from, bits) = (usize::from(step.image_bit), usize::from(step.bits));
+                if watched {
+                    changed |= copy_bits_tracked::<true>(image, from, to, 0, bits);
+                } else {
+                    copy_bits(image, from, to, 0, bits);
                 }
             }
         }
+        changed
     }
 
     /// Copies the mapped TxPDO values from the OD RAM into an image (SM3 content).
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
-        self.copy_runs::<false>(ram, image);
+        self.copy_runs::<false>(&self.runs, ram, image);
         for step in &self.steps {
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
             let src = match step.slot {
-                Slot::Ram(offset) => ram.get(usize::from(offset)..),
+                Slot::Ram(offset) | Slot::Watched(offset) => ram.get(usize::from(offset)..),
                 Slot::Const(bytes) => Some(bytes),
             };
             if let Some(src) = src {
@@ -396,6 +502,50 @@ impl ByteRun {
     }
 }
 
+/// Whether two of `runs` share OD RAM bytes.
+fn shares_ram(runs: &[ByteRun]) -> bool {
+    runs.iter().enumerate().any(|(i, a)| {
+        runs.iter()
+            .skip(i.saturating_add(1))
+            .any(|b| any_overlaps([(a.ram, a.len)], b.ram, b.len))
+    })
+}
+
+/// Appends `runs` to `into`: when `group`, each length of [`CLASS_LENGTHS`] in turn (mapping
+/// order within a length), then the others; else as they are. Returns how many runs of each
+/// length lead (none when not grouped).
+fn append_by_length(
+    runs: &[ByteRun],
+    group: bool,
+    into: &mut Vec<ByteRun, MAX_MAPPED_ENTRIES>,
+) -> [u8; CLASS_LENGTHS.len()] {
+    let mut counts = [0; CLASS_LENGTHS.len()];
+    if !group {
+        for run in runs {
+            // Never more runs than the plan held: the pushes fit.
+            let _ = into.push(*run);
+        }
+        return counts;
+    }
+    for (count, &len) in counts.iter_mut().zip(&CLASS_LENGTHS) {
+        for run in runs.iter().filter(|r| r.len == len) {
+            let _ = into.push(*run);
+            // At most MAX_MAPPED_ENTRIES (< 256) runs.
+            *count = count.saturating_add(1);
+        }
+    }
+    for run in runs.iter().filter(|r| !CLASS_LENGTHS.contains(&r.len)) {
+        let _ = into.push(*run);
+    }
+    counts
+}
+
+/// `runs` whose last `watched` are watched: (the others, the watched).
+fn split_watched(runs: &[ByteRun], watched: u8) -> (&[ByteRun], &[ByteRun]) {
+    let plain = runs.len().saturating_sub(usize::from(watched));
+    runs.split_at_checked(plain).unwrap_or((runs, &[]))
+}
+
 /// Copies the next `count` of `runs` (all `N` bytes long) from `from` to `to`: image to OD
 /// RAM when `UNPACK`, else OD RAM to image. A run out of range is skipped.
 #[inline(always)]
@@ -414,6 +564,30 @@ fn copy_group<'a, const N: usize, const UNPACK: bool>(
             *dst = *src;
         }
     }
+}
+
+/// [`copy_group`] from an RxPDO image to the OD RAM, comparing: whether a run changed.
+#[inline(always)]
+fn copy_group_changed<'a, const N: usize>(
+    runs: &mut impl Iterator<Item = &'a ByteRun>,
+    count: u8,
+    image: &[u8],
+    ram: &mut [u8],
+) -> bool {
+    let mut changed = false;
+    for run in runs.take(usize::from(count)) {
+        let src = image
+            .get(usize::from(run.image)..)
+            .and_then(|s| s.first_chunk::<N>());
+        let dst = ram
+            .get_mut(usize::from(run.ram)..)
+            .and_then(|d| d.first_chunk_mut::<N>());
+        if let (Some(src), Some(dst)) = (src, dst) {
+            changed |= src != dst;
+            *dst = *src;
+        }
+    }
+    changed
 }
 
 /// The `n` bytes of `buf` from `at` (`None` if they are not all in it).
@@ -479,33 +653,80 @@ fn copy_bytes(from: &[u8], to: &mut [u8]) {
     }
 }
 
+/// Copies `from` into `to` (equal lengths) and returns whether `to` held other bytes. The
+/// object sizes 4 and 2 compare and copy as one word.
+#[inline(always)]
+fn copy_changed(from: &[u8], to: &mut [u8]) -> bool {
+    #[inline(always)]
+    fn word<const N: usize>(from: &[u8], to: &mut [u8]) -> Option<bool> {
+        let (src, dst) = (from.first_chunk::<N>()?, to.first_chunk_mut::<N>()?);
+        let changed = src != dst;
+        *dst = *src;
+        Some(changed)
+    }
+    let whole = match from.len() {
+        4 => word::<4>(from, to),
+        2 => word::<2>(from, to),
+        _ => None,
+    };
+    whole.unwrap_or_else(|| {
+        let mut changed = false;
+        for (d, s) in to.iter_mut().zip(from) {
+            changed |= *d != *s;
+            *d = *s;
+        }
+        changed
+    })
+}
+
 /// Copies `bits` bits, LSB first (EtherCAT bit order), from `src` at bit `src_bit` to `dst` at
 /// bit `dst_bit`. Out-of-range parts are skipped, never panicked on.
 fn copy_bits(src: &[u8], src_bit: usize, dst: &mut [u8], dst_bit: usize, bits: usize) {
+    copy_bits_tracked::<false>(src, src_bit, dst, dst_bit, bits);
+}
+
+/// [`copy_bits`]; when `TRACK`, returns whether a copied bit changed in `dst` (else `false`).
+fn copy_bits_tracked<const TRACK: bool>(
+    src: &[u8],
+    src_bit: usize,
+    dst: &mut [u8],
+    dst_bit: usize,
+    bits: usize,
+) -> bool {
     if src_bit % 8 == 0 && dst_bit % 8 == 0 && bits % 8 == 0 {
         let (s, d, n) = (src_bit / 8, dst_bit / 8, bits / 8);
-        if let (Some(from), Some(to)) = (span(src, s, n), span_mut(dst, d, n)) {
-            copy_bytes(from, to);
+        let (Some(from), Some(to)) = (span(src, s, n), span_mut(dst, d, n)) else {
+            return false;
+        };
+        if TRACK {
+            return copy_changed(from, to);
         }
-        return;
+        copy_bytes(from, to);
+        return false;
     }
     // Bits whose position does not fit a usize lie out of range on either side.
     let (Some(src_end), Some(dst_end)) = (src_bit.checked_add(bits), dst_bit.checked_add(bits))
     else {
-        return;
+        return false;
     };
+    let mut changed = false;
     for (sb, db) in (src_bit..src_end).zip(dst_bit..dst_end) {
-        let Some(&byte) = src.get(sb / 8) else { return };
+        let Some(&byte) = src.get(sb / 8) else {
+            break;
+        };
         let Some(out) = dst.get_mut(db / 8) else {
-            return;
+            break;
         };
         let mask = 1u8 << (db % 8);
+        let was = *out;
         if byte & (1 << (sb % 8)) != 0 {
             *out |= mask;
         } else {
             *out &= !mask;
         }
+        changed |= TRACK && *out != was;
     }
+    changed
 }
 
 #[cfg(test)]
@@ -698,6 +919,124 @@ mod tests {
         assert_eq!((plan.entries(), plan.copies()), (2, 2));
     }
 
+    /// A watched entry (607Ah, next to the controlword in the image and in the OD RAM) is
+    /// copied apart from the others and compared: `unpack_watching` tells a change of its
+    /// bytes, not of the others'; the plain plan merges the two and watches nothing.
+    #[test]
+    fn a_watched_entry_is_copied_apart_and_its_changes_told() {
+        let mut ram = [0u8; 31];
+        od_with(&mut ram, &[0x6040_0010, 0x607A_0020]);
+        let od = Dictionary::new(&PROFILE, &mut ram);
+        // 607Ah is RAM 2..6.
+        let target = |at: u16, len: u16| at < 6 && at + len > 2;
+        let plan = PdoPlan::build_watching(&od, Direction::Rx, target).unwrap();
+        let plain = PdoPlan::build(&od, Direction::Rx).unwrap();
+        assert!(plan.watches() && !plain.watches());
+        assert_eq!((plan.entries(), plan.copies()), (2, 2), "not merged");
+        assert_eq!((plain.entries(), plain.copies()), (2, 1));
+        let mut ram = [0u8; 31];
+        let image = [0x0F, 0x00, 0x78, 0x56, 0x34, 0x12];
+        assert!(plan.unpack_watching(&image, &mut ram), "607Ah set");
+        assert_eq!(&ram[0..6], &image);
+        assert!(!plan.unpack_watching(&image, &mut ram), "the same again");
+        let image = [0x1F, 0x00, 0x78, 0x56, 0x34, 0x12];
+        assert!(
+            !plan.unpack_watching(&image, &mut ram),
+            "the controlword only"
+        );
+        assert_eq!(ram[0], 0x1F);
+        let image = [0x1F, 0x00, 0x78, 0x56, 0x34, 0x13];
+        assert!(
+            plan.unpack_watching(&image, &mut ram),
+            "the last byte of 607Ah"
+        );
+        assert_eq!(&ram[0..6], &image);
+        // The plain unpack copies the watched entry too, without telling.
+        let mut other = [0u8; 31];
+        plan.unpack(&image, &mut other);
+        assert_eq!(other, ram);
+    }
+
+    /// A watched entry off the byte boundaries of the image (a bit copy) tells its changes too.
+    #[test]
+    fn a_watched_bit_entry_tells_its_changes() {
+        let mut ram = [0u8; 31];
+        // The 1-bit flag 2000h (RAM 6), 7 bits of padding, the controlword.
+        od_with(&mut ram, &[0x2000_0001, 0x0000_0007, 0x6040_0010]);
+        let od = Dictionary::new(&PROFILE, &mut ram);
+        let plan = PdoPlan::build_watching(&od, Direction::Rx, |at, _| at == 6).unwrap();
+        assert!(plan.watches());
+        let mut ram = [0u8; 31];
+        assert!(
+            !plan.unpack_watching(&[0x00, 0x34, 0x12], &mut ram),
+            "flag still 0"
+        );
+        assert!(
+            plan.unpack_watching(&[0xFF, 0x34, 0x12], &mut ram),
+            "flag set"
+        );
+        assert_eq!((ram[6], &ram[0..2]), (0x01, &[0x34, 0x12][..]));
+        assert!(
+            !plan.unpack_watching(&[0x01, 0x00, 0x00], &mut ram),
+            "only the controlword"
+        );
+        assert!(
+            plan.unpack_watching(&[0x00, 0x00, 0x00], &mut ram),
+            "flag cleared"
+        );
+        assert_eq!(ram[6], 0x00);
+    }
+
+    /// Plain and watched runs, each kind grouped by length: every run is copied to its place,
+    /// and a change of each watched run alone is told, of each plain run alone not.
+    #[test]
+    fn watched_runs_grouped_by_length_tell_each_change() {
+        // (ram, image, len), none adjacent; the last five watched.
+        let spans = [
+            (40, 0, 2),
+            (10, 2, 4),
+            (30, 6, 1),
+            (0, 7, 4),
+            (60, 11, 4),
+            (70, 15, 1),
+            (80, 16, 2),
+            (90, 18, 3),
+            (100, 21, 4),
+        ];
+        let runs = spans.map(|(ram, image, len)| ByteRun { ram, image, len });
+        let mut plan = PdoPlan {
+            runs: Vec::from_slice(&runs).unwrap(),
+            watched_runs: 5,
+            ..PdoPlan::default()
+        };
+        plan.group_runs();
+        assert_eq!(plan.class_counts, [2, 1, 1], "the plain runs grouped");
+        assert_eq!(plan.watched_counts, [2, 1, 1], "the watched runs grouped");
+        let watched_lens: Vec<u16, 8> = plan.runs[4..].iter().map(|r| r.len).collect();
+        assert_eq!(
+            watched_lens.as_slice(),
+            &[4, 4, 2, 1, 3],
+            "grouped, the others last"
+        );
+        let image: [u8; 25] = core::array::from_fn(|i| 0x80 + i as u8);
+        let mut ram = [0u8; 112];
+        assert!(plan.unpack_watching(&image, &mut ram));
+        for (r, i, n) in spans.map(|(r, i, n)| (usize::from(r), usize::from(i), usize::from(n))) {
+            assert_eq!(&ram[r..r + n], &image[i..i + n], "run at image {i}");
+        }
+        assert!(!plan.unpack_watching(&image, &mut ram), "the same again");
+        for (k, &(_, at, len)) in spans.iter().enumerate() {
+            let mut changed = image;
+            changed[usize::from(at + len - 1)] ^= 0xFF;
+            assert_eq!(
+                plan.unpack_watching(&changed, &mut ram),
+                k >= 4,
+                "a change of run {k} alone"
+            );
+            plan.unpack(&image, &mut ram);
+        }
+    }
+
     #[test]
     fn writes_ram_names_exactly_the_mapped_entries_bytes() {
         let mut ram = [0u8; 31];
@@ -772,7 +1111,6 @@ mod tests {
     #[test]
     fn pack_copies_constants_and_ram() {
         let plan = PdoPlan {
-            class_counts: [0; CLASS_LENGTHS.len()],
             runs: Vec::from_slice(&[ByteRun {
                 ram: 2,
                 image: 2,
@@ -787,6 +1125,7 @@ mod tests {
             .unwrap(),
             entries: 2,
             bits: 48,
+            ..PdoPlan::default()
         };
         let mut ram = [0u8; 31];
         ram[2..6].copy_from_slice(&[1, 2, 3, 4]);

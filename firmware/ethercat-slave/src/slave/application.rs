@@ -102,6 +102,20 @@ pub trait Application {
         let _ = outputs;
     }
 
+    /// Whether the application keeps something converted from the `len` OD RAM bytes from
+    /// offset `at` (a setting) and must learn when an RxPDO changes them
+    /// ([`Self::watched_outputs_changed`]). Asked for each mapped entry when the RxPDO plan is
+    /// built (PREOP → SAFEOP). Default: nothing is watched.
+    fn watches_outputs(&self, at: u16, len: u16) -> bool {
+        let _ = (at, len);
+        false
+    }
+
+    /// In OP, the RxPDO just unpacked changed OD RAM bytes the application watches
+    /// ([`Self::watches_outputs`]): called in the cycle, before [`Self::cycle`]. Default:
+    /// nothing.
+    fn watched_outputs_changed(&mut self) {}
+
     /// Called at the start of every ESC-event round, in every EtherCAT state (on a board at
     /// least every few ms, also without bus traffic): work that is not tied to the
     /// process-data cycle, e.g. a service that runs across several mailbox requests. Must be

@@ -51,7 +51,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
                 pdi.read(device.outputs.start, image)?;
             }
             if state == AlState::Op {
-                self.rx_plan.unpack(&self.rx_image, &mut self.ram);
+                // Only a plan with watched entries compares (the default mappings have none).
+                if !self.rx_plan.watches() {
+                    self.rx_plan.unpack(&self.rx_image, &mut self.ram);
+                } else if self.rx_plan.unpack_watching(&self.rx_image, &mut self.ram) {
+                    self.app.watched_outputs_changed();
+                }
             }
         }
         Ok(Some(self.sync.cycle_ns))

@@ -12,7 +12,10 @@
 //! existing, mappable in the direction and of its bit length, dummies 0..7, the image within the
 //! profile's limit), refusing the others with 0x0025 (outputs) / 0x0024 (inputs); on an
 //! accepted plan, `pack(unpack(x)) = x` on every mapped bit, unpack writes no OD RAM byte
-//! outside the mapped entries and pack no image bit outside them.
+//! outside the mapped entries and pack no image bit outside them. An RxPDO plan built watching
+//! some OD RAM bytes (`PdoPlan::build_watching`, two fixed choices) unpacks to the same OD RAM
+//! as the plain plan, with or without the comparison, and `unpack_watching` reports a change
+//! whenever a watched entry's bytes changed, and only then where no two entries share them.
 
 use firmware::od::{Dictionary, Object, Value};
 use firmware::pdo::{self, Direction, PdoPlan, MAX_IMAGE, MAX_MAPPED_ENTRIES};
@@ -150,7 +153,96 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
             )))
         }
     };
-    round_trip(&plan.0, &plan.1, &mut input, od.ram())
+    let (plan, model) = plan;
+    if dir == Direction::Rx {
+        for watched in WATCHES {
+            let Ok(watching) = PdoPlan::build_watching(&od, dir, watched) else {
+                return Err(Violation(
+                    "a plan refused when built watching, accepted plainly".into(),
+                ));
+            };
+            if watching.byte_len() != plan.byte_len() || watching.entries() != plan.entries() {
+                return Err(Violation(
+                    "the watching plan lays the image out differently".into(),
+                ));
+            }
+            let mut probe = input.clone();
+            watch_changes(&plan, &watching, &model, watched, &mut probe, od.ram())?;
+        }
+    }
+    round_trip(&plan, &model, &mut input, od.ram())
+}
+
+/// The choices of watched OD RAM bytes tried: every other 3-byte block (neighbours of both
+/// kinds), everything.
+const WATCHES: [fn(u16, u16) -> bool; 2] = [
+    |at, len| (at..at.saturating_add(len)).any(|b| (b / 3) % 2 == 0),
+    |_, _| true,
+];
+
+/// The watching plan unpacks `image` as the plain one does (both ways), and reports a change
+/// exactly when a watched entry's OD RAM bytes changed (at least then where entries share
+/// bytes: a later copy may put back what an earlier one changed).
+fn watch_changes(
+    plain: &PdoPlan,
+    watching: &PdoPlan,
+    model: &[Mapped],
+    watched: fn(u16, u16) -> bool,
+    input: &mut Input<'_>,
+    ram0: &[u8],
+) -> Result<(), Violation> {
+    let image: Vec<u8> = (0..plain.byte_len()).map(|_| input.u8()).collect();
+    let mut expected = ram0.to_vec();
+    plain.unpack(&image, &mut expected);
+    let mut unpacked = ram0.to_vec();
+    watching.unpack(&image, &mut unpacked);
+    let mut compared = ram0.to_vec();
+    let changed = watching.unpack_watching(&image, &mut compared);
+    if unpacked != expected || compared != expected {
+        return Err(Violation(
+            "the watching plan unpacks other OD RAM bytes".into(),
+        ));
+    }
+    let spans: Vec<(usize, usize)> = model
+        .iter()
+        .filter_map(|m| Some((m.ram?, m.bits.div_ceil(8))))
+        .filter(|&(at, n)| watched(at as u16, n as u16))
+        .collect();
+    let watched_changed = spans
+        .iter()
+        .any(|&(at, n)| ram0[at..at + n] != expected[at..at + n]);
+    // Entries per OD RAM byte: a watched byte another entry writes too may be put back.
+    let mut owners = vec![0u8; ram0.len()];
+    for m in model {
+        if let Some(at) = m.ram {
+            for o in owners.iter_mut().skip(at).take(m.bits.div_ceil(8)) {
+                *o += 1;
+            }
+        }
+    }
+    let shared = spans
+        .iter()
+        .any(|&(at, n)| owners[at..at + n].iter().any(|&o| o > 1));
+    if watched_changed && !changed {
+        return Err(Violation(
+            "a watched entry changed and unpack_watching did not tell".into(),
+        ));
+    }
+    if changed && !watched_changed && !shared {
+        return Err(Violation(
+            "unpack_watching told a change no watched entry has".into(),
+        ));
+    }
+    if !watching.watches() && changed {
+        return Err(Violation(
+            "a plan that watches nothing told a change".into(),
+        ));
+    }
+    // The same image again changes nothing (where no entries share bytes).
+    if !shared && watching.unpack_watching(&image, &mut compared) {
+        return Err(Violation("the same image told a change twice".into()));
+    }
+    Ok(())
 }
 
 /// A mapping entry: one of the profile's mappable entries with its bit length, padding, or any

@@ -130,7 +130,9 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
     ) -> Result<Result<(), AlStatusCode>, P::Error> {
         let device = self.profile.device;
         let od = Dictionary::new(self.profile, &mut self.ram);
-        let rx = PdoPlan::build(&od, Direction::Rx);
+        let app = &self.app;
+        let rx =
+            PdoPlan::build_watching(&od, Direction::Rx, |at, len| app.watches_outputs(at, len));
         let tx = PdoPlan::build(&od, Direction::Tx);
         let (rx, tx) = match (rx, tx) {
             (Ok(rx), Ok(tx)) => (rx, tx),
