@@ -241,6 +241,8 @@ pub struct Output {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TouchProbes {
     probes: [Probe; 2],
+    /// 60B9h of the last step.
+    status: u16,
 }
 
 impl TouchProbes {
@@ -255,7 +257,10 @@ impl TouchProbes {
             values: [0; 2],
             counters: [0; 2],
         };
-        Self { probes: [OFF; 2] }
+        Self {
+            probes: [OFF; 2],
+            status: 0,
+        }
     }
 
     /// Whether a probe is enabled (the drive then reads the captures every cycle).
@@ -298,20 +303,30 @@ impl TouchProbes {
         self.step(&inputs, rules)
     }
 
+    /// The 60B9h of the last step when a step with `function` and `homing` and the inputs of
+    /// the last step (no edge, pulse or level change since) would change nothing and store
+    /// nothing: each probe's function (as `rules` and `homing` leave it) is the one it last
+    /// stepped with. The drive then skips the step (its cost in the SYNC0 handler), e.g. every
+    /// cycle of a profile that shows the input level in 60B9h while no probe is enabled.
+    pub fn unchanged_status(&self, function: u16, homing: bool, rules: &Rules) -> Option<u16> {
+        let [f1, f2] = probe_functions(function, homing, rules);
+        let [p1, p2] = &self.probes;
+        (f1 == p1.previous_function && f2 == p2.previous_function).then_some(self.status)
+    }
+
     /// One cycle.
     pub fn step(&mut self, i: &Inputs, rules: &Rules) -> Output {
-        let [low, high] = (i.function & rules.function_bits).to_le_bytes();
-        let [off1, off2] = rules.off_while_homing.map(|off| off && i.homing);
-        let gate = |f: u8, off: bool| if off { f & !function::ENABLE } else { f };
+        let [f1, f2] = probe_functions(i.function, i.homing, rules);
         let [p1, p2] = &mut self.probes;
         let [in1, in2] = i.probes;
         // Every store counts (wrapping): a changed counter is a stored position.
         let counted = [p1.counters, p2.counters];
-        let s1 = p1.step(gate(low, off1), in1, i.index, rules);
-        let s2 = p2.step(gate(high, off2), in2, i.index, rules);
+        let s1 = p1.step(f1, in1, i.index, rules);
+        let s2 = p2.step(f2, in2, i.index, rules);
+        self.status = u16::from_le_bytes([s1, s2]);
         Output {
             stored: counted != [p1.counters, p2.counters],
-            status: u16::from_le_bytes([s1, s2]),
+            status: self.status,
             values: [p1.values[0], p1.values[1], p2.values[0], p2.values[1]],
             counters: [
                 p1.counters[0],
@@ -321,6 +336,15 @@ impl TouchProbes {
             ],
         }
     }
+}
+
+/// Each probe's function byte of 60B8h `function`: the bits `rules` defines, the enable off
+/// while `homing` runs where the profile switches the probe off then.
+fn probe_functions(function: u16, homing: bool, rules: &Rules) -> [u8; 2] {
+    let [low, high] = (function & rules.function_bits).to_le_bytes();
+    let [off1, off2] = rules.off_while_homing.map(|off| off && homing);
+    let gate = |f: u8, off: bool| if off { f & !function::ENABLE } else { f };
+    [gate(low, off1), gate(high, off2)]
 }
 
 #[cfg(test)]
@@ -508,10 +532,12 @@ mod tests {
 
     #[test]
     fn a_step_with_unchanged_captures_is_the_step_with_the_last_inputs() {
-        // Two drives side by side: one steps with its inputs every cycle, the other passes them
-        // only when an edge, pulse or level changed. Scripted functions (enable, disable,
+        // Three drives side by side: one steps with its inputs every cycle, the second passes
+        // them only when an edge, pulse or level changed, the third also skips the step where
+        // `unchanged_status` says it would change nothing. Scripted functions (enable, disable,
         // single, continuous, index source, both probes) and edges between them; every output
-        // must be the same, under every bit 7 rule (the RSE shows the input level).
+        // must be the same, and the skipping drive's probes as the stepping ones, under every
+        // bit 7 rule (the RSE shows the input level).
         let functions: [u16; 12] = [
             0,
             TP1_SINGLE_BOTH,
@@ -535,9 +561,10 @@ mod tests {
             };
             let mut every = Bench::default();
             let mut lazy = TouchProbes::new();
+            let mut skipping = TouchProbes::new();
             let mut passed = every.inputs;
             let mut previous = Output::default();
-            let mut stores = 0;
+            let (mut stores, mut skips) = (0, 0);
             for cycle in 0..240usize {
                 let function = functions[(cycle / 5) % functions.len()];
                 // An edge on some cycles only, both probes and the index in turn.
@@ -551,15 +578,31 @@ mod tests {
                 let expected = every.step(function, &rules);
                 let changed =
                     every.inputs.probes != passed.probes || every.inputs.index != passed.index;
+                let skipped = (!changed)
+                    .then(|| skipping.unchanged_status(function, homing, &rules))
+                    .flatten();
                 let got = if changed {
                     passed = every.inputs;
+                    skipping.step(&every.inputs, &rules);
                     lazy.step(&every.inputs, &rules)
                 } else {
+                    if skipped.is_none() {
+                        skipping.step_unchanged(function, homing, &rules);
+                    }
                     lazy.step_unchanged(function, homing, &rules)
                 };
                 assert_eq!(
                     got, expected,
                     "{bit7:?}, cycle {cycle}, function {function:#06x}"
+                );
+                if let Some(status) = skipped {
+                    skips += 1;
+                    assert_eq!(status, expected.status, "{bit7:?}, cycle {cycle}");
+                    assert!(!expected.stored, "{bit7:?}, cycle {cycle}: a skipped store");
+                }
+                assert_eq!(
+                    skipping, lazy,
+                    "{bit7:?}, cycle {cycle}: the probes as stepped"
                 );
                 // What the drive relies on to write 60BAh–60BDh and 60D5h–60D8h only on a store.
                 if expected.stored {
@@ -578,6 +621,7 @@ mod tests {
                 stores > 10,
                 "{bit7:?}: the script stores positions ({stores})"
             );
+            assert!(skips > 60, "{bit7:?}: steps skipped ({skips})");
         }
     }
 }

@@ -1689,7 +1689,15 @@ impl DriveAxis {
             return;
         }
         let homing = self.profile_modes.homing_running();
-        let out = match link.captures_if_new(self.captures_seen) {
+        let captures = link.captures_if_new(self.captures_seen);
+        if let (None, false) = (&captures, self.probe_positions_stale) {
+            // No edge and the functions the probes last stepped with: nothing would change.
+            if let Some(status) = self.touch_probes.unchanged_status(function, homing, rules) {
+                write_u16(ram, vars.touch_probe_status, status);
+                return;
+            }
+        }
+        let out = match captures {
             Some((c, sequence)) => {
                 self.captures_seen = sequence;
                 let shift = self.position_shift;
