@@ -87,9 +87,6 @@ impl Direction {
 enum Slot {
     /// OD RAM byte offset.
     Ram(u16),
-    /// OD RAM byte offset of a watched entry ([`PdoPlan::build_watching`]) that is not on byte
-    /// boundaries in the image: [`PdoPlan::unpack_watching`] compares as it copies.
-    Watched(u16),
     /// A constant (TxPDO only).
     Const(&'static [u8]),
 }
@@ -151,6 +148,9 @@ pub struct PdoPlan {
     /// How many of the watched runs each group of [`CLASS_LENGTHS`] holds, in turn from the
     /// first watched run (the others follow).
     watched_counts: [u8; CLASS_LENGTHS.len()],
+    /// How many steps at the end of `steps` write watched bytes (entries off the byte
+    /// boundaries of the image: a bit copy).
+    watched_steps: u8,
     /// Whether a run or a step is watched.
     watches: bool,
     /// Mapped entries (padding excluded).
@@ -179,8 +179,8 @@ impl PdoPlan {
     ) -> Result<Self, AlStatusCode> {
         let bad = dir.invalid_mapping();
         let mut plan = Self::default();
-        // Whether each run is watched (a run holds entries of one kind).
-        let mut kinds: Vec<bool, MAX_MAPPED_ENTRIES> = Vec::new();
+        // Whether each run and each step is watched (a run holds entries of one kind).
+        let mut kinds = Kinds::default();
         let assign = dir.assign_index();
         let pdo_count = od.read_u32(assign, 0).ok_or(bad)?;
         for n in 1..=pdo_count {
@@ -196,39 +196,19 @@ impl PdoPlan {
         if plan.byte_len() > max_bytes {
             return Err(bad);
         }
-        plan.set_watched_last(&kinds);
+        // The two kinds never share OD RAM bytes (the same bytes are watched or not): their
+        // order does not change what an unpack leaves.
+        plan.watched_runs = watched_last(&mut plan.runs, &kinds.runs);
+        plan.watched_steps = watched_last(&mut plan.steps, &kinds.steps);
         plan.group_runs();
-        plan.watches = plan.watched_runs > 0
-            || plan
-                .steps
-                .iter()
-                .any(|s| matches!(s.slot, Slot::Watched(_)));
+        plan.watches = plan.watched_runs > 0 || plan.watched_steps > 0;
         Ok(plan)
-    }
-
-    /// Moves the runs `watched` marks (one flag per run) after the others, each kind in
-    /// mapping order. Runs of the two kinds never share OD RAM bytes (the same bytes are
-    /// watched or not), so that the order between the kinds does not change what an unpack
-    /// leaves.
-    fn set_watched_last(&mut self, watched: &[bool]) {
-        let mut ordered: Vec<ByteRun, MAX_MAPPED_ENTRIES> = Vec::new();
-        let mut count = 0u8;
-        for last in [false, true] {
-            for (run, _) in self.runs.iter().zip(watched).filter(|(_, &w)| w == last) {
-                // As many runs as before: the pushes fit.
-                let _ = ordered.push(*run);
-                // At most MAX_MAPPED_ENTRIES (< 256) runs.
-                count = count.saturating_add(u8::from(last));
-            }
-        }
-        self.watched_runs = count;
-        self.runs = ordered;
     }
 
     /// Orders the runs by [`CLASS_LENGTHS`] (stable: mapping order within each group) and
     /// counts each group: the runs copied plainly when there are at least
     /// [`GROUPED_FROM_RUNS`] of them, the watched ones at the end
-    /// ([`Self::set_watched_last`]) among themselves (their comparison costs more than a
+    /// (`watched_last`) among themselves (their comparison costs more than a
     /// group's set-up). Not where two runs share OD RAM bytes (an object mapped twice): then
     /// the runs stay in mapping order, all as others, so that an RxPDO's later copy still
     /// wins as mapped.
@@ -246,10 +226,7 @@ impl PdoPlan {
         od: &Dictionary<'_>,
         dir: Direction,
         pdo: u16,
-        (watched, kinds): (
-            &impl Fn(u16, u16) -> bool,
-            &mut Vec<bool, MAX_MAPPED_ENTRIES>,
-        ),
+        (watched, kinds): (&impl Fn(u16, u16) -> bool, &mut Kinds),
     ) -> Result<(), AlStatusCode> {
         let bad = dir.invalid_mapping();
         let entries = od.read_u32(pdo, 0).ok_or(bad)?;
@@ -299,17 +276,13 @@ impl PdoPlan {
                 (Slot::Ram(ram), Some((image, len))) => {
                     let image = u16::try_from(image).map_err(|_| bad)?;
                     let len = u16::try_from(len).map_err(|_| bad)?;
-                    self.add_run(ram, image, len, (watch, kinds))
+                    self.add_run(ram, image, len, (watch, &mut kinds.runs))
                         .map_err(|_| bad)?;
                 }
-                (Slot::Ram(ram), None) if watch => {
-                    let step = CopyStep {
-                        slot: Slot::Watched(ram),
-                        ..step
-                    };
+                _ => {
                     self.steps.push(step).map_err(|_| bad)?;
+                    kinds.steps.push(watch).map_err(|_| bad)?;
                 }
-                _ => self.steps.push(step).map_err(|_| bad)?,
             }
             self.bits = self.bits.checked_add(bits).ok_or(bad)?;
         }
@@ -353,7 +326,7 @@ impl PdoPlan {
     fn ram_spans(&self) -> impl Iterator<Item = (u16, u16)> + '_ {
         let runs = self.runs.iter().map(|r| (r.ram, r.len));
         let steps = self.steps.iter().filter_map(|s| match s.slot {
-            Slot::Ram(ram) | Slot::Watched(ram) => Some((ram, s.bits.div_ceil(8))),
+            Slot::Ram(ram) => Some((ram, s.bits.div_ceil(8))),
             Slot::Const(_) => None,
         });
         runs.chain(steps)
@@ -449,19 +422,25 @@ impl PdoPlan {
         } else {
             self.copy_runs::<true>(&self.runs, image, ram);
         }
-        for step in &self.steps {
-            let (offset, watched) = match step.slot {
-                Slot::Ram(offset) => (offset, false),
-                Slot::Watched(offset) => (offset, TRACK),
-                Slot::Const(_) => continue,
-            };
+        let (plain, watched) = if TRACK {
+            split_watched(&self.steps, self.watched_steps)
+        } else {
+            (self.steps.as_slice(), &[][..])
+        };
+        for step in plain {
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
-            if let Some(to) = ram.get_mut(usize::from(offset)..) {
-                let (from, bits) = (usize::from(step.image_bit), usize::from(step.bits));
-                if watched {
-                    changed |= copy_bits_tracked::<true>(image, from, to, 0, bits);
-                } else {
+            if let Slot::Ram(offset) = step.slot {
+                if let Some(to) = ram.get_mut(usize::from(offset)..) {
+                    let (from, bits) = (usize::from(step.image_bit), usize::from(step.bits));
                     copy_bits(image, from, to, 0, bits);
+                }
+            }
+        }
+        for step in watched {
+            if let Slot::Ram(offset) = step.slot {
+                if let Some(to) = ram.get_mut(usize::from(offset)..) {
+                    let (from, bits) = (usize::from(step.image_bit), usize::from(step.bits));
+                    changed |= copy_bits_tracked::<true>(image, from, to, 0, bits);
                 }
             }
         }
@@ -474,7 +453,7 @@ impl PdoPlan {
         for step in &self.steps {
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
             let src = match step.slot {
-                Slot::Ram(offset) | Slot::Watched(offset) => ram.get(usize::from(offset)..),
+                Slot::Ram(offset) => ram.get(usize::from(offset)..),
                 Slot::Const(bytes) => Some(bytes),
             };
             if let Some(src) = src {
@@ -540,10 +519,35 @@ fn append_by_length(
     counts
 }
 
-/// `runs` whose last `watched` are watched: (the others, the watched).
-fn split_watched(runs: &[ByteRun], watched: u8) -> (&[ByteRun], &[ByteRun]) {
-    let plain = runs.len().saturating_sub(usize::from(watched));
-    runs.split_at_checked(plain).unwrap_or((runs, &[]))
+/// Whether each run and each step of a plan being built is watched
+/// ([`PdoPlan::build_watching`]).
+#[derive(Default)]
+struct Kinds {
+    runs: Vec<bool, MAX_MAPPED_ENTRIES>,
+    steps: Vec<bool, MAX_MAPPED_ENTRIES>,
+}
+
+/// Moves the `items` that `watched` marks (one flag per item) after the others, each kind in
+/// mapping order; returns how many are watched.
+fn watched_last<T: Copy>(items: &mut Vec<T, MAX_MAPPED_ENTRIES>, watched: &[bool]) -> u8 {
+    let mut ordered: Vec<T, MAX_MAPPED_ENTRIES> = Vec::new();
+    let mut count = 0u8;
+    for last in [false, true] {
+        for (item, _) in items.iter().zip(watched).filter(|(_, &w)| w == last) {
+            // As many items as before: the pushes fit.
+            let _ = ordered.push(*item);
+            // At most MAX_MAPPED_ENTRIES (< 256) items.
+            count = count.saturating_add(u8::from(last));
+        }
+    }
+    *items = ordered;
+    count
+}
+
+/// `items` whose last `watched` are watched: (the others, the watched).
+fn split_watched<T>(items: &[T], watched: u8) -> (&[T], &[T]) {
+    let plain = items.len().saturating_sub(usize::from(watched));
+    items.split_at_checked(plain).unwrap_or((items, &[]))
 }
 
 /// Copies the next `count` of `runs` (all `N` bytes long) from `from` to `to`: image to OD
