@@ -164,7 +164,7 @@ impl PdoPlan {
     /// direction or has another bit length, or a plan beyond the buffer limits or the
     /// profile's `max_process_bytes` gives 0x0025 (outputs) / 0x0024 (inputs).
     pub fn build(od: &Dictionary<'_>, dir: Direction) -> Result<Self, AlStatusCode> {
-        Self::build_watching(od, dir, |_, _| false)
+        Self::build_watching(od, dir, &|_, _| false)
     }
 
     /// [`Self::build`], with the OD RAM bytes `watched(offset, length)` names watched: the
@@ -175,7 +175,8 @@ impl PdoPlan {
     pub fn build_watching(
         od: &Dictionary<'_>,
         dir: Direction,
-        watched: impl Fn(u16, u16) -> bool,
+        // A trait object: one copy of the builder's code for every caller.
+        watched: &dyn Fn(u16, u16) -> bool,
     ) -> Result<Self, AlStatusCode> {
         let bad = dir.invalid_mapping();
         let mut plan = Self::default();
@@ -189,7 +190,7 @@ impl PdoPlan {
             if !dir.mapping_range().contains(&pdo) {
                 return Err(bad);
             }
-            plan.add_pdo(od, dir, pdo, (&watched, &mut kinds))?;
+            plan.add_pdo(od, dir, pdo, (watched, &mut kinds))?;
         }
         // The profile's limit on the image of one direction (e.g. 32 bytes on the SDV3-E).
         let max_bytes = usize::from(od.profile().device.max_process_bytes).min(MAX_IMAGE);
@@ -226,7 +227,7 @@ impl PdoPlan {
         od: &Dictionary<'_>,
         dir: Direction,
         pdo: u16,
-        (watched, kinds): (&impl Fn(u16, u16) -> bool, &mut Kinds),
+        (watched, kinds): (&dyn Fn(u16, u16) -> bool, &mut Kinds),
     ) -> Result<(), AlStatusCode> {
         let bad = dir.invalid_mapping();
         let entries = od.read_u32(pdo, 0).ok_or(bad)?;
@@ -933,7 +934,7 @@ mod tests {
         let od = Dictionary::new(&PROFILE, &mut ram);
         // 607Ah is RAM 2..6.
         let target = |at: u16, len: u16| at < 6 && at + len > 2;
-        let plan = PdoPlan::build_watching(&od, Direction::Rx, target).unwrap();
+        let plan = PdoPlan::build_watching(&od, Direction::Rx, &target).unwrap();
         let plain = PdoPlan::build(&od, Direction::Rx).unwrap();
         assert!(plan.watches() && !plain.watches());
         assert_eq!((plan.entries(), plan.copies()), (2, 2), "not merged");
@@ -968,7 +969,7 @@ mod tests {
         // The 1-bit flag 2000h (RAM 6), 7 bits of padding, the controlword.
         od_with(&mut ram, &[0x2000_0001, 0x0000_0007, 0x6040_0010]);
         let od = Dictionary::new(&PROFILE, &mut ram);
-        let plan = PdoPlan::build_watching(&od, Direction::Rx, |at, _| at == 6).unwrap();
+        let plan = PdoPlan::build_watching(&od, Direction::Rx, &|at, _| at == 6).unwrap();
         assert!(plan.watches());
         let mut ram = [0u8; 31];
         assert!(

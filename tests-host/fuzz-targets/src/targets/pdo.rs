@@ -156,7 +156,7 @@ pub fn run(data: &[u8]) -> Result<(), Violation> {
     let (plan, model) = plan;
     if dir == Direction::Rx {
         for watched in WATCHES {
-            let Ok(watching) = PdoPlan::build_watching(&od, dir, watched) else {
+            let Ok(watching) = PdoPlan::build_watching(&od, dir, &watched) else {
                 return Err(Violation(
                     "a plan refused when built watching, accepted plainly".into(),
                 ));

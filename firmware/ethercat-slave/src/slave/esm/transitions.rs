@@ -132,7 +132,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let od = Dictionary::new(self.profile, &mut self.ram);
         let app = &self.app;
         let rx =
-            PdoPlan::build_watching(&od, Direction::Rx, |at, len| app.watches_outputs(at, len));
+            PdoPlan::build_watching(&od, Direction::Rx, &|at, len| app.watches_outputs(at, len));
         let tx = PdoPlan::build(&od, Direction::Tx);
         let (rx, tx) = match (rx, tx) {
             (Ok(rx), Ok(tx)) => (rx, tx),
