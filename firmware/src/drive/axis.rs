@@ -184,7 +184,8 @@ pub struct DriveAxis {
     settings_due: Groups,
     /// Which setting groups read an OD RAM offset (of `vars`).
     setting_offsets: GroupsByOffset,
-    /// The setting groups the RxPDO mapping writes: read in every cycle.
+    /// The setting groups the RxPDO mapping writes: read again in a cycle whose outputs
+    /// changed one ([`Self::mapped_settings_changed`]).
     settings_live: Groups,
     /// Safe torque off holds (the axis' last feedback).
     safe_torque_off: bool,

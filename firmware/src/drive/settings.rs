@@ -619,7 +619,7 @@ mod tests {
     }
 
     #[test]
-    fn only_the_groups_the_outputs_map_are_read_every_cycle() {
+    fn the_groups_the_outputs_map_are_live() {
         let live = |entries: &[(u16, u8, u8)]| live_groups(vars(), &plan_of(entries));
         // The default mapping (controlword, target position, mode): no setting.
         assert_eq!(
