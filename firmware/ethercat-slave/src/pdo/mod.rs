@@ -368,9 +368,9 @@ impl PdoPlan {
         let mut runs = runs.iter();
         // Few runs are never grouped (one comparison, not the groups' loops).
         if grouped {
-            copy_group::<{ CLASS_LENGTHS[0] as usize }, UNPACK>(&mut runs, words, from, to);
-            copy_group::<{ CLASS_LENGTHS[1] as usize }, UNPACK>(&mut runs, halves, from, to);
-            copy_group::<{ CLASS_LENGTHS[2] as usize }, UNPACK>(&mut runs, bytes, from, to);
+            copy_group::<{ CLASS_LENGTHS[0] as usize }, UNPACK, false>(&mut runs, words, from, to);
+            copy_group::<{ CLASS_LENGTHS[1] as usize }, UNPACK, false>(&mut runs, halves, from, to);
+            copy_group::<{ CLASS_LENGTHS[2] as usize }, UNPACK, false>(&mut runs, bytes, from, to);
         }
         for run in runs {
             let (image, ram, n) = run.span();
@@ -408,12 +408,15 @@ impl PdoPlan {
             self.copy_runs::<true>(plain, image, ram);
             let [words, halves, bytes] = self.watched_counts;
             let mut runs = watched.iter();
-            changed |=
-                copy_group_changed::<{ CLASS_LENGTHS[0] as usize }>(&mut runs, words, image, ram);
-            changed |=
-                copy_group_changed::<{ CLASS_LENGTHS[1] as usize }>(&mut runs, halves, image, ram);
-            changed |=
-                copy_group_changed::<{ CLASS_LENGTHS[2] as usize }>(&mut runs, bytes, image, ram);
+            changed |= copy_group::<{ CLASS_LENGTHS[0] as usize }, true, true>(
+                &mut runs, words, image, ram,
+            );
+            changed |= copy_group::<{ CLASS_LENGTHS[1] as usize }, true, true>(
+                &mut runs, halves, image, ram,
+            );
+            changed |= copy_group::<{ CLASS_LENGTHS[2] as usize }, true, true>(
+                &mut runs, bytes, image, ram,
+            );
             for run in runs {
                 let (from, to, n) = run.span();
                 if let (Some(src), Some(dst)) = (span(image, from, n), span_mut(ram, to, n)) {
@@ -552,43 +555,23 @@ fn split_watched<T>(items: &[T], watched: u8) -> (&[T], &[T]) {
 }
 
 /// Copies the next `count` of `runs` (all `N` bytes long) from `from` to `to`: image to OD
-/// RAM when `UNPACK`, else OD RAM to image. A run out of range is skipped.
+/// RAM when `UNPACK`, else OD RAM to image. A run out of range is skipped. When `TRACK`,
+/// returns whether a run changed `to` (else `false`).
 #[inline(always)]
-fn copy_group<'a, const N: usize, const UNPACK: bool>(
+fn copy_group<'a, const N: usize, const UNPACK: bool, const TRACK: bool>(
     runs: &mut impl Iterator<Item = &'a ByteRun>,
     count: u8,
     from: &[u8],
     to: &mut [u8],
-) {
+) -> bool {
+    let mut changed = false;
     for run in runs.take(usize::from(count)) {
         let (image, ram) = (usize::from(run.image), usize::from(run.ram));
         let (f, t) = if UNPACK { (image, ram) } else { (ram, image) };
         let src = from.get(f..).and_then(|s| s.first_chunk::<N>());
         let dst = to.get_mut(t..).and_then(|d| d.first_chunk_mut::<N>());
         if let (Some(src), Some(dst)) = (src, dst) {
-            *dst = *src;
-        }
-    }
-}
-
-/// [`copy_group`] from an RxPDO image to the OD RAM, comparing: whether a run changed.
-#[inline(always)]
-fn copy_group_changed<'a, const N: usize>(
-    runs: &mut impl Iterator<Item = &'a ByteRun>,
-    count: u8,
-    image: &[u8],
-    ram: &mut [u8],
-) -> bool {
-    let mut changed = false;
-    for run in runs.take(usize::from(count)) {
-        let src = image
-            .get(usize::from(run.image)..)
-            .and_then(|s| s.first_chunk::<N>());
-        let dst = ram
-            .get_mut(usize::from(run.ram)..)
-            .and_then(|d| d.first_chunk_mut::<N>());
-        if let (Some(src), Some(dst)) = (src, dst) {
-            changed |= src != dst;
+            changed |= TRACK && src != dst;
             *dst = *src;
         }
     }
