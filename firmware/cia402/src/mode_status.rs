@@ -308,13 +308,15 @@ impl ModeStatus {
             return statusword;
         }
         let standard = usize::from((statusword & MODE_BITS) >> FIRST_BIT.trailing_zeros());
-        let mut bits = self.moved.get(standard).copied().unwrap_or(0);
-        for (k, shows) in self.shows.iter().enumerate() {
-            if extra.0 & shows != 0 {
-                bits |= 1 << k;
-            }
-        }
-        (statusword & !MODE_BITS) | u16::from(bits) << FIRST_BIT.trailing_zeros()
+        let moved = self.moved.get(standard).copied().unwrap_or(0);
+        // The four bits tested side by side (no loop: a compare and an OR each).
+        let [s0, s1, s2, s3] = self.shows;
+        let e = extra.0;
+        let shown = u8::from(e & s0 != 0)
+            | u8::from(e & s1 != 0) << 1
+            | u8::from(e & s2 != 0) << 2
+            | u8::from(e & s3 != 0) << 3;
+        (statusword & !MODE_BITS) | u16::from(moved | shown) << FIRST_BIT.trailing_zeros()
     }
 }
 
