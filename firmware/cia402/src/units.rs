@@ -339,6 +339,9 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
 /// merge its 64 × 64-bit product into the common case.
 #[inline(never)]
 fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
+    if let Some(q) = scale_long_position(value, multiplier, divisor, inv) {
+        return q;
+    }
     let product = i64::try_from(multiplier)
         .ok()
         .and_then(|m| value.checked_mul(m));
@@ -366,6 +369,35 @@ fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
             })
         });
     narrow.unwrap_or_else(|| scale_wide(value, multiplier, divisor, inv))
+}
+
+/// [`scale`] of a position beyond 32 bits (a long travel: 2³² increments are 512 turns of a
+/// 23-bit encoder) with the factors within 32 bits: the 64 × 32-bit product from two 32 × 32
+/// multiplications, divided through the reciprocal when it fits 64 bits (as the 32-bit path
+/// does, without the general path's 64 × 64-bit product and its overflow check). `None` where
+/// that does not apply or the quotient leaves the i64 range (the general path saturates).
+#[inline]
+fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> Option<i64> {
+    if (multiplier | divisor) >> 32 != 0 || inv == 0 {
+        return None;
+    }
+    let (m, d) = (multiplier as u32, divisor as u32);
+    let magnitude = value.unsigned_abs();
+    // Each partial product ≤ (2³² − 1)², and the high one plus the low one's carry word
+    // ≤ (2³² − 1)² + 2³² − 1 < 2⁶⁴: no wrap (wrapping only to say so to the lint).
+    let low = (magnitude & 0xFFFF_FFFF).wrapping_mul(u64::from(m));
+    let high = (magnitude >> 32)
+        .wrapping_mul(u64::from(m))
+        .wrapping_add(low >> 32);
+    if high >> 32 != 0 {
+        return None;
+    }
+    // Rounded to the nearest as in [`scale`]: the floor of the product plus half the divisor.
+    let biased = (high << 32 | low & 0xFFFF_FFFF).checked_add(u64::from(d >> 1))?;
+    let (quotient, _) = divide_floor(biased, d, inv)?;
+    let q = i64::try_from(quotient).ok()?;
+    // q ≥ 0 and ≤ i64::MAX: its negation fits.
+    Some(if value < 0 { q.wrapping_neg() } else { q })
 }
 
 /// [`scale`] when the product does not fit 64 bits: the 128-bit product magnitude as two
@@ -629,6 +661,56 @@ mod tests {
             assert_ne!(inv, 0);
             assert_eq!(scale_wide(v, m, d, inv), reference(v, m, d), "{v}·{m}/{d}");
         }
+    }
+
+    /// Positions beyond 32 bits with 32-bit factors: exact up to the product's 64-bit end (a
+    /// product plus half the divisor that passes 2⁶⁴, or a quotient beyond i64, is left to the
+    /// general path, which must then give the same).
+    #[test]
+    fn a_long_position_converts_exactly_up_to_the_end_of_64_bits() {
+        let divisors = [
+            1u64,
+            2,
+            3,
+            10_000,
+            1 << 17,
+            (1 << 31) + 1,
+            u64::from(u32::MAX),
+        ];
+        let mut x: u64 = 0xD1B5_4A32_D192_ED03;
+        for i in 0..30_000u64 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let d = divisors
+                .get(i as usize % 10)
+                .copied()
+                .unwrap_or((x >> 40) | 1);
+            let m = (x & 0xFFFF_FFFF).max(1);
+            // Magnitudes from 2³² up, and the ones whose product lands at 2⁶⁴ (± a little).
+            let v = if i % 3 == 0 {
+                let edge = (u128::from(u64::MAX) / u128::from(m)) as u64;
+                let near = edge
+                    .wrapping_add((x >> 60).wrapping_sub(8))
+                    .min(i64::MAX as u64);
+                near as i64
+            } else {
+                ((x.rotate_left(23) | 1 << 32) >> (x % 30)).max(1 << 32) as i64
+            };
+            for v in [v, -v] {
+                let inv = reciprocal(d);
+                let expected = reference(v, m, d);
+                if let Some(q) = scale_long_position(v, m, d, inv) {
+                    assert_eq!(q, expected, "{v}·{m}/{d}");
+                }
+                assert_eq!(scale(v, m, d, inv), expected, "{v}·{m}/{d}");
+            }
+        }
+        // The product plus half the divisor passing 2⁶⁴: not this path.
+        let (m, d) = (u64::from(u32::MAX), 3u64);
+        let v = (u64::MAX / m) as i64;
+        assert_eq!(scale_long_position(v, m, d, reciprocal(d)), None);
+        assert_eq!(scale(v, m, d, reciprocal(d)), reference(v, m, d));
     }
 
     #[test]
