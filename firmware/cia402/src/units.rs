@@ -302,8 +302,9 @@ fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
 
 /// `value × multiplier / divisor` (`divisor` > 0) rounded to the nearest (halves away from
 /// zero), saturating at the i64 range: with the divisor's reciprocal `inv` (0: none) when the
-/// operands fit 32 bits (the common case: multiplications only), by a 64-bit division when
-/// there is no reciprocal, else in 128 bits. Rounding to the nearest both ways makes a position
+/// operands fit 32 bits (the common case: multiplications only) or only the value is wider
+/// and the product fits 64 bits ([`scale_long_position`]), by a 64-bit division when there is
+/// no reciprocal, else in 128 bits. Rounding to the nearest both ways makes a position
 /// survive the round trip through the other unit (truncating both ways loses a unit whenever
 /// the increments of a target have a fraction).
 fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
