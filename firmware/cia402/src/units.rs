@@ -696,7 +696,8 @@ mod tests {
                     .min(i64::MAX as u64);
                 near as i64
             } else {
-                ((x.rotate_left(23) | 1 << 32) >> (x % 30)).max(1 << 32) as i64
+                // Within the i64 range, so that its negation is one too.
+                (x.rotate_left(23) >> (x % 30)).clamp(1 << 32, i64::MAX as u64) as i64
             };
             for v in [v, -v] {
                 let inv = reciprocal(d);
