@@ -328,9 +328,8 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
         } else {
             divide_floor(biased, divisor32, inv).map(|(q, _)| q)
         };
-        if let Some(q) = quotient.and_then(|q| i64::try_from(q).ok()) {
-            // q ≥ 0 and ≤ i64::MAX: its negation fits.
-            return if value < 0 { q.wrapping_neg() } else { q };
+        if let Some(q) = quotient.and_then(|q| signed(value < 0, q)) {
+            return q;
         }
     }
     scale_general(value, multiplier, divisor, inv)
@@ -349,10 +348,9 @@ fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
     let divisor32 = u32::try_from(divisor).ok().filter(|_| inv != 0);
     if let (Some(product), Some(d)) = (product, divisor32) {
         let quotient = divide_by_reciprocal(product.unsigned_abs(), d, inv)
-            .and_then(|q| i64::try_from(q).ok());
+            .and_then(|q| signed(product < 0, q));
         if let Some(q) = quotient {
-            // q ≥ 0 and ≤ i64::MAX: its negation fits.
-            return if product < 0 { q.wrapping_neg() } else { q };
+            return q;
         }
     }
     let narrow = i64::try_from(divisor)
@@ -396,9 +394,16 @@ fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> O
     // Rounded to the nearest as in [`scale`]: the floor of the product plus half the divisor.
     let biased = (high << 32 | low & 0xFFFF_FFFF).checked_add(u64::from(d >> 1))?;
     let (quotient, _) = divide_floor(biased, d, inv)?;
-    let q = i64::try_from(quotient).ok()?;
+    signed(value < 0, quotient)
+}
+
+/// A quotient's `magnitude` with the sign of its operand (`negative`); `None` beyond the i64
+/// range (the callers then saturate).
+#[inline(always)]
+fn signed(negative: bool, magnitude: u64) -> Option<i64> {
+    let q = i64::try_from(magnitude).ok()?;
     // q ≥ 0 and ≤ i64::MAX: its negation fits.
-    Some(if value < 0 { q.wrapping_neg() } else { q })
+    Some(if negative { q.wrapping_neg() } else { q })
 }
 
 /// [`scale`] when the product does not fit 64 bits: the 128-bit product magnitude as two
