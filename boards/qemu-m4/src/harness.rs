@@ -314,6 +314,7 @@ impl Harness {
         state: &mut T,
         mut op: impl FnMut(&mut T),
     ) -> Option<u32> {
+        // Measured in turn rather than through `measure_net`: both closures write `state`.
         let restore = self.measure(name, &mut || *state = black_box(snapshot).clone())?;
         let both = self.measure(name, &mut || {
             *state = black_box(snapshot).clone();
