@@ -372,9 +372,10 @@ fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
 
 /// [`scale`] of a position beyond 32 bits (a long travel: 2³² increments are 512 turns of a
 /// 23-bit encoder) with the factors within 32 bits: the 64 × 32-bit product from two 32 × 32
-/// multiplications, divided through the reciprocal when it fits 64 bits (as the 32-bit path
-/// does, without the general path's 64 × 64-bit product and its overflow check). `None` where
-/// that does not apply or the quotient leaves the i64 range (the general path saturates).
+/// multiplications, divided through the reciprocal: in one step when it fits 64 bits, else in
+/// two 32-bit digits (as [`divide_wide`]; without the general path's 64 × 64-bit product, its
+/// overflow checks and the 128-bit division). `None` where that does not apply or the
+/// quotient leaves the i64 range (the general path saturates).
 #[inline]
 fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> Option<i64> {
     if (multiplier | divisor) >> 32 != 0 || inv == 0 {
@@ -382,19 +383,33 @@ fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> O
     }
     let (m, d) = (multiplier as u32, divisor as u32);
     let magnitude = value.unsigned_abs();
-    // Each partial product ≤ (2³² − 1)², and the high one plus the low one's carry word
-    // ≤ (2³² − 1)² + 2³² − 1 < 2⁶⁴: no wrap (wrapping only to say so to the lint).
+    // The product is high · 2³² + the low word of `low`. Each partial product ≤ (2³² − 1)²,
+    // and the high one plus the low one's carry word ≤ (2³² − 1)² + 2³² − 1 < 2⁶⁴: no wrap
+    // (wrapping only to say so to the lint).
     let low = (magnitude & 0xFFFF_FFFF).wrapping_mul(u64::from(m));
     let high = (magnitude >> 32)
         .wrapping_mul(u64::from(m))
         .wrapping_add(low >> 32);
-    if high >> 32 != 0 {
+    let low_word = low & 0xFFFF_FFFF;
+    if high >> 32 == 0 {
+        // Rounded to the nearest as in [`scale`]: the floor of the product plus half the
+        // divisor (unless that passes 2⁶⁴: then in two digits below).
+        if let Some(biased) = (high << 32 | low_word).checked_add(u64::from(d >> 1)) {
+            let (quotient, _) = divide_floor(biased, d, inv)?;
+            return signed(value < 0, quotient);
+        }
+    }
+    // Long division in two digits: high / d, then (its remainder · 2³² + the low word) / d.
+    let (q1, r1) = divide_floor(high, d, inv)?;
+    // A first digit of 2³¹ or more: the quotient is at least 2⁶³, beyond the i64 range.
+    if q1 >> 31 != 0 {
         return None;
     }
-    // Rounded to the nearest as in [`scale`]: the floor of the product plus half the divisor.
-    let biased = (high << 32 | low & 0xFFFF_FFFF).checked_add(u64::from(d >> 1))?;
-    let (quotient, _) = divide_floor(biased, d, inv)?;
-    signed(value < 0, quotient)
+    // r1 < d < 2³²: the second dividend is below d · 2³² < 2⁶⁴, its quotient below 2³².
+    let (q0, r0) = divide_floor(r1 << 32 | low_word, d, inv)?;
+    // Halves away from zero (on the magnitude: up): 2·r0 ≥ d, as the bias does above.
+    let round_up = r0 >= u64::from(d).wrapping_sub(r0);
+    signed(value < 0, (q1 << 32 | q0).wrapping_add(u64::from(round_up)))
 }
 
 /// A quotient's `magnitude` with the sign of its operand (`negative`); `None` beyond the i64
@@ -673,7 +688,7 @@ mod tests {
     /// product plus half the divisor that passes 2⁶⁴, or a quotient beyond i64, is left to the
     /// general path, which must then give the same).
     #[test]
-    fn a_long_position_converts_exactly_up_to_the_end_of_64_bits() {
+    fn a_long_position_converts_exactly_through_the_reciprocal() {
         let divisors = [
             1u64,
             2,
@@ -693,31 +708,47 @@ mod tests {
                 .copied()
                 .unwrap_or((x >> 40) | 1);
             let m = (x & 0xFFFF_FFFF).max(1);
-            // Magnitudes from 2³² up, and the ones whose product lands at 2⁶⁴ (± a little).
-            let v = if i % 3 == 0 {
-                let edge = (u128::from(u64::MAX) / u128::from(m)) as u64;
-                let near = edge
-                    .wrapping_add((x >> 60).wrapping_sub(8))
-                    .min(i64::MAX as u64);
-                near as i64
-            } else {
+            // Magnitudes from 2³² up (products within and beyond 64 bits), and the ones whose
+            // product lands at 2⁶⁴ (± a little) or whose quotient lands at 2⁶³.
+            let v = match i % 4 {
+                0 => {
+                    let edge = (u128::from(u64::MAX) / u128::from(m)) as u64;
+                    edge.wrapping_add((x >> 60).wrapping_sub(8))
+                        .min(i64::MAX as u64) as i64
+                }
+                1 => {
+                    let edge = (u128::from(i64::MAX as u64) * u128::from(d) / u128::from(m))
+                        .min(i64::MAX as u128) as u64;
+                    edge.wrapping_sub(x >> 61).max(1 << 32) as i64
+                }
                 // Within the i64 range, so that its negation is one too.
-                (x.rotate_left(23) >> (x % 30)).clamp(1 << 32, i64::MAX as u64) as i64
+                _ => (x.rotate_left(23) >> (x % 30)).clamp(1 << 32, i64::MAX as u64) as i64,
             };
             for v in [v, -v] {
                 let inv = reciprocal(d);
                 let expected = reference(v, m, d);
-                if let Some(q) = scale_long_position(v, m, d, inv) {
-                    assert_eq!(q, expected, "{v}·{m}/{d}");
+                // Every quotient within the i64 range takes this path, and exactly.
+                if expected.unsigned_abs() < i64::MAX as u64 {
+                    assert_eq!(
+                        scale_long_position(v, m, d, inv),
+                        Some(expected),
+                        "{v}·{m}/{d}"
+                    );
                 }
                 assert_eq!(scale(v, m, d, inv), expected, "{v}·{m}/{d}");
             }
         }
-        // The product plus half the divisor passing 2⁶⁴: not this path.
+        // The product plus half the divisor passing 2⁶⁴: in two digits.
         let (m, d) = (u64::from(u32::MAX), 3u64);
         let v = (u64::MAX / m) as i64;
-        assert_eq!(scale_long_position(v, m, d, reciprocal(d)), None);
-        assert_eq!(scale(v, m, d, reciprocal(d)), reference(v, m, d));
+        assert_eq!(
+            scale_long_position(v, m, d, reciprocal(d)),
+            Some(reference(v, m, d))
+        );
+        // A quotient beyond the i64 range: not this path; the general one saturates.
+        assert_eq!(scale_long_position(i64::MAX, 2, 1, reciprocal(1)), None);
+        assert_eq!(scale(i64::MAX, 2, 1, reciprocal(1)), i64::MAX);
+        assert_eq!(scale(i64::MIN + 1, 2, 1, reciprocal(1)), i64::MIN);
     }
 
     #[test]

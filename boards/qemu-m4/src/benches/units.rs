@@ -4,8 +4,8 @@
 //! measured over inputs that cover the conversion's branches: a ratio of one (no arithmetic),
 //! a divisor that is a power of two (a shift), one that is not (multiplications by its
 //! reciprocal), a position beyond 32 bits (a 64 × 32-bit product from two multiplications,
-//! then the reciprocal), a product beyond 64 bits (two 64-bit steps by the reciprocal), a
-//! divisor beyond 32 bits (no reciprocal: the library's 64-bit division, or beyond 64 bits the
+//! then the reciprocal), a product beyond 64 bits (the same product, divided in two 32-bit
+//! digits by the reciprocal), a divisor beyond 32 bits (no reciprocal: the library's 64-bit division, or beyond 64 bits the
 //! restoring division, a bit per step). Each cost includes the copy of the ratio into the call.
 
 use core::hint::black_box;
