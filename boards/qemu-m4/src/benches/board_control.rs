@@ -8,7 +8,9 @@
 //! Measured in the loop period (loop divider 1, a new set-point every period) over the inputs
 //! whose interrupts differ in CSP: at rest, following, and a step that drives the current to
 //! its limit and the voltage to its circle, each from the axis running at rest (a copy of it
-//! restored before every call, the restore measured alone and subtracted). The board's
+//! restored before every call, the restore measured alone and subtracted); and over one loop
+//! cycle of the board's tuning (the loop period and the periods after it, which run the current
+//! loop alone), the figure the report's interrupt load averages. The board's
 //! incremental encoder is aligned after each enable; the measurement
 //! gives the alignment's result as the commissioned commutation offset, so that the axis is in
 //! closed loop from the start (the same code runs after an alignment).
@@ -177,7 +179,12 @@ fn running(hw: &mut Board, link: &AxisLink) -> Result<Axis, &'static str> {
         bus_cycle_s: 1.0 / PWM_HZ as f32,
         ..TUNING
     };
-    let mut cfg = axis_config(&SERVO, &tuning);
+    running_with(hw, link, &tuning)
+}
+
+/// The axis of the board's servo at `tuning`, running at rest with the gates on.
+fn running_with(hw: &mut Board, link: &AxisLink, tuning: &Tuning) -> Result<Axis, &'static str> {
+    let mut cfg = axis_config(&SERVO, tuning);
     cfg.motor.commutation_offset = Some(0);
     let mut axis = Axis::new(cfg).map_err(|_| "the board's axis configuration was refused")?;
     for _ in 0..cfg.offset_samples + 16 {
@@ -200,6 +207,30 @@ fn running(hw: &mut Board, link: &AxisLink) -> Result<Axis, &'static str> {
     at_rest
         .then_some(axis)
         .ok_or("the board's axis is not running at rest with the gates on")
+}
+
+/// The axis of the board's servo at the board's tuning (the position and speed loops every
+/// `TUNING.loop_divider`-th period) with a new set-point every loop period, running at rest,
+/// its next period a loop period.
+fn running_before_loop_period(hw: &mut Board, link: &AxisLink) -> Result<Axis, &'static str> {
+    let tuning = Tuning {
+        bus_cycle_s: TUNING.loop_divider as f32 / PWM_HZ as f32,
+        ..TUNING
+    };
+    let mut axis = running_with(hw, link, &tuning)?;
+    for _ in 0..TUNING.loop_divider {
+        // A copy takes a step's set-point: in a loop period the current loop drives it.
+        let mut probe = axis.clone();
+        link.publish(INPUTS[2].command);
+        hw.control_interrupt(&mut probe, link);
+        let loop_period = !centred(&hw.inverter.timer().ccr);
+        link.publish(COMMAND);
+        if loop_period {
+            return Ok(axis);
+        }
+        hw.control_interrupt(&mut axis, link);
+    }
+    Err("no period of the loop cycle took the set-point")
 }
 
 /// One input of the measurement: the command published before the interrupt, and the check
@@ -322,6 +353,74 @@ pub fn run(h: &mut Harness) {
              (the SYNC0 publish subtracted), over the CSP inputs whose interrupts differ (at \
              rest, following, at the torque limit and the voltage circle); DESIGN.md §6 budgets \
              the whole interrupt at 1500"
+        ),
+    );
+    loop_cycle(h, &link, &mut hw);
+}
+
+/// The control interrupts of one loop cycle at the board's tuning (`TUNING.loop_divider`
+/// periods, the first the loop period: the periods after it run the current loop on the new
+/// torque demand), over the same inputs, each published before the cycle: what the interrupt
+/// load of the board averages over.
+fn loop_cycle(h: &mut Harness, link: &AxisLink, hw: &mut Board) {
+    const NAME: &str = "board-control-interrupt-loop-cycle";
+    let periods = TUNING.loop_divider;
+    let Some(snapshot) = h.ready(NAME, running_before_loop_period(hw, link)) else {
+        return;
+    };
+    let mut cases = Cases::new(NAME);
+    for input in INPUTS {
+        let command = input.command;
+        let mut axis = snapshot.clone();
+        link.publish(command);
+        for _ in 0..periods {
+            hw.control_interrupt(&mut axis, link);
+        }
+        let (fb, compares) = (link.feedback(), hw.inverter.timer().ccr);
+        if !hw.inverter.timer().moe || !(input.branch)(&axis, &fb, &compares) {
+            h.fail(
+                NAME,
+                format_args!(
+                    "input \"{}\" did not take its branch over the loop cycle: state {:?} \
+                     following error {} current limited {} compares {:?}",
+                    input.label,
+                    axis.state(),
+                    fb.following_error,
+                    fb.current_limited,
+                    compares
+                ),
+            );
+            return;
+        }
+        let mut restored = snapshot.clone();
+        let Some((cost, _, _)) = h.measure_net(
+            NAME,
+            &mut || {
+                restored = black_box(&snapshot).clone();
+                link.publish(black_box(command));
+                black_box(&mut restored);
+            },
+            &mut || {
+                axis = black_box(&snapshot).clone();
+                link.publish(black_box(command));
+                for _ in 0..black_box(periods) {
+                    black_box(hw.control_interrupt(&mut axis, link));
+                }
+            },
+        ) else {
+            return;
+        };
+        h.case(&mut cases, input.label, cost);
+    }
+    h.meta("board_loop_divider", periods);
+    h.report_cases(
+        &cases,
+        None,
+        format_args!(
+            "the same over one loop cycle of the board's tuning: {periods} control interrupts, \
+             the first the loop period (a new set-point every loop period), the periods after \
+             it the current loop on its torque demand, inputs as above; the interrupt load of \
+             the board averages over it"
         ),
     );
 }
