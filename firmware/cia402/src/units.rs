@@ -684,9 +684,9 @@ mod tests {
         }
     }
 
-    /// Positions beyond 32 bits with 32-bit factors: exact up to the product's 64-bit end (a
-    /// product plus half the divisor that passes 2⁶⁴, or a quotient beyond i64, is left to the
-    /// general path, which must then give the same).
+    /// Positions beyond 32 bits with 32-bit factors: exact through the reciprocal for every
+    /// quotient within the i64 range, the product within 64 bits or beyond (a quotient beyond
+    /// i64 is left to the general path, which saturates).
     #[test]
     fn a_long_position_converts_exactly_through_the_reciprocal() {
         let divisors = [

@@ -221,7 +221,7 @@ fn running_before_loop_period(hw: &mut Board, link: &AxisLink) -> Result<Axis, &
     for _ in 0..TUNING.loop_divider {
         // A copy takes a step's set-point: in a loop period the current loop drives it.
         let mut probe = axis.clone();
-        link.publish(INPUTS[2].command);
+        link.publish(STEP);
         hw.control_interrupt(&mut probe, link);
         let loop_period = !centred(&hw.inverter.timer().ccr);
         link.publish(COMMAND);
@@ -232,6 +232,12 @@ fn running_before_loop_period(hw: &mut Board, link: &AxisLink) -> Result<Axis, &
     }
     Err("no period of the loop cycle took the set-point")
 }
+
+/// A set-point step that drives the current to its limit and the voltage to its circle.
+const STEP: AxisCommand = AxisCommand {
+    position: 200_000,
+    ..COMMAND
+};
 
 /// One input of the measurement: the command published before the interrupt, and the check
 /// that the interrupt took the input's branch (the axis, its feedback, the compares written).
@@ -280,10 +286,7 @@ const INPUTS: [BoardInput; 3] = [
     },
     BoardInput {
         label: "CSP step: torque limit, voltage circle",
-        command: AxisCommand {
-            position: 200_000,
-            ..COMMAND
-        },
+        command: STEP,
         branch: |a, fb, c| runs(a, fb) && fb.current_limited && compare_span(c) > 0.8,
     },
 ];
