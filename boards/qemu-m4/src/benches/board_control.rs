@@ -291,6 +291,61 @@ const INPUTS: [BoardInput; 3] = [
     },
 ];
 
+/// The control interrupt's cost over `PERIODS` periods from `snapshot` (the first a loop
+/// period), for every input published before them: the cases of benchmark `name`. `None`
+/// after a failure reported to the harness.
+fn measure_inputs<const PERIODS: u32>(
+    h: &mut Harness,
+    name: &'static str,
+    snapshot: &Axis,
+    link: &AxisLink,
+    hw: &mut Board,
+) -> Option<Cases> {
+    let mut cases = Cases::new(name);
+    for input in INPUTS {
+        let command = input.command;
+        let mut axis = snapshot.clone();
+        link.publish(command);
+        for _ in 0..PERIODS {
+            hw.control_interrupt(&mut axis, link);
+        }
+        let (fb, compares) = (link.feedback(), hw.inverter.timer().ccr);
+        if !hw.inverter.timer().moe || !(input.branch)(&axis, &fb, &compares) {
+            h.fail(
+                name,
+                format_args!(
+                    "input \"{}\" did not take its branch over {PERIODS} period(s): state {:?} \
+                     following error {} current limited {} compares {:?}",
+                    input.label,
+                    axis.state(),
+                    fb.following_error,
+                    fb.current_limited,
+                    compares
+                ),
+            );
+            return None;
+        }
+        let mut restored = snapshot.clone();
+        let (cost, _, _) = h.measure_net(
+            name,
+            &mut || {
+                restored = black_box(snapshot).clone();
+                link.publish(black_box(command));
+                black_box(&mut restored);
+            },
+            &mut || {
+                axis = black_box(snapshot).clone();
+                link.publish(black_box(command));
+                for _ in 0..PERIODS {
+                    black_box(hw.control_interrupt(&mut axis, link));
+                }
+            },
+        )?;
+        h.case(&mut cases, input.label, cost);
+    }
+    Some(cases)
+}
+
 /// The benchmark.
 pub fn run(h: &mut Harness) {
     const NAME: &str = "board-control-interrupt";
@@ -300,46 +355,9 @@ pub fn run(h: &mut Harness) {
     let Some(snapshot) = h.ready(NAME, running(&mut hw, &link)) else {
         return;
     };
-    let mut cases = Cases::new(NAME);
-    for input in INPUTS {
-        let command = input.command;
-        let mut axis = snapshot.clone();
-        link.publish(command);
-        hw.control_interrupt(&mut axis, &link);
-        let (fb, compares) = (link.feedback(), hw.inverter.timer().ccr);
-        if !hw.inverter.timer().moe || !(input.branch)(&axis, &fb, &compares) {
-            h.fail(
-                NAME,
-                format_args!(
-                    "input \"{}\" did not take its branch: state {:?} following error {} \
-                     current limited {} compares {:?}",
-                    input.label,
-                    axis.state(),
-                    fb.following_error,
-                    fb.current_limited,
-                    compares
-                ),
-            );
-            return;
-        }
-        let mut restored = snapshot.clone();
-        let Some((cost, _, _)) = h.measure_net(
-            NAME,
-            &mut || {
-                restored = black_box(&snapshot).clone();
-                link.publish(black_box(command));
-                black_box(&mut restored);
-            },
-            &mut || {
-                axis = black_box(&snapshot).clone();
-                link.publish(black_box(command));
-                black_box(hw.control_interrupt(&mut axis, &link));
-            },
-        ) else {
-            return;
-        };
-        h.case(&mut cases, input.label, cost);
-    }
+    let Some(cases) = measure_inputs::<1>(h, NAME, &snapshot, &link, &mut hw) else {
+        return;
+    };
     // The board's clocks and PWM rate: the interrupt-load section of the report.
     h.meta("board_core_clock_hz", CORE_CLOCK_HZ);
     h.meta("board_pwm_hz", PWM_HZ);
@@ -367,60 +385,19 @@ pub fn run(h: &mut Harness) {
 /// load of the board averages over.
 fn loop_cycle(h: &mut Harness, link: &AxisLink, hw: &mut Board) {
     const NAME: &str = "board-control-interrupt-loop-cycle";
-    let periods = TUNING.loop_divider;
+    const PERIODS: u32 = TUNING.loop_divider;
     let Some(snapshot) = h.ready(NAME, running_before_loop_period(hw, link)) else {
         return;
     };
-    let mut cases = Cases::new(NAME);
-    for input in INPUTS {
-        let command = input.command;
-        let mut axis = snapshot.clone();
-        link.publish(command);
-        for _ in 0..periods {
-            hw.control_interrupt(&mut axis, link);
-        }
-        let (fb, compares) = (link.feedback(), hw.inverter.timer().ccr);
-        if !hw.inverter.timer().moe || !(input.branch)(&axis, &fb, &compares) {
-            h.fail(
-                NAME,
-                format_args!(
-                    "input \"{}\" did not take its branch over the loop cycle: state {:?} \
-                     following error {} current limited {} compares {:?}",
-                    input.label,
-                    axis.state(),
-                    fb.following_error,
-                    fb.current_limited,
-                    compares
-                ),
-            );
-            return;
-        }
-        let mut restored = snapshot.clone();
-        let Some((cost, _, _)) = h.measure_net(
-            NAME,
-            &mut || {
-                restored = black_box(&snapshot).clone();
-                link.publish(black_box(command));
-                black_box(&mut restored);
-            },
-            &mut || {
-                axis = black_box(&snapshot).clone();
-                link.publish(black_box(command));
-                for _ in 0..black_box(periods) {
-                    black_box(hw.control_interrupt(&mut axis, link));
-                }
-            },
-        ) else {
-            return;
-        };
-        h.case(&mut cases, input.label, cost);
-    }
-    h.meta("board_loop_divider", periods);
+    let Some(cases) = measure_inputs::<PERIODS>(h, NAME, &snapshot, link, hw) else {
+        return;
+    };
+    h.meta("board_loop_divider", PERIODS);
     h.report_cases(
         &cases,
         None,
         format_args!(
-            "the same over one loop cycle of the board's tuning: {periods} control interrupts, \
+            "the same over one loop cycle of the board's tuning: {PERIODS} control interrupts, \
              the first the loop period (a new set-point every loop period), the periods after \
              it the current loop on its torque demand, inputs as above; the interrupt load of \
              the board averages over it"
