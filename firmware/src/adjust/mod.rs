@@ -94,6 +94,12 @@ impl AdjustingService {
         index == self.spec.object && subindex <= SUB_COMMAND
     }
 
+    /// Whether the service waits for a request (no time limit runs: [`Self::on_time`] has
+    /// nothing to do).
+    pub fn idle(&self) -> bool {
+        matches!(self.phase, Phase::Idle)
+    }
+
     /// The adjustment running now, if any.
     pub fn running(&self) -> Option<Action> {
         match self.phase {

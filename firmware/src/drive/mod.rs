@@ -560,6 +560,13 @@ impl Application for Drive {
 
     fn background(&mut self, ram: &mut [u8], now_ns: u64) {
         self.now_ns = now_ns;
+        // Every ESC-event round calls this: with every service idle (no time limit running)
+        // and no adjustment on an axis there is nothing to do, and the round spares the
+        // 64-bit division below (a library call on the Cortex-M4).
+        let timing = self.adjusting.iter().flatten().any(|s| !s.idle());
+        if !timing && self.adjustment.is_none() {
+            return;
+        }
         let now_ms = now_ns / NS_PER_MS;
         for i in 0..MAX_ADJUSTING_SERVICES {
             let Some(mut service) = self.adjusting.get(i).copied().flatten() else {

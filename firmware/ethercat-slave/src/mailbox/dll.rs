@@ -40,7 +40,7 @@ use super::{DictionaryScope, MAX_MAILBOX};
 use crate::od::{DeviceInfo, Dictionary, SmLayout};
 
 /// SyncManager channel of the master → slave mailbox.
-const SM_MAILBOX_OUT: u8 = 0;
+pub(crate) const SM_MAILBOX_OUT: u8 = 0;
 /// SyncManager channel of the slave → master mailbox.
 const SM_MAILBOX_IN: u8 = 1;
 /// Status register of SM0.

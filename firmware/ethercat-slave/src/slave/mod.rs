@@ -47,6 +47,7 @@ mod errors;
 pub mod esm;
 mod mailbox_side;
 
+use crate::mailbox::dll::SM_MAILBOX_OUT;
 use crate::slave::esm::sync::{SyncConfig, SyncMode as Mode};
 pub use application::{AppEvent, AppEvents, Application, NoApplication, MAX_APP_EVENTS};
 pub use composite::Slave;
@@ -404,8 +405,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         job: EventJob,
         now_ns: u64,
     ) -> Result<(), P::Error> {
-        if job.state != AlState::Init && job.state != AlState::Boot {
-            // The master acknowledges diagnosis messages by writing 10F3h:03.
+        // The master acknowledges diagnosis messages by writing 10F3h:03, with an SDO
+        // download: a request in SM0 (whose event is set until its buffer is read, which this
+        // round did), served in the round that reads it. A round without one (a cycle's SM2
+        // event, a timer) has nothing to pick up.
+        let request = job.events.any(AlEvent::sm(SM_MAILBOX_OUT));
+        if request && job.state != AlState::Init && job.state != AlState::Boot {
             let _ = self
                 .diag
                 .poll(&mut Dictionary::new(self.profile, &mut self.ram));
