@@ -248,6 +248,33 @@ fn install_drive(
     started
 }
 
+/// The axis made from its pins, the drive installed with it, then the control interrupt
+/// started (the axis is attached by then). Returns whether the drive started and whether the
+/// control interrupt runs. Not in `main`: the control context (some 1.8 KiB) stays on the
+/// stack of this call, not in the main task's future, which lives for ever.
+#[inline(never)]
+fn start_drive(
+    (inverter, sensing, encoder, axis_io): (
+        pins::InverterPins,
+        pins::SensingPins,
+        pins::EncoderPins,
+        pins::AxisIoPins,
+    ),
+    sync0: &sync_capture::Sync0Capture,
+    pdi: Et1100Spi<'static>,
+    flash: Flash<'static, Blocking>,
+    ready: bool,
+) -> (bool, bool) {
+    let (control, brake) = make_axis(inverter, sensing, encoder, axis_io, sync0);
+    let with_control = control.is_some();
+    let started = install_drive(pdi, flash, brake, with_control, ready);
+    // The control interrupt starts after the drive is installed: the axis is attached.
+    if let Some(context) = control {
+        control::start(context, irq::Irqs);
+    }
+    (started, with_control)
+}
+
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let p = embassy_stm32::init(clocks::config());
@@ -271,26 +298,25 @@ async fn main(spawner: Spawner) {
         axis_io,
         iwdg,
     } = pins::split(p);
-    let mut pdi = Et1100Spi::new(esc.spi, esc.sck, esc.miso, esc.mosi, esc.cs);
-    info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
-    let ready = probe_esc(&mut pdi).await;
+    // The main task's future lives for ever, with room for every local borrowed across one
+    // of its awaits: the PDI, borrowed by the probe, ends in this block.
+    let (pdi, ready) = {
+        let mut pdi = Et1100Spi::new(esc.spi, esc.sck, esc.miso, esc.mosi, esc.cs);
+        info!("PDI: SPI3, mode 3, {} Hz", pdi.clock_hz());
+        let ready = probe_esc(&mut pdi).await;
+        (pdi, ready)
+    };
 
     // TIM3 time-stamps SYNC0 and the probe edges against the PWM; its vector stays masked
     // until the drive is installed.
     let sync0 = sync_capture::configure(esc.sync0_timer, esc.sync0);
-    let (control, brake) = make_axis(inverter, sensing, encoder, axis_io, &sync0);
-    let started = install_drive(
+    let (started, with_control) = start_drive(
+        (inverter, sensing, encoder, axis_io),
+        &sync0,
         pdi,
         Flash::new_blocking(flash),
-        brake,
-        control.is_some(),
         ready,
     );
-    // The control interrupt starts after the drive is installed: the axis is attached.
-    let with_control = control.is_some();
-    if let Some(context) = control {
-        control::start(context, irq::Irqs);
-    }
     let iwdg = watchdog::Iwdg::start(iwdg).unwrap_or_else(|iwdg| {
         error!("IWDG did not take its setting: 512 ms reset timeout");
         iwdg
