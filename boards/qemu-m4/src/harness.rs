@@ -23,7 +23,7 @@
 //! | (none) | [`ITERATIONS`] calls counted with the SysTick, as above | instructions per call |
 //! | `trace` | one call between the markers [`bench_span_begin`] and [`bench_span_end`], for an instruction trace (`-singlestep -d exec,nochain`) that `benchmarks/cycle-model` turns into a value per span | 0 |
 //! | `replay FILE` | one call | the next line of the host file FILE: the span's value from the trace |
-//! | `profile` | as `trace`, each span named by a `SPAN` record, the count-only benchmarks included: `benchmarks/profile` attributes each span's instructions to the functions that executed them | 0 |
+//! | `profile` | as `trace`, each span named by a `SPAN` record: `benchmarks/profile` attributes each span's instructions to the functions that executed them | 0 |
 //!
 //! The benchmarks run the same code in every mode, so the spans come in the same order, and a
 //! replay derives its rows from the span values exactly as the counting run does from its
@@ -34,7 +34,7 @@
 //!
 //! | record | fields |
 //! |---|---|
-//! | `META` | key, value |
+//! | `META` | key, value; or key `name:input` (a fact of one input of a benchmark), value |
 //! | `CALIBRATION` | expected, measured |
 //! | `BENCH` | name, instructions (the max over its inputs), budget (`-` if none; `N*` a target not yet met, not enforced), description |
 //! | `CASE` | name, input, instructions: one input of a benchmark measured over a set |
@@ -192,11 +192,6 @@ impl Harness {
             "META\tinstructions_per_tick\t{INSTRUCTIONS_PER_TICK}"
         ));
         harness
-    }
-
-    /// Whether this run counts instructions (the default mode, not `trace` or `replay`).
-    pub fn counting(&self) -> bool {
-        matches!(self.mode, Mode::Count)
     }
 
     /// Whether this run traces every benchmark for a profile (mode `profile`).
@@ -421,6 +416,11 @@ impl Harness {
     /// process-image size or a clock).
     pub fn meta(&mut self, key: &str, value: u32) {
         self.record(format_args!("META\t{key}\t{value}"));
+    }
+
+    /// Prints a `META` record of one input of a benchmark: key `key:input`.
+    pub fn meta_of(&mut self, key: &str, input: fmt::Arguments<'_>, value: u32) {
+        self.record(format_args!("META\t{key}:{input}\t{value}"));
     }
 
     /// Reports a failed check of a benchmark (e.g. the operation did not give the expected

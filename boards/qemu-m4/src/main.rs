@@ -30,11 +30,6 @@ fn main() -> ! {
     for bench in benches::ALL {
         bench(&mut harness);
     }
-    if harness.counting() || harness.profiling() {
-        for bench in benches::COUNT_ONLY {
-            bench(&mut harness);
-        }
-    }
     semihosting::exit(harness.finish())
 }
 

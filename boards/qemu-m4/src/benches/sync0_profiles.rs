@@ -109,6 +109,16 @@ enum Mapping {
     Largest,
 }
 
+impl Mapping {
+    /// Its name in the `META` records of the process images' lengths.
+    fn label(self) -> &'static str {
+        match self {
+            Self::Default => "default",
+            Self::Largest => "largest",
+        }
+    }
+}
+
 /// A profile's slave in OP with its axes attached and running.
 struct ProfileBench {
     profile: &'static DriveProfile,
@@ -116,6 +126,8 @@ struct ProfileBench {
     esc: RamEsc,
     rx: PdoPlan,
     axes: [Option<Axis>; MAX_AXES],
+    /// The TxPDO image's length, bytes.
+    tx_len: usize,
     /// What every axis' control interrupt samples (the encoder at rest on the measured
     /// position).
     sample: Sample,
@@ -192,6 +204,7 @@ impl ProfileBench {
             esc,
             rx,
             axes,
+            tx_len,
             sample: Sample {
                 position: Ok(at.position),
                 ..SAMPLE
@@ -397,14 +410,14 @@ fn largest_mapping(od: &mut Dictionary<'_>, profile: &DriveProfile) -> Result<()
 }
 
 /// The SYNC0 handler of `profile` with `mapping` and the axes placed `at`: the more expensive
-/// of the cycle at rest and the cycle following a target ahead. `None` after a failure
-/// reported to the harness.
+/// of the cycle at rest and the cycle following a target ahead, and the lengths of the RxPDO
+/// and TxPDO images. `None` after a failure reported to the harness.
 fn profile_cost(
     h: &mut Harness,
     profile: &'static DriveProfile,
     mapping: Mapping,
     at: Placement,
-) -> Option<u32> {
+) -> Option<(u32, (usize, usize))> {
     let name = profile.od.device.profile;
     let label = at.label;
     let bench = ProfileBench::new(profile, mapping, at).and_then(|mut b| b.enable().map(|()| b));
@@ -415,6 +428,7 @@ fn profile_cost(
             return None;
         }
     };
+    let images = (bench.rx.byte_len(), bench.tx_len);
     let ProfileBench {
         core, esc, now_ns, ..
     } = &mut bench;
@@ -430,7 +444,7 @@ fn profile_cost(
         return None;
     }
     match bench.following_cost(h, name) {
-        Ok(Some(following)) => Some(at_rest.max(following)),
+        Ok(Some(following)) => Some((at_rest.max(following), images)),
         Ok(None) => None,
         Err(reason) => {
             h.fail(name, format_args!("{reason} (axes {label})"));
@@ -451,13 +465,21 @@ pub fn run(h: &mut Harness) {
             (Mapping::Default, &mut default),
             (Mapping::Largest, &mut largest),
         ] {
-            let mut worst = Some(0);
+            let name = profile.od.device.profile;
+            let mut worst = Some((0, (0, 0)));
             for at in PLACEMENTS {
                 let cost = profile_cost(h, profile, mapping, at);
-                worst = worst.zip(cost).map(|(w, c)| w.max(c));
+                worst = worst
+                    .zip(cost)
+                    .map(|((w, _), (c, images))| (w.max(c), images));
             }
-            if let Some(worst) = worst {
-                h.case(cases, profile.od.device.profile, worst);
+            if let Some((worst, (rx_len, tx_len))) = worst {
+                h.case(cases, name, worst);
+                // The process images the SPI moves per cycle (the report's load per profile).
+                for (key, len) in [("sm2_bytes", rx_len), ("sm3_bytes", tx_len)] {
+                    let len = u32::try_from(len).unwrap_or(u32::MAX);
+                    h.meta_of(key, format_args!("{name}:{}", mapping.label()), len);
+                }
             }
         }
     }
