@@ -124,29 +124,59 @@ fn map_max(
     exclude: Option<(u16, u8)>,
     most: usize,
 ) -> usize {
-    let Some(mapping) = od.object(first_mapping(direction)) else {
-        return 0;
+    let limit_bits = 8 * usize::from(profile.device.max_process_bytes).min(MAX_IMAGE);
+    let fill = Fill {
+        direction,
+        mapping: first_mapping(direction),
+        first,
+        taken: exclude.as_slice(),
+    };
+    fill_mapping(od, profile, &fill, most, limit_bits).0
+}
+
+/// What [`fill_mapping`] maps.
+struct Fill<'a> {
+    direction: Direction,
+    /// The mapping object (e.g. 1600h).
+    mapping: u16,
+    /// The entries that come first (index, subindex, bit length).
+    first: &'a [(u16, u8, u16)],
+    /// Entries left out (mapped elsewhere already).
+    taken: &'a [(u16, u8)],
+}
+
+/// Maps into `fill.mapping` the entries `fill.first`, then as many other mappable OD RAM
+/// entries of `profile` (of `fill.direction`, none of `fill.taken`) as its subindices and
+/// `bits_left` allow, from the highest index down (see [`map_max`]), at most `most`; returns
+/// how many and their bits.
+fn fill_mapping(
+    od: &mut Dictionary<'_>,
+    profile: &Profile,
+    fill: &Fill<'_>,
+    most: usize,
+    bits_left: usize,
+) -> (usize, usize) {
+    let Some(mapping) = od.object(fill.mapping) else {
+        return (0, 0);
     };
     let slots = mapping.entries.len().saturating_sub(1).min(most);
-    let limit_bits = 8 * usize::from(profile.device.max_process_bytes).min(MAX_IMAGE);
     let candidates = profile.objects.iter().rev().flat_map(|o| {
         o.entries.iter().rev().filter_map(move |e| {
-            let mappable = match direction {
+            let key = (o.index, e.subindex);
+            let mappable = match fill.direction {
                 Direction::Rx => e.pdo.rx(),
                 Direction::Tx => e.pdo.tx(),
             } && matches!(e.value, Value::Ram(_))
-                && Some((o.index, e.subindex)) != exclude
-                && !first
-                    .iter()
-                    .any(|&(i, s, _)| (i, s) == (o.index, e.subindex));
+                && !fill.taken.contains(&key)
+                && !fill.first.iter().any(|&(i, s, _)| (i, s) == key);
             mappable.then_some((o.index, e.subindex, e.bit_len))
         })
     });
-    let candidates = first.iter().copied().chain(candidates);
+    let candidates = fill.first.iter().copied().chain(candidates);
     let (mut mapped, mut bits) = (0usize, 0usize);
     let _ = set(od, mapping, 0, 0);
     for (index, subindex, bit_len) in candidates {
-        if mapped == slots || bits + usize::from(bit_len) > limit_bits {
+        if mapped == slots || bits + usize::from(bit_len) > bits_left {
             break;
         }
         let value = (u32::from(index) << 16) | (u32::from(subindex) << 8) | u32::from(bit_len);
@@ -157,7 +187,7 @@ fn map_max(
         }
     }
     let _ = set(od, mapping, 0, mapped as u32);
-    mapped
+    (mapped, bits)
 }
 
 /// Writes `value` to `object`'s `subindex` (its own width); whether it was stored.

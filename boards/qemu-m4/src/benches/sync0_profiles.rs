@@ -10,9 +10,10 @@
 //! not a copy specialised for one profile. The core has the RAM of the largest profile
 //! (`MAX_RAM_SIZE`), as an image that carries several profiles would.
 //!
-//! The largest mapping: RxPDO 1600h and TxPDO 1A00h filled with as many mappable OD RAM entries
-//! as the profile allows (its subindices, `max_process_bytes`), none adjacent in the OD RAM, so
-//! that each is a copy of its own; the first RxPDO and TxPDO are then the only ones assigned.
+//! The largest mapping: every PDO of the default assignment (1600h and 1A00h; per axis in a
+//! multi-axis profile) filled with as many mappable OD RAM entries as the profile allows (the
+//! subindices, `max_process_bytes`), none adjacent in the OD RAM, so that each is a copy of its
+//! own, and none in two PDOs.
 
 use core::hint::black_box;
 
@@ -29,7 +30,7 @@ use hal::esc::{regs, AlEvent, AlState, DcActivation, DlStatus};
 
 use super::motor::{tuning, POSITION, SAMPLE};
 use super::sync0_handler::{request_state, RamEsc};
-use super::{entry_at, first_mapping, map_max, read, set, write, MODE_CYCLIC_SYNC_POSITION};
+use super::{entry_at, fill_mapping, read, set, write, Fill, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
 
 /// DESIGN.md §6 and issue 13: the SYNC0 handler with a profile's default mapping. A target
@@ -39,6 +40,10 @@ const DEFAULT_MAPPING_BUDGET: u32 = 2_000;
 const MAX_MAPPING_BUDGET: u32 = 2_500;
 /// Most axes a profile has.
 const MAX_AXES: usize = 2;
+/// Most PDOs a profile assigns by default (1C12h/1C13h).
+const MAX_ASSIGNED: usize = 4;
+/// Most entries the largest mapping takes over all PDOs of one direction.
+const MAX_TAKEN: usize = 64;
 /// PDO assignment objects (ETG.1000.6 Table 67): RxPDO 1C12h, TxPDO 1C13h.
 const RX_ASSIGN: u16 = 0x1C12;
 const TX_ASSIGN: u16 = 0x1C13;
@@ -353,60 +358,88 @@ impl ProfileBench {
     }
 }
 
-/// The largest mapping of `profile` in `od` (PREOP): the first RxPDO and TxPDO filled
-/// ([`map_max`]) and assigned alone. What the master needs comes first: per axis the
-/// controlword, 607Ah and 6060h out, the statusword and 6064h in.
+/// The largest mapping of `profile` in `od` (PREOP): every PDO of the default assignment
+/// (one per axis in a multi-axis profile) filled ([`fill_mapping`]), the process image
+/// shared out in assignment order, no entry in two PDOs. What the master needs comes first:
+/// per axis, in its own PDO where it has one, the controlword, 607Ah and 6060h out, the
+/// statusword and 6064h in.
 fn largest_mapping(od: &mut Dictionary<'_>, profile: &DriveProfile) -> Result<(), &'static str> {
-    let mut rx_first = [(0, 0, 0); 3 * MAX_AXES];
-    let mut tx_first = [(0, 0, 0); 2 * MAX_AXES];
-    let (mut rx_len, mut tx_len) = (0, 0);
-    for vars in profile.axes.iter().take(MAX_AXES) {
-        for at in [
-            vars.controlword,
-            vars.target_position,
-            vars.modes_of_operation,
-        ] {
-            if let (Some(entry), Some(slot)) = (entry_at(&profile.od, at), rx_first.get_mut(rx_len))
-            {
-                *slot = entry;
-                rx_len += 1;
-            }
-        }
-        for at in [vars.statusword, vars.position_actual_value] {
-            if let (Some(entry), Some(slot)) = (entry_at(&profile.od, at), tx_first.get_mut(tx_len))
-            {
-                *slot = entry;
-                tx_len += 1;
-            }
-        }
-    }
-    let plan = [
-        (
-            Direction::Rx,
-            RX_ASSIGN,
-            rx_first.get(..rx_len).unwrap_or_default(),
-        ),
-        (
-            Direction::Tx,
-            TX_ASSIGN,
-            tx_first.get(..tx_len).unwrap_or_default(),
-        ),
-    ];
-    for (direction, assign, first) in plan {
+    let limit_bits = 8 * usize::from(profile.od.device.max_process_bytes).min(MAX_IMAGE);
+    for (direction, assign) in [(Direction::Rx, RX_ASSIGN), (Direction::Tx, TX_ASSIGN)] {
         let assignment = od.object(assign).ok_or("no PDO assignment object")?;
-        if !(set(od, assignment, 0, 0)
-            && set(od, assignment, 1, u32::from(first_mapping(direction))))
-        {
+        let count = od.read_u32(assign, 0).ok_or("no PDO assignment count")?;
+        let mut pdos = [0u16; MAX_ASSIGNED];
+        let assigned = pdos.len().min(count as usize);
+        for (sub, pdo) in (1..).zip(pdos.iter_mut().take(assigned)) {
+            *pdo = od
+                .read_u32(assign, sub)
+                .and_then(|v| u16::try_from(v).ok())
+                .ok_or("an assigned PDO is unreadable")?;
+        }
+        if !set(od, assignment, 0, 0) {
             return Err("the PDO assignment is not writable");
         }
-        if map_max(od, &profile.od, direction, first, None, usize::MAX) < first.len() {
-            return Err("the largest mapping lacks what the master needs");
+        let mut taken = [(0, 0); MAX_TAKEN];
+        let (mut n_taken, mut bits_left) = (0, limit_bits);
+        for (axis, &mapping) in pdos.iter().take(assigned).enumerate() {
+            let needs = needed_entries(profile, direction, axis);
+            let first = needs.0.get(..needs.1).unwrap_or_default();
+            let fill = Fill {
+                direction,
+                mapping,
+                first,
+                taken: taken.get(..n_taken).unwrap_or_default(),
+            };
+            let (mapped, bits) = fill_mapping(od, &profile.od, &fill, usize::MAX, bits_left);
+            if mapped < first.len() {
+                return Err("the largest mapping lacks what the master needs");
+            }
+            bits_left = bits_left.saturating_sub(bits);
+            for sub in (1..).take(mapped) {
+                let value = od
+                    .read_u32(mapping, sub)
+                    .ok_or("a mapped entry is unreadable")?;
+                if let Some(slot) = taken.get_mut(n_taken) {
+                    *slot = ((value >> 16) as u16, (value >> 8) as u8);
+                    n_taken += 1;
+                }
+            }
         }
-        if !set(od, assignment, 0, 1) {
+        if !set(od, assignment, 0, assigned as u32) {
             return Err("the PDO assignment is not writable");
         }
     }
     Ok(())
+}
+
+/// The entries the master needs of `axis` in `direction` (index, subindex, bit length), as
+/// many as the array's first `.1`: the controlword, 607Ah and 6060h out, the statusword and
+/// 6064h in.
+fn needed_entries(
+    profile: &DriveProfile,
+    direction: Direction,
+    axis: usize,
+) -> ([(u16, u8, u16); 3], usize) {
+    let mut needs = [(0, 0, 0); 3];
+    let mut len = 0;
+    let Some(vars) = profile.axes.get(axis) else {
+        return (needs, 0);
+    };
+    let wanted = match direction {
+        Direction::Rx => [
+            vars.controlword,
+            vars.target_position,
+            vars.modes_of_operation,
+        ],
+        Direction::Tx => [vars.statusword, vars.position_actual_value, None],
+    };
+    for at in wanted {
+        if let (Some(entry), Some(slot)) = (entry_at(&profile.od, at), needs.get_mut(len)) {
+            *slot = entry;
+            len += 1;
+        }
+    }
+    (needs, len)
 }
 
 /// The SYNC0 handler of `profile` with `mapping` and the axes placed `at`: the more expensive
