@@ -84,9 +84,15 @@ pub struct Ratio {
     inv_denominator: u64,
 }
 
+/// Equal as values (n₁·d₂ = n₂·d₁, in 128 bits from 32 × 32-bit products): a ratio in lowest
+/// terms ([`Ratio::prepared`]) equals its unreduced form, and the reciprocals do not count.
 impl PartialEq for Ratio {
     fn eq(&self, other: &Self) -> bool {
-        self.numerator == other.numerator && self.denominator == other.denominator
+        let (a, b) = (
+            (self.numerator, other.denominator),
+            (other.numerator, self.denominator),
+        );
+        a.0.wrapping_mul(a.1) == b.0.wrapping_mul(b.1) && mul_high(a.0, a.1) == mul_high(b.0, b.1)
     }
 }
 
@@ -151,12 +157,29 @@ impl Ratio {
     }
 
     /// This ratio with the reciprocals that let positions convert without a division (the
-    /// two divisions happen here, once). The conversions give the same results either way.
+    /// two divisions happen here, once), in lowest terms where a side exceeds 32 bits (a
+    /// product of factors, e.g. a gear ratio times a feed constant, often has common factors):
+    /// the same value, so the conversions give the same results either way, but factors
+    /// within 32 bits take the conversions' short paths (a side beyond 32 bits has no
+    /// reciprocal: a 64-bit or a bit-by-bit division per conversion).
     pub fn prepared(self) -> Self {
+        let (numerator, denominator) = if (self.numerator | self.denominator) >> 32 != 0 {
+            let common = gcd(self.numerator, self.denominator);
+            // Both sides ≥ 1 (`new`), so `common` ≥ 1 divides both.
+            (
+                self.numerator.checked_div(common).unwrap_or(self.numerator),
+                self.denominator
+                    .checked_div(common)
+                    .unwrap_or(self.denominator),
+            )
+        } else {
+            (self.numerator, self.denominator)
+        };
         Self {
-            inv_numerator: reciprocal(self.numerator),
-            inv_denominator: reciprocal(self.denominator),
-            ..self
+            numerator,
+            denominator,
+            inv_numerator: reciprocal(numerator),
+            inv_denominator: reciprocal(denominator),
         }
     }
 
@@ -233,6 +256,29 @@ impl Ratio {
         let rest = r1.wrapping_mul(2).wrapping_add(num).wrapping_sub(1) >> 1;
         let (q2, _) = divide_floor(rest, den32, inv)?;
         Some(q1.saturating_add(q2))
+    }
+}
+
+/// The greatest common divisor of `a` and `b` (binary: shifts and subtractions, at most some
+/// 130 steps, no division); 0 only for two zeros.
+fn gcd(mut a: u64, mut b: u64) -> u64 {
+    if a == 0 || b == 0 {
+        return a | b;
+    }
+    // The powers of two they share, then odd numbers only: the difference of two odd numbers
+    // is even, and halving it keeps the common divisor.
+    let shift = (a | b).trailing_zeros();
+    a >>= a.trailing_zeros();
+    loop {
+        b >>= b.trailing_zeros();
+        if a > b {
+            core::mem::swap(&mut a, &mut b);
+        }
+        // b ≥ a, both odd: no wrap.
+        b = b.wrapping_sub(a);
+        if b == 0 {
+            return a << shift;
+        }
     }
 }
 
@@ -749,6 +795,82 @@ mod tests {
         assert_eq!(scale_long_position(i64::MAX, 2, 1, reciprocal(1)), None);
         assert_eq!(scale(i64::MAX, 2, 1, reciprocal(1)), i64::MAX);
         assert_eq!(scale(i64::MIN + 1, 2, 1, reciprocal(1)), i64::MIN);
+    }
+
+    #[test]
+    fn gcd_is_the_greatest_common_divisor() {
+        fn euclid(a: u64, b: u64) -> u64 {
+            if b == 0 {
+                a
+            } else {
+                euclid(b, a % b)
+            }
+        }
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        let specials = [0, 1, 2, 3, 1 << 63, u64::MAX, (1 << 40) * 3, 600, 10_000];
+        for i in 0..20_000u32 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            // Shared factors: a common multiplier, so that gcds above 1 are common too.
+            let common = (x >> 48) | 1;
+            let (a, b) = match i % 3 {
+                0 => (x >> (x % 64), x.rotate_left(29) >> (x % 61)),
+                1 => (
+                    (x >> 40).wrapping_mul(common),
+                    (x & 0xFF_FFFF).wrapping_mul(common),
+                ),
+                _ => (
+                    specials[(x % 9) as usize],
+                    specials[((x >> 8) % 9) as usize],
+                ),
+            };
+            assert_eq!(gcd(a, b), euclid(a, b), "gcd({a}, {b})");
+        }
+    }
+
+    #[test]
+    fn ratios_are_equal_as_values() {
+        assert_eq!(Ratio::new(2, 4), Ratio::new(1, 2));
+        assert_eq!(Ratio::new(1 << 40, 3), Ratio::new(1 << 41, 6));
+        assert_ne!(Ratio::new(1, 2), Ratio::new(1, 3));
+        // Cross products equal in their low 64 bits (both 0) but not above: 2¹⁵ against 2¹⁰.
+        assert_ne!(Ratio::new(1 << 40, 1 << 25), Ratio::new(1 << 40, 1 << 30));
+        // A ratio in lowest terms equals its unreduced form.
+        let (n, d) = (3 * (1u64 << 40), 5 * (1u64 << 36));
+        assert_eq!(Ratio::new(n, d).prepared(), Ratio::new(n, d));
+        assert_eq!(Ratio::new(n, d).prepared(), Ratio::new(48, 5));
+    }
+
+    #[test]
+    fn a_ratio_beyond_32_bits_is_prepared_in_lowest_terms() {
+        // A gear ratio times a feed constant (2²⁰ increments per 7 turns, 10⁶ units per 2¹²
+        // turns): 2²⁰·10⁶ / (7·2¹²), a numerator beyond 32 bits, = 2⁸·10⁶ / 7.
+        let (n, d) = ((1u64 << 20) * 1_000_000, 7 * (1u64 << 12));
+        let r = Ratio::new(n, d).prepared();
+        assert_eq!((r.numerator, r.denominator), (256_000_000, 7));
+        assert!(
+            r.inv_numerator != 0 && r.inv_denominator != 0,
+            "both reciprocals"
+        );
+        let mut x: u64 = 0x2545_F491_4F6C_DD1D;
+        for _ in 0..5_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x >> (x % 40)) as i64 * if x & 1 == 0 { 1 } else { -1 };
+            assert_eq!(r.position_to_internal(v), reference(v, n, d), "{v}");
+            assert_eq!(r.position_from_internal(v), reference(v, d, n), "{v}");
+        }
+        // Within 32 bits a ratio keeps its terms (they take the short paths already).
+        let small = Ratio::new(131_072, 10_000).prepared();
+        assert_eq!((small.numerator, small.denominator), (131_072, 10_000));
+        // Coprime sides beyond 32 bits stay as they are.
+        let coprime = Ratio::new(1 << 40, (1 << 33) + 1).prepared();
+        assert_eq!(
+            (coprime.numerator, coprime.denominator),
+            (1 << 40, (1 << 33) + 1)
+        );
     }
 
     #[test]
