@@ -419,8 +419,8 @@ fn scale_general(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
 /// [`scale`] of a position beyond 32 bits (a long travel: 2³² increments are 512 turns of a
 /// 23-bit encoder) with the factors within 32 bits: the 64 × 32-bit product from two 32 × 32
 /// multiplications, divided through the reciprocal: in one step when it fits 64 bits, else in
-/// two 32-bit digits (as [`divide_wide`]; without the general path's 64 × 64-bit product, its
-/// overflow checks and the 128-bit division). `None` where that does not apply or the
+/// two 32-bit digits ([`divide_wide`]; without the general path's 64 × 64-bit product and its
+/// overflow checks). `None` where that does not apply or the
 /// quotient leaves the i64 range (the general path saturates).
 #[inline]
 fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> Option<i64> {
@@ -445,17 +445,17 @@ fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> O
             return signed(value < 0, quotient);
         }
     }
-    // Long division in two digits: high / d, then (its remainder · 2³² + the low word) / d.
-    let (q1, r1) = divide_floor(high, d, inv)?;
-    // A first digit of 2³¹ or more: the quotient is at least 2⁶³, beyond the i64 range.
-    if q1 >> 31 != 0 {
+    // The product as a 128-bit value: its upper half is `high`'s upper word. Below the
+    // divisor, the quotient fits 64 bits and [`divide_wide`] divides in two 32-bit digits;
+    // else the quotient is 2⁶⁴ or more, beyond the i64 range.
+    let upper = high >> 32;
+    if upper >= u64::from(d) {
         return None;
     }
-    // r1 < d < 2³²: the second dividend is below d · 2³² < 2⁶⁴, its quotient below 2³².
-    let (q0, r0) = divide_floor(r1 << 32 | low_word, d, inv)?;
-    // Halves away from zero (on the magnitude: up): 2·r0 ≥ d, as the bias does above.
-    let round_up = r0 >= u64::from(d).wrapping_sub(r0);
-    signed(value < 0, (q1 << 32 | q0).wrapping_add(u64::from(round_up)))
+    let (quotient, remainder) = divide_wide(upper, high << 32 | low_word, d, inv)?;
+    // Halves away from zero (on the magnitude: up): 2·remainder ≥ d, as the bias does above.
+    let round_up = remainder >= u64::from(d).wrapping_sub(remainder);
+    signed(value < 0, quotient.checked_add(u64::from(round_up))?)
 }
 
 /// A quotient's `magnitude` with the sign of its operand (`negative`); `None` beyond the i64
@@ -512,6 +512,7 @@ fn scale_wide(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
 /// `u32::MAX` (the quotient fits 64 bits): long division in two 32-bit digits, each a 64-bit
 /// by 32-bit division through the reciprocal `inv` ([`divide_floor`]). `None` if a step
 /// fails its bound (which `high` < `divisor` excludes).
+#[inline]
 fn divide_wide(high: u64, low: u64, divisor: u32, inv: u64) -> Option<(u64, u64)> {
     // high < divisor ≤ 2³² − 1: shifted by 32 bits with the next digit it stays below
     // divisor · 2³² < 2⁶⁴, and so does each remainder's.
@@ -656,6 +657,13 @@ impl RatioRange {
 mod tests {
     use super::*;
 
+    /// The next state of a xorshift64 generator (the tests' reproducible inputs).
+    fn xorshift(x: &mut u64) {
+        *x ^= *x << 13;
+        *x ^= *x >> 7;
+        *x ^= *x << 17;
+    }
+
     /// `value × n / d` rounded to the nearest, halves away from zero, in exact 128-bit
     /// arithmetic (the reference), saturated to i64.
     fn reference(value: i64, n: u64, d: u64) -> i64 {
@@ -718,9 +726,7 @@ mod tests {
             u64::from(u32::MAX),
         ];
         for i in 0..20_000u64 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let d = ends.get(i as usize).copied().unwrap_or((x >> 32).max(1));
             let m = x | (1 << 40);
             let v = (x.rotate_left(17) as i64) >> (x % 20);
@@ -746,9 +752,7 @@ mod tests {
         ];
         let mut x: u64 = 0xD1B5_4A32_D192_ED03;
         for i in 0..30_000u64 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let d = divisors
                 .get(i as usize % 10)
                 .copied()
@@ -809,9 +813,7 @@ mod tests {
         let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
         let specials = [0, 1, 2, 3, 1 << 63, u64::MAX, (1 << 40) * 3, 600, 10_000];
         for i in 0..20_000u32 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             // Shared factors: a common multiplier, so that gcds above 1 are common too.
             let common = (x >> 48) | 1;
             let (a, b) = match i % 3 {
@@ -855,9 +857,7 @@ mod tests {
         );
         let mut x: u64 = 0x2545_F491_4F6C_DD1D;
         for _ in 0..5_000 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let v = (x >> (x % 40)) as i64 * if x & 1 == 0 { 1 } else { -1 };
             assert_eq!(r.position_to_internal(v), reference(v, n, d), "{v}");
             assert_eq!(r.position_from_internal(v), reference(v, d, n), "{v}");
@@ -950,9 +950,7 @@ mod tests {
         // Pseudo-random products near the reciprocal's error bound (large magnitudes).
         let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
         for _ in 0..20_000 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let d = (x >> 32) | 1;
             let n = (x & 0xFFFF) + 1;
             let v = (x as i64) >> (x % 48);
@@ -993,9 +991,7 @@ mod tests {
     fn the_32_bit_path_converts_exactly_over_the_whole_operand_range() {
         let mut x: u64 = 0xD1B5_4A32_D192_ED03;
         for _ in 0..200_000 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let (n, d) = (((x >> 32) >> (x % 31)).max(1), (x & 0xFFFF_FFFF).max(1));
             let v = (x.rotate_left(23) as u32 as i64) * if x & 1 == 0 { 1 } else { -1 };
             let r = Ratio::new(n, d).prepared();
@@ -1022,9 +1018,7 @@ mod tests {
         };
         let mut x: u64 = 0x8CB9_2BA7_2F3D_8DD7;
         for i in 0..200_000u64 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let d = match i % 4 {
                 0 => (x >> 32).max(1),
                 1 => 1 << (x % 32),
@@ -1051,9 +1045,7 @@ mod tests {
     fn a_window_in_increments_is_the_boundary_of_the_conversion() {
         let mut x: u64 = 0x5851_F42D_4C95_7F2D;
         for i in 0..100_000u32 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
+            xorshift(&mut x);
             let (n, d) = (
                 ((x >> 32) >> (x % 29)).max(1),
                 ((x & 0xFFFF_FFFF) >> (x % 31)).max(1),
