@@ -527,3 +527,60 @@ fn sdv3_e_an_alarm_record_holds_the_speed_at_the_alarm() {
         }
     });
 }
+
+/// SDV3-E §6.3.3 alarm record field 13 (command position, in the position unit): the motor
+/// holds a CSP target (607Ah over the default PDOs) when the power stage overheats (AH); the
+/// newest record holds the target, the position demand 6062h of the cycle that raised the
+/// alarm.
+#[test]
+fn sdv3_e_an_alarm_record_holds_the_command_position_at_the_alarm() {
+    use tests_host::vendor;
+    // SDV3-E 1600h: 6040h at byte 0, 607Ah at 2, 6060h at 12.
+    const TARGET: i32 = 200_000;
+    const STEP: i32 = 500;
+    block_on(async {
+        let (m, transport) = master_for(Segment::new("sdv3-e", 1).expect("profile"));
+        tokio::task::spawn_local(transport);
+        let md: &MainDevice<'_> = &m.maindevice;
+        let group = vendor::into_op(&m, md, &[]).await;
+        let cycle = |cw: u16, target: i32| {
+            let (m, group) = (&m, &group);
+            async move {
+                let (cw, target) = (cw.to_le_bytes(), target.to_le_bytes());
+                let outputs: [(usize, &[u8]); 3] = [(0, &cw), (2, &target), (12, &[CSP])];
+                let inputs = vendor::exchange(m, md, group, &outputs, CYCLE_NS).await;
+                vendor::u16_at(&inputs, 0)
+            }
+        };
+        let mut sw = 0;
+        for cw in vendor::enable_sequence(20) {
+            sw = cycle(cw, 0).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        let mut target = 0;
+        while target < TARGET {
+            target += STEP;
+            cycle(ENABLE_OPERATION, target).await;
+        }
+        for _ in 0..200 {
+            sw = cycle(ENABLE_OPERATION, TARGET).await;
+        }
+        assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
+        m.shared.segment().drives_mut()[0].servos[0]
+            .plant
+            .set_drive_temperature(120.0);
+        let mut faulted = false;
+        for _ in 0..300 {
+            if cycle(ENABLE_OPERATION, TARGET).await & FAULT_BIT != 0 {
+                faulted = true;
+                break;
+            }
+        }
+        assert!(faulted, "AH");
+        let sd = group.subdevice(md, 0).expect("drive");
+        sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
+        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+        let position = sd.sdo_read::<i32>(0x3201, 13).await.expect("3201h:0D");
+        assert_eq!(position, TARGET, "3201h:0D command position");
+    });
+}

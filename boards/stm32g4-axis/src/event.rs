@@ -166,7 +166,8 @@ impl<const RAM: usize, S: NvStorage, const CAP: usize> EventSide<RAM, S, CAP> {
             Ok(request) => {
                 let loaded = match request {
                     Some(r) => Some(
-                        drive.with(|d| self.mailbox.load_dictionary(&d.core, r, &self.params))?,
+                        drive
+                            .with(|d| self.mailbox.load_dictionary(&mut d.core, r, &self.params))?,
                     ),
                     None => None,
                 };

@@ -34,11 +34,12 @@ pub fn torque_from_permille_f32(permille: f32, rated_nm: f32) -> f32 {
     permille * PER_MILLE * rated_nm
 }
 
-/// A torque in N·m as ‰ of the rated torque (`as` saturates; NaN → 0).
+/// A torque in N·m as ‰ of the rated torque, rounded to the nearest as [`velocity_object`]
+/// (`as` saturates; NaN → 0).
 pub fn torque_to_permille(torque_nm: f32, rated_nm: f32) -> i16 {
     // Through i32 (one VCVT, which saturates and maps NaN to 0 like `as`), then limited to the
     // i16 range (SSAT): a direct `as i16` becomes a chain of range checks.
-    let permille = (torque_nm / rated_nm * PER_MILLE_INV) as i32;
+    let permille = nearest(torque_nm / rated_nm * PER_MILLE_INV) as i32;
     permille.clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16
 }
 
@@ -53,9 +54,18 @@ pub fn position_object(position: i64) -> i32 {
     position as i32
 }
 
-/// A velocity in increments/s as its 32-bit object (606Ch; `as` saturates, NaN → 0).
+/// A velocity in increments/s as its 32-bit object (606Ch), rounded to the nearest (halves
+/// away from zero; `as` saturates, NaN → 0): a set-point that went through a fractional factor
+/// and back (60FFh → increments/s → 606Bh) reads as it was written, not one unit short of it.
 pub fn velocity_object(velocity: f32) -> i32 {
-    velocity as i32
+    nearest(velocity) as i32
+}
+
+/// `x` plus half a unit away from zero: `as` (which truncates) then rounds to the nearest.
+/// Three instructions (copysign, add), where `f32::round` would be a library call.
+#[inline(always)]
+fn nearest(x: f32) -> f32 {
+    x + 0.5_f32.copysign(x)
 }
 
 /// A commissioned quantity in SI units as its object value in `unit` (µΩ, nH, g·mm²), rounded.
@@ -1226,6 +1236,51 @@ mod tests {
         assert_eq!(torque_to_permille(-1e9, rated), i16::MIN);
         assert_eq!(torque_to_permille(f32::INFINITY, rated), i16::MAX);
         assert_eq!(torque_to_permille(f32::NEG_INFINITY, rated), i16::MIN);
+    }
+
+    /// Every torque object value survives the round trip through N·m for rated torques whose
+    /// ‰ is not exact in binary (0.001 × 3.3 N·m): 30 ‰ read back as 29 when the object value
+    /// was truncated.
+    #[test]
+    fn every_torque_object_value_round_trips_through_newton_metres() {
+        for rated in [0.1, 1.0, 2.0, 3.3, 7.77, 45.0] {
+            for permille in i16::MIN..=i16::MAX {
+                let nm = torque_from_permille(permille, rated);
+                assert_eq!(
+                    torque_to_permille(nm, rated),
+                    permille,
+                    "{permille} ‰ of {rated}"
+                );
+            }
+        }
+        // Halves away from zero.
+        assert_eq!(torque_to_permille(0.0015, 1.0), 2);
+        assert_eq!(torque_to_permille(-0.0015, 1.0), -2);
+        assert_eq!(torque_to_permille(0.0014, 1.0), 1);
+    }
+
+    /// A velocity object value survives the round trip through increments/s with a fractional
+    /// factor (the GHA-E's 13.1072 increments per unit: 2000 units/s read back as 1999 when the
+    /// object value was truncated), over the speeds a drive runs at.
+    #[test]
+    fn velocity_objects_round_trip_through_a_fractional_factor() {
+        let scale = Ratio::new(131_072, 10_000).scale();
+        let mut x = 0x9E37_79B9_7F4A_7C15_u64;
+        for _ in 0..100_000 {
+            xorshift(&mut x);
+            // |v| ≤ 2²¹ units/s (27·10⁶ increments/s: 26 rev/s of a 20-bit encoder): the two
+            // roundings of f32 stay below half a unit up to some 2²⁴ / 6.
+            let v = (x >> 42) as i32 - (1 << 21);
+            let back =
+                velocity_object(scale.velocity_from_internal(scale.velocity_to_internal(v as f32)));
+            assert_eq!(back, v);
+        }
+        assert_eq!(velocity_object(2.5), 3);
+        assert_eq!(velocity_object(-2.5), -3);
+        assert_eq!(velocity_object(2.49), 2);
+        assert_eq!(velocity_object(f32::NAN), 0);
+        assert_eq!(velocity_object(1e12), i32::MAX);
+        assert_eq!(velocity_object(-1e12), i32::MIN);
     }
 
     #[test]

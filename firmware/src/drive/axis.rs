@@ -45,7 +45,7 @@ use crate::profile::{
     self, AccelerationUnit, AppVars, Cia402Rules, DriveProfile, Factor, Operand,
     ProbeInputAssignment, RatioRange, UnitRatios, MOTOR_FAULT_COUNT,
 };
-use ethercat_slave::od::Object;
+use ethercat_slave::od::{Object, Value};
 use ethercat_slave::pdo::PdoPlan;
 
 /// The motor counts as running above this speed and at rest at or below it, rpm: the Σ-V
@@ -178,6 +178,9 @@ pub struct DriveAxis {
     /// The unit conversions in force (rebuilt only when [`Groups::UNITS`] is due: a factor's
     /// object may have changed).
     units_cache: Option<UnitRatios>,
+    /// The demand values a TxPDO carries: the cycle writes these, an upload the others
+    /// ([`Self::before_upload`]).
+    demands_carried: DemandObjects,
     /// The settings (option codes, limits, ramps, windows...) in drive units.
     settings: Settings,
     /// The setting groups to read again in the next cycle (their objects were written).
@@ -221,19 +224,91 @@ pub struct DriveAxis {
 struct Recent {
     /// Increments/s (converted to rpm only for a record: the cycle just stores).
     velocity: f32,
-    demand_velocity: f32,
-    /// N·m, and the rated torque they are a share of.
-    demand_torque: f32,
+    /// What the axis was asked for (also what the demand values show).
+    demands: Demands,
+    /// N·m, and the rated torque it is a share of (the demand torque's too).
     torque: f32,
     rated_nm: f32,
     bus_voltage: f32,
-    demand_position: i32,
     /// Velocities (increments/s) sampled every [`SPEED_SAMPLE_NS`], the newest at
     /// `speeds[newest]`.
     speeds: [f32; SPEED_SAMPLES],
     newest: usize,
     since_sample_ns: u32,
     running_ns: u64,
+}
+
+/// What the axis was asked for in a cycle, in drive units: the demand values 6062h, 606Bh and
+/// 6074h show it in their objects' units ([`write_demands`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Demands {
+    /// The position set-point (increments, drive positions).
+    position: i64,
+    /// The velocity set-point (increments/s).
+    velocity: f32,
+    /// The torque demand (N·m).
+    torque: f32,
+}
+
+/// Which of the demand value objects ([`Demands`]) to write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct DemandObjects {
+    /// 6062h position demand value.
+    position: bool,
+    /// 606Bh velocity demand value.
+    velocity: bool,
+    /// 6074h torque demand.
+    torque: bool,
+}
+
+impl DemandObjects {
+    const NONE: Self = Self {
+        position: false,
+        velocity: false,
+        torque: false,
+    };
+    const ALL: Self = Self {
+        position: true,
+        velocity: true,
+        torque: true,
+    };
+}
+
+/// Writes the objects `which` of `demands` in the objects' units: positions and velocities
+/// through the unit conversions and the polarity, the torque in ‰ of `object_rated_nm` (the
+/// torque objects' unit). The cycle writes those a TxPDO carries; an upload all of them
+/// ([`DriveAxis::before_upload`]): nobody reads the others in between, and the position's
+/// conversion is one of the costliest steps of a cycle.
+#[inline(always)]
+fn write_demands(
+    ram: &mut [u8],
+    vars: &AppVars,
+    which: DemandObjects,
+    demands: &Demands,
+    (position_ratio, velocity_ratio, pol, object_rated_nm): (
+        &units::Ratio,
+        &units::Scale,
+        Polarity,
+        f32,
+    ),
+) {
+    if which.position {
+        let position = pol.position(units::actual_position(demands.position, *position_ratio));
+        write_bytes(ram, vars.position_demand_value, position.to_le_bytes());
+    }
+    if which.velocity {
+        let velocity =
+            units::velocity_object(velocity_ratio.velocity_from_internal(demands.velocity));
+        write_bytes(
+            ram,
+            vars.velocity_demand_value,
+            pol.velocity(velocity).to_le_bytes(),
+        );
+    }
+    if which.torque {
+        let torque = units::torque_to_permille(demands.torque, object_rated_nm);
+        write_bytes(ram, vars.torque_demand, pol.torque(torque).to_le_bytes());
+    }
 }
 
 /// The record's "speed 5 ms before": samples 1 ms apart, the oldest of them 5 ms back.
@@ -304,6 +379,7 @@ impl DriveAxis {
             warning: None,
             latched_units: None,
             units_cache: None,
+            demands_carried: DemandObjects::NONE,
             settings: Settings::UNREAD,
             settings_due: Groups::ALL,
             setting_offsets: GroupsByOffset::of(vars),
@@ -311,12 +387,14 @@ impl DriveAxis {
             fault_number: None,
             recent: Recent {
                 velocity: 0.0,
-                demand_velocity: 0.0,
-                demand_torque: 0.0,
+                demands: Demands {
+                    position: 0,
+                    velocity: 0.0,
+                    torque: 0.0,
+                },
                 torque: 0.0,
                 rated_nm: 1.0,
                 bus_voltage: 0.0,
-                demand_position: 0,
                 speeds: [0.0; SPEED_SAMPLES],
                 newest: 0,
                 since_sample_ns: 0,
@@ -477,6 +555,54 @@ impl DriveAxis {
         self.settings_live = live_groups(self.vars, outputs);
     }
 
+    /// The TxPDO mapping is now `inputs`: the demand values it carries are written in every
+    /// cycle, the others when an upload reads them ([`Self::before_upload`]).
+    pub(super) fn inputs_mapped(&mut self, inputs: &PdoPlan) {
+        // A mapped entry is mapped whole: its first byte tells.
+        let carried = |at: Option<u16>| at.is_some_and(|at| inputs.writes_ram(at, 1));
+        let vars = self.vars;
+        self.demands_carried = DemandObjects {
+            position: carried(vars.position_demand_value),
+            velocity: carried(vars.velocity_demand_value),
+            torque: carried(vars.torque_demand),
+        };
+    }
+
+    /// An upload is about to read `object`: if it shows one of the demand values, they are
+    /// written as of the last cycle (with the unit factors, the polarity and the torque unit in
+    /// force). Nothing before the unit conversions exist (no motor yet: no cycle wrote them
+    /// either).
+    pub(super) fn before_upload(&self, ram: &mut [u8], object: &Object) {
+        let vars = self.vars;
+        let is_demand = |at| {
+            let at = Some(at);
+            at == vars.position_demand_value
+                || at == vars.velocity_demand_value
+                || at == vars.torque_demand
+        };
+        let shows_demand = object.entries.iter().any(|e| match e.value {
+            Value::Ram(at) => is_demand(at),
+            _ => false,
+        });
+        if !shows_demand {
+            return;
+        }
+        if let Some(units) = self.units_cache.as_ref() {
+            write_demands(
+                ram,
+                vars,
+                DemandObjects::ALL,
+                &self.recent.demands,
+                (
+                    &units.position,
+                    &units.velocity,
+                    self.polarity,
+                    self.settings.object_rated_nm,
+                ),
+            );
+        }
+    }
+
     /// The settings in drive units, as of their last refresh.
     #[cfg(test)]
     pub(super) fn settings(&self) -> &Settings {
@@ -595,11 +721,15 @@ impl DriveAxis {
             running_s: u32::try_from(r.running_ns / NS_PER_S).unwrap_or(u32::MAX),
             speed_rpm: r.velocity * rpm_per_count_s,
             speed_rpm_5ms_before: r.speeds.get(oldest).copied().unwrap_or(0.0) * rpm_per_count_s,
-            demand_speed_rpm: r.demand_velocity * rpm_per_count_s,
-            demand_torque_percent: r.demand_torque * percent_per_nm,
+            demand_speed_rpm: r.demands.velocity * rpm_per_count_s,
+            demand_torque_percent: r.demands.torque * percent_per_nm,
             torque_percent: r.torque * percent_per_nm,
             bus_voltage: r.bus_voltage,
-            demand_position: r.demand_position,
+            // As 6062h shows it (no conversion yet: 0, as the cycle had not run either).
+            demand_position: self.units_cache.as_ref().map_or(0, |u| {
+                self.polarity
+                    .position(units::actual_position(r.demands.position, u.position))
+            }),
             mode: self.running_mode as i8,
         }
     }
@@ -1512,35 +1642,30 @@ impl DriveAxis {
                 .map_or(0, |s| s.digital_inputs(feedback.safe_torque_off_channels)))
             .to_le_bytes(),
         );
-        // Demand values: what the axis is asked for this cycle.
-        let position_out = |p: i64| pol.position(units::actual_position(p, position_ratio));
+        // Demand values: what the axis is asked for this cycle (written where a TxPDO carries
+        // them; an upload shows the others).
+        let demands = Demands {
+            position: set_point.position,
+            velocity: set_point.velocity,
+            torque: if set_point.control == modes::Loop::Torque {
+                set_point.torque
+            } else {
+                feedback.torque
+            },
+        };
+        write_demands(
+            ram,
+            vars,
+            self.demands_carried,
+            &demands,
+            (&position_ratio, &velocity_ratio, pol, object_rated_nm),
+        );
         let velocity_out = |v: f32| {
             pol.velocity(units::velocity_object(
                 velocity_ratio.velocity_from_internal(v),
             ))
         };
         let torque_out = |t: f32| pol.torque(units::torque_to_permille(t, object_rated_nm));
-        let demand_position = position_out(set_point.position);
-        write_bytes(
-            ram,
-            vars.position_demand_value,
-            demand_position.to_le_bytes(),
-        );
-        write_bytes(
-            ram,
-            vars.velocity_demand_value,
-            velocity_out(set_point.velocity).to_le_bytes(),
-        );
-        let torque_demand = if set_point.control == modes::Loop::Torque {
-            set_point.torque
-        } else {
-            feedback.torque
-        };
-        write_bytes(
-            ram,
-            vars.torque_demand,
-            torque_out(torque_demand).to_le_bytes(),
-        );
         let actual_object = pol.position(units::position_object(actual_user(feedback.position)));
         write_bytes(ram, vars.position_actual_value, actual_object.to_le_bytes());
         write_bytes(
@@ -1558,33 +1683,25 @@ impl DriveAxis {
         } else {
             feedback.position
         };
-        self.remember(
-            feedback,
-            &set_point,
-            (torque_demand, rated_nm),
-            demand_position,
-            (enable, cycle_ns),
-        );
+        self.remember(feedback, &demands, rated_nm, (enable, cycle_ns));
     }
 
     /// Keeps what an alarm record shows of this cycle (a few stores; the speed ring every ms).
     fn remember(
         &mut self,
         feedback: &AxisFeedback,
-        set_point: &modes::SetPoint,
-        (torque_demand, rated_nm): (f32, f32),
-        demand_position: i32,
+        demands: &Demands,
+        rated_nm: f32,
         (running, cycle_ns): (bool, u32),
     ) {
-        // Stored as they are: converted only when a record is made (`alarm_conditions`).
+        // Stored as they are: converted only when a record is made (`alarm_conditions`) or an
+        // upload reads a demand value (`before_upload`).
         let r = &mut self.recent;
         r.velocity = feedback.velocity;
-        r.demand_velocity = set_point.velocity;
-        r.demand_torque = torque_demand;
+        r.demands = *demands;
         r.torque = feedback.torque;
         r.rated_nm = rated_nm;
         r.bus_voltage = feedback.bus_voltage;
-        r.demand_position = demand_position;
         if running {
             r.running_ns = r.running_ns.saturating_add(u64::from(cycle_ns));
         }

@@ -27,7 +27,7 @@ pub use axis::DriveAxis;
 use cia402::faults::FaultReport;
 use cia402::pds::PdsState;
 use ethercat_slave::od::index::STORE_PARAMETERS;
-use ethercat_slave::od::ErrorReport;
+use ethercat_slave::od::{ErrorReport, Object};
 use ethercat_slave::pdo::PdoPlan;
 use ethercat_slave::slave::{AppEvent, AppEvents, Application};
 
@@ -556,6 +556,18 @@ impl Application for Drive {
                 });
         }
         self.any_split_mapped = self.split_mapped.contains(&true);
+    }
+
+    fn inputs_mapped(&mut self, inputs: &PdoPlan) {
+        for axis in self.axes.iter_mut().flatten() {
+            axis.inputs_mapped(inputs);
+        }
+    }
+
+    fn before_upload(&mut self, ram: &mut [u8], object: &Object) {
+        for axis in self.axes.iter().flatten() {
+            axis.before_upload(ram, object);
+        }
     }
 
     fn background(&mut self, ram: &mut [u8], now_ns: u64) {

@@ -23,7 +23,8 @@ use firmware::cia402::pds::{controlword, PdsState};
 use firmware::cia402::profile_position::{CHANGE_SET_IMMEDIATELY, NEW_SET_POINT};
 use firmware::motor::axis::{Axis, AxisLink, AxisState};
 use firmware::motor::servo::{self, SERVO_400W};
-use firmware::profiles::standard::RAM_SIZE;
+use firmware::profiles::standard::{PROFILE, RAM_SIZE};
+use firmware::slave::Application;
 use firmware::sync0::on_sync0;
 use firmware::DriveCore;
 
@@ -36,6 +37,8 @@ use crate::harness::{Cases, Harness};
 const SYNC0_HANDLER_BUDGET: u32 = 2_000;
 /// Modes of operation 6060h: profile position mode (IEC 61800-7-201).
 const MODE_PROFILE_POSITION: i8 = 1;
+/// CiA402 606Bh velocity demand value: the phases of the move are told by its change.
+const VELOCITY_DEMAND_VALUE: u16 = 0x606B;
 /// CiA402 device-control commands (IEC 61800-7-201 Table 5).
 const SHUTDOWN: u16 = controlword::ENABLE_VOLTAGE | controlword::QUICK_STOP;
 const SWITCH_ON: u16 = SHUTDOWN | controlword::SWITCH_ON;
@@ -133,9 +136,12 @@ impl Bench {
             .ok_or("the enabled axis is not at rest on the start position")
     }
 
-    /// 606Bh velocity demand value, increments/s.
+    /// 606Bh velocity demand value, increments/s, as an upload reads it (no TxPDO carries
+    /// it: the drive writes it for the upload).
     fn velocity_demand(&mut self) -> Option<i32> {
-        let (_, ram) = self.setup.core.application();
+        let object = PROFILE.od.object(VELOCITY_DEMAND_VALUE)?;
+        let (app, ram) = self.setup.core.application();
+        app.before_upload(ram, object);
         read::<4>(ram, axis_vars()?.velocity_demand_value).map(i32::from_le_bytes)
     }
 

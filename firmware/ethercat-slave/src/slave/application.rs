@@ -1,7 +1,7 @@
 //! The device application the slave runs in every process-data cycle: what makes the slave a
 //! drive, an I/O module or anything else. The stack knows nothing about it beyond this trait.
 
-use crate::od::ErrorReport;
+use crate::od::{ErrorReport, Object};
 use crate::pdo::PdoPlan;
 
 /// What happened to the application's error state during a cycle: the slave turns it into the
@@ -100,6 +100,25 @@ pub trait Application {
     /// change in every cycle ([`PdoPlan::writes_ram`]). Default: nothing.
     fn outputs_mapped(&mut self, outputs: &PdoPlan) {
         let _ = outputs;
+    }
+
+    /// The TxPDO mapping changed: `inputs` is the plan the cycles pack from now on (built at
+    /// PREOP → SAFEOP; the empty plan when the state falls below SAFEOP). An application that
+    /// shows some values only on demand ([`Self::before_upload`]) learns here which of them
+    /// every cycle must write because a TxPDO carries them ([`PdoPlan::writes_ram`]). Default:
+    /// nothing.
+    fn inputs_mapped(&mut self, inputs: &PdoPlan) {
+        let _ = inputs;
+    }
+
+    /// A mailbox request is about to read the OD RAM entries of `object` (an SDO upload): the
+    /// application writes the values of the object that it shows on demand rather than in
+    /// every cycle (a drive's demand values, which no TxPDO carries: converting them to user
+    /// units each cycle would be work nobody reads). Bounded; called with the core, before
+    /// the entries are copied for the answer. Default: nothing (every value is written in the
+    /// cycle).
+    fn before_upload(&mut self, ram: &mut [u8], object: &Object) {
+        let _ = (ram, object);
     }
 
     /// Whether the application keeps something converted from the `len` OD RAM bytes from

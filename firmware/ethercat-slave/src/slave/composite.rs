@@ -81,7 +81,7 @@ impl<const RAM: usize, A: Application> Slave<RAM, A> {
         let job = self.core.event_begin(pdi, now_ns)?;
         self.mailbox.load(&mut self.core);
         let served = self.mailbox.serve(
-            &self.core,
+            &mut self.core,
             pdi,
             job,
             &mut WithDomains {

@@ -40,7 +40,9 @@ use super::{EventJob, SlaveCore};
 use crate::mailbox::{DictionaryScope, Mailbox, Request};
 use heapless::Vec;
 
-use crate::od::{AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Profile, Value};
+use crate::od::{
+    AbortCode, Dictionary, DirtyMap, DomainStore, DownloadHook, Object, Profile, Value,
+};
 use crate::pdo::RamRanges;
 use crate::slave::Application;
 
@@ -128,15 +130,27 @@ impl<const RAM: usize> MailboxSide<RAM> {
     /// or writes as it is now ([`Mailbox::scope`], [`load_scope`]: the entries of the object a
     /// request names, all of it where `hook`, the download hook [`Self::answer`] runs, reaches
     /// beyond the object, none for a request that reads no value) and the OD RAM the core's
-    /// RxPDO plan writes.
+    /// RxPDO plan writes. Before an upload's entries are copied, the application writes the
+    /// values of the object it shows on demand ([`Application::before_upload`]).
     pub fn load_dictionary<A: Application, H: DownloadHook + ?Sized>(
         &mut self,
-        core: &SlaveCore<RAM, A>,
+        core: &mut SlaveCore<RAM, A>,
         request: ReceivedRequest,
         hook: &H,
     ) -> LoadedRequest {
         let scope = self.mailbox.scope(&request.0);
-        load_scope(self.profile, scope, hook, &core.ram, &mut self.ram);
+        if let DictionaryScope::Object { index, download } = scope {
+            if download && hook.reaches_beyond_object(self.profile, index) {
+                self.ram = core.ram;
+            } else if let Some(object) = self.profile.object(index) {
+                // (An object the profile does not have: nothing to load, the answer is an
+                // abort.)
+                if !download {
+                    core.app.before_upload(&mut core.ram, object);
+                }
+                load_entries(object, &core.ram, &mut self.ram);
+            }
+        }
         if self.rx_generation != Some(core.rx_plan_generation) {
             self.rx_outputs = core.rx_plan.ram_ranges();
             self.rx_generation = Some(core.rx_plan_generation);
@@ -176,7 +190,7 @@ impl<const RAM: usize> MailboxSide<RAM> {
     /// Steps 2 to 4 in one, for a caller that holds the core throughout (no lock between).
     pub fn serve<P: EscPdi, A: Application, H: DownloadHook + ?Sized>(
         &mut self,
-        core: &SlaveCore<RAM, A>,
+        core: &mut SlaveCore<RAM, A>,
         pdi: &mut P,
         job: EventJob,
         hook: &mut H,
@@ -226,11 +240,14 @@ pub fn load_scope<const RAM: usize, H: DownloadHook + ?Sized>(
     };
     if download && hook.reaches_beyond_object(profile, index) {
         *ram = *core_ram;
-        return;
+    } else if let Some(object) = profile.object(index) {
+        load_entries(object, core_ram, ram);
     }
-    let Some(object) = profile.object(index) else {
-        return;
-    };
+}
+
+/// [`load_scope`] of an `object` whose answer reads or writes its entries alone.
+#[inline(always)]
+fn load_entries<const RAM: usize>(object: &Object, core_ram: &[u8; RAM], ram: &mut [u8; RAM]) {
     if object.entries.len() > MOST_ENTRIES_LOADED_ALONE {
         *ram = *core_ram;
         return;

@@ -141,7 +141,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         let result = faults::check_process_data_sms(pdi, &device, rx.byte_len(), tx.byte_len())?;
         if result.is_ok() {
             self.set_rx_plan(rx);
-            self.tx_plan = tx;
+            self.set_tx_plan(tx);
         }
         Ok(result)
     }
@@ -190,6 +190,12 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         self.app.outputs_mapped(&self.rx_plan);
     }
 
+    /// Puts `plan` in place as the TxPDO plan: the application learns the mapped inputs.
+    fn set_tx_plan(&mut self, plan: PdoPlan) {
+        self.tx_plan = plan;
+        self.app.inputs_mapped(&self.tx_plan);
+    }
+
     pub(in crate::slave) fn leave_and_enter<P: EscPdi>(
         &mut self,
         pdi: &mut P,
@@ -217,7 +223,7 @@ impl<const RAM: usize, A: Application> SlaveCore<RAM, A> {
         }
         if rank_to < 2 && rank_from >= 2 {
             self.set_rx_plan(PdoPlan::default());
-            self.tx_plan = PdoPlan::default();
+            self.set_tx_plan(PdoPlan::default());
             self.sync = SyncConfig {
                 mode: Mode::FreeRun,
                 cycle_ns: 0,
