@@ -36,8 +36,10 @@ use crate::adjust::service::Refusal;
 use crate::adjust::Action;
 use crate::alarm_log::{self, next_in_ring, AlarmTable, Conditions, Warning, WarningInputs};
 use crate::motion::{self, HomingInputs, ProfileModes};
-use crate::motor::axis::{AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel};
-use crate::motor::capture::{Captures, Latch, SwitchCapture};
+use crate::motor::axis::{
+    AxisCommand, AxisFeedback, AxisLink, AxisState, ControlMode, MotorModel, Withheld,
+};
+use crate::motor::capture::{Captures, Latch, SwitchCapture, Switches};
 use crate::motor::math;
 use crate::motor::servo::EncoderSpec;
 use crate::motor::trajectory::SaneLimits;
@@ -178,9 +180,11 @@ pub struct DriveAxis {
     /// The unit conversions in force (rebuilt only when [`Groups::UNITS`] is due: a factor's
     /// object may have changed).
     units_cache: Option<UnitRatios>,
-    /// The demand values a TxPDO carries: the cycle writes these, an upload the others
+    /// The values of [`Shown`] a TxPDO carries: the cycle writes these, an upload the others
     /// ([`Self::before_upload`]).
-    demands_carried: DemandObjects,
+    carried: Shown,
+    /// The OD RAM offsets of the values of [`Shown`] ([`Shown::places`]).
+    shown_places: [u16; Shown::COUNT],
     /// The settings (option codes, limits, ramps, windows...) in drive units.
     settings: Settings,
     /// The setting groups to read again in the next cycle (their objects were written).
@@ -226,6 +230,8 @@ struct Recent {
     velocity: f32,
     /// What the axis was asked for (also what the demand values show).
     demands: Demands,
+    /// The input levels (what 60FDh shows).
+    inputs: InputsSeen,
     /// N·m, and the rated torque it is a share of (the demand torque's too).
     torque: f32,
     rated_nm: f32,
@@ -250,64 +256,88 @@ struct Demands {
     torque: f32,
 }
 
-/// Which of the demand value objects ([`Demands`]) to write.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct DemandObjects {
-    /// 6062h position demand value.
-    position: bool,
-    /// 606Bh velocity demand value.
-    velocity: bool,
-    /// 6074h torque demand.
-    torque: bool,
+/// An OD RAM offset no entry has (the OD RAM is far smaller than 64 KiB).
+const NO_PLACE: u16 = u16::MAX;
+
+/// The input levels of a cycle that 60FDh digital inputs shows.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct InputsSeen {
+    switches: Switches,
+    withheld: Withheld,
+    safe_torque_off_channels: [bool; 2],
 }
 
-impl DemandObjects {
+/// The process values of a cycle that the OD RAM shows only where a TxPDO carries them, or an
+/// upload reads them ([`DriveAxis::show`]): converting them to the objects' units in every
+/// cycle would be work nobody reads (the position's conversion is one of the costliest steps
+/// of a cycle). The actual position 6064h is not among them: the cycle converts it anyway.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Shown {
+    /// 6062h position demand value.
+    position_demand: bool,
+    /// 606Bh velocity demand value.
+    velocity_demand: bool,
+    /// 6074h torque demand.
+    torque_demand: bool,
+    /// 606Ch velocity actual value.
+    velocity_actual: bool,
+    /// 6077h torque actual value.
+    torque_actual: bool,
+    /// 60FDh digital inputs.
+    digital_inputs: bool,
+}
+
+impl Shown {
     const NONE: Self = Self {
-        position: false,
-        velocity: false,
-        torque: false,
+        position_demand: false,
+        velocity_demand: false,
+        torque_demand: false,
+        velocity_actual: false,
+        torque_actual: false,
+        digital_inputs: false,
     };
     const ALL: Self = Self {
-        position: true,
-        velocity: true,
-        torque: true,
+        position_demand: true,
+        velocity_demand: true,
+        torque_demand: true,
+        velocity_actual: true,
+        torque_actual: true,
+        digital_inputs: true,
     };
-}
 
-/// Writes the objects `which` of `demands` in the objects' units: positions and velocities
-/// through the unit conversions and the polarity, the torque in ‰ of `object_rated_nm` (the
-/// torque objects' unit). The cycle writes those a TxPDO carries; an upload all of them
-/// ([`DriveAxis::before_upload`]): nobody reads the others in between, and the position's
-/// conversion is one of the costliest steps of a cycle.
-#[inline(always)]
-fn write_demands(
-    ram: &mut [u8],
-    vars: &AppVars,
-    which: DemandObjects,
-    demands: &Demands,
-    (position_ratio, velocity_ratio, pol, object_rated_nm): (
-        &units::Ratio,
-        &units::Scale,
-        Polarity,
-        f32,
-    ),
-) {
-    if which.position {
-        let position = pol.position(units::actual_position(demands.position, *position_ratio));
-        write_bytes(ram, vars.position_demand_value, position.to_le_bytes());
+    /// How many values there are.
+    const COUNT: usize = 6;
+
+    /// The OD RAM offsets of the values in `vars` ([`NO_PLACE`] for those the profile does not
+    /// have), for the quick test of an upload's object.
+    const fn places(vars: &AppVars) -> [u16; Self::COUNT] {
+        const fn or_none(at: Option<u16>) -> u16 {
+            match at {
+                Some(at) => at,
+                None => NO_PLACE,
+            }
+        }
+        [
+            or_none(vars.position_demand_value),
+            or_none(vars.velocity_demand_value),
+            or_none(vars.torque_demand),
+            or_none(vars.velocity_actual_value),
+            or_none(vars.torque_actual_value),
+            or_none(vars.digital_inputs),
+        ]
     }
-    if which.velocity {
-        let velocity =
-            units::velocity_object(velocity_ratio.velocity_from_internal(demands.velocity));
-        write_bytes(
-            ram,
-            vars.velocity_demand_value,
-            pol.velocity(velocity).to_le_bytes(),
-        );
-    }
-    if which.torque {
-        let torque = units::torque_to_permille(demands.torque, object_rated_nm);
-        write_bytes(ram, vars.torque_demand, pol.torque(torque).to_le_bytes());
+
+    /// The values whose OD RAM places (`vars`' offsets) satisfy `at`.
+    fn where_placed(vars: &AppVars, at: impl Fn(u16) -> bool) -> Self {
+        let placed = |offset: Option<u16>| offset.is_some_and(&at);
+        Self {
+            position_demand: placed(vars.position_demand_value),
+            velocity_demand: placed(vars.velocity_demand_value),
+            torque_demand: placed(vars.torque_demand),
+            velocity_actual: placed(vars.velocity_actual_value),
+            torque_actual: placed(vars.torque_actual_value),
+            digital_inputs: placed(vars.digital_inputs),
+        }
     }
 }
 
@@ -379,7 +409,8 @@ impl DriveAxis {
             warning: None,
             latched_units: None,
             units_cache: None,
-            demands_carried: DemandObjects::NONE,
+            carried: Shown::NONE,
+            shown_places: Shown::places(vars),
             settings: Settings::UNREAD,
             settings_due: Groups::ALL,
             setting_offsets: GroupsByOffset::of(vars),
@@ -391,6 +422,15 @@ impl DriveAxis {
                     position: 0,
                     velocity: 0.0,
                     torque: 0.0,
+                },
+                inputs: InputsSeen {
+                    switches: Switches {
+                        positive_limit: false,
+                        negative_limit: false,
+                        home: false,
+                    },
+                    withheld: Withheld::NONE,
+                    safe_torque_off_channels: [false; 2],
                 },
                 torque: 0.0,
                 rated_nm: 1.0,
@@ -555,51 +595,88 @@ impl DriveAxis {
         self.settings_live = live_groups(self.vars, outputs);
     }
 
-    /// The TxPDO mapping is now `inputs`: the demand values it carries are written in every
-    /// cycle, the others when an upload reads them ([`Self::before_upload`]).
+    /// The TxPDO mapping is now `inputs`: the values of [`Shown`] it carries are written in
+    /// every cycle, the others when an upload reads them ([`Self::before_upload`]).
     pub(super) fn inputs_mapped(&mut self, inputs: &PdoPlan) {
         // A mapped entry is mapped whole: its first byte tells.
-        let carried = |at: Option<u16>| at.is_some_and(|at| inputs.writes_ram(at, 1));
-        let vars = self.vars;
-        self.demands_carried = DemandObjects {
-            position: carried(vars.position_demand_value),
-            velocity: carried(vars.velocity_demand_value),
-            torque: carried(vars.torque_demand),
-        };
+        self.carried = Shown::where_placed(self.vars, |at| inputs.writes_ram(at, 1));
     }
 
-    /// An upload is about to read `object`: if it shows one of the demand values, they are
-    /// written as of the last cycle (with the unit factors, the polarity and the torque unit in
-    /// force). Nothing before the unit conversions exist (no motor yet: no cycle wrote them
-    /// either).
+    /// An upload is about to read `object`: if it shows one of the values of [`Shown`], they
+    /// are written as of the last cycle (with the unit factors, the polarity and the torque
+    /// unit in force). Nothing before the unit conversions exist (no motor yet: no cycle wrote
+    /// them either).
     pub(super) fn before_upload(&self, ram: &mut [u8], object: &Object) {
-        let vars = self.vars;
-        let is_demand = |at| {
-            let at = Some(at);
-            at == vars.position_demand_value
-                || at == vars.velocity_demand_value
-                || at == vars.torque_demand
-        };
-        let shows_demand = object.entries.iter().any(|e| match e.value {
-            Value::Ram(at) => is_demand(at),
-            _ => false,
-        });
-        if !shows_demand {
+        let places = &self.shown_places;
+        let shows = object
+            .entries
+            .iter()
+            .any(|e| matches!(e.value, Value::Ram(at) if places.contains(&at)));
+        if !shows {
             return;
         }
         if let Some(units) = self.units_cache.as_ref() {
-            write_demands(
+            self.show(ram, Shown::ALL, (&units.position, &units.velocity));
+        }
+    }
+
+    /// Writes the values `which` of the last cycle ([`Recent`]) in their objects' units:
+    /// positions and velocities through the unit conversions (`ratios`) and the polarity, the
+    /// torques in ‰ of the torque objects' unit, the digital inputs in the profile's layout.
+    #[inline(always)]
+    fn show(&self, ram: &mut [u8], which: Shown, ratios: (&units::Ratio, &units::Scale)) {
+        let (vars, r, pol) = (self.vars, &self.recent, self.polarity);
+        let (position_ratio, velocity_ratio) = ratios;
+        let velocity = |v: f32| {
+            pol.velocity(units::velocity_object(
+                velocity_ratio.velocity_from_internal(v),
+            ))
+        };
+        let rated_nm = self.settings.object_rated_nm;
+        let torque = |t: f32| pol.torque(units::torque_to_permille(t, rated_nm));
+        if which.position_demand {
+            let position = units::actual_position(r.demands.position, *position_ratio);
+            write_bytes(
                 ram,
-                vars,
-                DemandObjects::ALL,
-                &self.recent.demands,
-                (
-                    &units.position,
-                    &units.velocity,
-                    self.polarity,
-                    self.settings.object_rated_nm,
-                ),
+                vars.position_demand_value,
+                pol.position(position).to_le_bytes(),
             );
+        }
+        if which.velocity_demand {
+            let v = velocity(r.demands.velocity);
+            write_bytes(ram, vars.velocity_demand_value, v.to_le_bytes());
+        }
+        if which.torque_demand {
+            let t = torque(r.demands.torque);
+            write_bytes(ram, vars.torque_demand, t.to_le_bytes());
+        }
+        if which.velocity_actual {
+            let v = velocity(r.velocity);
+            write_bytes(ram, vars.velocity_actual_value, v.to_le_bytes());
+        }
+        if which.torque_actual {
+            let t = torque(r.torque);
+            write_bytes(ram, vars.torque_actual_value, t.to_le_bytes());
+        }
+        if which.digital_inputs {
+            let inputs = &r.inputs;
+            let switches = inputs.switches;
+            let levels = limits::digital_inputs(
+                limits::InputLevels {
+                    negative_limit: switches.negative_limit,
+                    positive_limit: switches.positive_limit,
+                    home: switches.home,
+                    interlock: inputs.withheld.interlocked(),
+                },
+                limits::InputLayout {
+                    limits_swapped: self.rules.digital_inputs_limits_swapped,
+                    without_interlock: self.rules.digital_inputs_without_interlock,
+                },
+            ) | self
+                .rules
+                .safe_torque_off
+                .map_or(0, |s| s.digital_inputs(inputs.safe_torque_off_channels));
+            write_bytes(ram, vars.digital_inputs, levels.to_le_bytes());
         }
     }
 
@@ -1621,29 +1698,14 @@ impl DriveAxis {
             self.homing_failure_raised = failed;
         }
         self.touch_probe(ram, link, position_ratio);
-        let switches = feedback.switches;
-        write_bytes(
-            ram,
-            vars.digital_inputs,
-            (limits::digital_inputs(
-                limits::InputLevels {
-                    negative_limit: switches.negative_limit,
-                    positive_limit: switches.positive_limit,
-                    home: switches.home,
-                    interlock: feedback.withheld.interlocked(),
-                },
-                limits::InputLayout {
-                    limits_swapped: self.rules.digital_inputs_limits_swapped,
-                    without_interlock: self.rules.digital_inputs_without_interlock,
-                },
-            ) | self
-                .rules
-                .safe_torque_off
-                .map_or(0, |s| s.digital_inputs(feedback.safe_torque_off_channels)))
-            .to_le_bytes(),
-        );
-        // Demand values: what the axis is asked for this cycle (written where a TxPDO carries
-        // them; an upload shows the others).
+        let actual_object = pol.position(units::position_object(actual_user(feedback.position)));
+        write_bytes(ram, vars.position_actual_value, actual_object.to_le_bytes());
+        self.position_demand = if matches!(motion, Motion::Run) {
+            set_point.position
+        } else {
+            feedback.position
+        };
+        // What the axis is asked for this cycle.
         let demands = Demands {
             position: set_point.position,
             velocity: set_point.velocity,
@@ -1653,37 +1715,9 @@ impl DriveAxis {
                 feedback.torque
             },
         };
-        write_demands(
-            ram,
-            vars,
-            self.demands_carried,
-            &demands,
-            (&position_ratio, &velocity_ratio, pol, object_rated_nm),
-        );
-        let velocity_out = |v: f32| {
-            pol.velocity(units::velocity_object(
-                velocity_ratio.velocity_from_internal(v),
-            ))
-        };
-        let torque_out = |t: f32| pol.torque(units::torque_to_permille(t, object_rated_nm));
-        let actual_object = pol.position(units::position_object(actual_user(feedback.position)));
-        write_bytes(ram, vars.position_actual_value, actual_object.to_le_bytes());
-        write_bytes(
-            ram,
-            vars.velocity_actual_value,
-            velocity_out(feedback.velocity).to_le_bytes(),
-        );
-        write_bytes(
-            ram,
-            vars.torque_actual_value,
-            torque_out(feedback.torque).to_le_bytes(),
-        );
-        self.position_demand = if matches!(motion, Motion::Run) {
-            set_point.position
-        } else {
-            feedback.position
-        };
         self.remember(feedback, &demands, rated_nm, (enable, cycle_ns));
+        // The values a TxPDO carries; an upload shows the others.
+        self.show(ram, self.carried, (&position_ratio, &velocity_ratio));
     }
 
     /// Keeps what an alarm record shows of this cycle (a few stores; the speed ring every ms).
@@ -1694,11 +1728,16 @@ impl DriveAxis {
         rated_nm: f32,
         (running, cycle_ns): (bool, u32),
     ) {
-        // Stored as they are: converted only when a record is made (`alarm_conditions`) or an
-        // upload reads a demand value (`before_upload`).
+        // Stored as they are: converted only when a record is made (`alarm_conditions`) or
+        // shown in the OD RAM (`show`).
         let r = &mut self.recent;
         r.velocity = feedback.velocity;
         r.demands = *demands;
+        r.inputs = InputsSeen {
+            switches: feedback.switches,
+            withheld: feedback.withheld,
+            safe_torque_off_channels: feedback.safe_torque_off_channels,
+        };
         r.torque = feedback.torque;
         r.rated_nm = rated_nm;
         r.bus_voltage = feedback.bus_voltage;
