@@ -245,7 +245,7 @@ struct Recent {
 }
 
 /// What the axis was asked for in a cycle, in drive units: the demand values 6062h, 606Bh and
-/// 6074h show it in their objects' units ([`write_demands`]).
+/// 6074h show it in their objects' units ([`DriveAxis::show`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct Demands {
     /// The position set-point (increments, drive positions).
