@@ -451,7 +451,13 @@ fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> O
         // Rounded to the nearest as in [`scale`]: the floor of the product plus half the
         // divisor (unless that passes 2⁶⁴: then in two digits below).
         if let Some(biased) = (high << 32 | low_word).checked_add(u64::from(d >> 1)) {
-            let (quotient, _) = divide_floor(biased, d, inv)?;
+            // A power-of-two divisor (an encoder's resolution, a factor of 2ⁿ) divides by a
+            // shift, as in [`scale`] (by less than 32: no wrap).
+            let quotient = if d.is_power_of_two() {
+                biased.wrapping_shr(d.trailing_zeros())
+            } else {
+                divide_floor(biased, d, inv)?.0
+            };
             return signed(value < 0, quotient);
         }
     }
@@ -751,12 +757,14 @@ mod tests {
     /// i64 is left to the general path, which saturates).
     #[test]
     fn a_long_position_converts_exactly_through_the_reciprocal() {
+        // Powers of two (divided by a shift) and others (through the reciprocal).
         let divisors = [
             1u64,
             2,
             3,
             10_000,
             1 << 17,
+            1 << 31,
             (1 << 31) + 1,
             u64::from(u32::MAX),
         ];

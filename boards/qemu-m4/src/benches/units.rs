@@ -1,11 +1,11 @@
 //! A position's conversion between user units and increments (`cia402::units::Ratio`, e.g.
-//! 6091h's gear ratio): the SYNC0 handler converts the target, the offset and the actual and
-//! demand positions in every cycle. Its cost depends on the ratio and the position, so it is
+//! 6091h's gear ratio): the SYNC0 handler converts the target, the offset and the actual
+//! position in every cycle (the demand position where a TxPDO carries it). Its cost depends on the ratio and the position, so it is
 //! measured over inputs that cover the conversion's branches: a ratio of one (no arithmetic),
 //! a divisor that is a power of two (a shift), one that is not (multiplications by its
 //! reciprocal; also factors beyond 32 bits that the prepared ratio reduces below them), a
 //! position beyond 32 bits (a 64 × 32-bit product from two multiplications, then the
-//! reciprocal), a product beyond 64 bits (the same product, divided in two 32-bit digits by
+//! reciprocal or, for a power-of-two divisor, a shift), a product beyond 64 bits (the same product, divided in two 32-bit digits by
 //! the reciprocal), a divisor beyond 32 bits (no reciprocal: the library's 64-bit division, or
 //! beyond 64 bits the restoring division, a bit per step). Each cost includes the copy of the
 //! ratio into the call.
@@ -19,7 +19,7 @@ use crate::harness::{Cases, Harness};
 const NAME: &str = "position-conversion";
 
 /// (label, numerator, denominator, position in user units) of each input.
-const INPUTS: [(&str, u64, u64, i64); 8] = [
+const INPUTS: [(&str, u64, u64, i64); 9] = [
     ("power-of-two divisor", 10_000, 1 << 17, -123_456_789),
     ("32-bit divisor", 1 << 17, 10_000, -123_456_789),
     // A gear ratio times a feed constant, 2²⁰·10⁶ / (7·2¹²): beyond 32 bits, prepared in lowest
@@ -32,6 +32,13 @@ const INPUTS: [(&str, u64, u64, i64); 8] = [
     ),
     ("a ratio of one", 10_000, 10_000, 987_654),
     ("position beyond 32 bits", 1 << 17, 10_000, 1 << 40),
+    // 10000 / 2¹⁷ in lowest terms: 625 / 2¹³.
+    (
+        "position beyond 32 bits, power-of-two divisor",
+        10_000,
+        1 << 17,
+        1 << 40,
+    ),
     ("product beyond 64 bits", (1 << 32) - 1, 10_000, 1 << 40),
     // Factors beyond 32 bits (a product of ratios, e.g. a gear ratio times a feed constant):
     // no reciprocal.
