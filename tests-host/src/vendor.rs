@@ -203,6 +203,47 @@ pub const VELOCITY_MAPPING: ([MappedEntry; 3], [MappedEntry; 3]) = (
     [(0x6041, 0, 16), (0x6061, 0, 8), (0x606C, 0, 32)],
 );
 
+/// The outputs of a scenario that commands every mode: 6040h, 6060h, 607Ah, 60FFh, 6071h, in
+/// this order ([`Command::image`]).
+pub const COMMAND_OUTPUTS: [MappedEntry; 5] = [
+    (0x6040, 0, 16),
+    (0x6060, 0, 8),
+    (0x607A, 0, 32),
+    (0x60FF, 0, 32),
+    (0x6071, 0, 16),
+];
+
+/// The byte length of the [`COMMAND_OUTPUTS`] image.
+pub const COMMAND_IMAGE_LEN: usize = 13;
+
+/// One cycle's outputs in the [`COMMAND_OUTPUTS`] layout.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Command {
+    /// 6040h.
+    pub cw: u16,
+    /// 6060h.
+    pub mode: i8,
+    /// 607Ah.
+    pub position: i32,
+    /// 60FFh.
+    pub velocity: i32,
+    /// 6071h.
+    pub torque: i16,
+}
+
+impl Command {
+    /// The output image: each object little-endian at its place in [`COMMAND_OUTPUTS`].
+    pub fn image(&self) -> [u8; COMMAND_IMAGE_LEN] {
+        let mut image = [0; COMMAND_IMAGE_LEN];
+        image[0..2].copy_from_slice(&self.cw.to_le_bytes());
+        image[2] = self.mode as u8;
+        image[3..7].copy_from_slice(&self.position.to_le_bytes());
+        image[7..11].copy_from_slice(&self.velocity.to_le_bytes());
+        image[11..13].copy_from_slice(&self.torque.to_le_bytes());
+        image
+    }
+}
+
 /// INIT → OP in DC with [`VELOCITY_MAPPING`] of axis `axis` (its objects, and its PDOs 1600h and
 /// 1A00h plus 10h per axis, assigned alone) and then `setup` written in PREOP, followed by
 /// [`SYNC0_START_CYCLES`] cycles with controlword 0 and 6060h = `mode`, so that SYNC0 runs.

@@ -8,6 +8,7 @@
 //! (§6.3.3), its non-resettable alarms (Table 5-1 reset column), the RSE's fault history 200Bh
 //! and its clear command (7.3.12).
 
+use board_sim::inproc::InProcess;
 use board_sim::Segment;
 use ethercrab::MainDevice;
 use tests_host::{block_on, emcy, master_for};
@@ -459,6 +460,32 @@ fn rse_a_limit_switch_is_a_warning_not_a_fault() {
     });
 }
 
+/// The SDV3-E's power stage overheats while `cycle` (one cycle of the scenario's command, its
+/// statusword) runs: the alarm AH within 300 cycles. Then the newest alarm record (3200h = 1)
+/// is AH's (3201h:01 = 26h).
+async fn overheat_to_the_ah_record<F, S>(
+    m: &InProcess,
+    sd: &ethercrab::SubDeviceRef<'_, S>,
+    mut cycle: impl FnMut() -> F,
+) where
+    F: std::future::Future<Output = u16>,
+    S: std::ops::Deref<Target = ethercrab::SubDevice>,
+{
+    m.shared.segment().drives_mut()[0].servos[0]
+        .plant
+        .set_drive_temperature(120.0);
+    let mut faulted = false;
+    for _ in 0..300 {
+        if cycle().await & FAULT_BIT != 0 {
+            faulted = true;
+            break;
+        }
+    }
+    assert!(faulted, "AH");
+    sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
+    assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+}
+
 /// SDV3-E §6.3.3 alarm record fields 05–07 (feedback speed, the speed 5 ms before, command
 /// speed, rpm): the motor runs at 300 rpm in CSV (60FFh in 0.1 rpm over the default PDOs) when
 /// the power stage overheats (AH); the newest record holds 300 rpm in all three.
@@ -500,20 +527,8 @@ fn sdv3_e_an_alarm_record_holds_the_speed_at_the_alarm() {
         }
         let (rpm, _) = vendor::motor(&m);
         assert!((rpm - RPM).abs() < 5.0, "{rpm:.1} rpm");
-        m.shared.segment().drives_mut()[0].servos[0]
-            .plant
-            .set_drive_temperature(120.0);
-        let mut faulted = false;
-        for _ in 0..300 {
-            if cycle(ENABLE_OPERATION, RPM).await & FAULT_BIT != 0 {
-                faulted = true;
-                break;
-            }
-        }
-        assert!(faulted, "AH");
         let sd = group.subdevice(md, 0).expect("drive");
-        sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
-        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+        overheat_to_the_ah_record(&m, &sd, || cycle(ENABLE_OPERATION, RPM)).await;
         for (sub, what) in [
             (5, "feedback speed"),
             (6, "feedback speed 5 ms before"),
@@ -566,20 +581,8 @@ fn sdv3_e_an_alarm_record_holds_the_command_position_at_the_alarm() {
             sw = cycle(ENABLE_OPERATION, TARGET).await;
         }
         assert_eq!(sw & STATE_MASK, OPERATION_ENABLED);
-        m.shared.segment().drives_mut()[0].servos[0]
-            .plant
-            .set_drive_temperature(120.0);
-        let mut faulted = false;
-        for _ in 0..300 {
-            if cycle(ENABLE_OPERATION, TARGET).await & FAULT_BIT != 0 {
-                faulted = true;
-                break;
-            }
-        }
-        assert!(faulted, "AH");
         let sd = group.subdevice(md, 0).expect("drive");
-        sd.sdo_write(0x3200, 0, 1u8).await.expect("3200h = 1");
-        assert_eq!(sd.sdo_read::<i32>(0x3201, 1).await.expect("3201h:01"), 0x26);
+        overheat_to_the_ah_record(&m, &sd, || cycle(ENABLE_OPERATION, TARGET)).await;
         let position = sd.sdo_read::<i32>(0x3201, 13).await.expect("3201h:0D");
         assert_eq!(position, TARGET, "3201h:0D command position");
     });

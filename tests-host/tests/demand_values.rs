@@ -12,7 +12,7 @@
 
 use board_sim::inproc::InProcess;
 use ethercrab::MainDevice;
-use tests_host::vendor::{self, DcGroup, MappedEntry, Sdo};
+use tests_host::vendor::{self, Command, DcGroup, MappedEntry, Sdo};
 use tests_host::{block_on, cia402, master_for};
 
 const CYCLE_NS: u64 = 1_000_000;
@@ -22,18 +22,6 @@ const CSV: i8 = 9;
 const CST: i8 = 10;
 /// 607Eh: position, velocity and torque polarity inverted (bits 7, 6, 5).
 const ALL_INVERTED: u8 = 0xE0;
-/// Outputs: 6040h, 6060h, 607Ah, 60FFh, 6071h.
-const OUTPUTS: [MappedEntry; 5] = [
-    (0x6040, 0, 16),
-    (0x6060, 0, 8),
-    (0x607A, 0, 32),
-    (0x60FF, 0, 32),
-    (0x6071, 0, 16),
-];
-/// Byte offsets of 607Ah, 60FFh and 6071h in the output image.
-const TARGET_POSITION_AT: usize = 3;
-const TARGET_VELOCITY_AT: usize = 7;
-const TARGET_TORQUE_AT: usize = 11;
 /// Inputs: 6041h, 6064h, then (when carried) the demand values.
 const INPUTS: [MappedEntry; 2] = [(0x6041, 0, 16), (0x6064, 0, 32)];
 const DEMANDS: [MappedEntry; 3] = [(0x6062, 0, 32), (0x606B, 0, 32), (0x6074, 0, 16)];
@@ -50,30 +38,9 @@ const TARGET_VELOCITY: i32 = 2_000;
 /// CST: 0.1 % of the rated torque.
 const TARGET_TORQUE: i16 = 30;
 
-/// One cycle's command.
-#[derive(Clone, Copy)]
-struct Command {
-    cw: u16,
-    mode: i8,
-    position: i32,
-    velocity: i32,
-    torque: i16,
-}
-
+/// One DC cycle of `c`; the inputs it brought back.
 async fn cycle(m: &InProcess, md: &MainDevice<'_>, group: &DcGroup, c: Command) -> Vec<u8> {
-    let cw = c.cw.to_le_bytes();
-    let mode = [c.mode as u8];
-    let position = c.position.to_le_bytes();
-    let velocity = c.velocity.to_le_bytes();
-    let torque = c.torque.to_le_bytes();
-    let outputs: [(usize, &[u8]); 5] = [
-        (0, &cw),
-        (2, &mode),
-        (TARGET_POSITION_AT, &position),
-        (TARGET_VELOCITY_AT, &velocity),
-        (TARGET_TORQUE_AT, &torque),
-    ];
-    vendor::exchange_dc(m, md, group, &outputs, CYCLE_NS).await
+    vendor::exchange_dc(m, md, group, &[(0, &c.image())], CYCLE_NS).await
 }
 
 /// The demand values of the drive by SDO upload: 6062h, 606Bh, 6074h.
@@ -105,7 +72,7 @@ fn demand_values_read_the_command(carry: bool) {
         if carry {
             inputs.extend(DEMANDS);
         }
-        let mut setup = vendor::mapping(&OUTPUTS, &inputs);
+        let mut setup = vendor::mapping(&vendor::COMMAND_OUTPUTS, &inputs);
         setup.push(Sdo::U8(0x607E, 0, ALL_INVERTED));
         let group = vendor::into_op_dc(&m, md, &setup, CYCLE_NS).await;
         let mut command = Command {

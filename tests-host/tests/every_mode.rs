@@ -20,8 +20,8 @@ use board_sim::Segment;
 use ethercrab::MainDevice;
 use od_gen::model::Profile;
 use tests_host::vendor::{
-    self, axis_object, enable_sequence, i32_at, motor_of_axis, u16_at, DcGroup as Group, Sdo,
-    ENABLE_OPERATION,
+    self, axis_object, enable_sequence, i32_at, motor_of_axis, u16_at, Command, DcGroup as Group,
+    Sdo, ENABLE_OPERATION,
 };
 use tests_host::{block_on, master_for, units};
 
@@ -46,14 +46,7 @@ const PROFILE_SPEED: f64 = 10.0;
 const ACCELERATION: f64 = 100.0;
 const TORQUE_PERMILLE: i16 = 50;
 
-/// The process images' layout (byte offsets).
-const RX: [(u16, u8); 5] = [
-    (0x6040, 16),
-    (0x6060, 8),
-    (0x607A, 32),
-    (0x60FF, 32),
-    (0x6071, 16),
-];
+/// The process images' layout: the outputs [`vendor::COMMAND_OUTPUTS`], these inputs.
 const TX: [(u16, u8); 5] = [
     (0x6041, 16),
     (0x6061, 8),
@@ -61,11 +54,6 @@ const TX: [(u16, u8); 5] = [
     (0x606C, 32),
     (0x6077, 16),
 ];
-const RX_CW: usize = 0;
-const RX_MODE: usize = 2;
-const RX_POSITION: usize = 3;
-const RX_VELOCITY: usize = 7;
-const RX_TORQUE: usize = 11;
 const TX_SW: usize = 0;
 const TX_MODE: usize = 2;
 const TX_POSITION: usize = 3;
@@ -74,15 +62,15 @@ const TX_POSITION: usize = 3;
 /// its PDOs 1600h/1A00h plus 10h per axis, assigned alone) mapped and its profile-mode objects
 /// set.
 async fn into_op(m: &InProcess, md: &MainDevice<'_>, p: &Profile, axis: usize) -> Group {
-    let entries = |layout: &[(u16, u8)]| -> Vec<(u16, u8, u8)> {
-        layout
-            .iter()
-            .map(|&(index, bits)| (axis_object(index, axis), 0, bits))
-            .collect()
-    };
+    let on_axis = |(index, sub, bits): (u16, u8, u8)| (axis_object(index, axis), sub, bits);
+    let outputs: Vec<_> = vendor::COMMAND_OUTPUTS.into_iter().map(on_axis).collect();
+    let inputs: Vec<_> = TX
+        .iter()
+        .map(|&(index, bits)| on_axis((index, 0, bits)))
+        .collect();
     let pdo_offset = 0x10 * axis as u16;
-    let mut setup = vendor::remap(0x1600 + pdo_offset, 0x1C12, &entries(&RX));
-    setup.extend(vendor::remap(0x1A00 + pdo_offset, 0x1C13, &entries(&TX)));
+    let mut setup = vendor::remap(0x1600 + pdo_offset, 0x1C12, &outputs);
+    setup.extend(vendor::remap(0x1A00 + pdo_offset, 0x1C13, &inputs));
     let speed = units::velocity(p, PROFILE_SPEED);
     let accel = units::acceleration(p, ACCELERATION);
     for (index, value) in [
@@ -118,16 +106,6 @@ struct Sample {
     rev: f64,
 }
 
-/// The outputs of one cycle.
-#[derive(Clone, Copy, Debug, Default)]
-struct Command {
-    cw: u16,
-    mode: i8,
-    position: i32,
-    velocity: i32,
-    torque: i16,
-}
-
 /// The axis a scenario drives (0 = the first).
 #[derive(Clone, Copy)]
 struct Axis(usize);
@@ -139,14 +117,7 @@ async fn cycle(
     c: Command,
 ) -> Sample {
     let sd = group.subdevice(md, 0).expect("drive");
-    {
-        let mut out = sd.outputs_raw_mut();
-        out[RX_CW..RX_CW + 2].copy_from_slice(&c.cw.to_le_bytes());
-        out[RX_MODE] = c.mode as u8;
-        out[RX_POSITION..RX_POSITION + 4].copy_from_slice(&c.position.to_le_bytes());
-        out[RX_VELOCITY..RX_VELOCITY + 4].copy_from_slice(&c.velocity.to_le_bytes());
-        out[RX_TORQUE..RX_TORQUE + 2].copy_from_slice(&c.torque.to_le_bytes());
-    }
+    sd.outputs_raw_mut()[..vendor::COMMAND_IMAGE_LEN].copy_from_slice(&c.image());
     group.tx_rx_dc(md).await.expect("tx/rx");
     m.shared.advance(CYCLE_NS);
     let inp = sd.inputs_raw();
