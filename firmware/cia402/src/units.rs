@@ -62,7 +62,7 @@ pub fn velocity_object(velocity: f32) -> i32 {
 }
 
 /// `x` plus half a unit away from zero: `as` (which truncates) then rounds to the nearest.
-/// Three instructions (copysign, add), where `f32::round` would be a library call.
+/// A few instructions (copysign, add), where `f32::round` would be a library call.
 #[inline(always)]
 fn nearest(x: f32) -> f32 {
     x + 0.5_f32.copysign(x)
@@ -1261,10 +1261,12 @@ mod tests {
                 );
             }
         }
-        // Halves away from zero.
-        assert_eq!(torque_to_permille(0.0015, 1.0), 2);
-        assert_eq!(torque_to_permille(-0.0015, 1.0), -2);
+        // To the nearest, either sign (a half is not exact in binary here: `velocity_object`'s
+        // test has the halves).
+        assert_eq!(torque_to_permille(0.0016, 1.0), 2);
+        assert_eq!(torque_to_permille(-0.0016, 1.0), -2);
         assert_eq!(torque_to_permille(0.0014, 1.0), 1);
+        assert_eq!(torque_to_permille(-0.0014, 1.0), -1);
     }
 
     /// A velocity object value survives the round trip through increments/s with a fractional
