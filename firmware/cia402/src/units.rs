@@ -344,6 +344,18 @@ fn divide_floor(magnitude: u64, divisor: u32, inv: u64) -> Option<(u64, u64)> {
     (remainder < divisor).then_some((quotient.wrapping_add(1), remainder))
 }
 
+/// `dividend / divisor` rounded down: a power-of-two divisor (an encoder's resolution, a
+/// factor of 2ⁿ) needs no reciprocal, the quotient is a shift (by less than 32: no wrap);
+/// others through `inv` ([`divide_floor`]).
+#[inline(always)]
+fn quotient_floor(dividend: u64, divisor: u32, inv: u64) -> Option<u64> {
+    if divisor.is_power_of_two() {
+        Some(dividend.wrapping_shr(divisor.trailing_zeros()))
+    } else {
+        divide_floor(dividend, divisor, inv).map(|(q, _)| q)
+    }
+}
+
 /// `magnitude / divisor` rounded to the nearest (halves up) through `inv` ([`divide_floor`]).
 #[inline]
 fn divide_by_reciprocal(magnitude: u64, divisor: u32, inv: u64) -> Option<u64> {
@@ -377,13 +389,7 @@ fn scale(value: i64, multiplier: u64, divisor: u64, inv: u64) -> i64 {
         let biased = u64::from(magnitude as u32)
             .wrapping_mul(u64::from(multiplier as u32))
             .wrapping_add(u64::from(divisor32 >> 1));
-        // A power-of-two divisor (an encoder's resolution, a factor of 2ⁿ) needs no
-        // reciprocal: the quotient is a shift (by less than 32: no wrap).
-        let quotient = if divisor32.is_power_of_two() {
-            Some(biased.wrapping_shr(divisor32.trailing_zeros()))
-        } else {
-            divide_floor(biased, divisor32, inv).map(|(q, _)| q)
-        };
+        let quotient = quotient_floor(biased, divisor32, inv);
         if let Some(q) = quotient.and_then(|q| signed(value < 0, q)) {
             return q;
         }
@@ -451,14 +457,7 @@ fn scale_long_position(value: i64, multiplier: u64, divisor: u64, inv: u64) -> O
         // Rounded to the nearest as in [`scale`]: the floor of the product plus half the
         // divisor (unless that passes 2⁶⁴: then in two digits below).
         if let Some(biased) = (high << 32 | low_word).checked_add(u64::from(d >> 1)) {
-            // A power-of-two divisor (an encoder's resolution, a factor of 2ⁿ) divides by a
-            // shift, as in [`scale`] (by less than 32: no wrap).
-            let quotient = if d.is_power_of_two() {
-                biased.wrapping_shr(d.trailing_zeros())
-            } else {
-                divide_floor(biased, d, inv)?.0
-            };
-            return signed(value < 0, quotient);
+            return signed(value < 0, quotient_floor(biased, d, inv)?);
         }
     }
     // The product as a 128-bit value: its upper half is `high`'s upper word. Below the

@@ -271,45 +271,30 @@ struct InputsSeen {
 /// upload reads them ([`DriveAxis::show`]): converting them to the objects' units in every
 /// cycle would be work nobody reads (the position's conversion is one of the costliest steps
 /// of a cycle). The actual position 6064h is not among them: the cycle converts it anyway.
+/// A set of them: element `i` for the value at index `i` of [`Shown::places`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Shown {
-    /// 6062h position demand value.
-    position_demand: bool,
-    /// 606Bh velocity demand value.
-    velocity_demand: bool,
-    /// 6074h torque demand.
-    torque_demand: bool,
-    /// 606Ch velocity actual value.
-    velocity_actual: bool,
-    /// 6077h torque actual value.
-    torque_actual: bool,
-    /// 60FDh digital inputs.
-    digital_inputs: bool,
-}
+struct Shown([bool; Shown::COUNT]);
 
 impl Shown {
-    const NONE: Self = Self {
-        position_demand: false,
-        velocity_demand: false,
-        torque_demand: false,
-        velocity_actual: false,
-        torque_actual: false,
-        digital_inputs: false,
-    };
-    const ALL: Self = Self {
-        position_demand: true,
-        velocity_demand: true,
-        torque_demand: true,
-        velocity_actual: true,
-        torque_actual: true,
-        digital_inputs: true,
-    };
-
+    /// 6062h position demand value.
+    const POSITION_DEMAND: usize = 0;
+    /// 606Bh velocity demand value.
+    const VELOCITY_DEMAND: usize = 1;
+    /// 6074h torque demand.
+    const TORQUE_DEMAND: usize = 2;
+    /// 606Ch velocity actual value.
+    const VELOCITY_ACTUAL: usize = 3;
+    /// 6077h torque actual value.
+    const TORQUE_ACTUAL: usize = 4;
+    /// 60FDh digital inputs.
+    const DIGITAL_INPUTS: usize = 5;
     /// How many values there are.
     const COUNT: usize = 6;
+    const NONE: Self = Self([false; Self::COUNT]);
+    const ALL: Self = Self([true; Self::COUNT]);
 
-    /// The OD RAM offsets of the values in `vars` ([`NO_PLACE`] for those the profile does not
-    /// have), for the quick test of an upload's object.
+    /// The OD RAM offsets of the values in `vars`, in the order of their indices ([`NO_PLACE`]
+    /// for those the profile does not have).
     const fn places(vars: &AppVars) -> [u16; Self::COUNT] {
         const fn or_none(at: Option<u16>) -> u16 {
             match at {
@@ -327,17 +312,14 @@ impl Shown {
         ]
     }
 
-    /// The values whose OD RAM places (`vars`' offsets) satisfy `at`.
-    fn where_placed(vars: &AppVars, at: impl Fn(u16) -> bool) -> Self {
-        let placed = |offset: Option<u16>| offset.is_some_and(&at);
-        Self {
-            position_demand: placed(vars.position_demand_value),
-            velocity_demand: placed(vars.velocity_demand_value),
-            torque_demand: placed(vars.torque_demand),
-            velocity_actual: placed(vars.velocity_actual_value),
-            torque_actual: placed(vars.torque_actual_value),
-            digital_inputs: placed(vars.digital_inputs),
-        }
+    /// The values whose OD RAM offsets (of [`Self::places`]) satisfy `at`.
+    fn where_placed(places: &[u16; Self::COUNT], at: impl Fn(u16) -> bool) -> Self {
+        Self(places.map(|place| place != NO_PLACE && at(place)))
+    }
+
+    /// Whether the set has the value of index `value` (one of the constants: in range).
+    fn has(self, value: usize) -> bool {
+        self.0.get(value).copied().unwrap_or(false)
     }
 }
 
@@ -599,7 +581,7 @@ impl DriveAxis {
     /// every cycle, the others when an upload reads them ([`Self::before_upload`]).
     pub(super) fn inputs_mapped(&mut self, inputs: &PdoPlan) {
         // A mapped entry is mapped whole: its first byte tells.
-        self.carried = Shown::where_placed(self.vars, |at| inputs.writes_ram(at, 1));
+        self.carried = Shown::where_placed(&self.shown_places, |at| inputs.writes_ram(at, 1));
     }
 
     /// An upload is about to read `object`: if it shows one of the values of [`Shown`], they
@@ -620,6 +602,14 @@ impl DriveAxis {
         }
     }
 
+    /// The last cycle's position demand as 6062h shows it: in user units through `ratio`, with
+    /// the polarity.
+    #[inline(always)]
+    fn position_demand_object(&self, ratio: &units::Ratio) -> i32 {
+        let position = units::actual_position(self.recent.demands.position, *ratio);
+        self.polarity.position(position)
+    }
+
     /// Writes the values `which` of the last cycle ([`Recent`]) in their objects' units:
     /// positions and velocities through the unit conversions (`ratios`) and the polarity, the
     /// torques in ‰ of the torque objects' unit, the digital inputs in the profile's layout.
@@ -634,31 +624,27 @@ impl DriveAxis {
         };
         let rated_nm = self.settings.object_rated_nm;
         let torque = |t: f32| pol.torque(units::torque_to_permille(t, rated_nm));
-        if which.position_demand {
-            let position = units::actual_position(r.demands.position, *position_ratio);
-            write_bytes(
-                ram,
-                vars.position_demand_value,
-                pol.position(position).to_le_bytes(),
-            );
+        if which.has(Shown::POSITION_DEMAND) {
+            let position = self.position_demand_object(position_ratio);
+            write_bytes(ram, vars.position_demand_value, position.to_le_bytes());
         }
-        if which.velocity_demand {
+        if which.has(Shown::VELOCITY_DEMAND) {
             let v = velocity(r.demands.velocity);
             write_bytes(ram, vars.velocity_demand_value, v.to_le_bytes());
         }
-        if which.torque_demand {
+        if which.has(Shown::TORQUE_DEMAND) {
             let t = torque(r.demands.torque);
             write_bytes(ram, vars.torque_demand, t.to_le_bytes());
         }
-        if which.velocity_actual {
+        if which.has(Shown::VELOCITY_ACTUAL) {
             let v = velocity(r.velocity);
             write_bytes(ram, vars.velocity_actual_value, v.to_le_bytes());
         }
-        if which.torque_actual {
+        if which.has(Shown::TORQUE_ACTUAL) {
             let t = torque(r.torque);
             write_bytes(ram, vars.torque_actual_value, t.to_le_bytes());
         }
-        if which.digital_inputs {
+        if which.has(Shown::DIGITAL_INPUTS) {
             let inputs = &r.inputs;
             let switches = inputs.switches;
             let levels = limits::digital_inputs(
@@ -803,10 +789,10 @@ impl DriveAxis {
             torque_percent: r.torque * percent_per_nm,
             bus_voltage: r.bus_voltage,
             // As 6062h shows it (no conversion yet: 0, as the cycle had not run either).
-            demand_position: self.units_cache.as_ref().map_or(0, |u| {
-                self.polarity
-                    .position(units::actual_position(r.demands.position, u.position))
-            }),
+            demand_position: self
+                .units_cache
+                .as_ref()
+                .map_or(0, |u| self.position_demand_object(&u.position)),
             mode: self.running_mode as i8,
         }
     }
