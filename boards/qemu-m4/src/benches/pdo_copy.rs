@@ -6,9 +6,9 @@
 //!
 //! Per entry: (the copy's cost − the cost of the same call with an empty mapping) / entries,
 //! rounded up. The empty mapping's cost is the call's own (entry, the loops' set-up, return),
-//! which a cycle pays once whatever it maps. A plan of a few runs copies them in mapping order
-//! with a dispatch on each run's length; from four runs on, grouped by length
-//! (`PdoPlan::group_runs`): both ways are among the inputs.
+//! which a cycle pays once whatever it maps. The plan copies each run with one jump on its
+//! copy width (decided when the plan is built): the mappings of 1 to the most entries cover
+//! the object sizes 1, 2 and 4 bytes.
 
 use core::hint::black_box;
 
@@ -117,7 +117,5 @@ pub fn run(h: &mut Harness) {
          {}) of the standard profile, none adjacent (each its own copy)",
         most[0], most[1]
     );
-    // Not met yet for mappings of a few runs (copied in mapping order with a dispatch on
-    // each run's length, see `PdoPlan::unpack`): reported as the issue's target.
-    h.report_cases_target(&cases, PER_ENTRY_BUDGET, description);
+    h.report_cases(&cases, Some(PER_ENTRY_BUDGET), description);
 }

@@ -3,8 +3,8 @@
 //!
 //! The plan is built once at PREOP → SAFEOP; the cycle then runs [`PdoPlan::unpack`] and
 //! [`PdoPlan::pack`], which do no lookups: one copy per run of byte-aligned entries (adjacent
-//! entries merged into one run; a plan of many runs copies them grouped by length, a loop per
-//! length), a bit copy only for entries that are not byte-aligned. An RxPDO plan may watch
+//! entries merged into one run), by the copy width decided for the run when the plan is built,
+//! and a bit copy only for entries that are not byte-aligned. An RxPDO plan may watch
 //! OD RAM bytes for the application ([`PdoPlan::build_watching`]): their entries are copied
 //! apart and compared, and [`PdoPlan::unpack_watching`] tells when one changed. [`rules`] holds
 //! what an SDO write to the PDO objects must satisfy; both read the object indices defined
@@ -120,34 +120,51 @@ struct ByteRun {
     image: u16,
     /// Bytes.
     len: u16,
+    /// How the run is copied: [`Width::of`] `len`.
+    width: Width,
 }
 
-/// The run lengths copied by a loop of their own ([`PdoPlan::unpack`], [`PdoPlan::pack`]):
-/// the object sizes of nearly every mapping (UDINT/DINT, UINT/INT, USINT/SINT). A loop of
-/// one length copies with one load and one store and no dispatch on the length.
-const CLASS_LENGTHS: [u16; 3] = [4, 2, 1];
+/// How a [`ByteRun`] is copied, decided when the plan is built so that a cycle's copy of the
+/// run is one jump on it: the object sizes with the bounds checks of a constant length, two
+/// overlapping words for the runs of merged entries the default mappings make, the others by
+/// [`copy_bytes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Width {
+    /// 1 byte.
+    Byte,
+    /// 2 bytes.
+    Half,
+    /// 4 bytes.
+    Word,
+    /// 5 to 8 bytes: [`copy_pair`] of words.
+    Words,
+    /// Any other length.
+    Other,
+}
 
-/// Fewest runs a plan copies in groups by length: each group's loop costs its set-up, which
-/// the plans of a few runs (the default mappings: adjacent entries merge) do not win back.
-const GROUPED_FROM_RUNS: usize = 4;
+impl Width {
+    /// The copy of `len` bytes.
+    fn of(len: u16) -> Self {
+        match len {
+            1 => Self::Byte,
+            2 => Self::Half,
+            4 => Self::Word,
+            5..=8 => Self::Words,
+            _ => Self::Other,
+        }
+    }
+}
 
 /// The copy plan of one direction: the byte runs, then the entries that need a bit copy or
 /// come from a constant.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct PdoPlan {
-    /// Grouped by length when the plan is built ([`PdoPlan::group_runs`]): the runs of each
-    /// of [`CLASS_LENGTHS`] in turn, then the others; in mapping order within each group.
+    /// In mapping order, the watched ones last.
     runs: Vec<ByteRun, MAX_MAPPED_ENTRIES>,
-    /// How many runs each group of [`CLASS_LENGTHS`] holds, in turn from the start of `runs`
-    /// (the others follow).
-    class_counts: [u8; CLASS_LENGTHS.len()],
     steps: Vec<CopyStep, MAX_MAPPED_ENTRIES>,
     /// How many runs at the end of `runs` write watched bytes ([`PdoPlan::build_watching`]):
     /// after the others.
     watched_runs: u8,
-    /// How many of the watched runs each group of [`CLASS_LENGTHS`] holds, in turn from the
-    /// first watched run (the others follow).
-    watched_counts: [u8; CLASS_LENGTHS.len()],
     /// How many steps at the end of `steps` write watched bytes (entries off the byte
     /// boundaries of the image: a bit copy).
     watched_steps: u8,
@@ -201,25 +218,8 @@ impl PdoPlan {
         // order does not change what an unpack leaves.
         plan.watched_runs = watched_last(&mut plan.runs, &kinds.runs);
         plan.watched_steps = watched_last(&mut plan.steps, &kinds.steps);
-        plan.group_runs();
         plan.watches = plan.watched_runs > 0 || plan.watched_steps > 0;
         Ok(plan)
-    }
-
-    /// Orders the runs by [`CLASS_LENGTHS`] (stable: mapping order within each group) and
-    /// counts each group: the runs copied plainly when there are at least
-    /// [`GROUPED_FROM_RUNS`] of them, the watched ones at the end
-    /// (`watched_last`) among themselves (their comparison costs more than a
-    /// group's set-up). Not where two runs share OD RAM bytes (an object mapped twice): then
-    /// the runs stay in mapping order, all as others, so that an RxPDO's later copy still
-    /// wins as mapped.
-    fn group_runs(&mut self) {
-        let (plain, watched) = split_watched(&self.runs, self.watched_runs);
-        let mut grouped: Vec<ByteRun, MAX_MAPPED_ENTRIES> = Vec::new();
-        let plain_grouped = plain.len() >= GROUPED_FROM_RUNS && !shares_ram(plain);
-        self.class_counts = append_by_length(plain, plain_grouped, &mut grouped);
-        self.watched_counts = append_by_length(watched, !shares_ram(watched), &mut grouped);
-        self.runs = grouped;
     }
 
     fn add_pdo(
@@ -310,10 +310,11 @@ impl PdoPlan {
                 && last_watched == watched;
             if let (true, Some(merged)) = (continues, last.len.checked_add(len)) {
                 last.len = merged;
+                last.width = Width::of(merged);
                 return Ok(());
             }
         }
-        let run = ByteRun { ram, image, len };
+        let run = ByteRun::new(ram, image, len);
         kinds.push(watched).map_err(|_| run)?;
         self.runs.push(run)
     }
@@ -356,29 +357,20 @@ impl PdoPlan {
         (self.bits as usize).div_ceil(8)
     }
 
-    /// Copies the byte runs from `from` to `to`: image to OD RAM when `UNPACK`, else OD RAM
-    /// to image. A plan of few runs copies them in mapping order with a dispatch on each
-    /// run's length ([`copy_bytes`]); one of [`GROUPED_FROM_RUNS`] or more, its groups by
-    /// length first ([`Self::group_runs`]), then the others.
-    /// `runs`: all of them, or the first part (the groups by length come first).
+    /// Copies `runs` from `from` to `to`: image to OD RAM when `UNPACK`, else OD RAM to
+    /// image, each by its width ([`copy_run`]). When `TRACK`, returns whether a run changed
+    /// `to` (else `false`).
     #[inline(always)]
-    fn copy_runs<const UNPACK: bool>(&self, runs: &[ByteRun], from: &[u8], to: &mut [u8]) {
-        let [words, halves, bytes] = self.class_counts;
-        let grouped = runs.len() >= GROUPED_FROM_RUNS;
-        let mut runs = runs.iter();
-        // Few runs are never grouped (one comparison, not the groups' loops).
-        if grouped {
-            copy_group::<{ CLASS_LENGTHS[0] as usize }, UNPACK, false>(&mut runs, words, from, to);
-            copy_group::<{ CLASS_LENGTHS[1] as usize }, UNPACK, false>(&mut runs, halves, from, to);
-            copy_group::<{ CLASS_LENGTHS[2] as usize }, UNPACK, false>(&mut runs, bytes, from, to);
-        }
+    fn copy_runs<const UNPACK: bool, const TRACK: bool>(
+        runs: &[ByteRun],
+        from: &[u8],
+        to: &mut [u8],
+    ) -> bool {
+        let mut changed = false;
         for run in runs {
-            let (image, ram, n) = run.span();
-            let (f, t) = if UNPACK { (image, ram) } else { (ram, image) };
-            if let (Some(src), Some(dst)) = (span(from, f, n), span_mut(to, t, n)) {
-                copy_bytes(src, dst);
-            }
+            changed |= copy_run::<UNPACK, TRACK>(run, from, to);
         }
+        changed
     }
 
     /// Copies an RxPDO image (SM2 content) into the OD RAM (the watched entries too, not
@@ -402,30 +394,13 @@ impl PdoPlan {
     /// whether one changed (else `false`).
     #[inline(always)]
     fn unpack_tracked<const TRACK: bool>(&self, image: &[u8], ram: &mut [u8]) -> bool {
-        let mut changed = false;
-        if TRACK {
-            let (plain, watched) = split_watched(&self.runs, self.watched_runs);
-            self.copy_runs::<true>(plain, image, ram);
-            let [words, halves, bytes] = self.watched_counts;
-            let mut runs = watched.iter();
-            changed |= copy_group::<{ CLASS_LENGTHS[0] as usize }, true, true>(
-                &mut runs, words, image, ram,
-            );
-            changed |= copy_group::<{ CLASS_LENGTHS[1] as usize }, true, true>(
-                &mut runs, halves, image, ram,
-            );
-            changed |= copy_group::<{ CLASS_LENGTHS[2] as usize }, true, true>(
-                &mut runs, bytes, image, ram,
-            );
-            for run in runs {
-                let (from, to, n) = run.span();
-                if let (Some(src), Some(dst)) = (span(image, from, n), span_mut(ram, to, n)) {
-                    changed |= copy_changed(src, dst);
-                }
-            }
+        let (plain, watched) = if TRACK {
+            split_watched(&self.runs, self.watched_runs)
         } else {
-            self.copy_runs::<true>(&self.runs, image, ram);
-        }
+            (self.runs.as_slice(), &[][..])
+        };
+        Self::copy_runs::<true, false>(plain, image, ram);
+        let mut changed = Self::copy_runs::<true, true>(watched, image, ram);
         let (plain, watched) = if TRACK {
             split_watched(&self.steps, self.watched_steps)
         } else {
@@ -453,7 +428,7 @@ impl PdoPlan {
 
     /// Copies the mapped TxPDO values from the OD RAM into an image (SM3 content).
     pub fn pack(&self, ram: &[u8], image: &mut [u8]) {
-        self.copy_runs::<false>(&self.runs, ram, image);
+        Self::copy_runs::<false, false>(&self.runs, ram, image);
         for step in &self.steps {
             // An OD RAM value starts on a byte boundary: bit 0 of the RAM from its offset.
             let src = match step.slot {
@@ -474,6 +449,16 @@ impl PdoPlan {
 }
 
 impl ByteRun {
+    /// The run of `len` bytes from OD RAM offset `ram` at image byte `image`.
+    fn new(ram: u16, image: u16, len: u16) -> Self {
+        Self {
+            ram,
+            image,
+            len,
+            width: Width::of(len),
+        }
+    }
+
     /// Image offset, RAM offset, length.
     #[inline(always)]
     fn span(&self) -> (usize, usize, usize) {
@@ -483,44 +468,6 @@ impl ByteRun {
             usize::from(self.len),
         )
     }
-}
-
-/// Whether two of `runs` share OD RAM bytes.
-fn shares_ram(runs: &[ByteRun]) -> bool {
-    runs.iter().enumerate().any(|(i, a)| {
-        runs.iter()
-            .skip(i.saturating_add(1))
-            .any(|b| any_overlaps([(a.ram, a.len)], b.ram, b.len))
-    })
-}
-
-/// Appends `runs` to `into`: when `group`, each length of [`CLASS_LENGTHS`] in turn (mapping
-/// order within a length), then the others; else as they are. Returns how many runs of each
-/// length lead (none when not grouped).
-fn append_by_length(
-    runs: &[ByteRun],
-    group: bool,
-    into: &mut Vec<ByteRun, MAX_MAPPED_ENTRIES>,
-) -> [u8; CLASS_LENGTHS.len()] {
-    let mut counts = [0; CLASS_LENGTHS.len()];
-    if !group {
-        for run in runs {
-            // Never more runs than the plan held: the pushes fit.
-            let _ = into.push(*run);
-        }
-        return counts;
-    }
-    for (count, &len) in counts.iter_mut().zip(&CLASS_LENGTHS) {
-        for run in runs.iter().filter(|r| r.len == len) {
-            let _ = into.push(*run);
-            // At most MAX_MAPPED_ENTRIES (< 256) runs.
-            *count = count.saturating_add(1);
-        }
-    }
-    for run in runs.iter().filter(|r| !CLASS_LENGTHS.contains(&r.len)) {
-        let _ = into.push(*run);
-    }
-    counts
 }
 
 /// Whether each run and each step of a plan being built is watched
@@ -554,28 +501,94 @@ fn split_watched<T>(items: &[T], watched: u8) -> (&[T], &[T]) {
     items.split_at_checked(plain).unwrap_or((items, &[]))
 }
 
-/// Copies the next `count` of `runs` (all `N` bytes long) from `from` to `to`: image to OD
-/// RAM when `UNPACK`, else OD RAM to image. A run out of range is skipped. When `TRACK`,
-/// returns whether a run changed `to` (else `false`).
+/// Copies `run` from `from` to `to` (image to OD RAM when `UNPACK`, else OD RAM to image) by
+/// its [`Width`], nothing where it is out of range. When `TRACK`, returns whether `to` held
+/// other bytes (else `false`).
 #[inline(always)]
-fn copy_group<'a, const N: usize, const UNPACK: bool, const TRACK: bool>(
-    runs: &mut impl Iterator<Item = &'a ByteRun>,
-    count: u8,
+fn copy_run<const UNPACK: bool, const TRACK: bool>(
+    run: &ByteRun,
     from: &[u8],
     to: &mut [u8],
 ) -> bool {
-    let mut changed = false;
-    for run in runs.take(usize::from(count)) {
-        let (image, ram) = (usize::from(run.image), usize::from(run.ram));
-        let (f, t) = if UNPACK { (image, ram) } else { (ram, image) };
-        let src = from.get(f..).and_then(|s| s.first_chunk::<N>());
-        let dst = to.get_mut(t..).and_then(|d| d.first_chunk_mut::<N>());
-        if let (Some(src), Some(dst)) = (src, dst) {
-            changed |= TRACK && src != dst;
-            *dst = *src;
-        }
+    let (image, ram, n) = run.span();
+    let (f, t) = if UNPACK { (image, ram) } else { (ram, image) };
+    match run.width {
+        Width::Word => copy_fixed::<4, TRACK>(from, f, to, t),
+        Width::Half => copy_fixed::<2, TRACK>(from, f, to, t),
+        Width::Byte => copy_fixed::<1, TRACK>(from, f, to, t),
+        Width::Words => match spans(from, f, to, t, n) {
+            Some((src, dst)) if TRACK => copy_changed(src, dst),
+            Some((src, dst)) => {
+                copy_pair::<4>(src, dst);
+                false
+            }
+            None => false,
+        },
+        Width::Other => match spans(from, f, to, t, n) {
+            Some((src, dst)) if TRACK => copy_changed(src, dst),
+            Some((src, dst)) => {
+                copy_bytes(src, dst);
+                false
+            }
+            None => false,
+        },
     }
+}
+
+/// Copies the `N` bytes of `from` at `f` to `to` at `t` (nothing if either is out of range).
+/// When `TRACK`, returns whether `to` held other bytes (else `false`).
+#[inline(always)]
+fn copy_fixed<const N: usize, const TRACK: bool>(
+    from: &[u8],
+    f: usize,
+    to: &mut [u8],
+    t: usize,
+) -> bool {
+    // The ends as ranges, not the first chunk from the offset: their checks need no
+    // length − N kept across a loop (fewer registers). Offsets from u16: no overflow.
+    let src = from
+        .get(f..f.wrapping_add(N))
+        .and_then(|s| s.first_chunk::<N>());
+    let dst = to
+        .get_mut(t..t.wrapping_add(N))
+        .and_then(|d| d.first_chunk_mut::<N>());
+    let (Some(src), Some(dst)) = (src, dst) else {
+        return false;
+    };
+    let changed = TRACK && src != dst;
+    *dst = *src;
     changed
+}
+
+/// The `n` bytes of `from` at `f` and of `to` at `t` (`None` if either is out of range).
+#[inline(always)]
+fn spans<'a, 'b>(
+    from: &'a [u8],
+    f: usize,
+    to: &'b mut [u8],
+    t: usize,
+    n: usize,
+) -> Option<(&'a [u8], &'b mut [u8])> {
+    Some((span(from, f, n)?, span_mut(to, t, n)?))
+}
+
+/// Copies `from` into `to` (equal lengths, `N` to 2·`N` bytes) as two `N`-byte parts, the
+/// first and the last, which overlap as far as the length falls short of 2·`N` (nothing
+/// where the length is shorter than `N`).
+#[inline(always)]
+fn copy_pair<const N: usize>(from: &[u8], to: &mut [u8]) {
+    copy_part::<N>(from, to, 0);
+    copy_part::<N>(from, to, from.len().wrapping_sub(N));
+}
+
+/// Copies the `N` bytes at `at` of `from` into `to` (equal lengths; nothing if out of range).
+#[inline(always)]
+fn copy_part<const N: usize>(from: &[u8], to: &mut [u8], at: usize) {
+    let src = from.get(at..).and_then(|s| s.first_chunk::<N>());
+    let dst = to.get_mut(at..).and_then(|d| d.first_chunk_mut::<N>());
+    if let (Some(src), Some(dst)) = (src, dst) {
+        *dst = *src;
+    }
 }
 
 /// The `n` bytes of `buf` from `at` (`None` if they are not all in it).
@@ -590,81 +603,54 @@ fn span_mut(buf: &mut [u8], at: usize, n: usize) -> Option<&mut [u8]> {
     buf.get_mut(at..).and_then(|b| b.get_mut(..n))
 }
 
-/// Copies `from` into `to` (equal lengths). The common object sizes are copied by whole
-/// words, not through the library `memcpy` call a slice copy of unknown length becomes (its
-/// call and size dispatch cost more than the copy of a few bytes): 4 to 8 bytes as two words
-/// that overlap where the length is below 8 (the first and the last four bytes), 2 or 3 bytes
-/// as two half-words likewise, 9 to 16 bytes as four words likewise, longer runs word by word.
-/// Branches on ranges rather than on each size: fewer instructions than the jump table a
-/// `match` on the sizes becomes.
+/// Copies `from` into `to` (equal lengths), of any length (a run of [`Width::Other`], a
+/// byte-aligned bit copy). By whole words, not through the library `memcpy` call a slice copy
+/// of unknown length becomes (its call and size dispatch cost more than the copy of a few
+/// bytes): 4 to 8 bytes as two words that overlap where the length is below 8 (the first and
+/// the last four bytes), 2 or 3 bytes as two half-words likewise, 9 to 16 bytes as four words
+/// likewise, longer runs word by word. Branches on ranges rather than on each size: fewer
+/// instructions than the jump table a `match` on the sizes becomes.
 #[inline(always)]
 fn copy_bytes(from: &[u8], to: &mut [u8]) {
-    /// Copies `N` bytes at `at` (nothing if out of range).
-    #[inline(always)]
-    fn part<const N: usize>(from: &[u8], to: &mut [u8], at: usize) {
-        let src = from.get(at..).and_then(|s| s.first_chunk::<N>());
-        let dst = to.get_mut(at..).and_then(|d| d.first_chunk_mut::<N>());
-        if let (Some(src), Some(dst)) = (src, dst) {
-            *dst = *src;
-        }
-    }
     let n = from.len();
     // n − 4 and n − 2 wrap for the shorter lengths, which then fail the range test.
     let (last4, last2) = (n.wrapping_sub(4), n.wrapping_sub(2));
     if last4 <= 4 {
-        part::<4>(from, to, 0);
-        part::<4>(from, to, last4);
+        copy_pair::<4>(from, to);
     } else if last2 <= 1 {
-        part::<2>(from, to, 0);
-        part::<2>(from, to, last2);
+        copy_pair::<2>(from, to);
     } else if n == 1 {
-        part::<1>(from, to, 0);
+        copy_part::<1>(from, to, 0);
     } else if n.wrapping_sub(9) <= 7 {
         // 9 to 16 bytes (a run of merged entries): four words, the last two overlapping the
         // first two as far as the length falls short of 16.
-        let last8 = n.wrapping_sub(8);
-        part::<4>(from, to, 0);
-        part::<4>(from, to, 4);
-        part::<4>(from, to, last8);
-        part::<4>(from, to, last4);
+        copy_pair::<4>(from, to);
+        copy_part::<4>(from, to, 4);
+        copy_part::<4>(from, to, n.wrapping_sub(8));
     } else if n > 16 {
         // Longer runs (merged entries of a large mapping): word by word, the last word
         // overlapping the one before it as far as the length is not a multiple of 4. The
         // library `memcpy` would copy an unaligned image byte by byte.
         let mut at = 0;
         while at < last4 {
-            part::<4>(from, to, at);
+            copy_part::<4>(from, to, at);
             // at < n − 4: no overflow.
             at = at.wrapping_add(4);
         }
-        part::<4>(from, to, last4);
+        copy_part::<4>(from, to, last4);
     }
 }
 
-/// Copies `from` into `to` (equal lengths) and returns whether `to` held other bytes. The
-/// object sizes 4 and 2 compare and copy as one word.
+/// Copies `from` into `to` (equal lengths) and returns whether `to` held other bytes, byte by
+/// byte (the object sizes compare as words in [`copy_fixed`]).
 #[inline(always)]
 fn copy_changed(from: &[u8], to: &mut [u8]) -> bool {
-    #[inline(always)]
-    fn word<const N: usize>(from: &[u8], to: &mut [u8]) -> Option<bool> {
-        let (src, dst) = (from.first_chunk::<N>()?, to.first_chunk_mut::<N>()?);
-        let changed = src != dst;
-        *dst = *src;
-        Some(changed)
+    let mut changed = false;
+    for (d, s) in to.iter_mut().zip(from) {
+        changed |= *d != *s;
+        *d = *s;
     }
-    let whole = match from.len() {
-        4 => word::<4>(from, to),
-        2 => word::<2>(from, to),
-        _ => None,
-    };
-    whole.unwrap_or_else(|| {
-        let mut changed = false;
-        for (d, s) in to.iter_mut().zip(from) {
-            changed |= *d != *s;
-            *d = *s;
-        }
-        changed
-    })
+    changed
 }
 
 /// Copies `bits` bits, LSB first (EtherCAT bit order), from `src` at bit `src_bit` to `dst` at
@@ -820,68 +806,68 @@ mod tests {
         assert_eq!(&ram[2..6], &[0x78, 0x56, 0x34, 0x12]);
     }
 
-    /// A plan of many runs copies them grouped by length (a loop per length), each still to
-    /// and from its own place; a plan of few runs keeps them in mapping order.
+    /// Runs of every copy width (an object size, or entries merged), none adjacent: each is
+    /// copied to and from its own place, and nothing else.
     #[test]
-    fn runs_grouped_by_length_copy_each_entry_to_its_place() {
-        // (ram, image, len), none adjacent on both sides, lengths mixed.
+    fn runs_of_every_width_copy_each_entry_to_its_place() {
+        // (ram, image, len): lengths 1 to 4, 7 (two words), 12 (four words), 21 (long).
         let spans = [
             (40, 0, 2),
             (10, 2, 4),
             (30, 6, 1),
-            (0, 7, 4),
-            (20, 11, 3),
-            (50, 14, 1),
+            (0, 7, 3),
+            (50, 10, 7),
+            (60, 17, 12),
+            (80, 29, 21),
         ];
-        let runs = spans.map(|(ram, image, len)| ByteRun { ram, image, len });
-        let mut plan = PdoPlan {
+        let widths = [
+            Width::Half,
+            Width::Word,
+            Width::Byte,
+            Width::Other,
+            Width::Words,
+            Width::Other,
+            Width::Other,
+        ];
+        let runs = spans.map(|(ram, image, len)| ByteRun::new(ram, image, len));
+        assert_eq!(runs.map(|r| r.width), widths);
+        let plan = PdoPlan {
             runs: Vec::from_slice(&runs).unwrap(),
             ..PdoPlan::default()
         };
-        plan.group_runs();
-        assert_eq!(plan.class_counts, [2, 1, 2], "4-, 2- and 1-byte runs");
-        let lens: Vec<u16, 8> = plan.runs.iter().map(|r| r.len).collect();
-        assert_eq!(
-            lens.as_slice(),
-            &[4, 4, 2, 1, 1, 3],
-            "grouped, the others last"
-        );
-        let image: [u8; 15] = core::array::from_fn(|i| 0x80 + i as u8);
-        let mut ram = [0u8; 64];
+        let image: [u8; 50] = core::array::from_fn(|i| 0x80 + i as u8);
+        let mut ram = [0u8; 104];
         plan.unpack(&image, &mut ram);
+        let mut expected = [0u8; 104];
         for (r, i, n) in spans.map(|(r, i, n)| (usize::from(r), usize::from(i), usize::from(n))) {
-            assert_eq!(&ram[r..r + n], &image[i..i + n], "run at image {i}");
+            expected[r..r + n].copy_from_slice(&image[i..i + n]);
         }
-        let mut back = [0u8; 15];
+        assert_eq!(ram, expected, "every run at its place, nothing else");
+        let mut back = [0u8; 52];
         plan.pack(&ram, &mut back);
-        assert_eq!(back, image, "packed back where it was mapped");
-
-        let mut few = PdoPlan {
-            runs: Vec::from_slice(&runs[..GROUPED_FROM_RUNS - 1]).unwrap(),
-            ..PdoPlan::default()
-        };
-        few.group_runs();
-        assert_eq!(few.class_counts, [0, 0, 0]);
-        assert_eq!(
-            few.runs.as_slice(),
-            &runs[..GROUPED_FROM_RUNS - 1],
-            "in mapping order"
-        );
+        assert_eq!(&back[..50], &image, "packed back where it was mapped");
+        assert_eq!(&back[50..], &[0, 0], "nothing after the image");
+        // Out of range on either side: nothing copied, no panic.
+        let mut short = [0u8; 40];
+        plan.unpack(&image, &mut short);
+        assert_eq!(short, expected[..40], "the runs that fit");
+        let mut small_image = [0u8; 20];
+        plan.pack(&ram, &mut small_image);
+        assert_eq!(&small_image[..17], &image[..17], "the runs that fit");
+        assert_eq!(&small_image[17..], &[0, 0, 0]);
     }
 
     /// Runs that share OD RAM bytes (an object mapped twice, here a 2-byte run and then a
-    /// 4-byte run over the same bytes) stay in mapping order, so that the later copy wins as
-    /// mapped: grouped, the 4-byte run would be copied first.
+    /// 4-byte run over the same bytes) are copied in mapping order, so that the later copy
+    /// wins as mapped.
     #[test]
     fn runs_sharing_ram_keep_the_mapping_order() {
         let spans = [(0, 0, 2), (0, 2, 4), (10, 6, 1), (20, 7, 1)];
-        let mut plan = PdoPlan {
-            runs: Vec::from_slice(&spans.map(|(ram, image, len)| ByteRun { ram, image, len }))
+        let plan = PdoPlan {
+            runs: Vec::from_slice(&spans.map(|(ram, image, len)| ByteRun::new(ram, image, len)))
                 .unwrap(),
             ..PdoPlan::default()
         };
-        plan.group_runs();
-        assert_eq!(plan.class_counts, [0, 0, 0], "not grouped");
         let mut ram = [0u8; 24];
         plan.unpack(&[1, 1, 2, 2, 2, 2, 3, 4], &mut ram);
         assert_eq!(&ram[0..4], &[2, 2, 2, 2], "the later run's bytes");
@@ -975,11 +961,11 @@ mod tests {
         assert_eq!(ram[6], 0x00);
     }
 
-    /// Plain and watched runs, each kind grouped by length: every run is copied to its place,
-    /// and a change of each watched run alone is told, of each plain run alone not.
+    /// Plain and watched runs of every width: every run is copied to its place, and a change
+    /// of each watched run alone is told, of each plain run alone not.
     #[test]
-    fn watched_runs_grouped_by_length_tell_each_change() {
-        // (ram, image, len), none adjacent; the last five watched.
+    fn watched_runs_tell_each_change() {
+        // (ram, image, len), none adjacent; the last five watched (lengths 4, 1, 2, 3, 7).
         let spans = [
             (40, 0, 2),
             (10, 2, 4),
@@ -989,24 +975,15 @@ mod tests {
             (70, 15, 1),
             (80, 16, 2),
             (90, 18, 3),
-            (100, 21, 4),
+            (100, 21, 7),
         ];
-        let runs = spans.map(|(ram, image, len)| ByteRun { ram, image, len });
-        let mut plan = PdoPlan {
+        let runs = spans.map(|(ram, image, len)| ByteRun::new(ram, image, len));
+        let plan = PdoPlan {
             runs: Vec::from_slice(&runs).unwrap(),
             watched_runs: 5,
             ..PdoPlan::default()
         };
-        plan.group_runs();
-        assert_eq!(plan.class_counts, [2, 1, 1], "the plain runs grouped");
-        assert_eq!(plan.watched_counts, [2, 1, 1], "the watched runs grouped");
-        let watched_lens: Vec<u16, 8> = plan.runs[4..].iter().map(|r| r.len).collect();
-        assert_eq!(
-            watched_lens.as_slice(),
-            &[4, 4, 2, 1, 3],
-            "grouped, the others last"
-        );
-        let image: [u8; 25] = core::array::from_fn(|i| 0x80 + i as u8);
+        let image: [u8; 28] = core::array::from_fn(|i| 0x80 + i as u8);
         let mut ram = [0u8; 112];
         assert!(plan.unpack_watching(&image, &mut ram));
         for (r, i, n) in spans.map(|(r, i, n)| (usize::from(r), usize::from(i), usize::from(n))) {
@@ -1099,12 +1076,7 @@ mod tests {
     #[test]
     fn pack_copies_constants_and_ram() {
         let plan = PdoPlan {
-            runs: Vec::from_slice(&[ByteRun {
-                ram: 2,
-                image: 2,
-                len: 4,
-            }])
-            .unwrap(),
+            runs: Vec::from_slice(&[ByteRun::new(2, 2, 4)]).unwrap(),
             steps: Vec::from_slice(&[CopyStep {
                 slot: Slot::Const(&[0x37, 0x02]),
                 image_bit: 0,
