@@ -3,7 +3,9 @@
 //! at rest (the master's target equals the actual position) and following (the target a step
 //! ahead), each with the axes near the encoder's zero and far from it (positions beyond 32
 //! bits take the longer unit conversions), measured with the profile's default PDO mapping and
-//! with the largest mapping it takes; per profile the most expensive cycle.
+//! with the largest mapping it takes; per profile the most expensive cycle. The profiles of one
+//! axis are held to issue 13's budgets; those of two axes (both axes' work in the one handler)
+//! are reported in rows of their own against them as a target.
 //!
 //! The profile reaches the core at run time: the loop goes through `firmware::profiles::ALL`
 //! behind `black_box`, so the measured code is the generic code reading the profile's tables,
@@ -33,10 +35,11 @@ use super::sync0_handler::{request_state, RamEsc};
 use super::{entry_at, fill_mapping, read, set, write, Fill, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
 
-/// DESIGN.md §6 and issue 13: the SYNC0 handler with a profile's default mapping. A target
-/// not yet met (issue 13 open): reported, not enforced.
+/// DESIGN.md §6 and issue 13: the SYNC0 handler with a profile's default mapping. Enforced
+/// on the profiles of one axis; a target for those of more (reported, not enforced: they run
+/// every axis's work in the one handler, and issue 13 leaves open what their budget is).
 const DEFAULT_MAPPING_BUDGET: u32 = 2_000;
-/// Issue 13: the SYNC0 handler with the largest mapping a profile takes (a target, as above).
+/// Issue 13: the SYNC0 handler with the largest mapping a profile takes (enforced likewise).
 const MAX_MAPPING_BUDGET: u32 = 2_500;
 /// Most axes a profile has.
 const MAX_AXES: usize = 2;
@@ -486,17 +489,35 @@ fn profile_cost(
     }
 }
 
-/// Measures every profile with both mappings, the axes near zero and far.
+/// Measures every profile with both mappings, the axes near zero and far: the profiles of
+/// one axis and those of more in rows of their own.
 pub fn run(h: &mut Harness) {
     let mut default = Cases::new("sync0-handler-profiles");
     let mut largest = Cases::new("sync0-handler-profiles-max-mapping");
+    let mut default_axes = Cases::new("sync0-handler-profiles-two-axes");
+    let mut largest_axes = Cases::new("sync0-handler-profiles-two-axes-max-mapping");
     for i in 0..ALL.len() {
         let Some(&profile) = ALL.get(black_box(i)) else {
             continue;
         };
+        let several = profile.axes.len() > 1;
         for (mapping, cases) in [
-            (Mapping::Default, &mut default),
-            (Mapping::Largest, &mut largest),
+            (
+                Mapping::Default,
+                if several {
+                    &mut default_axes
+                } else {
+                    &mut default
+                },
+            ),
+            (
+                Mapping::Largest,
+                if several {
+                    &mut largest_axes
+                } else {
+                    &mut largest
+                },
+            ),
         ] {
             let name = profile.od.device.profile;
             let mut worst = Some((0, (0, 0)));
@@ -516,25 +537,43 @@ pub fn run(h: &mut Harness) {
             }
         }
     }
-    h.report_cases_target(
+    h.report_cases(
         &default,
-        DEFAULT_MAPPING_BUDGET,
+        Some(DEFAULT_MAPPING_BUDGET),
         format_args!(
-            "on_sync0 in OP, every profile through the runtime profile, its default mapping, \
-             every axis attached and running, CSP: supervision, SM2 read + unpack, CiA402 + \
-             set-point + axis handoff, pack + SM3 write (PDI bus time excluded); per profile \
-             the most expensive of the cycle at rest and the cycle following a target \
-             {FOLLOWING_STEP} position units ahead (from a snapshot: restore + handler − \
-             restore), with the axes near the encoder's zero and 2^52 increments from it \
-             (beyond 32 bits: the longer unit conversions)"
+            "on_sync0 in OP, every profile of one axis through the runtime profile, its \
+             default mapping, the axis attached and running, CSP: supervision, SM2 read + \
+             unpack, CiA402 + set-point + axis handoff, pack + SM3 write (PDI bus time \
+             excluded); per profile the most expensive of the cycle at rest and the cycle \
+             following a target {FOLLOWING_STEP} position units ahead (from a snapshot: \
+             restore + handler − restore), with the axis near the encoder's zero and 2^52 \
+             increments from it (beyond 32 bits: the longer unit conversions)"
         ),
     );
-    h.report_cases_target(
+    h.report_cases(
         &largest,
-        MAX_MAPPING_BUDGET,
+        Some(MAX_MAPPING_BUDGET),
         format_args!(
             "the same with the largest mapping of each profile: first RxPDO and TxPDO filled \
              with mappable OD RAM entries, none adjacent"
+        ),
+    );
+    // Issue 13's budget is per profile; a handler that runs two axes' work is over it, and
+    // what a profile of several axes may take is open: its target, not enforced.
+    h.report_cases_target(
+        &default_axes,
+        DEFAULT_MAPPING_BUDGET,
+        format_args!(
+            "the same (default mapping) for the profiles of two axes: both axes attached and \
+             running, both axes' work in the one handler"
+        ),
+    );
+    h.report_cases_target(
+        &largest_axes,
+        MAX_MAPPING_BUDGET,
+        format_args!(
+            "the profiles of two axes with their largest mapping (every PDO of the default \
+             assignment filled)"
         ),
     );
 }
