@@ -17,7 +17,9 @@ use firmware::profiles::standard::{INPUTS_SIZE, OUTPUTS_SIZE, PROFILE, RAM_SIZE}
 use firmware::slave::{EventJob, MailboxSide};
 use firmware::sync0::on_sync0;
 use firmware::DriveCore;
-use hal::esc::{regs, AlEvent, AlState, SmActivate, SmConfig, SmControl, SmPdiControl, SmStatus};
+use hal::esc::{
+    regs, AlEvent, AlState, DcActivation, SmActivate, SmConfig, SmControl, SmPdiControl, SmStatus,
+};
 use hal::pdi::{EscPdi, PdiError, PdiErrorKind};
 
 use super::master_outputs;
@@ -33,6 +35,11 @@ const SHUTDOWN: u16 = controlword::ENABLE_VOLTAGE | controlword::QUICK_STOP;
 const SWITCH_ON: u16 = SHUTDOWN | controlword::SWITCH_ON;
 const ENABLE_OPERATION: u16 = SWITCH_ON | controlword::ENABLE_OPERATION;
 const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
+/// The DC SYNC0 cycle of the benchmarks that run the drive in DC mode, ns: one that every
+/// profile accepts.
+pub(super) const DC_CYCLE_NS: u32 = 1_000_000;
+/// Requests of OP in DC mode (with a SYNC0 cycle between them) before giving up.
+pub(super) const MAX_OP_REQUESTS: u32 = 100;
 /// Mailbox header (ETG.1000.4): length, address, channel/priority, type (CoE = 3) / counter.
 pub(super) const MBX_TYPE_COE: u8 = 0x03;
 
@@ -182,6 +189,8 @@ pub(super) struct Setup<const R: usize = RAM_SIZE> {
     pub(super) mailbox: MailboxSide<R>,
     pub(super) esc: RamEsc,
     rx: PdoPlan,
+    /// The time of the last SYNC0 in DC mode ([`Setup::new_dc`]), ns; 0 in free run.
+    pub(super) now_ns: u64,
 }
 
 impl<const R: usize> Setup<R> {
@@ -192,6 +201,35 @@ impl<const R: usize> Setup<R> {
 
     /// INIT → PREOP → SAFEOP → OP in free run with the profile's mailbox and default mapping.
     pub(super) fn new() -> Option<Self> {
+        let mut s = Self::safe_op(None)?;
+        // The master has written the outputs once (the profile's SAFEOP → OP rule).
+        s.request(AlState::Op, AlEvent::sm(2))?;
+        Some(s)
+    }
+
+    /// [`Setup::new`] in DC mode, SYNC0 every [`DC_CYCLE_NS`], as the board runs: the master
+    /// writes the outputs every cycle, so SM2's event stays set in the image.
+    pub(super) fn new_dc() -> Option<Self> {
+        let mut s = Self::safe_op(Some(DC_CYCLE_NS))?;
+        let events = AlEvent::sm(2);
+        // In DC mode the drive may take SAFEOP → OP only once its cycle runs on the SYNC0
+        // events: SYNC0 cycles between the requests.
+        for _ in 0..MAX_OP_REQUESTS {
+            let reached = s.request(AlState::Op, events);
+            s.esc
+                .set(regs::AL_EVENT_REQUEST.addr, &events.to_le_bytes());
+            if reached.is_some() {
+                return Some(s);
+            }
+            s.now_ns += u64::from(DC_CYCLE_NS);
+            on_sync0(&mut s.core, &mut s.esc, s.now_ns).ok()?;
+        }
+        None
+    }
+
+    /// INIT → PREOP → SAFEOP with the profile's mailbox and default mapping, in DC mode with
+    /// SYNC0 every `dc_cycle_ns` if given, else in free run.
+    fn safe_op(dc_cycle_ns: Option<u32>) -> Option<Self> {
         let mut ram = [0; R];
         let mut od = Dictionary::new(&PROFILE.od, &mut ram);
         od.load_defaults();
@@ -202,6 +240,7 @@ impl<const R: usize> Setup<R> {
             mailbox,
             esc: RamEsc::new(),
             rx,
+            now_ns: 0,
         };
         let device = &PROFILE.od.device;
         s.core.start(&mut s.esc).ok()?;
@@ -212,10 +251,22 @@ impl<const R: usize> Setup<R> {
         s.request(AlState::PreOp, 0)?;
         s.esc.set_sm(2, &device.outputs, OUTPUTS_SIZE as u16);
         s.esc.set_sm(3, &device.inputs, INPUTS_SIZE as u16);
+        if let Some(cycle_ns) = dc_cycle_ns {
+            s.esc.set(
+                regs::DC_ACTIVATION.addr,
+                &[DcActivation::CYCLIC | DcActivation::SYNC0],
+            );
+            s.esc
+                .set(regs::DC_SYNC0_CYCLE.addr, &cycle_ns.to_le_bytes());
+        }
         s.request(AlState::SafeOp, 0)?;
-        // The master has written the outputs once (the profile's SAFEOP → OP rule).
-        s.request(AlState::Op, AlEvent::sm(2))?;
         Some(s)
+    }
+
+    /// One SYNC0 of DC mode: [`DC_CYCLE_NS`] after the last one.
+    pub(super) fn dc_cycle(&mut self) -> Result<(), &'static str> {
+        self.now_ns += u64::from(DC_CYCLE_NS);
+        on_sync0(&mut self.core, &mut self.esc, self.now_ns).map_err(|_| "the SYNC0 handler failed")
     }
 
     /// [`Setup::new`], then the power-up sequence of controlwords, one cycle each, to operation

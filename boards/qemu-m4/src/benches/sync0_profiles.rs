@@ -31,7 +31,7 @@ use firmware::DriveCore;
 use hal::esc::{regs, AlEvent, AlState, DcActivation, DlStatus};
 
 use super::motor::{tuning, POSITION, SAMPLE};
-use super::sync0_handler::{request_state, RamEsc};
+use super::sync0_handler::{request_state, RamEsc, DC_CYCLE_NS, MAX_OP_REQUESTS};
 use super::{entry_at, fill_mapping, read, set, write, Fill, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
 
@@ -98,10 +98,6 @@ const PLACEMENTS: [Placement; 2] = [
 ];
 /// Bus cycles of the enable sequence before giving up (offset calibration included).
 const MAX_ENABLE_CYCLES: u32 = 400;
-/// Requests of OP (with a SYNC0 cycle between them) before giving up.
-const MAX_OP_REQUESTS: u32 = 100;
-/// The DC SYNC0 cycle, ns: one that every profile accepts.
-const CYCLE_NS: u32 = 1_000_000;
 /// PWM periods of each axis' control interrupt per bus cycle while enabling.
 const PERIODS_PER_CYCLE: u32 = 40;
 
@@ -144,7 +140,7 @@ struct ProfileBench {
 }
 
 impl ProfileBench {
-    /// INIT → PREOP (the mapping) → SAFEOP → OP in free run, every axis attached, placed at
+    /// INIT → PREOP (the mapping) → SAFEOP → OP in DC mode, every axis attached, placed at
     /// `at`.
     fn new(
         profile: &'static DriveProfile,
@@ -204,7 +200,7 @@ impl ProfileBench {
             regs::DC_ACTIVATION.addr,
             &[DcActivation::CYCLIC | DcActivation::SYNC0],
         );
-        esc.set(regs::DC_SYNC0_CYCLE.addr, &CYCLE_NS.to_le_bytes());
+        esc.set(regs::DC_SYNC0_CYCLE.addr, &DC_CYCLE_NS.to_le_bytes());
         request_state(&mut core, &mut esc, AlState::SafeOp, 0).ok_or("no SAFEOP")?;
         let mut bench = Self {
             profile,
@@ -270,7 +266,7 @@ impl ProfileBench {
 
     /// One bus cycle: the SYNC0 handler, then `periods` control interrupts of every axis.
     fn cycle(&mut self, periods: u32) -> Result<(), &'static str> {
-        self.now_ns += u64::from(CYCLE_NS);
+        self.now_ns += u64::from(DC_CYCLE_NS);
         on_sync0(&mut self.core, &mut self.esc, self.now_ns)
             .map_err(|_| "the SYNC0 handler failed")?;
         for (axis, link) in self.axes.iter_mut().zip(&LINKS) {
@@ -315,7 +311,7 @@ impl ProfileBench {
     fn following_cost(&mut self, h: &mut Harness, name: &str) -> Result<Option<u32>, &'static str> {
         self.outputs_ahead(ENABLE_OPERATION, FOLLOWING_STEP)?;
         let snapshot = self.core.clone();
-        let now_ns = self.now_ns.saturating_add(u64::from(CYCLE_NS));
+        let now_ns = self.now_ns.saturating_add(u64::from(DC_CYCLE_NS));
         let ProfileBench { core, esc, .. } = self;
         let Some(cost) = h.measure_from(name, &snapshot, core, |core| {
             let _ = on_sync0(core, esc, black_box(now_ns));
@@ -469,7 +465,7 @@ fn profile_cost(
         core, esc, now_ns, ..
     } = &mut bench;
     let at_rest = h.measure(name, &mut || {
-        *now_ns += u64::from(CYCLE_NS);
+        *now_ns += u64::from(DC_CYCLE_NS);
         let _ = on_sync0(core, esc, black_box(*now_ns));
     })?;
     if !bench.at_rest() {

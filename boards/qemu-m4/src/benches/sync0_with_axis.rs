@@ -1,7 +1,8 @@
 //! The whole SYNC0 handler with the motor attached, as the board runs it: `on_sync0` on the
-//! slave's core in OP with the `standard` profile's default mapping, and the drive's axis
-//! attached to a motor-control [`Axis`] through an [`AxisLink`], so that the cycle includes the
-//! axis handoff (feedback read, set-point publish) and the set-point generators.
+//! slave's core in OP in DC mode (each cycle a SYNC0 one DC cycle after the last, which the
+//! sync supervision counts), with the `standard` profile's default mapping, and the drive's
+//! axis attached to a motor-control [`Axis`] through an [`AxisLink`], so that the cycle
+//! includes the axis handoff (feedback read, set-point publish) and the set-point generators.
 //!
 //! Two modes:
 //! - cyclic synchronous position at rest (the master's target equals the actual position);
@@ -29,7 +30,7 @@ use firmware::sync0::on_sync0;
 use firmware::DriveCore;
 
 use super::motor::{tuning, POSITION, SAMPLE};
-use super::sync0_handler::Setup;
+use super::sync0_handler::{Setup, DC_CYCLE_NS};
 use super::{axis_vars, master_outputs_for, read, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
 
@@ -72,9 +73,10 @@ struct Bench {
 }
 
 impl Bench {
-    /// The slave in OP ([`Setup::new`]) with its axis attached to a servo axis.
+    /// The slave in OP in DC mode ([`Setup::new_dc`]) with its axis attached to a servo axis.
     fn new() -> Result<Self, &'static str> {
-        let mut setup = <Setup>::new().ok_or("the slave did not reach OP on the ESC image")?;
+        let mut setup =
+            <Setup>::new_dc().ok_or("the slave did not reach OP in DC mode on the ESC image")?;
         let cfg = servo::axis_config(&SERVO_400W, &tuning(1, 1e-3));
         let axis = Axis::new(cfg).map_err(|_| "the axis configuration was refused")?;
         let (drive, ram) = setup.core.application();
@@ -93,8 +95,7 @@ impl Bench {
 
     /// One bus cycle: the SYNC0 handler, then `periods` control interrupts.
     fn cycle(&mut self, periods: u32) -> Result<(), &'static str> {
-        on_sync0(&mut self.setup.core, &mut self.setup.esc, 0)
-            .map_err(|_| "the SYNC0 handler failed")?;
+        self.setup.dc_cycle()?;
         for _ in 0..periods {
             self.axis.control_step(&SAMPLE, &LINK);
         }
@@ -160,9 +161,11 @@ fn cost_from(
     snapshot: &DriveCore<RAM_SIZE>,
     setup: &mut Setup,
 ) -> Option<u32> {
+    // The next SYNC0 (the snapshot's cycle runs again after the measurement).
+    let now_ns = setup.now_ns.saturating_add(u64::from(DC_CYCLE_NS));
     let Setup { core, esc, .. } = setup;
     h.measure_from(name, snapshot, core, |core| {
-        let _ = on_sync0(core, esc, black_box(0));
+        let _ = on_sync0(core, esc, black_box(now_ns));
     })
 }
 
@@ -183,17 +186,22 @@ pub fn run(h: &mut Harness) {
 /// CSP at rest: every cycle the same (the target equals the actual position).
 fn csp_at_rest(h: &mut Harness, bench: &mut Bench) {
     const NAME: &str = "sync0-handler-csp";
-    let Setup { core, esc, .. } = &mut bench.setup;
+    let Setup {
+        core, esc, now_ns, ..
+    } = &mut bench.setup;
     h.bench(
         NAME,
         Some(SYNC0_HANDLER_BUDGET),
         format_args!(
-            "on_sync0 in OP with the axis attached, CSP at rest: supervision, SM2 read + unpack, \
-             CiA402 + CSP set-point + axis handoff (feedback read, command publish), pack + SM3 \
-             write (default mapping, PDI bus time excluded)"
+            "on_sync0 in OP in DC mode (SYNC0 every {} µs) with the axis attached, CSP at rest: \
+             SYNC0 supervision, SM2 read + unpack, CiA402 + CSP set-point + axis handoff \
+             (feedback read, command publish), pack + SM3 write (default mapping, PDI bus \
+             time excluded)",
+            DC_CYCLE_NS / 1000
         ),
         &mut || {
-            let _ = on_sync0(core, esc, black_box(0));
+            *now_ns += u64::from(DC_CYCLE_NS);
+            let _ = on_sync0(core, esc, black_box(*now_ns));
         },
     );
     if bench.at_rest().is_err() {
@@ -331,7 +339,7 @@ fn profile_position_move(h: &mut Harness, bench: &mut Bench) -> Result<(), &'sta
         &phases.cases,
         Some(SYNC0_HANDLER_BUDGET),
         format_args!(
-            "on_sync0 in OP with the axis attached, profile position: the cycles of an \
+            "on_sync0 in OP in DC mode with the axis attached, profile position: the cycles of an \
              8-revolution move, each kind from a snapshot of the core taken just before it \
              (restore + handler − restore)"
         ),
