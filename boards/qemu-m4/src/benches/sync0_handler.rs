@@ -8,6 +8,7 @@
 //! handler reaches only the core, so both must cost the same: mailbox traffic cannot delay or
 //! lengthen the SYNC0 path.
 
+use core::fmt;
 use core::hint::black_box;
 
 use firmware::cia402::pds::{controlword, PdsState};
@@ -53,17 +54,62 @@ impl PdiError for OutOfImage {
     }
 }
 
-/// The ESC as a RAM image: reads and writes are copies; every access returns the AL event
-/// register, as the ET1100's SPI PDI does.
-pub(super) struct RamEsc {
-    mem: [u8; ESC_IMAGE],
+/// The PDI transfers a [`RamEsc`] that tallies them saw: what the bus time of an ET1100 SPI
+/// depends on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct PdiTally {
+    /// Reads, and the data bytes they moved.
+    pub(super) reads: u32,
+    pub(super) read_bytes: u32,
+    /// Writes, and the data bytes they moved.
+    pub(super) writes: u32,
+    pub(super) write_bytes: u32,
 }
 
-impl RamEsc {
+impl PdiTally {
+    /// Records the tally as `META` records `pdi_reads`, `pdi_read_bytes`, `pdi_writes` and
+    /// `pdi_write_bytes`, each followed by `suffix` (the report's load model reads them).
+    pub(super) fn record(&self, h: &mut Harness, suffix: fmt::Arguments<'_>) {
+        for (key, value) in [
+            ("pdi_reads", self.reads),
+            ("pdi_read_bytes", self.read_bytes),
+            ("pdi_writes", self.writes),
+            ("pdi_write_bytes", self.write_bytes),
+        ] {
+            h.meta_of(key, suffix, value);
+        }
+    }
+}
+
+/// The ESC as a RAM image: reads and writes are copies; every access returns the AL event
+/// register, as the ET1100's SPI PDI does. With `TALLY` it counts its transfers
+/// ([`PdiTally`]); the measured code runs on one without, which does nothing more than copy.
+pub(super) struct RamEsc<const TALLY: bool = false> {
+    mem: [u8; ESC_IMAGE],
+    tally: PdiTally,
+}
+
+impl RamEsc<true> {
+    /// A copy of `image` that tallies its transfers from now on.
+    pub(super) fn tallying(image: &RamEsc) -> Self {
+        Self {
+            mem: image.mem,
+            tally: PdiTally::default(),
+        }
+    }
+
+    /// The transfers so far.
+    pub(super) fn tally(&self) -> PdiTally {
+        self.tally
+    }
+}
+
+impl<const TALLY: bool> RamEsc<TALLY> {
     /// An ESC image of zeros.
     pub(super) fn new() -> Self {
         Self {
             mem: [0; ESC_IMAGE],
+            tally: PdiTally::default(),
         }
     }
 
@@ -96,13 +142,17 @@ impl RamEsc {
     }
 }
 
-impl EscPdi for RamEsc {
+impl<const TALLY: bool> EscPdi for RamEsc<TALLY> {
     type Error = OutOfImage;
 
     fn read(&mut self, addr: u16, buf: &mut [u8]) -> Result<AlEvent, OutOfImage> {
         let at = usize::from(addr);
         let src = self.mem.get(at..at + buf.len()).ok_or(OutOfImage)?;
         transfer(src, buf);
+        if TALLY {
+            self.tally.reads = self.tally.reads.saturating_add(1);
+            self.tally.read_bytes = self.tally.read_bytes.saturating_add(len_u32(buf.len()));
+        }
         Ok(self.events())
     }
 
@@ -110,8 +160,30 @@ impl EscPdi for RamEsc {
         let at = usize::from(addr);
         let dst = self.mem.get_mut(at..at + data.len()).ok_or(OutOfImage)?;
         transfer(data, dst);
+        if TALLY {
+            self.tally.writes = self.tally.writes.saturating_add(1);
+            self.tally.write_bytes = self.tally.write_bytes.saturating_add(len_u32(data.len()));
+        }
         Ok(self.events())
     }
+}
+
+/// A transfer's length as a tally counts it.
+fn len_u32(len: usize) -> u32 {
+    u32::try_from(len).unwrap_or(u32::MAX)
+}
+
+/// The PDI transfers of one `on_sync0` of `core` at `now_ns`, run on copies of the core and of
+/// the ESC image (neither changes); `None` if the handler failed.
+pub(super) fn sync0_transfers<const R: usize>(
+    core: &DriveCore<R>,
+    esc: &RamEsc,
+    now_ns: u64,
+) -> Option<PdiTally> {
+    let mut core = core.clone();
+    let mut esc = RamEsc::tallying(esc);
+    on_sync0(&mut core, &mut esc, now_ns).ok()?;
+    Some(esc.tally())
 }
 
 /// The data of a PDI access: what the board's SPI transfer does, which the budget excludes
@@ -332,9 +404,11 @@ pub fn run(h: &mut Harness) {
     let Some(mut s) = h.ready("sync0-handler", <Setup>::powered_up()) else {
         return;
     };
-    // The process-data image sizes of the default mapping: the PDI bus time of a cycle.
-    h.meta("sm2_bytes", OUTPUTS_SIZE as u32);
-    h.meta("sm3_bytes", INPUTS_SIZE as u32);
+    // The PDI transfers of a cycle (free run: its time is not counted).
+    match sync0_transfers(&s.core, &s.esc, 0) {
+        Some(tally) => tally.record(h, format_args!("sync0-handler")),
+        None => h.fail("sync0-handler", format_args!("the SYNC0 handler failed")),
+    }
     let Setup { core, esc, .. } = &mut s;
     let idle = h.bench(
         "sync0-handler",

@@ -31,7 +31,9 @@ use firmware::DriveCore;
 use hal::esc::{regs, AlEvent, AlState, DcActivation, DlStatus};
 
 use super::motor::{tuning, POSITION, SAMPLE};
-use super::sync0_handler::{request_state, RamEsc, DC_CYCLE_NS, MAX_OP_REQUESTS};
+use super::sync0_handler::{
+    request_state, sync0_transfers, PdiTally, RamEsc, DC_CYCLE_NS, MAX_OP_REQUESTS,
+};
 use super::{entry_at, fill_mapping, read, set, write, Fill, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
 
@@ -114,7 +116,7 @@ enum Mapping {
 }
 
 impl Mapping {
-    /// Its name in the `META` records of the process images' lengths.
+    /// Its name in the `META` records of the PDI transfers.
     fn label(self) -> &'static str {
         match self {
             Self::Default => "default",
@@ -130,8 +132,6 @@ struct ProfileBench {
     esc: RamEsc,
     rx: PdoPlan,
     axes: [Option<Axis>; MAX_AXES],
-    /// The TxPDO image's length, bytes.
-    tx_len: usize,
     /// What every axis' control interrupt samples (the encoder at rest on the measured
     /// position).
     sample: Sample,
@@ -208,7 +208,6 @@ impl ProfileBench {
             esc,
             rx,
             axes,
-            tx_len,
             sample: Sample {
                 position: Ok(at.position),
                 ..SAMPLE
@@ -442,14 +441,14 @@ fn needed_entries(
 }
 
 /// The SYNC0 handler of `profile` with `mapping` and the axes placed `at`: the more expensive
-/// of the cycle at rest and the cycle following a target ahead, and the lengths of the RxPDO
-/// and TxPDO images. `None` after a failure reported to the harness.
+/// of the cycle at rest and the cycle following a target ahead, and the PDI transfers of a
+/// cycle at rest. `None` after a failure reported to the harness.
 fn profile_cost(
     h: &mut Harness,
     profile: &'static DriveProfile,
     mapping: Mapping,
     at: Placement,
-) -> Option<(u32, (usize, usize))> {
+) -> Option<(u32, PdiTally)> {
     let name = profile.od.device.profile;
     let label = at.label;
     let bench = ProfileBench::new(profile, mapping, at).and_then(|mut b| b.enable().map(|()| b));
@@ -460,7 +459,14 @@ fn profile_cost(
             return None;
         }
     };
-    let images = (bench.rx.byte_len(), bench.tx_len);
+    let next = bench.now_ns.saturating_add(u64::from(DC_CYCLE_NS));
+    let Some(transfers) = sync0_transfers(&bench.core, &bench.esc, next) else {
+        h.fail(
+            name,
+            format_args!("the SYNC0 handler failed (axes {label})"),
+        );
+        return None;
+    };
     let ProfileBench {
         core, esc, now_ns, ..
     } = &mut bench;
@@ -476,7 +482,7 @@ fn profile_cost(
         return None;
     }
     match bench.following_cost(h, name) {
-        Ok(Some(following)) => Some((at_rest.max(following), images)),
+        Ok(Some(following)) => Some((at_rest.max(following), transfers)),
         Ok(None) => None,
         Err(reason) => {
             h.fail(name, format_args!("{reason} (axes {label})"));
@@ -516,20 +522,17 @@ pub fn run(h: &mut Harness) {
             ),
         ] {
             let name = profile.od.device.profile;
-            let mut worst = Some((0, (0, 0)));
+            let mut worst = Some((0, PdiTally::default()));
             for at in PLACEMENTS {
                 let cost = profile_cost(h, profile, mapping, at);
                 worst = worst
                     .zip(cost)
-                    .map(|((w, _), (c, images))| (w.max(c), images));
+                    .map(|((w, _), (c, transfers))| (w.max(c), transfers));
             }
-            if let Some((worst, (rx_len, tx_len))) = worst {
+            if let Some((worst, transfers)) = worst {
                 h.case(cases, name, worst);
-                // The process images the SPI moves per cycle (the report's load per profile).
-                for (key, len) in [("sm2_bytes", rx_len), ("sm3_bytes", tx_len)] {
-                    let len = u32::try_from(len).unwrap_or(u32::MAX);
-                    h.meta_of(key, format_args!("{name}:{}", mapping.label()), len);
-                }
+                // What the SPI moves per cycle (the report's load per profile).
+                transfers.record(h, format_args!("{name}:{}", mapping.label()));
             }
         }
     }
