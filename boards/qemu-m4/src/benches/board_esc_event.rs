@@ -36,7 +36,7 @@ use super::sdo::{
     command, mailbox_frame, request, FRAME_LEN, MAPPABLE_PARAMETER, MAPPABLE_PARAMETER_VALUE,
     STATUSWORD, USER_PARAMETER, USER_PARAMETER_VALUE,
 };
-use super::sync0_handler::{RamEsc, Setup};
+use super::sync0_handler::{PdiTally, RamEsc, Setup};
 use crate::harness::{Cases, Harness};
 
 const NAME: &str = "board-esc-event";
@@ -50,17 +50,20 @@ impl OutputPins for NoPins {
     fn set_brake_released(&mut self, _: bool) {}
 }
 
-type Side = CycleSide<MAX_RAM_SIZE, RamEsc, NoPins>;
+type Side<const TALLY: bool> = CycleSide<MAX_RAM_SIZE, RamEsc<TALLY>, NoPins>;
 
-/// The drive lock of a single context: always available.
-struct Direct(Side);
+/// The drive lock of a single context: always available. With `TALLY` its ESC image counts
+/// the transfers.
+struct Direct<const TALLY: bool = false>(Side<TALLY>);
 
-impl SharedDrive<MAX_RAM_SIZE, RamEsc, NoPins> for Direct {
-    fn with<R>(&mut self, f: impl FnOnce(&mut Side) -> R) -> Option<R> {
+impl<const TALLY: bool> SharedDrive<MAX_RAM_SIZE, RamEsc<TALLY>, NoPins> for Direct<TALLY> {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Side<TALLY>) -> R) -> Option<R> {
         Some(f(&mut self.0))
     }
 }
 
+/// The label of the round without a request.
+const IDLE_LABEL: &str = "no request (a cycle's SM2 event)";
 /// A byte put in SM1's buffer before the round without a request, found there after it.
 const IDLE_MARK: u8 = 0xA5;
 
@@ -163,6 +166,28 @@ fn round_cost(
     Some(cost)
 }
 
+/// The PDI transfers of one round after `setup`, run on a copy of the core with a copy of the
+/// ESC image that tallies them (the event side's round is a real one: run it after the
+/// measurements). `None` if the round failed.
+fn round_transfers(
+    drive: &RefCell<Direct>,
+    event: &mut Event,
+    setup: &dyn Fn(&mut RamEsc),
+) -> Option<PdiTally> {
+    let mut tallying = {
+        let plain = drive.borrow();
+        let mut image = plain.0.pdi.clone();
+        setup(&mut image);
+        Direct::<true>(CycleSide {
+            core: plain.0.core.clone(),
+            pdi: RamEsc::tallying(&image),
+            brake: BrakeOutput::new(NoPins),
+            sync_lock: None,
+        })
+    };
+    matches!(event.esc_event_round(&mut tallying, 0), Some(Ok(()))).then(|| tallying.0.pdi.tally())
+}
+
 /// The benchmark.
 pub fn run(h: &mut Harness) {
     let Some(setup) = h.ready(NAME, Setup::<MAX_RAM_SIZE>::powered_up()) else {
@@ -215,7 +240,22 @@ pub fn run(h: &mut Harness) {
     let Some(cost) = round_cost(h, &drive, &mut event, &idle) else {
         return;
     };
-    h.case(&mut cases, "no request (a cycle's SM2 event)", cost);
+    h.case(&mut cases, IDLE_LABEL, cost);
+    // The transfers of each round (the report's load model counts their bus time).
+    for (label, frame, _) in requests() {
+        let Some(tally) = round_transfers(&drive, &mut event, &|esc| post(esc, &frame)) else {
+            h.fail(NAME, format_args!("{label}: the tallied round failed"));
+            return;
+        };
+        tally.record(h, format_args!("{NAME}:{label}"));
+    }
+    match round_transfers(&drive, &mut event, &idle) {
+        Some(tally) => tally.record(h, format_args!("{NAME}:{IDLE_LABEL}")),
+        None => h.fail(
+            NAME,
+            format_args!("the tallied round without a request failed"),
+        ),
+    }
     h.report_cases(
         &cases,
         None,

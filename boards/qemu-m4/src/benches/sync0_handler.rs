@@ -84,6 +84,7 @@ impl PdiTally {
 /// The ESC as a RAM image: reads and writes are copies; every access returns the AL event
 /// register, as the ET1100's SPI PDI does. With `TALLY` it counts its transfers
 /// ([`PdiTally`]); the measured code runs on one without, which does nothing more than copy.
+#[derive(Clone)]
 pub(super) struct RamEsc<const TALLY: bool = false> {
     mem: [u8; ESC_IMAGE],
     tally: PdiTally,
