@@ -22,6 +22,9 @@ struct MockEsc {
     sm1_full: bool,
     sm1_activate: u8,
     sm1_pdi_control: u8,
+    /// Reads from the SM0 buffer and the bytes they moved.
+    sm0_reads: usize,
+    sm0_bytes_read: usize,
 }
 
 const SM0_STATUS: u16 = regs::sm(0).addr + regs::sm_offset::STATUS;
@@ -37,6 +40,8 @@ impl MockEsc {
             sm1_full: false,
             sm1_activate: SmActivate::ENABLE,
             sm1_pdi_control: 0,
+            sm0_reads: 0,
+            sm0_bytes_read: 0,
         }
     }
     fn out_start() -> usize {
@@ -98,6 +103,10 @@ impl EscPdi for MockEsc {
             SM1_ACTIVATE => buf[0] = self.sm1_activate,
             _ => {
                 buf.copy_from_slice(&self.mem[a..a + buf.len()]);
+                if (Self::out_start()..=Self::out_last()).contains(&a) {
+                    self.sm0_reads += 1;
+                    self.sm0_bytes_read += buf.len();
+                }
                 if a <= Self::out_last() && Self::out_last() < a + buf.len() {
                     self.sm0_full = false;
                 }
@@ -335,4 +344,53 @@ fn a_received_request_names_the_od_ram_its_answer_needs() {
     let mut oversized = upload_request(4);
     oversized[0..2].copy_from_slice(&0x0FFFu16.to_le_bytes());
     assert_eq!(scope_of(&mut b, &oversized), DictionaryScope::Nothing);
+}
+
+/// A request is read as its mailbox header announces it, and then SM0's last byte, which hands
+/// the buffer back (ETG.1000.4 mailbox mode): not the whole buffer, whose every byte costs SPI
+/// bus time. A frame that fills SM0 needs no extra read of the last byte.
+#[test]
+fn a_request_is_read_to_its_length_and_the_last_byte_of_sm0() {
+    let size = standard::PROFILE.device.mailbox_out.length as usize;
+    let mut b = Bench::new();
+    let frame = upload_request(1);
+    b.esc.master_writes(&frame);
+    b.service(AlEvent(0));
+    assert!(!b.esc.sm0_full, "SM0 handed back to the master");
+    let (h, p) = b.esc.master_reads().expect("answered");
+    assert_eq!((h.counter, p[..2].to_vec()), (1, COE_SDO_RESPONSE.to_vec()));
+    assert_eq!(
+        (b.esc.sm0_reads, b.esc.sm0_bytes_read),
+        (3, frame.len() + 1),
+        "header, the rest of the frame, the last byte"
+    );
+    // A frame as long as SM0 (the CoE request padded with zeros): the frame's end is the
+    // buffer's last byte.
+    let mut full = [0u8; MEM];
+    full[..frame.len()].copy_from_slice(&upload_request(2));
+    let length = (size - HEADER_LEN) as u16;
+    full[..2].copy_from_slice(&length.to_le_bytes());
+    (b.esc.sm0_reads, b.esc.sm0_bytes_read) = (0, 0);
+    b.esc.master_writes(&full[..size]);
+    b.service(AlEvent(0));
+    assert!(!b.esc.sm0_full);
+    assert!(b.esc.master_reads().is_some(), "answered");
+    assert_eq!((b.esc.sm0_reads, b.esc.sm0_bytes_read), (2, size));
+}
+
+/// A header that announces more than SM0 holds: the whole buffer is read (SM0 handed back)
+/// and the request refused with the mailbox error "invalid size" (ETG.1000.4 Table 30, 0x0008).
+#[test]
+fn a_request_longer_than_sm0_reads_the_buffer_and_is_refused() {
+    let size = standard::PROFILE.device.mailbox_out.length as usize;
+    let mut b = Bench::new();
+    let mut frame = upload_request(1);
+    frame[0..2].copy_from_slice(&(size as u16).to_le_bytes());
+    b.esc.master_writes(&frame);
+    b.service(AlEvent(0));
+    assert!(!b.esc.sm0_full, "SM0 handed back to the master");
+    assert_eq!(b.esc.sm0_bytes_read, size);
+    let (h, p) = b.esc.master_reads().expect("a mailbox error");
+    assert_eq!(h.kind, 0, "mailbox error service");
+    assert_eq!(u16::from_le_bytes([p[2], p[3]]), 0x0008, "invalid size");
 }
