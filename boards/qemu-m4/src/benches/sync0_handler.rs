@@ -405,7 +405,7 @@ pub fn run(h: &mut Harness) {
     let Some(mut s) = h.ready("sync0-handler", <Setup>::powered_up()) else {
         return;
     };
-    // The PDI transfers of a cycle (free run: its time is not counted).
+    // The PDI transfers of a cycle (the load model counts the bus time of the row it takes).
     match sync0_transfers(&s.core, &s.esc, 0) {
         Some(tally) => tally.record(h, format_args!("sync0-handler")),
         None => h.fail("sync0-handler", format_args!("the SYNC0 handler failed")),
