@@ -75,7 +75,11 @@ fn read_frame<P: EscPdi>(
     let frame = HEADER_LEN.saturating_add(announced).min(len);
     // The SM0 buffer lies in the ESC's 16-bit address space (its layout checked at start):
     // offsets within it fit a u16; were they not, the part is skipped.
-    let at = |offset: usize| u16::try_from(offset).ok().and_then(|o| start.checked_add(o));
+    let at = |offset: usize| {
+        u16::try_from(offset)
+            .ok()
+            .and_then(|o| start.checked_add(o))
+    };
     if let (Some(rest), Some(addr)) = (inbox.get_mut(head..frame), at(head)) {
         if !rest.is_empty() {
             pdi.read(addr, rest)?;
