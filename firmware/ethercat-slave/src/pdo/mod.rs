@@ -584,11 +584,7 @@ fn copy_pair<const N: usize>(from: &[u8], to: &mut [u8]) {
 /// Copies the `N` bytes at `at` of `from` into `to` (equal lengths; nothing if out of range).
 #[inline(always)]
 fn copy_part<const N: usize>(from: &[u8], to: &mut [u8], at: usize) {
-    let src = from.get(at..).and_then(|s| s.first_chunk::<N>());
-    let dst = to.get_mut(at..).and_then(|d| d.first_chunk_mut::<N>());
-    if let (Some(src), Some(dst)) = (src, dst) {
-        *dst = *src;
-    }
+    _ = copy_fixed::<N, false>(from, at, to, at);
 }
 
 /// The `n` bytes of `buf` from `at` (`None` if they are not all in it).
