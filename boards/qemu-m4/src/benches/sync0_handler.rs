@@ -40,7 +40,7 @@ const POWER_UP: [u16; 4] = [0, SHUTDOWN, SWITCH_ON, ENABLE_OPERATION];
 /// profile accepts.
 pub(super) const DC_CYCLE_NS: u32 = 1_000_000;
 /// Requests of OP in DC mode (with a SYNC0 cycle between them) before giving up.
-pub(super) const MAX_OP_REQUESTS: u32 = 100;
+const MAX_OP_REQUESTS: u32 = 100;
 /// Mailbox header (ETG.1000.4): length, address, channel/priority, type (CoE = 3) / counter.
 pub(super) const MBX_TYPE_COE: u8 = 0x03;
 
@@ -233,6 +233,38 @@ fn transfer_pieces(from: &[u8], to: &mut [u8]) {
     transfer(from, to);
 }
 
+/// DC SYNC0 every [`DC_CYCLE_NS`] in the ESC image, as a master activates it before SAFEOP.
+pub(super) fn activate_dc(esc: &mut RamEsc) {
+    esc.set(
+        regs::DC_ACTIVATION.addr,
+        &[DcActivation::CYCLIC | DcActivation::SYNC0],
+    );
+    esc.set(regs::DC_SYNC0_CYCLE.addr, &DC_CYCLE_NS.to_le_bytes());
+}
+
+/// SAFEOP → OP in DC mode: the drive takes it only once its cycle runs on the SYNC0 events, so
+/// SYNC0 cycles (each [`DC_CYCLE_NS`] after `now_ns`, which follows them) run between the
+/// requests. The master writes the outputs every cycle: SM2's event stays set in the image.
+/// `None` if OP was not reached.
+pub(super) fn request_op_in_dc<const R: usize>(
+    core: &mut DriveCore<R>,
+    esc: &mut RamEsc,
+    now_ns: &mut u64,
+) -> Option<()> {
+    let events = AlEvent::sm(2);
+    for _ in 0..MAX_OP_REQUESTS {
+        let reached = request_state(core, esc, AlState::Op, events);
+        // The request clears the event register.
+        esc.set(regs::AL_EVENT_REQUEST.addr, &events.to_le_bytes());
+        if reached.is_some() {
+            return Some(());
+        }
+        *now_ns += u64::from(DC_CYCLE_NS);
+        on_sync0(core, esc, *now_ns).ok()?;
+    }
+    None
+}
+
 /// A master's request of AL `state` (with the AL events `events` besides AL control), handled
 /// as the ESC-event context does; `Some` if the core went to `state`.
 pub(super) fn request_state<const R: usize>(
@@ -274,7 +306,7 @@ impl<const R: usize> Setup<R> {
 
     /// INIT → PREOP → SAFEOP → OP in free run with the profile's mailbox and default mapping.
     pub(super) fn new() -> Option<Self> {
-        let mut s = Self::safe_op(None)?;
+        let mut s = Self::safe_op(false)?;
         // The master has written the outputs once (the profile's SAFEOP → OP rule).
         s.request(AlState::Op, AlEvent::sm(2))?;
         Some(s)
@@ -283,26 +315,14 @@ impl<const R: usize> Setup<R> {
     /// [`Setup::new`] in DC mode, SYNC0 every [`DC_CYCLE_NS`], as the board runs: the master
     /// writes the outputs every cycle, so SM2's event stays set in the image.
     pub(super) fn new_dc() -> Option<Self> {
-        let mut s = Self::safe_op(Some(DC_CYCLE_NS))?;
-        let events = AlEvent::sm(2);
-        // In DC mode the drive may take SAFEOP → OP only once its cycle runs on the SYNC0
-        // events: SYNC0 cycles between the requests.
-        for _ in 0..MAX_OP_REQUESTS {
-            let reached = s.request(AlState::Op, events);
-            s.esc
-                .set(regs::AL_EVENT_REQUEST.addr, &events.to_le_bytes());
-            if reached.is_some() {
-                return Some(s);
-            }
-            s.now_ns += u64::from(DC_CYCLE_NS);
-            on_sync0(&mut s.core, &mut s.esc, s.now_ns).ok()?;
-        }
-        None
+        let mut s = Self::safe_op(true)?;
+        request_op_in_dc(&mut s.core, &mut s.esc, &mut s.now_ns)?;
+        Some(s)
     }
 
-    /// INIT → PREOP → SAFEOP with the profile's mailbox and default mapping, in DC mode with
-    /// SYNC0 every `dc_cycle_ns` if given, else in free run.
-    fn safe_op(dc_cycle_ns: Option<u32>) -> Option<Self> {
+    /// INIT → PREOP → SAFEOP with the profile's mailbox and default mapping, in DC mode
+    /// ([`activate_dc`]) if `dc`, else in free run.
+    fn safe_op(dc: bool) -> Option<Self> {
         let mut ram = [0; R];
         let mut od = Dictionary::new(&PROFILE.od, &mut ram);
         od.load_defaults();
@@ -324,16 +344,22 @@ impl<const R: usize> Setup<R> {
         s.request(AlState::PreOp, 0)?;
         s.esc.set_sm(2, &device.outputs, OUTPUTS_SIZE as u16);
         s.esc.set_sm(3, &device.inputs, INPUTS_SIZE as u16);
-        if let Some(cycle_ns) = dc_cycle_ns {
-            s.esc.set(
-                regs::DC_ACTIVATION.addr,
-                &[DcActivation::CYCLIC | DcActivation::SYNC0],
-            );
-            s.esc
-                .set(regs::DC_SYNC0_CYCLE.addr, &cycle_ns.to_le_bytes());
+        if dc {
+            activate_dc(&mut s.esc);
         }
         s.request(AlState::SafeOp, 0)?;
         Some(s)
+    }
+
+    /// Records the PDI transfers of the next cycle (one DC cycle on; in free run the time
+    /// does not matter) as those of benchmark `name`, for the report's load model; a failure
+    /// if the handler fails.
+    pub(super) fn record_transfers(&self, h: &mut Harness, name: &str) {
+        let next = self.now_ns.saturating_add(u64::from(DC_CYCLE_NS));
+        match sync0_transfers(&self.core, &self.esc, next) {
+            Some(tally) => tally.record(h, format_args!("{name}")),
+            None => h.fail(name, format_args!("the SYNC0 handler failed")),
+        }
     }
 
     /// One SYNC0 of DC mode: [`DC_CYCLE_NS`] after the last one.
@@ -406,10 +432,7 @@ pub fn run(h: &mut Harness) {
         return;
     };
     // The PDI transfers of a cycle (the load model counts the bus time of the row it takes).
-    match sync0_transfers(&s.core, &s.esc, 0) {
-        Some(tally) => tally.record(h, format_args!("sync0-handler")),
-        None => h.fail("sync0-handler", format_args!("the SYNC0 handler failed")),
-    }
+    s.record_transfers(h, "sync0-handler");
     let Setup { core, esc, .. } = &mut s;
     let idle = h.bench(
         "sync0-handler",

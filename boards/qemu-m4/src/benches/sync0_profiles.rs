@@ -28,11 +28,11 @@ use firmware::profile::DriveProfile;
 use firmware::profiles::{ALL, MAX_RAM_SIZE};
 use firmware::sync0::on_sync0;
 use firmware::DriveCore;
-use hal::esc::{regs, AlEvent, AlState, DcActivation, DlStatus};
+use hal::esc::{regs, AlState, DlStatus};
 
 use super::motor::{tuning, POSITION, SAMPLE};
 use super::sync0_handler::{
-    request_state, sync0_transfers, PdiTally, RamEsc, DC_CYCLE_NS, MAX_OP_REQUESTS,
+    activate_dc, request_op_in_dc, request_state, sync0_transfers, PdiTally, RamEsc, DC_CYCLE_NS,
 };
 use super::{entry_at, fill_mapping, read, set, write, Fill, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
@@ -196,11 +196,7 @@ impl ProfileBench {
         esc.set_sm(2, &device.outputs, rx_len as u16);
         esc.set_sm(3, &device.inputs, tx_len as u16);
         // DC SYNC0 (every profile takes it; some refuse free run), as the board runs.
-        esc.set(
-            regs::DC_ACTIVATION.addr,
-            &[DcActivation::CYCLIC | DcActivation::SYNC0],
-        );
-        esc.set(regs::DC_SYNC0_CYCLE.addr, &DC_CYCLE_NS.to_le_bytes());
+        activate_dc(&mut esc);
         request_state(&mut core, &mut esc, AlState::SafeOp, 0).ok_or("no SAFEOP")?;
         let mut bench = Self {
             profile,
@@ -216,22 +212,11 @@ impl ProfileBench {
         };
         // The master has written the outputs once (the SAFEOP → OP rule of some profiles).
         bench.outputs(0)?;
-        // In DC mode the drive may take SAFEOP → OP only once its cycle runs on the SYNC0
-        // events: SYNC0 cycles between the requests.
-        let events = AlEvent::sm(2);
-        for _ in 0..MAX_OP_REQUESTS {
-            let reached = request_state(&mut bench.core, &mut bench.esc, AlState::Op, events);
-            // The request clears the event register; the master writes the outputs every
-            // cycle, so SM2's event stays set in the image.
-            bench
-                .esc
-                .set(regs::AL_EVENT_REQUEST.addr, &events.to_le_bytes());
-            if reached.is_some() {
-                return Ok(bench);
-            }
-            bench.cycle(0)?;
-        }
-        Err("no OP")
+        let ProfileBench {
+            core, esc, now_ns, ..
+        } = &mut bench;
+        request_op_in_dc(core, esc, now_ns).ok_or("no OP")?;
+        Ok(bench)
     }
     /// The master's outputs to every axis: controlword `cw`, CSP, the target at the actual
     /// position (6064h echoed into 607Ah, in the profile's own position unit). 6060h is also

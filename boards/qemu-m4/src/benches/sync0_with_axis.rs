@@ -30,7 +30,7 @@ use firmware::sync0::on_sync0;
 use firmware::DriveCore;
 
 use super::motor::{tuning, POSITION, SAMPLE};
-use super::sync0_handler::{sync0_transfers, Setup, DC_CYCLE_NS};
+use super::sync0_handler::{Setup, DC_CYCLE_NS};
 use super::{axis_vars, master_outputs_for, read, MODE_CYCLIC_SYNC_POSITION};
 use crate::harness::{Cases, Harness};
 
@@ -207,17 +207,7 @@ fn csp_at_rest(h: &mut Harness, bench: &mut Bench) {
     if bench.at_rest().is_err() {
         h.fail(NAME, format_args!("the measured cycles changed the drive"));
     }
-    record_transfers(h, NAME, &bench.setup);
-}
-
-/// Records the PDI transfers of the next cycle of `setup` as those of benchmark `name` (the
-/// report's load model reads them); a failure if the handler fails.
-fn record_transfers(h: &mut Harness, name: &str, setup: &Setup) {
-    let next = setup.now_ns.saturating_add(u64::from(DC_CYCLE_NS));
-    match sync0_transfers(&setup.core, &setup.esc, next) {
-        Some(tally) => tally.record(h, format_args!("{name}")),
-        None => h.fail(name, format_args!("the SYNC0 handler failed")),
-    }
+    bench.setup.record_transfers(h, NAME);
 }
 
 /// The kinds of cycle of a profile-position move, in the order a move meets them.
@@ -303,7 +293,7 @@ fn profile_position_move(h: &mut Harness, bench: &mut Bench) -> Result<(), &'sta
         target,
         MODE_PROFILE_POSITION,
     )?;
-    record_transfers(h, PP_NAME, &bench.setup);
+    bench.setup.record_transfers(h, PP_NAME);
     phases.measure(h, bench, Phase::Accept)?;
     bench.outputs(ENABLE_OPERATION, target, MODE_PROFILE_POSITION)?;
     // 606Bh of the previous cycle: its change tells the phase.
